@@ -1,0 +1,1 @@
+"""ROS-free numerical core. Only numpy and scipy; importable without rclpy."""

@@ -1,0 +1,48 @@
+"""Shared input checks for the core: one place that words the errors."""
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import InputDataError, ParameterError
+
+
+def finite_array(values: ArrayLike, name: str, *, ndim: int | None = None,
+                 allow_empty: bool = False) -> NDArray[np.float64]:
+    """Return ``values`` as a float64 array after checking it is finite.
+
+    Raises
+    ------
+    InputDataError
+        If the array is empty (unless allowed), has the wrong number of
+        dimensions or holds NaN/inf; the message names ``name`` and the first
+        bad index.
+    """
+    try:
+        array = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputDataError(f"{name}: cannot be read as numbers ({exc})") from exc
+    if ndim is not None and array.ndim != ndim:
+        raise InputDataError(f"{name}: expected {ndim}-D array, got shape {array.shape}")
+    if array.size == 0 and not allow_empty:
+        raise InputDataError(f"{name}: empty input")
+    bad = ~np.isfinite(array)
+    if bad.any():
+        first = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise InputDataError(
+            f"{name}: {int(bad.sum())} non-finite value(s) (NaN or inf), first at index {first}")
+    return array
+
+
+def same_length(name_a: str, a: NDArray, name_b: str, b: NDArray) -> None:
+    """Raise :class:`InputDataError` unless ``a`` and ``b`` have equal length."""
+    if len(a) != len(b):
+        raise InputDataError(f"{name_a} has {len(a)} values but {name_b} has {len(b)}")
+
+
+def positive(value: float, name: str) -> float:
+    """Return ``value`` as float after checking it is finite and > 0."""
+    value = float(value)
+    if not np.isfinite(value) or value <= 0.0:
+        raise ParameterError(f"{name} must be a finite positive number, got {value!r}")
+    return value

@@ -1,0 +1,90 @@
+"""Helpers every node shares: QoS profiles, stamps, parameter descriptors."""
+from __future__ import annotations
+
+from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
+                                SetParametersResult)
+from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
+                       qos_profile_sensor_data)
+
+#: Raw sensor streams (scales, temperatures): best effort, keep last 5 - a late
+#: sample is worth less than the next one, as in ``qos_profile_sensor_data``.
+SENSOR_QOS = qos_profile_sensor_data
+
+#: Results (yaw batches, profiles, compensation): reliable, keep last 50.
+RESULT_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE,
+                        durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
+
+#: Tables a late joiner must still get: reliable + transient local, keep last 1.
+LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                         history=HistoryPolicy.KEEP_LAST)
+
+
+def nanoseconds_to_stamp(nanoseconds: int):
+    """``builtin_interfaces/Time`` for an integer number of nanoseconds."""
+    from builtin_interfaces.msg import Time
+
+    return Time(sec=int(nanoseconds // 1_000_000_000), nanosec=int(nanoseconds % 1_000_000_000))
+
+
+def stamp_to_nanoseconds(stamp) -> int:
+    """Integer nanoseconds of a ``builtin_interfaces/Time``."""
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def float_descriptor(description: str, low: float, high: float,
+                     read_only: bool = False) -> ParameterDescriptor:
+    """Descriptor of a double parameter with an inclusive range."""
+    return ParameterDescriptor(
+        description=description, read_only=read_only,
+        floating_point_range=[FloatingPointRange(from_value=float(low), to_value=float(high))])
+
+
+def int_descriptor(description: str, low: int, high: int,
+                   read_only: bool = False) -> ParameterDescriptor:
+    """Descriptor of an integer parameter with an inclusive range."""
+    return ParameterDescriptor(
+        description=description, read_only=read_only,
+        integer_range=[IntegerRange(from_value=int(low), to_value=int(high), step=1)])
+
+
+def plain_descriptor(description: str, read_only: bool = False) -> ParameterDescriptor:
+    """Descriptor with a description only."""
+    return ParameterDescriptor(description=description, read_only=read_only)
+
+
+def refuse(reason: str) -> SetParametersResult:
+    """A failed set-parameters result carrying ``reason``."""
+    return SetParametersResult(successful=False, reason=reason)
+
+
+def accept() -> SetParametersResult:
+    """A successful set-parameters result."""
+    return SetParametersResult(successful=True)
+
+
+def pack_float64(values) -> "array.array":
+    """``array('d')`` of ``values`` - the fast path into rosidl float64[] fields.
+
+    Assigning an ``array.array('d')`` skips rosidl's per-element type checks,
+    which dominate at 20 kHz x 6 channels.
+    """
+    import array
+
+    import numpy as np
+
+    packed = array.array("d")
+    packed.frombytes(np.ascontiguousarray(values, dtype=np.float64).tobytes())
+    return packed
+
+
+def unpack_float64(field):
+    """numpy float64 view of a rosidl float64[] field (no copy for array('d'))."""
+    import numpy as np
+
+    if len(field) == 0:
+        return np.zeros(0, dtype=np.float64)
+    try:
+        return np.frombuffer(field, dtype=np.float64)
+    except (TypeError, ValueError, BufferError):
+        return np.asarray(field, dtype=np.float64)

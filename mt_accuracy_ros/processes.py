@@ -1,0 +1,78 @@
+"""Start nodes of this package as separate processes (a small stand-in for ros2 launch)."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+#: node name -> module, the same table as setup.py's console_scripts.
+NODE_MODULES = {
+    "encoder_publisher": "mt_accuracy_ros.nodes.encoder_publisher",
+    "yaw_estimator": "mt_accuracy_ros.nodes.yaw_estimator",
+}
+
+
+def format_parameter(value) -> str:
+    """A parameter value in the YAML form ``--ros-args -p name:=value`` expects."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return json.dumps(list(value))
+    return str(value)
+
+
+def ros_arguments(parameters: Mapping[str, object] | None = None, namespace: str | None = None,
+                  params_file: str | None = None,
+                  remappings: Mapping[str, str] | None = None) -> list[str]:
+    """The ``--ros-args`` part of a node command line."""
+    args = ["--ros-args"]
+    if params_file:
+        args += ["--params-file", params_file]
+    for name, value in (parameters or {}).items():
+        args += ["-p", f"{name}:={format_parameter(value)}"]
+    if namespace:
+        args += ["-r", f"__ns:={namespace}"]
+    for source, target in (remappings or {}).items():
+        args += ["-r", f"{source}:={target}"]
+    return args
+
+
+@dataclass
+class NodeProcess:
+    """One node running in its own process."""
+
+    name: str
+    popen: subprocess.Popen
+    command: list[str] = field(default_factory=list)
+
+    def stop(self, timeout_s: float = 10.0) -> int:
+        """SIGINT, then SIGKILL after ``timeout_s``; returns the exit code."""
+        if self.popen.poll() is None:
+            self.popen.send_signal(signal.SIGINT)
+            try:
+                self.popen.wait(timeout=timeout_s)
+            except subprocess.TimeoutExpired:
+                self.popen.kill()
+                self.popen.wait()
+        return self.popen.returncode
+
+
+def start_node(name: str, parameters: Mapping[str, object] | None = None, *,
+               namespace: str | None = None, params_file: str | None = None,
+               remappings: Mapping[str, str] | None = None,
+               extra_args: Sequence[str] = (), env: Mapping[str, str] | None = None,
+               quiet: bool = False) -> NodeProcess:
+    """Start node ``name`` (a key of :data:`NODE_MODULES`) in a new process."""
+    if name not in NODE_MODULES:
+        raise KeyError(f"unknown node '{name}'; known: {', '.join(sorted(NODE_MODULES))}")
+    command = [sys.executable, "-m", NODE_MODULES[name], *extra_args,
+               *ros_arguments(parameters, namespace, params_file, remappings)]
+    process_env = dict(os.environ)
+    process_env.update(env or {})
+    output = subprocess.DEVNULL if quiet else None
+    popen = subprocess.Popen(command, env=process_env, stdout=output, stderr=output)
+    return NodeProcess(name=name, popen=popen, command=command)

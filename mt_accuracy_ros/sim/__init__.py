@@ -1,0 +1,1 @@
+"""The virtual machine tool: ROS-free simulation of scales, temperatures and errors."""
