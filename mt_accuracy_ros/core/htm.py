@@ -1,0 +1,117 @@
+"""Homogeneous transformation matrices, batched over leading dimensions.
+
+Elementary HTMs of Kidani Table 2.1 (= Khan & Chen eqs. 1-6): translations
+D_X(x), D_Y(y), D_Z(z) and rotations D_A(alpha), D_B(beta), D_C(gamma) about
+x, y, z. Six error motions (dx, dy, dz, ex, ey, ez) of a joint combine either
+exactly, as the product D_X D_Y D_Z D_A D_B D_C (the left side of Kidani eq.
+2.7), or to first order as the single matrix of Kidani eq. 2.7 / Khan & Chen
+eq. 7.
+
+Every function takes arrays of any shape ``S`` and returns ``S + (4, 4)``.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+
+def identity(shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
+    """Identity HTMs of shape ``shape + (4, 4)``."""
+    out = np.zeros(shape + (4, 4))
+    out[..., [0, 1, 2, 3], [0, 1, 2, 3]] = 1.0
+    return out
+
+
+def translation(dx: ArrayLike = 0.0, dy: ArrayLike = 0.0, dz: ArrayLike = 0.0) -> NDArray:
+    """D_X(dx) D_Y(dy) D_Z(dz) (Kidani Table 2.1; Khan & Chen eqs. 1-3)."""
+    dx, dy, dz = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (dx, dy, dz)))
+    out = identity(dx.shape)
+    out[..., 0, 3] = dx
+    out[..., 1, 3] = dy
+    out[..., 2, 3] = dz
+    return out
+
+
+def rotation(axis: str, angle: ArrayLike) -> NDArray:
+    """D_A, D_B or D_C: rotation by ``angle`` [rad] about x, y or z (Table 2.1; eqs. 4-6)."""
+    angle = np.asarray(angle, dtype=np.float64)
+    c, s = np.cos(angle), np.sin(angle)
+    out = identity(angle.shape)
+    i, j = {"x": (1, 2), "y": (2, 0), "z": (0, 1)}[axis]
+    out[..., i, i] = c
+    out[..., i, j] = -s
+    out[..., j, i] = s
+    out[..., j, j] = c
+    return out
+
+
+def rotation_matrix_xyz(ex: ArrayLike, ey: ArrayLike, ez: ArrayLike) -> NDArray:
+    """3x3 part of D_A(ex) D_B(ey) D_C(ez), in closed form."""
+    ex, ey, ez = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (ex, ey, ez)))
+    ca, sa, cb, sb, cc, sc = np.cos(ex), np.sin(ex), np.cos(ey), np.sin(ey), np.cos(ez), np.sin(ez)
+    r = np.empty(ex.shape + (3, 3))
+    r[..., 0, 0] = cb * cc
+    r[..., 0, 1] = -cb * sc
+    r[..., 0, 2] = sb
+    r[..., 1, 0] = sa * sb * cc + ca * sc
+    r[..., 1, 1] = -sa * sb * sc + ca * cc
+    r[..., 1, 2] = -sa * cb
+    r[..., 2, 0] = -ca * sb * cc + sa * sc
+    r[..., 2, 1] = ca * sb * sc + sa * cc
+    r[..., 2, 2] = ca * cb
+    return r
+
+
+def error_htm_exact(errors: ArrayLike) -> NDArray:
+    """D_X(dx) D_Y(dy) D_Z(dz) D_A(ex) D_B(ey) D_C(ez) for ``errors[..., :] = (dx, dy, dz, ex, ey, ez)``."""
+    e = np.asarray(errors, dtype=np.float64)
+    out = identity(e.shape[:-1])
+    out[..., :3, :3] = rotation_matrix_xyz(e[..., 3], e[..., 4], e[..., 5])
+    out[..., :3, 3] = e[..., :3]
+    return out
+
+
+def error_htm_first_order(errors: ArrayLike) -> NDArray:
+    """The first-order error matrix of Kidani eq. 2.7 / Khan & Chen eq. 7."""
+    e = np.asarray(errors, dtype=np.float64)
+    out = identity(e.shape[:-1])
+    dx, dy, dz, ex, ey, ez = (e[..., i] for i in range(6))
+    out[..., 0, 1], out[..., 0, 2] = -ez, ey
+    out[..., 1, 0], out[..., 1, 2] = ez, -ex
+    out[..., 2, 0], out[..., 2, 1] = -ey, ex
+    out[..., 0, 3], out[..., 1, 3], out[..., 2, 3] = dx, dy, dz
+    return out
+
+
+def rotation_vector(rotation_3x3: ArrayLike) -> NDArray:
+    """Rotation vector (axis * angle) of rotation matrices, shape ``S + (3,)``."""
+    from scipy.spatial.transform import Rotation
+
+    r = np.asarray(rotation_3x3, dtype=np.float64)
+    flat = r.reshape(-1, 3, 3)
+    return Rotation.from_matrix(flat).as_rotvec().reshape(r.shape[:-2] + (3,))
+
+
+def thermal_link_htm(expansion_m: ArrayLike = 0.0, deflection_m: ArrayLike = 0.0,
+                     slope_rad: ArrayLike = 0.0, *, length_axis: str = "x",
+                     deflection_axis: str = "y") -> NDArray:
+    """HTM of a thermally deformed link (Zhu section 4.2, eq. 4.2, Table 4.2).
+
+    The link's end moves by ``expansion_m`` along its length axis and by
+    ``deflection_m`` along the deflection axis, and turns by ``slope_rad`` about
+    the third axis (right-handed: x, y -> z), as Zhu's epsilon, delta, theta.
+    """
+    axes = "xyz"
+    if length_axis not in axes or deflection_axis not in axes or length_axis == deflection_axis:
+        raise ValueError(f"length_axis and deflection_axis must be two different of x, y, z, "
+                         f"got {length_axis!r}, {deflection_axis!r}")
+    normal = next(a for a in axes if a not in (length_axis, deflection_axis))
+    expansion, deflection, slope = np.broadcast_arrays(
+        *(np.asarray(v, dtype=np.float64) for v in (expansion_m, deflection_m, slope_rad)))
+    # Right-handedness of (length, deflection, normal) fixes the slope's sign.
+    order = axes.index(length_axis), axes.index(deflection_axis), axes.index(normal)
+    handed = 1.0 if (order[1] - order[0]) % 3 == 1 else -1.0
+    out = rotation(normal, handed * slope)
+    out[..., axes.index(length_axis), 3] += expansion
+    out[..., axes.index(deflection_axis), 3] += deflection
+    return out
