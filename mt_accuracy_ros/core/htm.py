@@ -49,17 +49,19 @@ def rotation_matrix_xyz(ex: ArrayLike, ey: ArrayLike, ez: ArrayLike) -> NDArray:
     """3x3 part of D_A(ex) D_B(ey) D_C(ez), in closed form."""
     ex, ey, ez = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (ex, ey, ez)))
     ca, sa, cb, sb, cc, sc = np.cos(ex), np.sin(ex), np.cos(ey), np.sin(ey), np.cos(ez), np.sin(ez)
-    r = np.empty(ex.shape + (3, 3))
-    r[..., 0, 0] = cb * cc
-    r[..., 0, 1] = -cb * sc
-    r[..., 0, 2] = sb
-    r[..., 1, 0] = sa * sb * cc + ca * sc
-    r[..., 1, 1] = -sa * sb * sc + ca * cc
-    r[..., 1, 2] = -sa * cb
-    r[..., 2, 0] = -ca * sb * cc + sa * sc
-    r[..., 2, 1] = ca * sb * sc + sa * cc
-    r[..., 2, 2] = ca * cb
-    return r
+    sa_sb, ca_sb = sa * sb, ca * sb
+    # One stacking copy instead of nine strided element writes.
+    return np.stack([cb * cc, -cb * sc, sb,
+                     sa_sb * cc + ca * sc, -sa_sb * sc + ca * cc, -sa * cb,
+                     -ca_sb * cc + sa * sc, ca_sb * sc + sa * cc, ca * cb],
+                    axis=-1).reshape(ex.shape + (3, 3))
+
+
+def rotation_matrix_first_order(ex: ArrayLike, ey: ArrayLike, ez: ArrayLike) -> NDArray:
+    """3x3 part of the first-order error matrix of Kidani eq. 2.7."""
+    ex, ey, ez = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (ex, ey, ez)))
+    one = np.ones_like(ex)
+    return np.stack([one, -ez, ey, ez, one, -ex, -ey, ex, one], axis=-1).reshape(ex.shape + (3, 3))
 
 
 def error_htm_exact(errors: ArrayLike) -> NDArray:
@@ -84,12 +86,22 @@ def error_htm_first_order(errors: ArrayLike) -> NDArray:
 
 
 def rotation_vector(rotation_3x3: ArrayLike) -> NDArray:
-    """Rotation vector (axis * angle) of rotation matrices, shape ``S + (3,)``."""
-    from scipy.spatial.transform import Rotation
+    """Rotation vector (axis * angle) of rotation matrices, shape ``S + (3,)``.
 
+    theta = acos((trace - 1) / 2); vector = theta / (2 sin theta) * vee(R - R^T),
+    with the series 1 + theta^2 / 6 for small angles (the machine-error case).
+    Valid for angles below pi - 1e-6.
+    """
     r = np.asarray(rotation_3x3, dtype=np.float64)
-    flat = r.reshape(-1, 3, 3)
-    return Rotation.from_matrix(flat).as_rotvec().reshape(r.shape[:-2] + (3,))
+    vee = np.stack([r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0],
+                    r[..., 1, 0] - r[..., 0, 1]], axis=-1)
+    cos_theta = np.clip((np.trace(r, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
+    theta = np.arccos(cos_theta)
+    sin_theta = np.sin(theta)
+    small = theta < 1e-4
+    with np.errstate(invalid="ignore", divide="ignore"):
+        factor = np.where(small, 0.5 * (1.0 + theta ** 2 / 6.0), theta / (2.0 * sin_theta))
+    return vee * factor[..., None]
 
 
 def thermal_link_htm(expansion_m: ArrayLike = 0.0, deflection_m: ArrayLike = 0.0,

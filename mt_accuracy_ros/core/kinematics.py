@@ -32,8 +32,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import MachineDescriptionError
-from .htm import (error_htm_exact, error_htm_first_order, identity, rotation, rotation_vector,
-                  translation)
+from .htm import (identity, rotation, rotation_matrix_first_order, rotation_matrix_xyz,
+                  rotation_vector, translation)
 from .machine import COMPONENTS, MachineDescription, location_error_name, motion_error_name
 
 Positions = dict[str, NDArray[np.float64]]
@@ -133,28 +133,62 @@ class KinematicModel:
         ``"workpiece"`` (N loop, ending at the workpiece point); the returned
         frame's origin is that point.
         """
-        overrides = overrides or ErrorOverrides()
+        rot, pos = self._branch_rp(which, positions, errors, first_order,
+                                   overrides or ErrorOverrides(), check_stroke)
+        out = identity((rot.shape[0],))
+        out[:, :3, :3] = rot
+        out[:, :3, 3] = pos
+        return out
+
+    def _branch_rp(self, which: str, positions: Positions, errors: bool, first_order: bool,
+                   overrides: ErrorOverrides, check_stroke: bool) -> tuple[NDArray, NDArray]:
+        """The branch product kept as rotation (N, 3, 3) and translation (N, 3).
+
+        Composing T1 T2 as (R1 R2, R1 p2 + p1) skips the constant last row of
+        every 4x4 product and lets linear motions add a column instead of
+        multiplying a matrix.
+        """
         q, n = self._positions(positions, check_stroke)
         axes = self.machine.tool_branch if which == "tool" else self.machine.workpiece_branch
         end = self.machine.tool if which == "tool" else self.machine.workpiece
-        make_error = error_htm_first_order if first_order else error_htm_exact
-        total = identity((n,))
+        rotation_of = rotation_matrix_first_order if first_order else rotation_matrix_xyz
+        rot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+        pos = np.zeros((n, 3))
+
+        def apply_error(twist):
+            # The error HTM D_X D_Y D_Z D_A D_B D_C (or eq. 2.7) as (R_e, d).
+            nonlocal rot, pos
+            pos = pos + np.einsum("nij,nj->ni", rot, twist[:, :3])
+            rot = rot @ rotation_of(twist[:, 3], twist[:, 4], twist[:, 5])
+
+        def apply(htm):
+            nonlocal rot, pos
+            pos = pos + np.einsum("nij,nj->ni", rot, htm[:, :3, 3])
+            rot = rot @ htm[:, :3, :3]
+
         thermal = self._thermal("bed_tool" if which == "tool" else "bed_work", n, overrides)
         if errors and thermal is not None:
-            total = total @ make_error(thermal)
+            apply_error(thermal)
         parent_offset = np.zeros(3)
         for axis in axes:
-            total = total @ translation(*parent_offset)
+            pos = pos + rot @ parent_offset
             if errors:
-                total = total @ make_error(self.location_errors(axis, n, overrides))
-            total = total @ self._motion(axis, q[axis])
+                location = self.location_errors(axis, n, overrides)
+                if np.any(location):
+                    apply_error(location)
+            spec = self.machine.axes[axis]
+            if spec.is_rotary:
+                apply(rotation("xyz"[spec.direction], spec.sign * q[axis]))
+            else:
+                pos = pos + rot[:, :, spec.direction] * (spec.sign * q[axis])[:, None]
             if errors:
-                total = total @ make_error(self.motion_errors(axis, q[axis], overrides))
+                apply_error(self.motion_errors(axis, q[axis], overrides))
                 thermal = self._thermal(axis, n, overrides)
                 if thermal is not None:
-                    total = total @ make_error(thermal)
-            parent_offset = self.machine.axes[axis].offset
-        return total @ translation(*(parent_offset + end))
+                    apply_error(thermal)
+            parent_offset = spec.offset
+        pos = pos + rot @ (parent_offset + end)
+        return rot, pos
 
     def tcp_error(self, positions: Positions, *, first_order: bool = False,
                   overrides: ErrorOverrides | None = None,
@@ -168,16 +202,17 @@ class KinematicModel:
         the actual tool orientation relative to the workpiece against the nominal
         one, in the bed frame.
         """
-        kwargs = dict(overrides=overrides, check_stroke=check_stroke)
-        tool = self.branch("tool", positions, first_order=first_order, **kwargs)
-        work = self.branch("workpiece", positions, first_order=first_order, **kwargs)
-        tool0 = self.branch("tool", positions, errors=False, **kwargs)
-        work0 = self.branch("workpiece", positions, errors=False, **kwargs)
-        position = (tool[:, :3, 3] - work[:, :3, 3]) - (tool0[:, :3, 3] - work0[:, :3, 3])
+        overrides = overrides or ErrorOverrides()
+        args = (overrides, check_stroke)
+        tool_r, tool_p = self._branch_rp("tool", positions, True, first_order, *args)
+        work_r, work_p = self._branch_rp("workpiece", positions, True, first_order, *args)
+        tool0_r, tool0_p = self._branch_rp("tool", positions, False, False, *args)
+        work0_r, work0_p = self._branch_rp("workpiece", positions, False, False, *args)
+        position = (tool_p - work_p) - (tool0_p - work0_p)
         # Orientation error: (work rotation error)^T (tool rotation error), both as
         # R_actual R_nominal^T in the bed frame.
-        tool_rot = tool[:, :3, :3] @ np.swapaxes(tool0[:, :3, :3], 1, 2)
-        work_rot = work[:, :3, :3] @ np.swapaxes(work0[:, :3, :3], 1, 2)
+        tool_rot = tool_r @ np.swapaxes(tool0_r, 1, 2)
+        work_rot = work_r @ np.swapaxes(work0_r, 1, 2)
         relative = np.swapaxes(work_rot, 1, 2) @ tool_rot
         return {"position": position, "orientation": rotation_vector(relative)}
 
@@ -347,3 +382,24 @@ class KinematicModel:
             considered += [location_error_name(c, axis) for c in spec.location_errors]
         potential += ["machine coordinate system: " + n for n in ("EA0M", "EB0M", "EC0M")]
         return {"potential": potential, "considered": considered}
+
+
+def volumetric_map(model: KinematicModel, positions: Positions, *, chunk: int = 100_000,
+                   overrides_factory=None, first_order: bool = False) -> dict[str, NDArray]:
+    """TCP position and orientation errors at many configurations, in chunks.
+
+    ``positions`` maps each axis to an (N,) array. Chunks bound the memory of the
+    (chunk, 4, 4) temporaries. ``overrides_factory(slice)`` may return the
+    :class:`ErrorOverrides` for a chunk.
+    """
+    n = len(next(iter(positions.values())))
+    position = np.empty((n, 3))
+    orientation = np.empty((n, 3))
+    for start in range(0, n, chunk):
+        part = slice(start, min(n, start + chunk))
+        overrides = overrides_factory(part) if overrides_factory else None
+        out = model.tcp_error({a: np.asarray(v)[part] for a, v in positions.items()},
+                              overrides=overrides, first_order=first_order)
+        position[part] = out["position"]
+        orientation[part] = out["orientation"]
+    return {"position": position, "orientation": orientation}
