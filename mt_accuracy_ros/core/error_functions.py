@@ -92,3 +92,11 @@ def sampled(function: ErrorFunction, grid: ArrayLike) -> ErrorFunction:
     """The function as a table on ``grid`` (what a CNC compensation table holds)."""
     g = np.asarray(grid, dtype=np.float64)
     return ErrorFunction(kind="table", positions=g, values=function(g))
+
+
+def from_profile(positions: ArrayLike, systematic: ArrayLike) -> ErrorFunction:
+    """An error function from a measured profile, e.g. the kNN systematic error
+    of :func:`mt_accuracy_ros.core.knn.extract_systematic` (positions ascending)."""
+    return parse_error_function({"profile": {"positions": np.asarray(positions).tolist(),
+                                             "values": np.asarray(systematic).tolist()}},
+                                "profile")

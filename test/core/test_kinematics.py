@@ -277,3 +277,25 @@ def test_positions_outside_the_stroke_or_unknown_axes_are_refused(hmc):
         hmc.tcp_error({"X": [0.1], "Y": [0.0], "Z": [0.0], "W": [0.0]})
     with pytest.raises(MachineDescriptionError, match="missing for axis Z"):
         hmc.tcp_error({"X": [0.1], "Y": [0.0]})
+
+
+def test_a_knn_profile_feeds_the_model_as_an_error_function():
+    from dataclasses import replace
+
+    from mt_accuracy_ros.core.error_functions import from_profile
+    from mt_accuracy_ros.core.knn import extract_systematic
+
+    rng = np.random.default_rng(3)
+    x = rng.uniform(0, 0.39, 4000)
+    yaw = 4e-6 * np.sin(2 * np.pi * x / 0.3) + rng.normal(0, 3e-7, x.size)
+    grid = np.linspace(0, 0.39, 40)
+    profile = extract_systematic(x, yaw, grid, k_lim=50)
+    machine = load_machine("kidani_hmc")
+    axis = machine.axes["X"]
+    motion = dict(axis.motion_errors, C=from_profile(grid, profile.systematic))
+    machine = replace(machine, axes=dict(machine.axes, X=replace(axis, motion_errors=motion)))
+    model = KinematicModel(machine)
+    pos = {"X": grid, "Y": np.zeros(40), "Z": np.zeros(40)}
+    e = model.tcp_error(pos)["position"]
+    lever_y = machine.axes["X"].offset[1] + machine.axes["Y"].offset[1]
+    np.testing.assert_allclose(e[:, 0], -profile.systematic * lever_y, rtol=1e-6, atol=1e-13)
