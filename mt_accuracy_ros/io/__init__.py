@@ -1,0 +1,1 @@
+"""Bag I/O: rosbag2-compatible MCAP writing and reading (no ROS graph needed)."""

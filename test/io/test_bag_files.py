@@ -1,0 +1,163 @@
+"""rosbag2-compatible MCAP writing and reading, checked with an independent reader (rosbags)."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from mt_accuracy_ros.core.errors import BagError
+from mt_accuracy_ros.io.bag_reader import bag_info, decode, read_messages, recover
+from mt_accuracy_ros.io.bag_writer import BagWriter, qos_dict
+from mt_accuracy_ros.io.msg_definitions import SEPARATOR, schema_text
+
+
+def _scale_batch(i: int):
+    from mt_accuracy_msgs.msg import ScaleBatch
+    from mt_accuracy_ros.nodes._common import nanoseconds_to_stamp, pack_float64
+
+    m = ScaleBatch()
+    m.header.stamp = nanoseconds_to_stamp(1_700_000_000_000_000_000 + i * 50_000_000)
+    m.header.frame_id = "machine"
+    m.first_sample_index = i * 50
+    m.sample_period = 1e-3
+    m.channel_names = ["x1", "x2"]
+    m.positions = pack_float64(np.arange(100) * 1e-6 + i)
+    m.command_axes = ["x"]
+    m.command_positions = pack_float64(np.arange(50) * 1e-6)
+    return m
+
+
+def _write_bag(path: Path, n: int = 30, compression="zstd") -> list:
+    from rclpy.serialization import serialize_message
+    from std_msgs.msg import String
+
+    written = []
+    with BagWriter(path, compression=compression, chunk_size=4096) as bag:
+        bag.add_topic("/mt1/scales", "mt_accuracy_msgs/msg/ScaleBatch",
+                      qos_dict(reliability="best_effort", depth=5))
+        bag.add_topic("/note", "std_msgs/msg/String")
+        for i in range(n):
+            msg = _scale_batch(i)
+            t = 1_700_000_000_000_000_000 + i * 50_000_000
+            bag.write("/mt1/scales", serialize_message(msg), t + 1000, t)
+            written.append(("/mt1/scales", t + 1000, t, msg))
+            if i % 10 == 0:
+                note = String(data=f"note {i}")
+                bag.write("/note", serialize_message(note), t + 2000, t + 2000)
+                written.append(("/note", t + 2000, t + 2000, note))
+    return written
+
+
+def test_schema_text_follows_rosbag2_layout():
+    text = schema_text("mt_accuracy_msgs/msg/ScaleBatch")
+    assert text.startswith("# A batch of synchronous")
+    blocks = text.split(SEPARATOR + "\n")
+    assert [b.splitlines()[0] for b in blocks[1:]] == ["MSG: std_msgs/Header",
+                                                      "MSG: builtin_interfaces/Time"]
+
+
+def test_independent_reader_sees_the_same_bag(tmp_path):
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys.msg import get_types_from_msg
+
+    written = _write_bag(tmp_path / "bag")
+    assert sorted(os.listdir(tmp_path / "bag")) == ["bag_0.mcap", "metadata.yaml"]
+    store = get_typestore(Stores.ROS2_JAZZY)
+    with Reader(tmp_path / "bag") as reader:
+        types = {c.topic: c.msgtype for c in reader.connections}
+        assert types == {"/mt1/scales": "mt_accuracy_msgs/msg/ScaleBatch",
+                         "/note": "std_msgs/msg/String"}
+        for connection in reader.connections:
+            if connection.topic == "/mt1/scales":
+                store.register(get_types_from_msg(connection.msgdef.data, connection.msgtype))
+                qos = connection.ext.offered_qos_profiles
+                assert qos and qos[0].reliability.name.lower() == "best_effort"
+                assert qos[0].depth == 5
+        got = [(c.topic, t, store.deserialize_cdr(raw, c.msgtype)) for c, t, raw in reader.messages()]
+        assert reader.message_count == len(written)
+    scales = [w for w in written if w[0] == "/mt1/scales"]
+    ours = [g for g in got if g[0] == "/mt1/scales"]
+    assert [g[1] for g in ours] == [w[1] for w in scales]  # log times
+    for (_, _, _, sent), (_, _, decoded) in zip(scales, ours):
+        np.testing.assert_array_equal(decoded.positions, np.asarray(sent.positions))
+        assert decoded.header.stamp.sec == sent.header.stamp.sec
+        assert list(decoded.channel_names) == ["x1", "x2"]
+    notes = [g[2].data for g in got if g[0] == "/note"]
+    assert notes == ["note 0", "note 10", "note 20"]
+
+
+def test_own_reader_decodes_and_reports_info(tmp_path):
+    written = _write_bag(tmp_path / "bag", compression=None)
+    messages = list(read_messages(tmp_path / "bag"))
+    assert [m.log_time_ns for m in messages] == sorted(w[1] for w in written)
+    assert decode(messages[0]) == written[0][3]
+    info = bag_info(tmp_path / "bag")
+    assert info["message_count"] == len(written)
+    assert info["topics"]["/mt1/scales"] == {"type": "mt_accuracy_msgs/msg/ScaleBatch",
+                                            "count": 30, "encoding": "cdr"}
+    meta = yaml.safe_load((tmp_path / "bag" / "metadata.yaml").read_text())
+    assert meta["rosbag2_bagfile_information"]["ros_distro"] == "jazzy"
+    assert meta["rosbag2_bagfile_information"]["version"] == 9
+
+
+def test_rosbag2_written_samples_are_read(shared_data):
+    talker = list(read_messages(shared_data / "rosbag2_samples" / "talker"))
+    assert sum(m.topic == "/topic" for m in talker) == 10
+    assert decode(next(m for m in talker if m.topic == "/topic")).data.startswith("Hello")
+    split = list(read_messages(shared_data / "rosbag2_samples" / "multiple_files"))
+    assert len(split) > 0 and all(m.topic == "/chatter" for m in split)
+    assert [m.log_time_ns for m in split] == sorted(m.log_time_ns for m in split)
+
+
+def test_non_cdr_bag_is_refused_clearly(shared_data):
+    with pytest.raises(BagError, match="only 'cdr'"):
+        list(read_messages(shared_data / "rosbag2_samples" / "wrong_rmw_test"))
+
+
+def test_foreign_and_missing_files_raise_bag_error(tmp_path):
+    (tmp_path / "junk.mcap").write_bytes(b"this is not mcap at all" * 10)
+    with pytest.raises(BagError):
+        list(read_messages(tmp_path / "junk.mcap"))
+    with pytest.raises(BagError, match="no such bag"):
+        list(read_messages(tmp_path / "missing"))
+    with pytest.raises(BagError, match="already exists"):
+        BagWriter(tmp_path)
+
+
+def test_killed_writer_leaves_closed_chunks_recoverable(tmp_path):
+    script = textwrap.dedent(f"""
+        import sys, time
+        sys.path.insert(0, {str(Path(__file__).parent)!r})
+        from test_bag_files import _scale_batch
+        from rclpy.serialization import serialize_message
+        from mt_accuracy_ros.io.bag_writer import BagWriter
+        bag = BagWriter({str(tmp_path / 'killed')!r}, chunk_size=2048)
+        bag.add_topic('/scales', 'mt_accuracy_msgs/msg/ScaleBatch')
+        i = 0
+        while True:
+            bag.write('/scales', serialize_message(_scale_batch(i)), 1000 + i, 1000 + i)
+            i += 1
+            if i == 200:
+                print('ready', flush=True)
+            time.sleep(0.0005)
+        """)
+    process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
+                               cwd=Path(__file__).resolve().parents[2])
+    assert process.stdout.readline().strip() == "ready"
+    process.kill()
+    process.wait()
+    mcap_file = tmp_path / "killed" / "killed_0.mcap"
+    with pytest.raises(BagError):
+        bag_info(tmp_path / "killed")
+    salvaged = recover(mcap_file)
+    assert len(salvaged) >= 150  # every closed chunk; the open one is lost
+    assert [m.log_time_ns for m in salvaged] == list(range(1000, 1000 + len(salvaged)))
+    assert decode(salvaged[-1]).first_sample_index == (len(salvaged) - 1) * 50
