@@ -14,8 +14,10 @@ os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 os.environ.setdefault("AMENT_PREFIX_PATH", sys.prefix)
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
-SHARED_DATA = REPO_ROOT.parent / "shared" / "data"
-SEEDS = REPO_ROOT.parent / "shared" / "seeds"
+# shared/ sits beside the checkout (as in CI); MT_ACCURACY_SHARED points elsewhere.
+SHARED = Path(os.environ.get("MT_ACCURACY_SHARED", REPO_ROOT.parent / "shared"))
+SHARED_DATA = SHARED / "data"
+SEEDS = SHARED / "seeds"
 
 
 @pytest.fixture
