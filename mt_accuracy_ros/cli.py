@@ -11,6 +11,27 @@ def _demo(args: argparse.Namespace) -> int:
     return run_demo(out_dir=args.out, duration_s=args.duration)
 
 
+def _info(args: argparse.Namespace) -> int:
+    from .core.errors import BagError
+    from .io.bag_reader import bag_info
+
+    try:
+        info = bag_info(args.bag)
+    except BagError as exc:
+        print(f"mt-accuracy info: {exc}", file=sys.stderr)
+        return 2
+    print(f"Files:          {', '.join(info['files'])}")
+    print(f"Duration:       {info['duration_s']:.3f} s")
+    print(f"Start:          {info['start_ns'] / 1e9:.9f} s")
+    print(f"End:            {info['end_ns'] / 1e9:.9f} s")
+    print(f"Messages:       {info['message_count']}")
+    print("Topic information:")
+    for topic, entry in sorted(info["topics"].items()):
+        print(f"  Topic: {topic} | Type: {entry['type']} | Count: {entry['count']} | "
+              f"Serialization Format: {entry['encoding']}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mt-accuracy",
@@ -21,6 +42,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--duration", type=float, default=6.0,
                       help="simulated run time [s]")
     demo.set_defaults(handler=_demo)
+    info = commands.add_parser("info", help="counts, duration, topics and types of a bag")
+    info.add_argument("bag", help="bag directory or .mcap file")
+    info.set_defaults(handler=_info)
     return parser
 
 

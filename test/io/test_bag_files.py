@@ -161,3 +161,13 @@ def test_killed_writer_leaves_closed_chunks_recoverable(tmp_path):
     assert len(salvaged) >= 150  # every closed chunk; the open one is lost
     assert [m.log_time_ns for m in salvaged] == list(range(1000, 1000 + len(salvaged)))
     assert decode(salvaged[-1]).first_sample_index == (len(salvaged) - 1) * 50
+
+
+def test_info_command_prints_like_ros2_bag_info(shared_data, capsys):
+    from mt_accuracy_ros.cli import main
+
+    assert main(["info", str(shared_data / "rosbag2_samples" / "talker")]) == 0
+    out = capsys.readouterr().out
+    assert "Messages:       20" in out
+    assert "Topic: /topic | Type: std_msgs/msg/String | Count: 10 | Serialization Format: cdr" in out
+    assert main(["info", str(shared_data / "no_such_bag")]) == 2
