@@ -52,6 +52,7 @@ def received():
         node.create_subscription(getattr(messages, type_name), "roundtrip/" + type_name,
                                  lambda msg, t=type_name: got.setdefault(t, msg), qos)
     try:
+        # A timeout against a hung graph, not a speed requirement.
         deadline = time.monotonic() + 25
         while len(got) < len(MESSAGE_TYPES) and time.monotonic() < deadline:
             rclpy.spin_once(node, timeout_sec=0.1)

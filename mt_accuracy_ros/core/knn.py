@@ -77,8 +77,9 @@ def _grow_windows(training: SortedTraining, queries: NDArray[np.float64], k_max:
                   each_k=None):
     """Grow the neighbour window of every query from 1 to ``k_max`` points.
 
-    Calls ``each_k(k, running_sum, running_sum_sq)`` after the k-th neighbour is
-    admitted, with the sums over the k neighbours of every query, shape (n,).
+    Calls ``each_k(k, running_sum, running_sum_sq, rank)`` after the k-th
+    neighbour is admitted: the sums over the k neighbours of every query and
+    the sorted-order rank of the neighbour just admitted, each shape (n,).
     Returns the final window bounds ``lo, hi`` (``hi - lo == k_max``).
     """
     xs = training.positions
@@ -103,7 +104,7 @@ def _grow_windows(training: SortedTraining, queries: NDArray[np.float64], k_max:
         lo -= take_left
         hi += ~take_left
         if each_k is not None:
-            each_k(k, running, running_sq)
+            each_k(k, running, running_sq, admitted - 1)
     return lo, hi
 
 
@@ -133,7 +134,7 @@ def knn_predict(positions: ArrayLike, values: ArrayLike, queries: ArrayLike, k: 
     k = _check_k(k, len(training))
     result: dict[str, NDArray] = {}
 
-    def keep(step, running, running_sq):
+    def keep(step, running, running_sq, _rank):
         if step == k:
             result["sum"] = running.copy()
             result["sum_sq"] = running_sq.copy()
@@ -165,7 +166,7 @@ def knn_predict_all_k(training: SortedTraining, queries: ArrayLike,
     k_max = _check_k(k_max, len(training), "k_max")
     out = np.empty((k_max, q.size))
 
-    def store(step, running, _):
+    def store(step, running, _sq, _rank):
         out[step - 1] = running / step
 
     _grow_windows(training, q, k_max, store)
@@ -183,18 +184,12 @@ def knn_neighbour_indices(positions: ArrayLike, queries: ArrayLike, k: int) -> N
     training = SortedTraining.build(x, np.zeros_like(x))
     q = finite_array(queries, "queries", ndim=1)
     k = _check_k(k, len(training))
-    m = len(training)
-    lo = np.searchsorted(training.positions, q, side="left")
-    hi = lo.copy()
-    xs_pad = np.concatenate(([-np.inf], training.positions, [np.inf]))
     out = np.empty((q.size, k), dtype=np.intp)
-    for step in range(k):
-        take_left = ((q - xs_pad[lo]) <= (xs_pad[hi + 1] - q)) & (lo > 0)
-        take_left |= hi >= m
-        rank = np.where(take_left, lo - 1, hi)
-        out[:, step] = training.order[rank]
-        lo -= take_left
-        hi += ~take_left
+
+    def record(step, _sum, _sq, rank):
+        out[:, step - 1] = training.order[rank]
+
+    _grow_windows(training, q, k, record)
     return out
 
 
@@ -334,7 +329,7 @@ def cross_validate_k(positions: ArrayLike, values: ArrayLike, k_lim: int = 100,
         truth = y[held_out][query_order]
         squared = np.empty(k_lim)
 
-        def score(step, running, _):
+        def score(step, running, _sq, _rank):
             residual = running / step - truth
             squared[step - 1] = residual @ residual
 

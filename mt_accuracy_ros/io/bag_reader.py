@@ -8,6 +8,7 @@ decoding needs the type installed (``rclpy`` deserialisation).
 from __future__ import annotations
 
 import heapq
+import struct
 import importlib
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -138,7 +139,7 @@ def recover(path: str | Path) -> list[BagMessage]:
                     topic, schema_id = channels[record.channel_id]
                     out.append(BagMessage(topic, schemas.get(schema_id, ""), record.data,
                                           record.log_time, record.publish_time))
-        except (McapError, EOFError, ValueError, Exception) as exc:  # the truncation point
+        except (McapError, EOFError, ValueError, struct.error) as exc:  # the truncation point
             if not out and not channels:
                 raise BagError(f"{path}: nothing recoverable ({exc})") from exc
     return sorted(out, key=lambda m: m.log_time_ns)

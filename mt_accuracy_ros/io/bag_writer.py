@@ -97,7 +97,7 @@ class BagWriter:
             self._stream, chunk_size=self.chunk_size,
             compression=CompressionType.ZSTD if self.compression else CompressionType.NONE)
         self._writer.start(profile="ros2", library="mt_accuracy_ros")
-        self._written_chunks = 0
+        self._flushed_bytes = 0
 
     def add_topic(self, name: str, type_name: str, qos: list[dict] | dict | None = None) -> None:
         """Declare a topic; ``type_name`` as ``pkg/msg/Type``."""
@@ -131,10 +131,11 @@ class BagWriter:
         entry.count += 1
         self._first_ns = log_time_ns if self._first_ns is None else min(self._first_ns, log_time_ns)
         self._last_ns = max(self._last_ns, log_time_ns)
-        # Push every closed chunk to the OS so a killed process keeps it.
-        chunks = len(getattr(self._writer, "_Writer__chunk_indices", []) or [])
-        if chunks != self._written_chunks:
-            self._written_chunks = chunks
+        # The MCAP writer emits bytes only when a chunk closes; push each closed
+        # chunk to the OS so that a killed process keeps it.
+        position = self._stream.tell()
+        if position != self._flushed_bytes:
+            self._flushed_bytes = position
             self._stream.flush()
 
     @property

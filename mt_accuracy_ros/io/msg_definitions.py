@@ -57,12 +57,12 @@ def msg_text(type_name: str) -> str:
 def _dependencies(package: str, text: str) -> list[str]:
     found = []
     for line in text.splitlines():
-        line = line.split("#", 1)[0].strip()
-        if not line:
+        tokens = line.split("#", 1)[0].split()
+        if len(tokens) < 2:
             continue
-        field_type = line.split()[0]
-        if "=" in line.split()[1] if len(line.split()) > 1 else False:
-            continue  # a constant
+        field_type = tokens[0]
+        if "=" in " ".join(tokens[1:]):
+            continue  # a constant (bounded types like string<=8 keep their '=' in tokens[0])
         base = re.sub(r"\[.*\]$", "", field_type)
         base = re.sub(r"<=\d+$", "", base)
         if base in _PRIMITIVES or base.startswith(("string<", "wstring<")):

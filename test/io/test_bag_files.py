@@ -171,3 +171,11 @@ def test_info_command_prints_like_ros2_bag_info(shared_data, capsys):
     assert "Messages:       20" in out
     assert "Topic: /topic | Type: std_msgs/msg/String | Count: 10 | Serialization Format: cdr" in out
     assert main(["info", str(shared_data / "no_such_bag")]) == 2
+
+
+def test_schema_skips_constants_and_resolves_same_package_types():
+    text = schema_text("diagnostic_msgs/msg/DiagnosticArray")
+    headers = [line for line in text.splitlines() if line.startswith("MSG: ")]
+    # DiagnosticStatus declares byte constants (OK=0 ...): none may become a dependency.
+    assert headers == ["MSG: std_msgs/Header", "MSG: builtin_interfaces/Time",
+                       "MSG: diagnostic_msgs/DiagnosticStatus", "MSG: diagnostic_msgs/KeyValue"]

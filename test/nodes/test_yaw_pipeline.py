@@ -22,6 +22,7 @@ def test_yaw_estimated_in_another_process_matches_the_simulated_yaw(rclpy_contex
     batches: list[YawBatch] = []
     node.create_subscription(YawBatch, "yaw/x", batches.append, RESULT_QOS)
     try:
+        # A timeout against a hung graph, not a speed requirement.
         deadline = time.monotonic() + 30
         while time.monotonic() < deadline and publisher.popen.poll() is None:
             rclpy.spin_once(node, timeout_sec=0.1)
