@@ -12,6 +12,8 @@ PACKAGE_NAME = "mt_accuracy_ros"
 NODE_ENTRY_POINTS = {
     "encoder_publisher": "mt_accuracy_ros.nodes.encoder_publisher:main",
     "yaw_estimator": "mt_accuracy_ros.nodes.yaw_estimator:main",
+    "recorder": "mt_accuracy_ros.nodes.recorder:main",
+    "bag_player": "mt_accuracy_ros.nodes.player:main",
 }
 
 setup(

@@ -8,6 +8,7 @@ BENCHES = [
     ["bench.knn_vs_sklearn"],
     ["bench.volumetric_map"],
     ["bench.volumetric_map", "--machine", "khan_chen_rpppr"],
+    ["bench.bag_throughput"],
 ]
 
 

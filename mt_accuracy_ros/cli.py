@@ -32,6 +32,40 @@ def _info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _ros_args(parameters: dict, remaps: list[str]) -> list[str]:
+    from .processes import ros_arguments
+
+    pairs = {}
+    for remap in remaps:
+        source, sep, target = remap.partition(":=")
+        if not sep or not source or not target:
+            raise SystemExit(f"mt-accuracy: --remap expects OLD:=NEW, got {remap!r}")
+        pairs[source] = target
+    return ros_arguments(parameters, remappings=pairs)
+
+
+def _record(args: argparse.Namespace) -> int:
+    from .nodes.recorder import main as recorder_main
+
+    parameters = {"output": args.output or "", "compression": args.compression,
+                  "max_bag_size": args.max_bag_size, "max_bag_duration": args.max_bag_duration}
+    if args.topics:
+        parameters["topics"] = args.topics
+    return recorder_main(["mt-accuracy-record", *_ros_args(parameters, [])])
+
+
+def _play(args: argparse.Namespace) -> int:
+    from .nodes.player import main as player_main
+
+    parameters = {"bag": args.bag, "rate": args.rate, "start_offset": args.start_offset,
+                  "loop": args.loop, "clock": not args.no_clock,
+                  "start_paused": args.start_paused,
+                  "wait_for_subscribers_s": args.wait_for_subscribers}
+    if args.topics:
+        parameters["topics"] = args.topics
+    return player_main(["mt-accuracy-play", *_ros_args(parameters, args.remap)])
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mt-accuracy",
@@ -45,6 +79,26 @@ def build_parser() -> argparse.ArgumentParser:
     info = commands.add_parser("info", help="counts, duration, topics and types of a bag")
     info.add_argument("bag", help="bag directory or .mcap file")
     info.set_defaults(handler=_info)
+    record = commands.add_parser("record", help="record topics to a rosbag2-compatible MCAP bag")
+    record.add_argument("topics", nargs="*", help="topics to record (none: all)")
+    record.add_argument("-o", "--output", help="bag directory (default rosbag2_<date>)")
+    record.add_argument("--compression", choices=["zstd", "none"], default="zstd")
+    record.add_argument("--max-bag-size", type=int, default=0, help="split after N bytes")
+    record.add_argument("--max-bag-duration", type=float, default=0.0,
+                        help="split after S seconds")
+    record.set_defaults(handler=_record)
+    play = commands.add_parser("play", help="publish a bag's messages in recorded time, with /clock")
+    play.add_argument("bag", help="bag directory or .mcap file")
+    play.add_argument("--topics", nargs="+", help="topics to play (default all)")
+    play.add_argument("-r", "--rate", type=float, default=1.0, help="speed factor")
+    play.add_argument("--start-offset", type=float, default=0.0, help="skip S seconds")
+    play.add_argument("-l", "--loop", action="store_true")
+    play.add_argument("--remap", action="append", default=[], metavar="OLD:=NEW")
+    play.add_argument("--no-clock", action="store_true", help="do not publish /clock")
+    play.add_argument("--start-paused", action="store_true")
+    play.add_argument("--wait-for-subscribers", type=float, default=0.0, metavar="S",
+                      help="wait up to S seconds for subscribers before playing")
+    play.set_defaults(handler=_play)
     return parser
 
 

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 NODE_MODULES = {
     "encoder_publisher": "mt_accuracy_ros.nodes.encoder_publisher",
     "yaw_estimator": "mt_accuracy_ros.nodes.yaw_estimator",
+    "recorder": "mt_accuracy_ros.nodes.recorder",
+    "bag_player": "mt_accuracy_ros.nodes.player",
 }
 
 

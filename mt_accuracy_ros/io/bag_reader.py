@@ -143,3 +143,58 @@ def recover(path: str | Path) -> list[BagMessage]:
             if not out and not channels:
                 raise BagError(f"{path}: nothing recoverable ({exc})") from exc
     return sorted(out, key=lambda m: m.log_time_ns)
+
+
+@dataclass(frozen=True)
+class TopicInfo:
+    """What a bag says about one topic."""
+
+    name: str
+    type: str
+    encoding: str
+    offered_qos: tuple[dict, ...]
+
+
+def _channel_info(channel, schema_name: str) -> TopicInfo:
+    import yaml
+
+    try:
+        qos = yaml.safe_load(channel.metadata.get("offered_qos_profiles", "") or "[]") or []
+    except yaml.YAMLError:
+        qos = []
+    return TopicInfo(channel.topic, schema_name, channel.message_encoding,
+                     tuple(q for q in qos if isinstance(q, dict)))
+
+
+def topics(path: str | Path) -> dict[str, TopicInfo]:
+    """Topic name -> :class:`TopicInfo` over every file of a bag.
+
+    Uses each file's summary; a file without one (a killed writer) is scanned
+    up to its last complete record.
+    """
+    from mcap.records import Channel, Schema
+
+    found: dict[str, TopicInfo] = {}
+    for f in mcap_files(path):
+        try:
+            with open(f, "rb") as stream:
+                summary = make_reader(stream).get_summary()
+        except (McapError, ValueError, EOFError, struct.error) as exc:
+            raise BagError(f"{f}: not a readable MCAP file ({exc})") from exc
+        if summary is not None:
+            for channel in summary.channels.values():
+                schema = summary.schemas.get(channel.schema_id)
+                found.setdefault(channel.topic, _channel_info(channel, schema.name if schema else ""))
+            continue
+        schemas: dict[int, str] = {}
+        with open(f, "rb") as stream:
+            try:
+                for record in StreamReader(stream, skip_magic=False, emit_chunks=False).records:
+                    if isinstance(record, Schema):
+                        schemas[record.id] = record.name
+                    elif isinstance(record, Channel):
+                        found.setdefault(record.topic,
+                                         _channel_info(record, schemas.get(record.schema_id, "")))
+            except (McapError, EOFError, ValueError, struct.error):
+                pass  # truncated: keep what was complete
+    return found

@@ -12,6 +12,9 @@ Foxglove and independent readers open the result:
 * a metadata record ``rosbag2`` with key ``serialized_metadata``;
 * statistics and summary sections (rosbag2's reader needs the Statistics record).
 
+Optionally split over ``<name>_0.mcap``, ``<name>_1.mcap`` ... by size or
+duration (each file complete on its own, every topic declared in each).
+
 Chunks (optionally zstd-compressed) are flushed to disk as they close, so a
 process killed mid-write leaves every closed chunk readable
 (see :func:`mt_accuracy_ros.io.bag_reader.recover`).
@@ -56,9 +59,24 @@ class _Topic:
     name: str
     type: str
     qos: list[dict]
-    channel_id: int
     type_hash: str
     count: int = 0
+
+
+@dataclass
+class _File:
+    """Bookkeeping of one ``<name>_<i>.mcap`` of a (possibly split) bag."""
+
+    name: str
+    first_ns: int | None = None
+    last_ns: int = 0
+    count: int = 0
+
+    def info(self) -> dict:
+        start = self.first_ns or 0
+        return {"path": self.name, "starting_time": {"nanoseconds_since_epoch": start},
+                "duration": {"nanoseconds": max(0, self.last_ns - start)},
+                "message_count": self.count}
 
 
 @dataclass
@@ -72,16 +90,22 @@ class BagWriter:
     compression : ``"zstd"`` or ``None``
         Chunk compression.
     chunk_size : int
-        Bytes per chunk before it is closed and flushed.
+        Bytes per chunk before it is closed and flushed [B].
+    max_file_size : int
+        Split to a new ``<name>_<i>.mcap`` once the current file holds this many
+        bytes (0: never), like ``ros2 bag record --max-bag-size``.
+    max_file_duration_s : float
+        Split once a file spans this much log time [s] (0: never), like
+        ``--max-bag-duration``.
     """
 
     path: Path
     compression: str | None = "zstd"
     chunk_size: int = 1024 * 1024
+    max_file_size: int = 0
+    max_file_duration_s: float = 0.0
     _topics: dict[str, _Topic] = field(default_factory=dict, init=False)
-    _schemas: dict[str, int] = field(default_factory=dict, init=False)
-    _first_ns: int | None = field(default=None, init=False)
-    _last_ns: int = field(default=0, init=False)
+    _files: list[_File] = field(default_factory=list, init=False)
     _closed: bool = field(default=False, init=False)
 
     def __post_init__(self) -> None:
@@ -90,47 +114,86 @@ class BagWriter:
             raise BagError(f"{self.path} already exists; refusing to overwrite a bag")
         if self.compression not in (None, "zstd"):
             raise BagError(f"compression must be 'zstd' or None, got {self.compression!r}")
+        if self.max_file_size < 0 or self.max_file_duration_s < 0:
+            raise BagError("max_file_size and max_file_duration_s must be >= 0 (0 = no split)")
         self.path.mkdir(parents=True)
-        self.file_name = f"{self.path.name}_0.mcap"
-        self._stream = open(self.path / self.file_name, "wb")
+        self._open_file()
+
+    # -- files -------------------------------------------------------------------------
+    def _open_file(self) -> None:
+        current = _File(f"{self.path.name}_{len(self._files)}.mcap")
+        self._files.append(current)
+        self._stream = open(self.path / current.name, "wb")
         self._writer = Writer(
             self._stream, chunk_size=self.chunk_size,
             compression=CompressionType.ZSTD if self.compression else CompressionType.NONE)
         self._writer.start(profile="ros2", library="mt_accuracy_ros")
         self._flushed_bytes = 0
+        self._schema_ids: dict[str, int] = {}
+        self._channel_ids: dict[str, int] = {}
+        # rosbag2 repeats every known topic in each split file.
+        for topic in self._topics.values():
+            self._register(topic)
 
+    def _finish_file(self) -> None:
+        info = yaml.safe_dump(self.bag_info(), sort_keys=False)
+        self._writer.add_metadata("rosbag2", {"serialized_metadata": info})
+        self._writer.finish()
+        self._stream.close()
+
+    def _register(self, topic: _Topic) -> None:
+        if topic.type not in self._schema_ids:
+            self._schema_ids[topic.type] = self._writer.register_schema(
+                name=topic.type, encoding="ros2msg", data=schema_text(topic.type).encode())
+        self._channel_ids[topic.name] = self._writer.register_channel(
+            topic=topic.name, message_encoding="cdr", schema_id=self._schema_ids[topic.type],
+            metadata={"offered_qos_profiles": yaml.safe_dump(topic.qos, sort_keys=False),
+                      "topic_type_hash": topic.type_hash})
+
+    def _split_due(self, log_time_ns: int) -> bool:
+        current = self._files[-1]
+        if current.count == 0:
+            return False
+        if self.max_file_size and self._stream.tell() >= self.max_file_size:
+            return True
+        return bool(self.max_file_duration_s) and current.first_ns is not None and \
+            log_time_ns - current.first_ns >= self.max_file_duration_s * 1e9
+
+    # -- public API ----------------------------------------------------------------------
     def add_topic(self, name: str, type_name: str, qos: list[dict] | dict | None = None) -> None:
         """Declare a topic; ``type_name`` as ``pkg/msg/Type``."""
+        if self._closed:
+            raise BagError("bag already closed")
         if name in self._topics:
             if self._topics[name].type != type_name:
                 raise BagError(f"topic {name} already recorded as {self._topics[name].type}")
             return
-        if type_name not in self._schemas:
-            self._schemas[type_name] = self._writer.register_schema(
-                name=type_name, encoding="ros2msg", data=schema_text(type_name).encode())
         profiles = [qos] if isinstance(qos, dict) else list(qos or [qos_dict()])
-        hash_string = type_hash(type_name)
-        channel = self._writer.register_channel(
-            topic=name, message_encoding="cdr", schema_id=self._schemas[type_name],
-            metadata={"offered_qos_profiles": yaml.safe_dump(profiles, sort_keys=False),
-                      "topic_type_hash": hash_string})
-        self._topics[name] = _Topic(name, type_name, profiles, channel, hash_string)
+        topic = _Topic(name, type_name, profiles, type_hash(type_name))
+        self._register(topic)
+        self._topics[name] = topic
 
     def write(self, topic: str, data: bytes, log_time_ns: int,
               publish_time_ns: int | None = None) -> None:
-        """Write one serialized message."""
+        """Write one serialized message (times in integer nanoseconds)."""
         if self._closed:
             raise BagError("bag already closed")
         entry = self._topics.get(topic)
         if entry is None:
             raise BagError(f"topic {topic} not declared; call add_topic first")
-        publish = log_time_ns if publish_time_ns is None else publish_time_ns
-        self._writer.add_message(channel_id=entry.channel_id, log_time=int(log_time_ns),
-                                 publish_time=int(publish), data=bytes(data),
-                                 sequence=entry.count)
+        log_time_ns = int(log_time_ns)
+        if self._split_due(log_time_ns):
+            self._finish_file()
+            self._open_file()
+        publish = log_time_ns if publish_time_ns is None else int(publish_time_ns)
+        self._writer.add_message(channel_id=self._channel_ids[topic], log_time=log_time_ns,
+                                 publish_time=publish, data=bytes(data), sequence=entry.count)
         entry.count += 1
-        self._first_ns = log_time_ns if self._first_ns is None else min(self._first_ns, log_time_ns)
-        self._last_ns = max(self._last_ns, log_time_ns)
+        current = self._files[-1]
+        current.count += 1
+        current.first_ns = log_time_ns if current.first_ns is None else min(current.first_ns,
+                                                                             log_time_ns)
+        current.last_ns = max(current.last_ns, log_time_ns)
         # The MCAP writer emits bytes only when a chunk closes; push each closed
         # chunk to the OS so that a killed process keeps it.
         position = self._stream.tell()
@@ -142,10 +205,15 @@ class BagWriter:
     def message_count(self) -> int:
         return sum(t.count for t in self._topics.values())
 
+    @property
+    def file_names(self) -> list[str]:
+        return [f.name for f in self._files]
+
     def bag_info(self) -> dict:
         """The ``rosbag2_bagfile_information`` mapping (bag version 9)."""
-        start = self._first_ns or 0
-        duration = max(0, self._last_ns - start)
+        starts = [f.first_ns for f in self._files if f.first_ns is not None]
+        start = min(starts) if starts else 0
+        duration = max(0, max(f.last_ns for f in self._files) - start) if starts else 0
         topics = [{"topic_metadata": {"name": t.name, "type": t.type,
                                       "serialization_format": "cdr",
                                       "offered_qos_profiles": t.qos,
@@ -158,11 +226,8 @@ class BagWriter:
             "message_count": self.message_count,
             "topics_with_message_count": topics,
             "compression_format": "", "compression_mode": "",
-            "relative_file_paths": [self.file_name],
-            "files": [{"path": self.file_name,
-                       "starting_time": {"nanoseconds_since_epoch": start},
-                       "duration": {"nanoseconds": duration},
-                       "message_count": self.message_count}],
+            "relative_file_paths": self.file_names,
+            "files": [f.info() for f in self._files],
             "custom_data": {}, "ros_distro": "jazzy"}}
 
     def close(self) -> None:
@@ -170,11 +235,8 @@ class BagWriter:
         if self._closed:
             return
         self._closed = True
-        info = yaml.safe_dump(self.bag_info(), sort_keys=False)
-        self._writer.add_metadata("rosbag2", {"serialized_metadata": info})
-        self._writer.finish()
-        self._stream.close()
-        (self.path / "metadata.yaml").write_text(info)
+        self._finish_file()
+        (self.path / "metadata.yaml").write_text(yaml.safe_dump(self.bag_info(), sort_keys=False))
 
     def __enter__(self) -> "BagWriter":
         return self

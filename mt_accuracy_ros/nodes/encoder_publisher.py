@@ -46,6 +46,10 @@ class EncoderPublisher(Node):
             read_only=True))
         self.declare_parameter("frame_id", "machine", plain_descriptor(
             "frame_id of the published batches"))
+        self.declare_parameter("min_subscribers", 0, int_descriptor(
+            "Hold the stream until this many subscriptions match 'scales' (e.g. the "
+            "estimator and a recorder), so nobody misses the first sample", 0, 100,
+            read_only=True))
         self.add_on_set_parameters_callback(self._validate)
 
         self._rate = int(self.get_parameter("sample_rate_hz").value)
@@ -53,7 +57,7 @@ class EncoderPublisher(Node):
         self._rng = np.random.default_rng(int(self.get_parameter("seed").value))
         self._yaw_profile = YawProfile()
         self._next_index = 0
-        self._start_ns = self.get_clock().now().nanoseconds
+        self._start_ns: int | None = None
         self.finished = False
         self._publisher = self.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
         self._timer = self.create_timer(self._batch / self._rate, self._publish_batch)
@@ -70,6 +74,11 @@ class EncoderPublisher(Node):
         if duration > 0.0 and self._next_index / self._rate >= duration:
             self.finished = True
             return
+        if self._start_ns is None:
+            if self._publisher.get_subscription_count() < \
+                    int(self.get_parameter("min_subscribers").value):
+                return
+            self._start_ns = self.get_clock().now().nanoseconds
         index = self._next_index + np.arange(self._batch)
         time_s = index / self._rate
         position, _ = back_and_forth(time_s, self.get_parameter("stroke_m").value,

@@ -1,0 +1,169 @@
+"""Recorder: write topics of the graph to a rosbag2-compatible MCAP bag.
+
+Subscribes with ``raw=True`` (serialized CDR, never decoded) to the listed
+topics, or to every topic of the graph whose type is installed, discovered
+again every ``discovery_period_s`` so late publishers are recorded too. Each
+message is written with log time = receive time on the node's clock (so
+``use_sim_time`` records sim time) and publish time = the publisher's source
+timestamp. The subscription QoS follows the publishers (reliable only if all
+are, transient local only if all are - so latched tables are caught).
+
+SIGINT/SIGTERM close the bag completely (summary, statistics,
+``metadata.yaml``); after a SIGKILL every closed chunk is still readable and
+:func:`mt_accuracy_ros.io.bag_reader.recover` salvages it. Status on
+``/diagnostics`` once a second.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from datetime import datetime
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.clock import Clock, ClockType
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from ..core.errors import BagError
+from ..io.bag_reader import message_class
+from ..io.bag_writer import BagWriter, qos_from_rclpy
+from ._common import accept, float_descriptor, int_descriptor, plain_descriptor, refuse
+
+
+class Recorder(Node):
+    """Record raw messages of selected (or all) topics into one bag directory."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("recorder", **kwargs)
+        self.declare_parameter("output", "", plain_descriptor(
+            "Bag directory to create (empty: rosbag2_<date>_<time>)", read_only=True))
+        self.declare_parameter("topics", [""], plain_descriptor(
+            "Topics to record (empty: every topic whose type is installed)", read_only=True))
+        self.declare_parameter("compression", "zstd", plain_descriptor(
+            "Chunk compression: 'zstd' or 'none'", read_only=True))
+        self.declare_parameter("chunk_size", 1024 * 1024, int_descriptor(
+            "Bytes per MCAP chunk [B]", 1024, 1 << 30, read_only=True))
+        self.declare_parameter("max_bag_size", 0, int_descriptor(
+            "Split to a new file after this many bytes (0: never) [B]", 0, 1 << 40,
+            read_only=True))
+        self.declare_parameter("max_bag_duration", 0.0, float_descriptor(
+            "Split to a new file after this much time (0: never) [s]", 0.0, 1e7,
+            read_only=True))
+        self.declare_parameter("discovery_period_s", 0.5, float_descriptor(
+            "How often to look for new topics [s]", 0.05, 60.0))
+        self.add_on_set_parameters_callback(self._validate)
+
+        output = str(self.get_parameter("output").value) or \
+            datetime.now().strftime("rosbag2_%Y_%m_%d-%H_%M_%S")
+        compression = str(self.get_parameter("compression").value)
+        if compression not in ("zstd", "none"):
+            raise BagError(f"compression must be 'zstd' or 'none', got {compression!r}")
+        self.bag = BagWriter(output, compression=None if compression == "none" else "zstd",
+                             chunk_size=int(self.get_parameter("chunk_size").value),
+                             max_file_size=int(self.get_parameter("max_bag_size").value),
+                             max_file_duration_s=float(
+                                 self.get_parameter("max_bag_duration").value))
+        self._wanted = {t for t in self.get_parameter("topics").value if t}
+        self._subscriptions_by_topic: dict = {}
+        self._warned: set[str] = set()
+        self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self._discover()
+        # Discovery and status run on wall time: with use_sim_time a ROS-time timer
+        # would not fire before the first /clock, and nothing would be subscribed.
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._discovery_timer = self.create_timer(
+            float(self.get_parameter("discovery_period_s").value), self._discover, clock=steady)
+        self.create_timer(1.0, self._report, clock=steady)
+        self.get_logger().info(f"recording to {self.bag.path}")
+
+    def _validate(self, parameters):
+        for parameter in parameters:
+            if parameter.name == "discovery_period_s":
+                if not 0.05 <= float(parameter.value) <= 60.0:
+                    return refuse("discovery_period_s must be within [0.05, 60] s")
+                self._discovery_timer.timer_period_ns = int(float(parameter.value) * 1e9)
+        return accept()
+
+    def _discover(self) -> None:
+        for name, types in self.get_topic_names_and_types():
+            if name in self._subscriptions_by_topic or (self._wanted and name not in self._wanted):
+                continue
+            if len(types) != 1:
+                self._warn_once(name, f"topic {name} has several types {types}; not recorded")
+                continue
+            type_name = types[0]
+            try:
+                cls = message_class(type_name)
+            except BagError:
+                self._warn_once(name, f"topic {name}: type {type_name} is not installed; "
+                                      "not recorded")
+                continue
+            publishers = self.get_publishers_info_by_topic(name)
+            if not publishers:
+                continue
+            offered = [qos_from_rclpy(p.qos_profile) for p in publishers]
+            reliable = all(q["reliability"] == "reliable" for q in offered)
+            latched = all(q["durability"] == "transient_local" for q in offered)
+            qos = QoSProfile(
+                depth=1000, history=HistoryPolicy.KEEP_LAST,
+                reliability=ReliabilityPolicy.RELIABLE if reliable
+                else ReliabilityPolicy.BEST_EFFORT,
+                durability=DurabilityPolicy.TRANSIENT_LOCAL if latched
+                else DurabilityPolicy.VOLATILE)
+            self.bag.add_topic(name, type_name, offered)
+            self._subscriptions_by_topic[name] = self.create_subscription(
+                cls, name, self._writer_for(name), qos, raw=True)
+            self.get_logger().info(f"recording {name} [{type_name}]")
+
+    def _warn_once(self, topic: str, text: str) -> None:
+        if topic not in self._warned:
+            self._warned.add(topic)
+            self.get_logger().warning(text)
+
+    def _writer_for(self, topic: str):
+        clock = self.get_clock()
+
+        def write(data: bytes, info) -> None:
+            # info: rmw message info; source_timestamp is the publisher's stamp [ns].
+            received = clock.now().nanoseconds
+            self.bag.write(topic, data, received, int(info.get("source_timestamp", received)))
+        return write
+
+    def _report(self) -> None:
+        status = DiagnosticStatus(level=DiagnosticStatus.OK, name=f"{self.get_name()}: bag",
+                                  message=f"recording {len(self._subscriptions_by_topic)} topics",
+                                  hardware_id=str(self.bag.path))
+        status.values = [KeyValue(key="messages", value=str(self.bag.message_count)),
+                         KeyValue(key="files", value=",".join(self.bag.file_names))]
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self._diagnostics.publish(array)
+
+    def close(self) -> None:
+        self.bag.close()
+
+
+def main(args: list[str] | None = None) -> int:
+    rclpy.init(args=args if args is not None else sys.argv)
+    try:
+        node = Recorder()
+    except BagError as exc:
+        print(f"recorder: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        # Whatever stopped the spin, finish the file: summary, statistics, metadata.yaml.
+        node.close()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,280 @@
+"""Recorder and player as real processes: record a live graph, validate the bag with
+rosbags, replay it through the estimator with use_sim_time and get the same outputs."""
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap.writer import Writer
+
+from graph_helpers import spin_for, spin_until
+from mt_accuracy_ros.io.bag_reader import bag_info, decode, read_messages, recover
+from mt_accuracy_ros.io.bag_writer import BagWriter, qos_dict
+from mt_accuracy_ros.processes import start_node
+
+
+def _yaw_by_index(bag: Path) -> dict[int, tuple[int, np.ndarray]]:
+    out = {}
+    for message in read_messages(bag, ["/yaw/x"]):
+        decoded = decode(message)
+        stamp = decoded.header.stamp.sec * 10**9 + decoded.header.stamp.nanosec
+        out[decoded.first_sample_index] = (stamp, np.asarray(decoded.yaw))
+    return out
+
+
+def test_live_recording_validates_independently_and_replays_identically(rclpy_context, tmp_path):
+    import rclpy
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys.msg import get_types_from_msg
+
+    probe = rclpy.create_node("probe")
+    live = tmp_path / "live"
+    processes = [start_node("recorder", {"output": str(live), "topics": ["/scales", "/yaw/x"],
+                                         "discovery_period_s": 0.1, "chunk_size": 65536}),
+                 start_node("yaw_estimator", {"axes": ["x"], "scale_distance_m": [0.24]})]
+    try:
+        assert spin_until(probe, lambda: probe.count_subscribers("/yaw/x") >= 1)
+        encoder = start_node("encoder_publisher", {
+            "sample_rate_hz": 2000, "batch_period_s": 0.05, "duration_s": 2.0,
+            "min_subscribers": 2})
+        assert encoder.popen.wait(timeout=60) == 0
+        spin_for(probe, 1.0)
+    finally:
+        for process in processes:
+            assert process.stop() == 0
+    info = bag_info(live)
+    assert info["topics"]["/scales"]["count"] == 40  # 2 s at 20 batches/s, none lost
+    assert info["topics"]["/yaw/x"]["count"] == 40
+
+    # The independent reader sees the same topics, types, counts, times, QoS, contents.
+    store = get_typestore(Stores.ROS2_JAZZY)
+    ours = list(read_messages(live))
+    with Reader(live) as reader:
+        assert {c.topic: c.msgtype for c in reader.connections} == {
+            "/scales": "mt_accuracy_msgs/msg/ScaleBatch", "/yaw/x": "mt_accuracy_msgs/msg/YawBatch"}
+        qos = {c.topic: c.ext.offered_qos_profiles[0] for c in reader.connections}
+        assert qos["/scales"].reliability.name.lower() == "best_effort"
+        assert qos["/yaw/x"].reliability.name.lower() == "reliable"
+        for connection in reader.connections:
+            store.register(get_types_from_msg(connection.msgdef.data, connection.msgtype))
+        theirs = [(c.topic, t, store.deserialize_cdr(raw, c.msgtype))
+                  for c, t, raw in reader.messages()]
+    assert [(m.topic, m.log_time_ns) for m in ours] == [(t, ts) for t, ts, _ in theirs]
+    for mine, (_, _, other) in zip(ours, theirs):
+        decoded = decode(mine)
+        assert decoded.first_sample_index == other.first_sample_index
+        field = "positions"
+        np.testing.assert_array_equal(np.asarray(getattr(decoded, field)), getattr(other, field))
+
+    # Replay /scales through a fresh estimator on sim time; record its output.
+    replay = tmp_path / "replay"
+    processes = [start_node("recorder", {"output": str(replay), "topics": ["/yaw/x"],
+                                         "discovery_period_s": 0.1, "use_sim_time": True}),
+                 start_node("yaw_estimator", {"axes": ["x"], "scale_distance_m": [0.24],
+                                              "use_sim_time": True})]
+    try:
+        assert spin_until(probe, lambda: probe.count_subscribers("/yaw/x") >= 1)
+        player = start_node("bag_player", {"bag": str(live), "topics": ["/scales"],
+                                           "wait_for_subscribers_s": 20.0})
+        assert player.popen.wait(timeout=60) == 0
+        spin_for(probe, 1.0)
+    finally:
+        for process in processes:
+            assert process.stop() == 0
+        probe.destroy_node()
+    live_yaw, replayed_yaw = _yaw_by_index(live), _yaw_by_index(replay)
+    assert sorted(replayed_yaw) == sorted(live_yaw)
+    for index, (stamp, yaw) in live_yaw.items():
+        assert replayed_yaw[index][0] == stamp
+        np.testing.assert_array_equal(replayed_yaw[index][1], yaw)  # bit-identical
+    # The replay recorder logged on the played /clock: recorded time, not today's.
+    scale_times = [m.log_time_ns for m in read_messages(live, ["/scales"])]
+    replay_times = [m.log_time_ns for m in read_messages(replay)]
+    assert scale_times[0] - 10**8 <= min(replay_times)
+    assert max(replay_times) <= scale_times[-1] + 10**9
+
+
+def _chatter_bag(path: Path, n: int = 11, with_unknown_type: bool = True) -> None:
+    """/chatter at 10 Hz for 1 s, plus a topic of a type nobody has installed."""
+    from rclpy.serialization import serialize_message
+    from std_msgs.msg import String
+
+    with BagWriter(path) as bag:
+        bag.add_topic("/chatter", "std_msgs/msg/String")
+        for i in range(n):
+            bag.write("/chatter", serialize_message(String(data=f"m{i}")), 10**18 + i * 10**8)
+    if with_unknown_type:
+        with open(path / "extra.mcap", "wb") as stream:
+            writer = Writer(stream)
+            writer.start(profile="ros2", library="test")
+            schema = writer.register_schema("fake_msgs/msg/Nothing", "ros2msg", b"int32 a")
+            channel = writer.register_channel("/fake", "cdr", schema)
+            writer.add_message(channel, log_time=10**18, publish_time=10**18, data=b"\0\1\0\0\0\0\0\0")
+            writer.finish()
+
+
+def _player(bag: Path, *extra: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "mt_accuracy_ros.cli", "play", str(bag),
+                             "--wait-for-subscribers", "20", *extra],
+                            stderr=subprocess.PIPE, text=True)
+
+
+@pytest.mark.parametrize("rate, offset, expected_count", [(2.0, 0.0, 11), (1.0, 0.5, 6)])
+def test_player_timing_offset_remap_clock_and_unknown_type(rclpy_context, tmp_path, rate, offset,
+                                                           expected_count):
+    import rclpy
+    from rosgraph_msgs.msg import Clock
+    from std_msgs.msg import String
+
+    from mt_accuracy_ros.nodes.player import CLOCK_QOS
+
+    _chatter_bag(tmp_path / "bag")
+    node = rclpy.create_node("listener")
+    received: list[tuple[float, str]] = []
+    clocks: list[int] = []
+    node.create_subscription(String, "/talk", lambda m: received.append((time.monotonic(), m.data)),
+                             10)
+    node.create_subscription(Clock, "/clock", lambda m: clocks.append(
+        m.clock.sec * 10**9 + m.clock.nanosec), CLOCK_QOS)
+    process = _player(tmp_path / "bag", "--rate", str(rate), "--start-offset", str(offset),
+                      "--remap", "/chatter:=/talk")
+    try:
+        assert spin_until(node, lambda: process.poll() is not None, timeout_s=60)
+        spin_for(node, 0.3)
+    finally:
+        process.kill()
+        stderr = process.communicate()[1]
+        node.destroy_node()
+    assert process.returncode == 0, stderr
+    assert stderr.count("fake_msgs/msg/Nothing is not installed") == 1
+    assert [text for _, text in received] == [f"m{i}" for i in range(11 - expected_count, 11)]
+    span = received[-1][0] - received[0][0]
+    assert span == pytest.approx((expected_count - 1) * 0.1 / rate, abs=0.08)
+    assert clocks == sorted(clocks)
+    assert clocks[-1] == 10**18 + 10 * 10**8  # /clock reaches the last message's bag time
+    assert clocks[0] >= 10**18 + int(offset * 1e9)
+
+
+def test_player_pause_resume_and_loop(rclpy_context, tmp_path):
+    import rclpy
+    from std_msgs.msg import String
+    from std_srvs.srv import Trigger
+
+    _chatter_bag(tmp_path / "bag", with_unknown_type=False)
+    node = rclpy.create_node("listener")
+    received: list[str] = []
+    node.create_subscription(String, "/chatter", lambda m: received.append(m.data), 10)
+    resume = node.create_client(Trigger, "/bag_player/resume")
+    process = _player(tmp_path / "bag", "--start-paused", "--loop", "--rate", "4")
+    try:
+        assert resume.wait_for_service(timeout_sec=30)
+        spin_for(node, 1.0)
+        assert received == []  # paused: nothing plays
+        future = resume.call_async(Trigger.Request())
+        assert spin_until(node, future.done, timeout_s=10) and future.result().success
+        assert spin_until(node, lambda: len(received) >= 25, timeout_s=30)
+    finally:
+        process.send_signal(signal.SIGINT)
+        process.communicate(timeout=20)
+        node.destroy_node()
+    assert received[:22] == [f"m{i}" for i in range(11)] * 2  # looped, in order
+
+
+def test_player_refuses_non_cdr_bags_clearly(shared_data):
+    result = subprocess.run([sys.executable, "-m", "mt_accuracy_ros.cli", "play",
+                             str(shared_data / "rosbag2_samples" / "wrong_rmw_test")],
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2
+    assert "only 'cdr'" in result.stderr
+
+
+def test_player_plays_rosbag2_split_bag_without_metadata(rclpy_context, shared_data):
+    import rclpy
+    from std_msgs.msg import String
+
+    bag = shared_data / "rosbag2_samples" / "multiple_files"
+    expected = [decode(m).data for m in read_messages(bag)]
+    node = rclpy.create_node("listener")
+    received: list[str] = []
+    node.create_subscription(String, "/chatter", lambda m: received.append(m.data), 5000)
+    process = _player(bag, "--rate", "1000")
+    try:
+        assert spin_until(node, lambda: process.poll() is not None, timeout_s=60)
+        spin_for(node, 0.5)
+    finally:
+        process.kill()
+        process.communicate()
+        node.destroy_node()
+    assert process.returncode == 0
+    assert received == expected
+
+
+@pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM])
+def test_recorder_stopped_by_signal_leaves_a_complete_bag(rclpy_context, tmp_path, stop_signal):
+    import rclpy
+    from std_msgs.msg import String
+
+    node = rclpy.create_node("talker")
+    publisher = node.create_publisher(String, "/chatter", 10)
+    recorder = start_node("recorder", {"output": str(tmp_path / "bag"), "discovery_period_s": 0.1})
+    assert spin_until(node, lambda: publisher.get_subscription_count() >= 1)
+    for i in range(50):
+        publisher.publish(String(data=f"m{i}"))
+        spin_for(node, 0.01)
+    spin_for(node, 0.3)
+    recorder.popen.send_signal(stop_signal)
+    assert recorder.popen.wait(timeout=20) == 0
+    node.destroy_node()
+    info = bag_info(tmp_path / "bag")  # summary + statistics present: a complete file
+    assert info["topics"]["/chatter"]["count"] == 50
+    assert (tmp_path / "bag" / "metadata.yaml").is_file()
+    assert [decode(m).data for m in read_messages(tmp_path / "bag", ["/chatter"])] == \
+        [f"m{i}" for i in range(50)]
+
+
+def test_recorder_killed_keeps_closed_chunks(rclpy_context, tmp_path):
+    import rclpy
+    from std_msgs.msg import String
+
+    node = rclpy.create_node("talker")
+    publisher = node.create_publisher(String, "/chatter", 100)
+    recorder = start_node("recorder", {"output": str(tmp_path / "bag"), "topics": ["/chatter"],
+                                       "chunk_size": 2048, "discovery_period_s": 0.1,
+                                       "compression": "none"})
+    assert spin_until(node, lambda: publisher.get_subscription_count() >= 1)
+    for i in range(400):
+        publisher.publish(String(data=f"message number {i:05d}"))
+        spin_for(node, 0.002)
+    spin_for(node, 0.5)
+    recorder.popen.kill()
+    recorder.popen.wait()
+    node.destroy_node()
+    salvaged = [decode(m).data for m in recover(tmp_path / "bag" / "bag_0.mcap")]
+    assert len(salvaged) >= 300  # all but the open chunk (< 2 kB of ~25-byte messages)
+    assert salvaged == [f"message number {i:05d}" for i in range(len(salvaged))]
+
+
+def test_split_bag_reads_as_one(tmp_path):
+    from rclpy.serialization import serialize_message
+    from rosbags.rosbag2 import Reader
+    from std_msgs.msg import String
+
+    with BagWriter(tmp_path / "bag", chunk_size=4096, max_file_size=20_000,
+                   compression=None) as bag:
+        bag.add_topic("/chatter", "std_msgs/msg/String", qos_dict())
+        for i in range(2000):
+            bag.write("/chatter", serialize_message(String(data=f"m{i:06d}")), 10**9 + i)
+    files = sorted(p.name for p in (tmp_path / "bag").glob("*.mcap"))
+    assert len(files) >= 3 and files[0] == "bag_0.mcap"
+    assert bag_info(tmp_path / "bag")["message_count"] == 2000
+    assert [decode(m).data for m in read_messages(tmp_path / "bag")] == \
+        [f"m{i:06d}" for i in range(2000)]
+    with Reader(tmp_path / "bag") as reader:
+        assert reader.message_count == 2000
+        assert [t for _, t, _ in reader.messages()] == [10**9 + i for i in range(2000)]
