@@ -3,12 +3,20 @@ from __future__ import annotations
 
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
-from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
-                       qos_profile_sensor_data)
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-#: Raw sensor streams (scales, temperatures): best effort, keep last 5 - a late
-#: sample is worth less than the next one, as in ``qos_profile_sensor_data``.
-SENSOR_QOS = qos_profile_sensor_data
+#: Raw sensor streams (scales, temperatures): best effort and volatile like
+#: ``qos_profile_sensor_data`` - a retransmitted sample is worth less than the
+#: next one - but keep last 100 instead of 5: a batch holds many samples, and a
+#: subscriber whose process stalls for a few hundred ms on a loaded 2-core
+#: machine must not lose batches it already received.
+SENSOR_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT,
+                        durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
+
+#: After the publisher sees its subscribers matched, the subscribers may not yet
+#: have matched the publisher (discovery is not symmetric in time); a best-effort
+#: sample sent in that gap is lost. Streams that must be complete wait this long.
+MATCH_SETTLE_S = 0.5
 
 #: Results (yaw batches, profiles, compensation): reliable, keep last 50.
 RESULT_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE,

@@ -8,6 +8,7 @@ positions.
 from __future__ import annotations
 
 import sys
+import time
 
 import numpy as np
 import rclpy
@@ -18,7 +19,7 @@ from mt_accuracy_msgs.msg import ScaleBatch
 
 from ..sim.motion import back_and_forth
 from ..sim.scale_pair import YawProfile, read_scale_pair
-from ._common import (SENSOR_QOS, accept, float_descriptor, int_descriptor,
+from ._common import (MATCH_SETTLE_S, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse)
 
 
@@ -58,6 +59,7 @@ class EncoderPublisher(Node):
         self._yaw_profile = YawProfile()
         self._next_index = 0
         self._start_ns: int | None = None
+        self._matched_at: float | None = None
         self.finished = False
         self._publisher = self.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
         self._timer = self.create_timer(self._batch / self._rate, self._publish_batch)
@@ -77,6 +79,11 @@ class EncoderPublisher(Node):
         if self._start_ns is None:
             if self._publisher.get_subscription_count() < \
                     int(self.get_parameter("min_subscribers").value):
+                return
+            if self._matched_at is None:
+                self._matched_at = time.monotonic()
+            if time.monotonic() - self._matched_at < (
+                    MATCH_SETTLE_S if self.get_parameter("min_subscribers").value else 0.0):
                 return
             self._start_ns = self.get_clock().now().nanoseconds
         index = self._next_index + np.arange(self._batch)

@@ -28,7 +28,7 @@ from std_srvs.srv import Trigger
 from ..core.errors import BagError
 from ..io.bag_reader import message_class, read_messages, topics
 from ..io.playback import PlaybackClock, playback_policies
-from ._common import accept, float_descriptor, nanoseconds_to_stamp, plain_descriptor, refuse
+from ._common import MATCH_SETTLE_S, accept, float_descriptor, nanoseconds_to_stamp, plain_descriptor, refuse
 
 #: What ``use_sim_time`` subscribers use for /clock.
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
@@ -145,9 +145,13 @@ class BagPlayer(Node):
 
     def _wait_for_subscribers(self) -> None:
         deadline = time.monotonic() + float(self.get_parameter("wait_for_subscribers_s").value)
+        waited = False
         while time.monotonic() < deadline and not all(
                 p.get_subscription_count() > 0 for p in self._topic_publishers.values()):
+            waited = True
             time.sleep(0.02)
+        if waited or self.get_parameter("wait_for_subscribers_s").value > 0:
+            time.sleep(MATCH_SETTLE_S)
 
     def _publish_clock(self, bag_ns: int) -> None:
         if self._clock_publisher is not None:

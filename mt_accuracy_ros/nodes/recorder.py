@@ -68,6 +68,7 @@ class Recorder(Node):
         self._wanted = {t for t in self.get_parameter("topics").value if t}
         self._subscriptions_by_topic: dict = {}
         self._warned: set[str] = set()
+        self._pending: list[tuple[str, bytes, int]] = []
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self._discover()
         # Discovery and status run on wall time: with use_sim_time a ROS-time timer
@@ -128,7 +129,16 @@ class Recorder(Node):
         def write(data: bytes, info) -> None:
             # info: rmw message info; source_timestamp is the publisher's stamp [ns].
             received = clock.now().nanoseconds
-            self.bag.write(topic, data, received, int(info.get("source_timestamp", received)))
+            source = int(info.get("source_timestamp", received))
+            if received == 0:
+                # use_sim_time and no /clock heard yet: hold the message rather
+                # than log it at time zero; it gets the first valid time.
+                self._pending.append((topic, data, source))
+                return
+            while self._pending:
+                held_topic, held_data, held_source = self._pending.pop(0)
+                self.bag.write(held_topic, held_data, received, held_source)
+            self.bag.write(topic, data, received, source)
         return write
 
     def _report(self) -> None:
@@ -142,6 +152,10 @@ class Recorder(Node):
         self._diagnostics.publish(array)
 
     def close(self) -> None:
+        # Messages still waiting for a first /clock are kept, at their source time.
+        for topic, data, source in self._pending:
+            self.bag.write(topic, data, source, source)
+        self._pending.clear()
         self.bag.close()
 
 
