@@ -9,6 +9,8 @@ BENCHES = [
     ["bench.volumetric_map"],
     ["bench.volumetric_map", "--machine", "khan_chen_rpppr"],
     ["bench.bag_throughput"],
+    ["bench.sim_speed"],
+    ["bench.thesis_results"],
 ]
 
 

@@ -66,6 +66,45 @@ def _play(args: argparse.Namespace) -> int:
     return player_main(["mt-accuracy-play", *_ros_args(parameters, args.remap)])
 
 
+def _simulate(args: argparse.Namespace) -> int:
+    import json
+    import time
+    from pathlib import Path
+
+    from .core.errors import MtAccuracyError
+    from .sim.export import write_bag, write_csv
+    from .sim.machine_tool import simulate
+    from .sim.scenario import load_scenario
+
+    try:
+        scenario = load_scenario(args.scenario)
+    except MtAccuracyError as exc:
+        print(f"mt-accuracy simulate: {exc}", file=sys.stderr)
+        return 2
+    out = Path(args.out)
+    if (out / "bag").exists():
+        print(f"mt-accuracy simulate: {out / 'bag'} already exists", file=sys.stderr)
+        return 2
+    started = time.perf_counter()
+    result = simulate(scenario)
+    elapsed = time.perf_counter() - started
+    out.mkdir(parents=True, exist_ok=True)
+    files = [] if args.no_csv else write_csv(result, out, stride=args.csv_stride)
+    if not args.no_bag:
+        write_bag(result, out / "bag", progress=not args.quiet)
+        files.append(out / "bag")
+    summary = {"scenario": str(args.scenario), "samples": int(result.time_s.size),
+               "channels": result.scale_channels, "effects_on": sorted(scenario.enabled),
+               "events": [list(e) for e in scenario.events],
+               "simulated_s": scenario.duration_s, "generation_s": elapsed,
+               "samples_per_s": result.time_s.size / max(elapsed, 1e-9),
+               "files": [str(f) for f in files]}
+    (out / "simulation.json").write_text(json.dumps(summary, indent=2))
+    if not args.quiet:
+        print(json.dumps(summary, indent=2))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mt-accuracy",
@@ -87,6 +126,14 @@ def build_parser() -> argparse.ArgumentParser:
     record.add_argument("--max-bag-duration", type=float, default=0.0,
                         help="split after S seconds")
     record.set_defaults(handler=_record)
+    sim = commands.add_parser("simulate", help="run a scenario on the virtual machine tool")
+    sim.add_argument("scenario", help="scenario YAML (see mt_accuracy_ros.sim.scenario)")
+    sim.add_argument("--out", required=True, help="output directory (bag/ and CSV files)")
+    sim.add_argument("--no-bag", action="store_true")
+    sim.add_argument("--no-csv", action="store_true")
+    sim.add_argument("--csv-stride", type=int, default=1, help="write every N-th sample")
+    sim.add_argument("-q", "--quiet", action="store_true")
+    sim.set_defaults(handler=_simulate)
     play = commands.add_parser("play", help="publish a bag's messages in recorded time, with /clock")
     play.add_argument("bag", help="bag directory or .mcap file")
     play.add_argument("--topics", nargs="+", help="topics to play (default all)")

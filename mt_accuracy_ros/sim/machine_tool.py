@@ -1,0 +1,398 @@
+"""The virtual machine tool: scales, thermocouples and the true TCP error of a scenario.
+
+:func:`simulate` turns a :class:`~.scenario.Scenario` into a
+:class:`SimulationResult`, vectorised over all samples (no per-sample Python),
+deterministic for the scenario's seed. What it models, per linear axis with a
+scale pair (distance D, Kidani Table 3.1):
+
+* commanded motion from the program; actual position after ``reversal`` and
+  ``servo_lag``;
+* the pair's true yaw E (``geometric`` profile + ``guideway_deterioration``);
+* readings (Kidani eq. 2.13 inverted, scale zero at the low stroke end,
+  travel u = q - q_low):
+
+      x1 = q - D/2 E + g1(u) - dL1(u, t) + n1
+      x2 = q + D/2 E + g2(u) - dL2(u, t) + u (1/cos delta - 1) + v dt + n2
+
+  with g_i each scale's graduation error (a fraction of the SQ57 accuracy
+  (1.5 + 1.5 L) um, Table 3.2), dL_i the thermal expansion (eq. 3.17),
+  delta the parallelism (eq. 3.5), dt the head timing skew (eq. 2.20), n_i
+  white noise; then quantised to the 10 nm resolution;
+* thermocouples every 110 mm on each scale and on the structure, with noise
+  and 0.01 K resolution;
+* the TCP error relative to the workpiece against the command, from the
+  kinematic model (:class:`~mt_accuracy_ros.core.kinematics.KinematicModel`)
+  with every enabled effect, on demand at chosen samples (:meth:`tcp_error`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.kinematics import ErrorOverrides, KinematicModel
+from ..core.machine import location_error_name, motion_error_name
+from .effects import YAW_COMPONENT, SineProfile, deterioration_bump, random_profiles
+from .programs import PROGRAMS
+from .scenario import Scenario
+from .thermal_state import (first_order_response, scale_expansion_m, scale_shape,
+                            thermocouple_positions)
+
+#: Default distance between the scales of a pair when the machine file has none [m].
+DEFAULT_SCALE_DISTANCE_M = 0.5
+#: Fastest feed of the test machine [m/s] (60 m/min, Kidani Table 3.1).
+MAX_FEED_M_PER_S = 1.0
+
+
+@dataclass
+class SimulationResult:
+    """Everything one scenario produced. Arrays are per sample (N,) unless noted."""
+
+    scenario: Scenario
+    time_s: NDArray[np.float64]
+    command: dict[str, NDArray[np.float64]]
+    actual: dict[str, NDArray[np.float64]]
+    velocity: dict[str, NDArray[np.float64]]
+    scale_axes: list[str]
+    scale_channels: list[str]
+    scale_readings: NDArray[np.float64]          # (N, 2 * len(scale_axes)) [m]
+    scale_distance_m: dict[str, float]
+    yaw_truth: dict[str, NDArray[np.float64]]    # true yaw each pair measures [rad]
+    temperature_time_s: NDArray[np.float64]      # (M,)
+    temperature_names: list[str]
+    temperatures_c: NDArray[np.float64]          # (M, S) measured [degC]
+    temperatures_true_c: NDArray[np.float64]     # (M, S) [degC]
+    thermocouple_positions_m: dict[str, NDArray[np.float64]]
+    spindle_speed_rpm: NDArray[np.float64]       # (M,)
+    program: object
+    _masks: dict[str, NDArray[np.float64]] = field(repr=False, default_factory=dict)
+    _profiles: dict = field(repr=False, default_factory=dict)
+    _thermal: dict[str, NDArray[np.float64]] = field(repr=False, default_factory=dict)
+
+    @property
+    def sample_rate_hz(self) -> float:
+        return self.scenario.sample_rate_hz
+
+    def channel(self, name: str) -> NDArray[np.float64]:
+        """Readings of one scale head, e.g. ``"y1"`` [m]."""
+        return self.scale_readings[:, self.scale_channels.index(name)]
+
+    def mask(self, effect: str, indices=slice(None)) -> NDArray[np.float64]:
+        """1 where ``effect`` is on, per sample."""
+        if effect not in self._masks:
+            return np.zeros(self.time_s.size)[indices]
+        return self._masks[effect][indices]
+
+    def thermal_at(self, key: str, indices) -> NDArray[np.float64]:
+        """A thermal response (``column``, ``bed``, ``spindle``, ...) at sample indices."""
+        return np.interp(self.time_s[indices], self.temperature_time_s, self._thermal[key])
+
+    def temperature_rise(self, sensor: str) -> NDArray[np.float64]:
+        """Measured rise of a thermocouple since the first reading [K], per temperature step."""
+        column = self.temperatures_c[:, self.temperature_names.index(sensor)]
+        return column - column[0]
+
+    def dwell_groups(self, settle_s: float = 0.5) -> list[NDArray[np.int64]]:
+        """Sample indices of each program dwell (after ``settle_s``), in time order."""
+        labels = self.program.dwell_mask(self.time_s, settle_s)
+        # A repeating program dwells at the same label again; split at gaps.
+        index = np.flatnonzero(labels >= 0)
+        if index.size == 0:
+            return []
+        breaks = np.flatnonzero((np.diff(index) > 1) | (np.diff(labels[index]) != 0)) + 1
+        return np.split(index, breaks)
+
+    # ------------------------------------------------------------- TCP truth
+    def error_overrides(self, indices) -> ErrorOverrides:
+        """The kinematic-model inputs of every enabled effect at ``indices``."""
+        scenario = self.scenario
+        machine = scenario.machine
+        overrides = ErrorOverrides()
+        geometric = self.mask("geometric", indices)
+        for axis, components in self._profiles.items():
+            q = self.actual[axis][indices]
+            for component, profile in components.items():
+                overrides.motion[motion_error_name(component, axis)] = profile(q) * geometric
+        if scenario.ever_enabled("guideway_deterioration"):
+            params = scenario.parameters("guideway_deterioration")
+            axis = params["axis"]
+            name = motion_error_name(YAW_COMPONENT[axis], axis)
+            change = self._deterioration_yaw(axis, indices)
+            overrides.motion[name] = overrides.motion.get(name, 0.0) + change
+        if scenario.ever_enabled("position_dependent_thermal"):
+            params = scenario.parameters("position_dependent_thermal")
+            axis = params["axis"]
+            name = motion_error_name(axis, axis)
+            q = self.actual[axis][indices]
+            growth = (float(params["alpha_per_k"]) * (q - float(params["reference_m"]))
+                      * self.thermal_at("bed", indices)
+                      * self.mask("position_dependent_thermal", indices))
+            overrides.motion[name] = overrides.motion.get(name, 0.0) + growth
+        if scenario.ever_enabled("squareness"):
+            on = self.mask("squareness", indices)
+            for name, value in scenario.parameters("squareness")["errors_rad"].items():
+                if name[-1] in machine.axes:
+                    overrides.location[name] = float(value) * on
+        drift = np.zeros((np.size(self.time_s[indices]), 6))
+        if scenario.ever_enabled("structural_thermal_drift"):
+            beta = np.asarray(scenario.parameters("structural_thermal_drift")["beta_m_per_k"])
+            drift[:, :3] += np.outer(self.thermal_at("column", indices)
+                                     * self.mask("structural_thermal_drift", indices), beta)
+        if scenario.ever_enabled("spindle_thermal_growth"):
+            params = scenario.parameters("spindle_thermal_growth")
+            direction = np.asarray(params["direction"], dtype=np.float64)
+            direction = direction / np.linalg.norm(direction)
+            growth = (float(params["growth_m"]) * self.thermal_at("spindle", indices)
+                      * self.mask("spindle_thermal_growth", indices))
+            drift[:, :3] += np.outer(growth, direction)
+        if np.any(drift):
+            overrides.thermal["bed_tool"] = drift
+        return overrides
+
+    def _deterioration_yaw(self, axis: str, indices) -> NDArray[np.float64]:
+        params = self.scenario.parameters("guideway_deterioration")
+        if axis != params["axis"] or not self.scenario.ever_enabled("guideway_deterioration"):
+            return np.zeros(np.size(self.time_s[indices]))
+        q = self.actual[axis][indices]
+        peak = deterioration_peak_rad(self.scenario)
+        return peak * deterioration_bump(q, float(params["start_m"]), float(params["end_m"])) \
+            * self.mask("guideway_deterioration", indices)
+
+    def tcp_error(self, indices=None, *, with_orientation: bool = False):
+        """True TCP error relative to the workpiece, against the command (N, 3) [m].
+
+        The kinematic model's error at the actual axis positions (Kidani eq. 2.10)
+        plus the nominal displacement of actual vs commanded positions
+        (reversal, servo lag), plus the Abbe term eps x offset.
+        """
+        indices = np.arange(self.time_s.size)[slice(None) if indices is None else indices]
+        model = KinematicModel(self.scenario.machine)
+        actual = {a: self.actual[a][indices] for a in self.scenario.machine.axis_order}
+        command = {a: self.command[a][indices] for a in self.scenario.machine.axis_order}
+        result = model.tcp_error(actual, overrides=self.error_overrides(indices),
+                                 check_stroke=False)
+        position = result["position"] + (model.nominal_relative(actual)
+                                         - model.nominal_relative(command))
+        if self.scenario.ever_enabled("abbe_offset"):
+            offset = np.asarray(self.scenario.parameters("abbe_offset")["offset_m"], float)
+            position += np.cross(result["orientation"], offset) \
+                * self.mask("abbe_offset", indices)[:, None]
+        if with_orientation:
+            return position, result["orientation"]
+        return position
+
+
+def yaw_lever_m(machine, axis: str) -> float:
+    """|d e_TCP / d E_yaw| of ``axis`` from the kinematic model, mid stroke [m].
+
+    The Abbe lever d through which the pair's yaw moves the TCP (Kidani
+    eq. 3.14: e_y = E_CY d).
+    """
+    model = KinematicModel(machine)
+    positions = {a: np.array([0.5 * sum(machine.axes[a].stroke)]) for a in machine.axis_order}
+    name = motion_error_name(YAW_COMPONENT[axis], axis)
+    unit = 1e-6
+    moved = model.tcp_error(positions, overrides=ErrorOverrides(motion={name: unit},
+                                                                use_description=False))
+    return float(np.linalg.norm(moved["position"][0]) / unit)
+
+
+def deterioration_peak_rad(scenario: Scenario) -> float:
+    """Peak yaw change of ``guideway_deterioration`` that moves the TCP by ``tcp_change_m``."""
+    params = scenario.parameters("guideway_deterioration")
+    lever = float(params["lever_m"]) or yaw_lever_m(scenario.machine, params["axis"])
+    return float(params["tcp_change_m"]) / lever
+
+
+def _effect_masks(scenario: Scenario, time_s: NDArray[np.float64]) -> dict[str, NDArray]:
+    from .effects import EFFECTS
+
+    masks = {}
+    for name in EFFECTS:
+        if not scenario.ever_enabled(name):
+            continue  # read as zeros by SimulationResult.mask
+        on = np.full(time_s.shape, 1.0 if name in scenario.enabled else 0.0)
+        for event_time, effect, enable in scenario.events:
+            if effect == name:
+                on[time_s >= event_time] = 1.0 if enable else 0.0
+        masks[name] = on
+    return masks
+
+
+def _direction_held(velocity: NDArray[np.float64]) -> NDArray[np.float64]:
+    """sign(v), holding the last direction of motion while the axis stands still."""
+    moving = np.abs(velocity) > 1e-9
+    index = np.where(moving, np.arange(velocity.size), 0)
+    np.maximum.accumulate(index, out=index)
+    sign = np.sign(velocity[index])
+    sign[sign == 0] = 1.0
+    return sign
+
+
+def simulate(scenario: Scenario, *, progress: bool = False) -> SimulationResult:
+    """Run ``scenario``: every signal of the virtual machine tool, vectorised."""
+    machine = scenario.machine
+    seeds = np.random.SeedSequence(scenario.seed).spawn(5)
+    noise_seeds = np.random.SeedSequence(
+        scenario.seed if scenario.noise_seed is None else scenario.noise_seed).spawn(5)
+    rng_geometry, rng_graduation = (np.random.default_rng(seeds[0]),
+                                    np.random.default_rng(seeds[3]))
+    rng_noise, rng_thermo = (np.random.default_rng(noise_seeds[1]),
+                             np.random.default_rng(noise_seeds[2]))
+    n = scenario.n_samples
+    rate = scenario.sample_rate_hz
+    time_s = np.arange(n, dtype=np.float64) / rate
+    masks = _effect_masks(scenario, time_s)
+
+    program_args = {k: v for k, v in scenario.program.items() if k != "type"}
+    program = PROGRAMS[scenario.program["type"]](machine, **program_args)
+    moved = program.command(time_s)
+    command, actual, velocity = {}, {}, {}
+    for axis in machine.axis_order:
+        low, high = machine.axes[axis].stroke
+        home = 0.0 if machine.axes[axis].is_rotary else (low if low <= 0 <= high and low == 0
+                                                         else 0.5 * (low + high))
+        c = moved.get(axis, np.full(n, home))
+        v = np.gradient(c, 1.0 / rate) if n > 1 else np.zeros(n)
+        q = c.copy()
+        if not machine.axes[axis].is_rotary:
+            reversal = scenario.parameters("reversal")
+            if axis in reversal["axes"] and scenario.ever_enabled("reversal"):
+                q -= _direction_held(v) * 0.5 * float(reversal["backlash_m"]) * masks["reversal"]
+            lag = scenario.parameters("servo_lag")
+            if axis in lag["axes"] and scenario.ever_enabled("servo_lag"):
+                q -= v * float(lag["lag_s"]) * masks["servo_lag"]
+        command[axis], actual[axis], velocity[axis] = c, q, v
+
+    linear = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
+    geometric = scenario.parameters("geometric")
+    profiles = random_profiles(linear, rng_geometry, float(geometric["linear_m"]),
+                               float(geometric["angular_rad"]))
+
+    # ---- thermal state at the temperature rate
+    temperature_rate = scenario.temperature_rate_hz
+    m = max(2, int(np.floor(scenario.duration_s * temperature_rate)) + 1)
+    temperature_time = np.arange(m) / temperature_rate
+    bins = np.minimum((time_s * temperature_rate).astype(np.int64), m - 1)
+    counts = np.maximum(np.bincount(bins, minlength=m), 1)
+    motion_input = {a: np.bincount(bins, np.abs(velocity[a]), minlength=m) / counts
+                    / MAX_FEED_M_PER_S for a in linear}
+    spindle = scenario.spindle
+    speed = np.zeros(m)
+    for start, end in spindle.get("intervals_s") or []:
+        speed[(temperature_time >= float(start)) & (temperature_time < float(end))] = \
+            float(spindle["speed_rpm"])
+    spindle_input = speed / max(float(spindle["max_rpm"]), 1.0)
+    dt_thermal = 1.0 / temperature_rate
+    mean_motion = np.mean([motion_input[a] for a in linear], axis=0)
+    ambient_cfg = scenario.ambient
+    ambient = float(ambient_cfg["amplitude_k"]) * np.sin(
+        2 * np.pi * temperature_time / float(ambient_cfg["period_s"]))
+    expansion = scenario.parameters("scale_thermal_expansion")
+    drift = scenario.parameters("structural_thermal_drift")
+    bed = scenario.parameters("position_dependent_thermal")
+    growth = scenario.parameters("spindle_thermal_growth")
+    # Normalised to a steady 1 at full, continuous input; the rise parameters scale them.
+    thermal = {
+        "column": float(drift["rise_k"]) * first_order_response(
+            0.6 * np.minimum(mean_motion * 10, 1) + 0.4 * spindle_input, dt_thermal,
+            float(drift["time_constant_s"]), 1.0),
+        "bed": float(bed["rise_k"]) * first_order_response(
+            np.minimum(motion_input.get(bed["axis"], mean_motion) * 10, 1), dt_thermal,
+            float(bed["time_constant_s"]), 1.0),
+        "spindle": first_order_response(spindle_input, dt_thermal,
+                                        float(growth["time_constant_s"]), 1.0),
+        "ambient": ambient,
+    }
+
+    # ---- scales
+    scale_axes = [a for a in linear if a in machine.scale_distance_m] or linear[:3]
+    distances = {a: float(machine.scale_distance_m.get(a, DEFAULT_SCALE_DISTANCE_M))
+                 for a in scale_axes}
+    noise = scenario.noise
+    readings = np.empty((n, 2 * len(scale_axes)))
+    channels: list[str] = []
+    yaw_truth: dict[str, NDArray] = {}
+    temperature_names: list[str] = []
+    temperature_columns: list[NDArray] = []
+    tc_positions: dict[str, NDArray] = {}
+    skew = float(scenario.parameters("timing_skew")["skew_s"])
+    delta = float(scenario.parameters("scale_parallelism")["delta_rad"])
+    for k, axis in enumerate(scale_axes):
+        low, high = machine.axes[axis].stroke
+        length = high - low
+        q = actual[axis]
+        travel = q - low
+        distance = distances[axis]
+        yaw = profiles[axis][YAW_COMPONENT[axis]].tabulated(low, high)(q)
+        if "geometric" not in masks:
+            yaw = np.zeros(n)
+        elif not np.all(masks["geometric"]):
+            yaw = yaw * masks["geometric"]
+        if scenario.ever_enabled("guideway_deterioration"):
+            params = scenario.parameters("guideway_deterioration")
+            if params["axis"] == axis:
+                yaw = yaw + deterioration_peak_rad(scenario) * \
+                    deterioration_bump(q, float(params["start_m"]), float(params["end_m"])) * \
+                    masks["guideway_deterioration"]
+        yaw_truth[axis] = yaw
+        # Motion heat of this axis warms its scales; rise_i at steady full-duty motion.
+        h_axis = first_order_response(np.minimum(motion_input[axis] * 10, 1), dt_thermal,
+                                      float(expansion["time_constant_s"]), 1.0)
+        accuracy = float(noise["scale_accuracy_fraction"]) * (1.5e-6 + 1.5e-6 * length)
+        for i in (1, 2):
+            rise = float(expansion[f"rise_scale_{i}_k"]) * h_axis
+            name = f"{axis.lower()}{i}"
+            positions = thermocouple_positions(length)
+            tc_positions[name] = positions
+            for j, s in enumerate(positions):
+                temperature_names.append(f"{name}_s{j}")
+                temperature_columns.append(rise * scale_shape(s, length) + ambient)
+            graduation = SineProfile(
+                tuple(accuracy * rng_graduation.uniform(0.3, 1.0) / (1 + r) for r in range(3)),
+                tuple(float(w) for w in rng_graduation.uniform([0.5, 0.15, 0.05],
+                                                               [1.0, 0.3, 0.1])),
+                tuple(float(p) for p in rng_graduation.uniform(0, 2 * np.pi, 3)))
+            reading = q + (-0.5 if i == 1 else 0.5) * distance * yaw
+            reading = reading + graduation.tabulated(0.0, length)(travel) - graduation(np.zeros(1))
+            if scenario.ever_enabled("scale_thermal_expansion"):
+                shaped = np.interp(time_s, temperature_time, rise)
+                uniform = np.interp(time_s, temperature_time, ambient - ambient[0])
+                reading = reading - scale_expansion_m(
+                    travel, length, shaped, uniform,
+                    float(expansion["expansion_per_k"])) * masks["scale_thermal_expansion"]
+            if i == 2 and scenario.ever_enabled("scale_parallelism"):
+                reading = reading + travel * (1.0 / np.cos(delta) - 1.0) * \
+                    masks["scale_parallelism"]
+            if i == 2 and scenario.ever_enabled("timing_skew"):
+                reading = reading + velocity[axis] * skew * masks["timing_skew"]
+            if float(noise["scale_m"]) > 0:
+                reading = reading + rng_noise.normal(0.0, float(noise["scale_m"]), n)
+            resolution = float(noise["resolution_m"])
+            if resolution > 0:
+                reading = np.round(reading / resolution) * resolution
+            readings[:, 2 * k + i - 1] = reading
+            channels.append(name)
+
+    mean_c = float(ambient_cfg["mean_c"])
+    for name, key, scale in (("column", "column", 1.0), ("bed", "bed", 1.0),
+                             ("spindle", "spindle", 8.0)):
+        temperature_names.append(name)
+        temperature_columns.append(scale * thermal[key] + ambient)
+    temperature_names.append("ambient")
+    temperature_columns.append(ambient)
+    true_c = mean_c + np.column_stack(temperature_columns)
+    measured = true_c + rng_thermo.normal(0.0, float(noise["thermocouple_k"]), true_c.shape)
+    step = float(noise["thermocouple_resolution_k"])
+    if step > 0:
+        measured = np.round(measured / step) * step
+
+    return SimulationResult(
+        scenario=scenario, time_s=time_s, command=command, actual=actual, velocity=velocity,
+        scale_axes=scale_axes, scale_channels=channels, scale_readings=readings,
+        scale_distance_m=distances, yaw_truth=yaw_truth, temperature_time_s=temperature_time,
+        temperature_names=temperature_names, temperatures_c=measured,
+        temperatures_true_c=true_c, thermocouple_positions_m=tc_positions,
+        spindle_speed_rpm=speed, program=program, _masks=masks, _profiles=profiles,
+        _thermal=thermal)
