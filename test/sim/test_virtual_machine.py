@@ -228,3 +228,26 @@ def test_generation_speed_is_reported_not_asserted_but_runs_at_20_khz():
     result = _run(duration=2.0, rate=20000.0)
     assert result.scale_readings.shape == (40000, 6)
     assert np.all(np.isfinite(result.scale_readings))
+
+
+@pytest.mark.parametrize("program, moving", [
+    ("{type: diagonal, kind: body, steps: 4, dwell_s: 0.2, feed_m_per_min: 20}", "XYZ"),
+    ("{type: diagonal, kind: face, steps: 4, dwell_s: 0.2, feed_m_per_min: 20}", "XY"),
+])
+def test_five_axis_grinder_runs_diagonals(program, moving):
+    from mt_accuracy_ros.sim.scenario import scenario_from_yaml as parse
+
+    result = simulate(parse("machine: khan_chen_rpppr\nseed: 1\nduration_s: 8\nsample_rate_hz: 200\n"
+                            f"program: {program}\neffects: {{squareness: true}}\n"))
+    assert result.scale_readings.shape[1] == 6  # X, Y, Z pairs at the default distance
+    for axis in "XYZ":
+        assert (np.ptp(result.command[axis]) > 0.1) == (axis in moving)
+    # Along a diagonal all moving axes travel in proportion (ISO 230-6).
+    lows = {a: result.scenario.machine.axes[a].stroke[0] for a in moving}
+    spans = {a: np.ptp(result.scenario.machine.axes[a].stroke) for a in moving}
+    fractions = np.array([(result.command[a] - lows[a]) / spans[a] for a in moving])
+    np.testing.assert_allclose(fractions, fractions[0][None, :].repeat(len(moving), 0), atol=1e-12)
+    groups = result.dwell_groups(settle_s=0.05)
+    assert len(groups) >= 5
+    error = result.tcp_error(np.array([g[0] for g in groups]))
+    assert np.all(np.isfinite(error)) and np.abs(error).max() > 1e-7
