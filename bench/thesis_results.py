@@ -21,6 +21,14 @@ from mt_accuracy_ros.sim import thesis  # noqa: E402
 FIGURES = Path(__file__).resolve().parents[1] / "docs" / "figures"
 
 
+def _save(fig, ax, name: str, xlabel: str, ylabel: str, title: str) -> None:
+    ax.set(xlabel=xlabel, ylabel=ylabel, title=title)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(FIGURES / name, dpi=110)
+    plt.close(fig)
+
+
 def figure_a(r) -> None:
     fig, ax = plt.subplots(figsize=(6, 3.5))
     y = r.positions_m * 1e3
@@ -28,12 +36,8 @@ def figure_a(r) -> None:
                     (r.scale_yaw_rad + r.band_2u_rad) * 1e6, color="r", alpha=0.15, label="2u")
     ax.plot(y, r.scale_yaw_rad * 1e6, "ro-", label="scales (eq. 3.9)")
     ax.plot(y, r.laser_yaw_rad * 1e6, "bs-", label="laser (XM60-like)")
-    ax.set(xlabel="Y position [mm]", ylabel="E_CY [µrad]",
-           title=f"(a) yaw: {r.count_inside} of 11 positions inside 2u")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(FIGURES / "result_a.png", dpi=110)
-    plt.close(fig)
+    _save(fig, ax, "result_a.png", "Y position [mm]", "E_CY [µrad]",
+          f"(a) yaw: {r.count_inside} of 11 positions inside 2u")
 
 
 def figure_b(r) -> None:
@@ -43,13 +47,9 @@ def figure_b(r) -> None:
             label="scales - laser, raw")
     ax.plot(r.hours, np.max(np.abs(r.compensated_change_rad), axis=1) * 1e6, "r.-",
             label="with thermal compensation (eq. 3.17)")
-    ax.set(xlabel="warm-up time [h]", ylabel="max |apparent yaw change| [µrad]",
-           title=f"(b) 20 h warm-up: {100 * r.removed_fraction:.1f} % removed "
-                 f"(scale rises {r.scale_rise_k[end, 0]:.2f} / {r.scale_rise_k[end, 1]:.2f} K)")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(FIGURES / "result_b.png", dpi=110)
-    plt.close(fig)
+    _save(fig, ax, "result_b.png", "warm-up time [h]", "max |apparent yaw change| [µrad]",
+          f"(b) 20 h warm-up: {100 * r.removed_fraction:.1f} % removed "
+          f"(scale rises {r.scale_rise_k[end, 0]:.2f} / {r.scale_rise_k[end, 1]:.2f} K)")
 
 
 def figure_c(r) -> None:
@@ -59,12 +59,8 @@ def figure_c(r) -> None:
     ax.plot(y, r.residual_m * 1e6, "r-", label="T3 - T1 (y_MOD = y - Δe)")
     ax.fill_between(y, 0, 1, where=r.flagged, color="orange", alpha=0.2,
                     transform=ax.get_xaxis_transform(), label="flagged |ΔE| ≥ tol")
-    ax.set(xlabel="Y position [mm]", ylabel="TCP change Δe_y [µm]",
-           title=f"(c) deterioration: {100 * r.removed_fraction:.1f} % removed")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(FIGURES / "result_c.png", dpi=110)
-    plt.close(fig)
+    _save(fig, ax, "result_c.png", "Y position [mm]", "TCP change Δe_y [µm]",
+          f"(c) deterioration: {100 * r.removed_fraction:.1f} % removed")
 
 
 def figure_d(r) -> None:
@@ -72,13 +68,9 @@ def figure_d(r) -> None:
     ax.plot(r.positions_m * 1e3, r.values_rad * 1e6, ",", color="0.6", label="yaw samples")
     grid = np.linspace(r.positions_m.min(), r.positions_m.max(), r.systematic_rad.size)
     ax.plot(grid * 1e3, r.systematic_rad * 1e6, "r-", label=f"kNN systematic, k = {r.k}")
-    ax.set(xlabel="X position [mm]", ylabel="E_CX [µrad]",
-           title=f"(d) CV RMSE {r.cv_rmse_rad * 1e6:.4f} vs new data "
-                 f"{r.new_data_rmse_rad * 1e6:.4f} µrad ({100 * r.relative_difference:.2f} %)")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(FIGURES / "result_d.png", dpi=110)
-    plt.close(fig)
+    _save(fig, ax, "result_d.png", "X position [mm]", "E_CX [µrad]",
+          f"(d) CV RMSE {r.cv_rmse_rad * 1e6:.4f} vs new data "
+          f"{r.new_data_rmse_rad * 1e6:.4f} µrad ({100 * r.relative_difference:.2f} %)")
 
 
 def main() -> int:

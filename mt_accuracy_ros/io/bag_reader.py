@@ -115,6 +115,28 @@ def bag_info(path: str | Path) -> dict:
             "duration_s": ((last or 0) - (first or 0)) / 1e9, "topics": topics}
 
 
+class _Truncated(Exception):
+    """Raised by :func:`_complete_records` at the first incomplete record."""
+
+
+def _complete_records(path: Path, schemas: dict[int, str]):
+    """Records of an MCAP file read as a stream, up to the first incomplete one.
+
+    Fills ``schemas`` (id -> name) on the way; raises :class:`_Truncated` where
+    the file stops making sense (a killed writer's last, open chunk).
+    """
+    from mcap.records import Schema
+
+    with open(path, "rb") as stream:
+        try:
+            for record in StreamReader(stream, skip_magic=False, emit_chunks=False).records:
+                if isinstance(record, Schema):
+                    schemas[record.id] = record.name
+                yield record
+        except (McapError, EOFError, ValueError, struct.error) as exc:
+            raise _Truncated() from exc
+
+
 def recover(path: str | Path) -> list[BagMessage]:
     """Every message of the complete records of a truncated MCAP file.
 
@@ -122,26 +144,23 @@ def recover(path: str | Path) -> list[BagMessage]:
     up to the first incomplete record returns every message of every chunk
     that was closed (and flushed) before the kill.
     """
-    from mcap.records import Channel, Message, Schema
+    from mcap.records import Channel, Message
 
     path = Path(path)
-    schemas: dict[int, str] = {}
-    channels: dict[int, tuple[str, int]] = {}
     out: list[BagMessage] = []
-    with open(path, "rb") as stream:
-        try:
-            for record in StreamReader(stream, skip_magic=False, emit_chunks=False).records:
-                if isinstance(record, Schema):
-                    schemas[record.id] = record.name
-                elif isinstance(record, Channel):
-                    channels[record.id] = (record.topic, record.schema_id)
-                elif isinstance(record, Message) and record.channel_id in channels:
-                    topic, schema_id = channels[record.channel_id]
-                    out.append(BagMessage(topic, schemas.get(schema_id, ""), record.data,
-                                          record.log_time, record.publish_time))
-        except (McapError, EOFError, ValueError, struct.error) as exc:  # the truncation point
-            if not out and not channels:
-                raise BagError(f"{path}: nothing recoverable ({exc})") from exc
+    schemas: dict[int, str] = {}
+    channels: dict = {}
+    try:
+        for record in _complete_records(path, schemas):
+            if isinstance(record, Channel):
+                channels[record.id] = record
+            elif isinstance(record, Message) and record.channel_id in channels:
+                channel = channels[record.channel_id]
+                out.append(BagMessage(channel.topic, schemas.get(channel.schema_id, ""),
+                                      record.data, record.log_time, record.publish_time))
+    except _Truncated as exc:
+        if not out and not channels:
+            raise BagError(f"{path}: nothing recoverable ({exc.__cause__})") from exc
     return sorted(out, key=lambda m: m.log_time_ns)
 
 
@@ -172,7 +191,7 @@ def topics(path: str | Path) -> dict[str, TopicInfo]:
     Uses each file's summary; a file without one (a killed writer) is scanned
     up to its last complete record.
     """
-    from mcap.records import Channel, Schema
+    from mcap.records import Channel
 
     found: dict[str, TopicInfo] = {}
     for f in mcap_files(path):
@@ -187,14 +206,11 @@ def topics(path: str | Path) -> dict[str, TopicInfo]:
                 found.setdefault(channel.topic, _channel_info(channel, schema.name if schema else ""))
             continue
         schemas: dict[int, str] = {}
-        with open(f, "rb") as stream:
-            try:
-                for record in StreamReader(stream, skip_magic=False, emit_chunks=False).records:
-                    if isinstance(record, Schema):
-                        schemas[record.id] = record.name
-                    elif isinstance(record, Channel):
-                        found.setdefault(record.topic,
-                                         _channel_info(record, schemas.get(record.schema_id, "")))
-            except (McapError, EOFError, ValueError, struct.error):
-                pass  # truncated: keep what was complete
+        try:
+            for record in _complete_records(f, schemas):
+                if isinstance(record, Channel):
+                    found.setdefault(record.topic,
+                                     _channel_info(record, schemas.get(record.schema_id, "")))
+        except _Truncated:
+            pass  # keep what was complete
     return found
