@@ -11,6 +11,7 @@ BENCHES = [
     ["bench.bag_throughput"],
     ["bench.sim_speed"],
     ["bench.thesis_results"],
+    ["bench.thermal_report"],
 ]
 
 
