@@ -86,6 +86,20 @@ class ThermalFEModel:
         q[self.heat_nodes] = power_w / self.heat_nodes.size
         return q
 
+    def sensor_nodes(self, positions_m: ArrayLike, y_m: float = 0.0) -> NDArray[np.int64]:
+        """Nearest node of each sensor position along the element [m].
+
+        Raises :class:`InputDataError` for a sensor outside the body.
+        """
+        x = np.atleast_1d(np.asarray(positions_m, dtype=np.float64))
+        outside = (x < -1e-9) | (x > self.length_m + 1e-9) | ~np.isfinite(x)
+        if outside.any() or not (-1e-9 <= y_m <= max(self.height_m, 0.0) + 1e-9):
+            bad = x[outside] if outside.any() else np.array([y_m])
+            raise InputDataError(f"sensor position(s) {bad.tolist()} m outside the {self.kind} "
+                                 f"(x in [0, {self.length_m}] m, y in [0, {self.height_m}] m)")
+        distance = np.hypot(self.nodes[None, :, 0] - x[:, None], self.nodes[None, :, 1] - y_m)
+        return np.argmin(distance, axis=1)
+
     def deformation(self, temperatures: ArrayLike) -> dict[str, NDArray[np.float64]]:
         """Free-end expansion epsilon [m], deflection delta [m], slope theta [rad].
 

@@ -74,8 +74,7 @@ def modal_sensors(model: ThermalFEModel, modes: ThermalModes,
 def gauss_sensors(model: ThermalFEModel, order: int = 3) -> np.ndarray:
     """Candidate nodes nearest the Gauss points of an order-k field (Krulewich eq. 8)."""
     points, _ = gauss_points(order, model.length_m)
-    x = model.nodes[:, 0]
-    return np.array([int(np.argmin(np.abs(x - p))) for p in points])
+    return model.sensor_nodes(points)
 
 
 def krulewich_tube() -> ThermalFEModel:

@@ -97,5 +97,10 @@ def test_bad_parameters_and_models_without_losses():
         rod_model(length_m=-1.0)
     with pytest.raises(ParameterError):
         rod_model(heat_at_m=2.0)
+    with pytest.raises(InputDataError, match="outside the rod"):
+        rod_model().sensor_nodes([0.5, 1.2])
+    with pytest.raises(InputDataError, match="outside the beam"):
+        beam_model().sensor_nodes([0.5], y_m=0.5)
+    assert rod_model().sensor_nodes([0.0, 0.5, 1.0]).tolist() == [0, 11, 22]
     with pytest.raises(InputDataError, match="no heat loss"):
         thermal_modes(rod_model(convection_w_m2k=0.0))
