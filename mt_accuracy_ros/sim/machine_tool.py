@@ -66,6 +66,7 @@ class SimulationResult:
     thermocouple_positions_m: dict[str, NDArray[np.float64]]
     spindle_speed_rpm: NDArray[np.float64]       # (M,)
     program: object
+    first_index: int = 0                         # index of time_s[0] in the whole run
     _masks: dict[str, NDArray[np.float64]] = field(repr=False, default_factory=dict)
     _profiles: dict = field(repr=False, default_factory=dict)
     _thermal: dict[str, NDArray[np.float64]] = field(repr=False, default_factory=dict)
@@ -230,24 +231,19 @@ def _direction_held(velocity: NDArray[np.float64]) -> NDArray[np.float64]:
     return sign
 
 
-def simulate(scenario: Scenario, *, progress: bool = False) -> SimulationResult:
-    """Run ``scenario``: every signal of the virtual machine tool, vectorised."""
-    machine = scenario.machine
-    seeds = np.random.SeedSequence(scenario.seed).spawn(5)
-    noise_seeds = np.random.SeedSequence(
-        scenario.seed if scenario.noise_seed is None else scenario.noise_seed).spawn(5)
-    rng_geometry, rng_graduation = (np.random.default_rng(seeds[0]),
-                                    np.random.default_rng(seeds[3]))
-    rng_noise, rng_thermo = (np.random.default_rng(noise_seeds[1]),
-                             np.random.default_rng(noise_seeds[2]))
-    n = scenario.n_samples
-    rate = scenario.sample_rate_hz
-    time_s = np.arange(n, dtype=np.float64) / rate
-    masks = _effect_masks(scenario, time_s)
+#: Noise is drawn in blocks of this many samples, each from its own seed, so that
+#: any window of a run (a live node's chunk) holds exactly the whole run's values.
+NOISE_BLOCK = 65536
+#: Rate at which the program is sampled to drive the thermal model [Hz].
+THERMAL_MOTION_RATE_HZ = 10.0
 
-    program_args = {k: v for k, v in scenario.program.items() if k != "type"}
-    program = PROGRAMS[scenario.program["type"]](machine, **program_args)
+
+def _axis_motion(scenario: Scenario, program, time_s: NDArray, masks: dict) -> tuple[dict, dict,
+                                                                                     dict]:
+    machine = scenario.machine
     moved = program.command(time_s)
+    rate = scenario.sample_rate_hz
+    n = time_s.size
     command, actual, velocity = {}, {}, {}
     for axis in machine.axis_order:
         low, high = machine.axes[axis].stroke
@@ -264,6 +260,55 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimulationResult:
             if axis in lag["axes"] and scenario.ever_enabled("servo_lag"):
                 q -= v * float(lag["lag_s"]) * masks["servo_lag"]
         command[axis], actual[axis], velocity[axis] = c, q, v
+    return command, actual, velocity
+
+
+def _block_noise(entropy: int, first: int, stop: int, channels: int, sigma: float) -> NDArray:
+    """White noise (stop - first, channels) identical for any window of the same run."""
+    out = np.empty((stop - first, channels))
+    for block in range(first // NOISE_BLOCK, (stop - 1) // NOISE_BLOCK + 1 if stop > first else 0):
+        rng = np.random.default_rng(np.random.SeedSequence([entropy, 0x5CA1E, block]))
+        values = rng.normal(0.0, sigma, (NOISE_BLOCK, channels))
+        lo, hi = max(first, block * NOISE_BLOCK), min(stop, (block + 1) * NOISE_BLOCK)
+        out[lo - first:hi - first] = values[lo - block * NOISE_BLOCK:hi - block * NOISE_BLOCK]
+    return out
+
+
+def simulate(scenario: Scenario, *, start_index: int = 0, stop_index: int | None = None,
+             progress: bool = False) -> SimulationResult:
+    """Run ``scenario``: every signal of the virtual machine tool, vectorised.
+
+    ``start_index`` / ``stop_index`` select a window of samples (a live node
+    streams a long run chunk by chunk); every value in a window equals the
+    whole run's value at the same index. Temperatures always cover the whole run.
+    """
+    machine = scenario.machine
+    seeds = np.random.SeedSequence(scenario.seed).spawn(5)
+    noise_entropy = scenario.seed if scenario.noise_seed is None else scenario.noise_seed
+    noise_seeds = np.random.SeedSequence(noise_entropy).spawn(5)
+    rng_geometry, rng_graduation = (np.random.default_rng(seeds[0]),
+                                    np.random.default_rng(seeds[3]))
+    rng_thermo = np.random.default_rng(noise_seeds[2])
+    total = scenario.n_samples
+    rate = scenario.sample_rate_hz
+    stop = total if stop_index is None else int(min(max(stop_index, 0), total))
+    start = int(min(max(start_index, 0), stop))
+    program_args = {k: v for k, v in scenario.program.items() if k != "type"}
+    program = PROGRAMS[scenario.program["type"]](machine, **program_args)
+    # One sample of margin keeps np.gradient central at the window's edges; with
+    # reversal on, one program period more finds the last direction of motion.
+    lookback = 1
+    if scenario.ever_enabled("reversal"):
+        lookback += int(np.ceil(program.period_s * rate)) + 1
+    lo, hi = max(0, start - lookback), min(total, stop + 1)
+    wide_time = np.arange(lo, hi, dtype=np.float64) / rate
+    wide_masks = _effect_masks(scenario, wide_time)
+    wide = _axis_motion(scenario, program, wide_time, wide_masks)
+    keep = slice(start - lo, stop - lo)
+    command, actual, velocity = ({a: v[keep] for a, v in part.items()} for part in wide)
+    time_s = wide_time[keep]
+    masks = {name: mask[keep] for name, mask in wide_masks.items()}
+    n = time_s.size
 
     linear = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
     geometric = scenario.parameters("geometric")
@@ -274,9 +319,14 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimulationResult:
     temperature_rate = scenario.temperature_rate_hz
     m = max(2, int(np.floor(scenario.duration_s * temperature_rate)) + 1)
     temperature_time = np.arange(m) / temperature_rate
-    bins = np.minimum((time_s * temperature_rate).astype(np.int64), m - 1)
+    # Heat from motion: the program's speed sampled at a fixed rate over the whole
+    # run, averaged per temperature step (independent of the scale sample rate).
+    motion_time = np.arange(0.0, scenario.duration_s, 1.0 / THERMAL_MOTION_RATE_HZ)
+    motion_velocity = _axis_motion(scenario, program, motion_time,
+                                   _effect_masks(scenario, motion_time))[2]
+    bins = np.minimum((motion_time * temperature_rate).astype(np.int64), m - 1)
     counts = np.maximum(np.bincount(bins, minlength=m), 1)
-    motion_input = {a: np.bincount(bins, np.abs(velocity[a]), minlength=m) / counts
+    motion_input = {a: np.bincount(bins, np.abs(motion_velocity[a]), minlength=m) / counts
                     / MAX_FEED_M_PER_S for a in linear}
     spindle = scenario.spindle
     speed = np.zeros(m)
@@ -318,6 +368,8 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimulationResult:
     temperature_columns: list[NDArray] = []
     tc_positions: dict[str, NDArray] = {}
     skew = float(scenario.parameters("timing_skew")["skew_s"])
+    head_noise = _block_noise(noise_entropy, start, stop, 2 * len(scale_axes),
+                              float(noise["scale_m"])) if float(noise["scale_m"]) > 0 else None
     delta = float(scenario.parameters("scale_parallelism")["delta_rad"])
     for k, axis in enumerate(scale_axes):
         low, high = machine.axes[axis].stroke
@@ -368,7 +420,7 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimulationResult:
             if i == 2 and scenario.ever_enabled("timing_skew"):
                 reading = reading + velocity[axis] * skew * masks["timing_skew"]
             if float(noise["scale_m"]) > 0:
-                reading = reading + rng_noise.normal(0.0, float(noise["scale_m"]), n)
+                reading = reading + head_noise[:, 2 * k + i - 1]
             resolution = float(noise["resolution_m"])
             if resolution > 0:
                 reading = np.round(reading / resolution) * resolution
@@ -394,5 +446,6 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimulationResult:
         scale_distance_m=distances, yaw_truth=yaw_truth, temperature_time_s=temperature_time,
         temperature_names=temperature_names, temperatures_c=measured,
         temperatures_true_c=true_c, thermocouple_positions_m=tc_positions,
-        spindle_speed_rpm=speed, program=program, _masks=masks, _profiles=profiles,
+        spindle_speed_rpm=speed, program=program, first_index=start, _masks=masks,
+        _profiles=profiles,
         _thermal=thermal)

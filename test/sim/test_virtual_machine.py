@@ -251,3 +251,19 @@ def test_five_axis_grinder_runs_diagonals(program, moving):
     assert len(groups) >= 5
     error = result.tcp_error(np.array([g[0] for g in groups]))
     assert np.all(np.isfinite(error)) and np.abs(error).max() > 1e-7
+
+
+def test_a_window_of_a_run_equals_the_whole_run_there():
+    from mt_accuracy_ros.sim.scenario import scenario_from_yaml as parse
+
+    scenario = parse("machine: kidani_hmc\nseed: 5\nduration_s: 20\nsample_rate_hz: 5000\n"
+                     "program: {type: back_and_forth, axes: [X, Y], feed_m_per_min: 20}\n"
+                     "effects: {reversal: true, servo_lag: true, timing_skew: true, "
+                     "scale_thermal_expansion: {time_constant_s: 30}}\n")
+    whole = simulate(scenario)
+    for start, stop in ((0, 1000), (65000, 70001), (99_000, 100_000)):
+        part = simulate(scenario, start_index=start, stop_index=stop)
+        assert part.first_index == start
+        np.testing.assert_array_equal(part.scale_readings, whole.scale_readings[start:stop])
+        np.testing.assert_array_equal(part.actual["X"], whole.actual["X"][start:stop])
+        np.testing.assert_array_equal(part.temperatures_c, whole.temperatures_c)
