@@ -26,6 +26,9 @@ def _scalar(type_name: str, salt: int):
 
 
 def _value(type_name: str, salt: int):
+    if type_name.endswith("]") and "[" in type_name:  # fixed-size array, e.g. boolean[3]
+        inner, size = type_name[:-1].split("[")
+        return [_value(inner, salt + i) for i in range(int(size))]
     if type_name.startswith("sequence<"):
         inner = type_name[len("sequence<"):-1].split(",")[0]
         return [_value(inner, salt + i) for i in range(3)]

@@ -11,7 +11,8 @@ import pytest
 from conftest import REPO_ROOT
 
 MESSAGE_TYPES = ["ScaleBatch", "TemperatureArray", "YawBatch", "SystematicProfile",
-                 "VolumetricCompensation", "CompensationTable", "EffectScore", "ModelCheck"]
+                 "VolumetricCompensation", "CompensationTable", "EffectScore", "ModelCheck",
+                 "ReferenceMeasurement"]
 
 PUBLISHER = textwrap.dedent("""
     import sys, time
