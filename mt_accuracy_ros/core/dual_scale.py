@@ -263,3 +263,19 @@ def corrected_yaw(x1_m: ArrayLike, x2_m: ArrayLike, scale_distance_m: float, *,
     for term in terms.values():
         yaw -= term
     return {"yaw": yaw, "raw": raw, **terms}
+
+
+#: Thermocouple spacing along each scale [m] (Kidani section 3.3.3).
+THERMOCOUPLE_SPACING_M = 0.11
+
+
+def thermocouple_positions(length_m: float, spacing_m: float = THERMOCOUPLE_SPACING_M
+                           ) -> NDArray[np.float64]:
+    """Positions along a scale of thermocouples every ``spacing_m``, both ends included [m]."""
+    length = positive(length_m, "length_m")
+    spacing = positive(spacing_m, "spacing_m")
+    count = int(np.floor(length / spacing + 1e-9)) + 1
+    positions = np.arange(count) * spacing
+    if length - positions[-1] > 1e-6:
+        positions = np.append(positions, length)
+    return positions

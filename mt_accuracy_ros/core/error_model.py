@@ -179,8 +179,20 @@ class ErrorModel:
                 v = np.broadcast_to(np.asarray(velocities[axis], dtype=np.float64), q[axis].shape)
                 shift = -np.sign(v) * 0.5 * float(p["backlash_m"]) if sign_of \
                     else -v * float(p["lag_s"])
-                drive[:, self.machine.axes[axis].direction] += shift
+                drive += shift[:, None] * self.axis_direction(axis, q)
         return position + drive, orientation
+
+    def axis_direction(self, axis: str, positions: dict[str, NDArray]) -> NDArray[np.float64]:
+        """d(tool - workpiece)/d q_axis (N, 3): where a unit move of the axis takes the TCP.
+
+        +unit for a tool-branch linear axis, -unit for one carrying the workpiece.
+        """
+        q = {a: np.asarray(v, dtype=np.float64) for a, v in positions.items()}
+        step = 1e-6
+        moved = dict(q)
+        moved[axis] = q[axis] + step
+        return (self._kinematics.nominal_relative(moved) - self._kinematics.nominal_relative(q)) \
+            / step
 
     def correction(self, positions, temperatures=None, velocities=None) -> NDArray[np.float64]:
         """Value to add to the command [m]: minus the position error (first order)."""

@@ -1,8 +1,22 @@
-"""Yaw estimator: yaw of each axis from its pair of parallel scales (Kidani eq. 2.13).
+"""Yaw and systematic-error estimator, per axis (Kidani chapters 2-4).
 
-Subscribes ``scales`` (``mt_accuracy_msgs/ScaleBatch``, sensor-data QoS) and
-publishes ``yaw/<axis>`` (``mt_accuracy_msgs/YawBatch``, reliable), one yaw per
-sample, relative to the first sample received (the zero reference).
+Subscribes ``scales`` (``ScaleBatch``) and ``temperatures`` (``TemperatureArray``),
+and for every axis whose heads ``<axis>1``/``<axis>2`` are in the batches:
+
+* yaw from the pair (eq. 2.13) relative to the first sample heard, with the
+  relative scale expansion removed (eq. 3.17, thermocouples ``<axis><i>_s<j>``
+  every ``thermocouple_spacing_m``, rises over the first reading) -> ``yaw/<axis>``
+  (``YawBatch``, reliable);
+* the streaming kNN systematic profile with periodic re-selection of k by
+  K-fold CV, and the random sigma (eqs. 2.22-2.23, 4.10-4.12) ->
+  ``systematic/<axis>`` (``SystematicProfile``, reliable) every ``profile_period_s``;
+* once ``baseline_after_s`` of data has passed the profile becomes the
+  baseline; later profiles carry ``baseline_difference`` and a deterioration
+  alarm (|dE| >= ``tolerance_rad``, eq. 2.1) that also goes to ``/diagnostics``.
+
+Bad input (NaN readings, a gap in ``first_sample_index``, stamps going back,
+a dead thermocouple) is reported on ``/diagnostics`` and skipped; the node keeps
+running.
 """
 from __future__ import annotations
 
@@ -10,80 +24,319 @@ import sys
 
 import numpy as np
 import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 
-from mt_accuracy_msgs.msg import ScaleBatch, YawBatch
+from mt_accuracy_msgs.msg import ScaleBatch, SystematicProfile, TemperatureArray, YawBatch
 
-from ..core.dual_scale import yaw_from_scales
-from ..core.errors import InputDataError
-from ._common import (RESULT_QOS, SENSOR_QOS, accept, pack_float64, plain_descriptor, refuse,
+from ..core.deterioration import detect_deterioration
+from ..core.dual_scale import (SQ57_EXPANSION_PER_K, scale_expansion, thermal_yaw_error,
+                               thermocouple_positions, yaw_from_scales)
+from ..core.errors import InputDataError, MtAccuracyError
+from ..core.machine import load_machine
+from ..core.streaming import StreamingSystematic
+from ..sim.effects import YAW_COMPONENT
+from ._common import (RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
+                      pack_float64, plain_descriptor, refuse, stamp_to_nanoseconds,
                       unpack_float64)
 
 
+class AxisState:
+    """Everything the estimator keeps for one axis."""
+
+    def __init__(self, axis: str, distance: float, stroke: tuple[float, float], params) -> None:
+        self.axis = axis
+        self.distance = distance
+        self.low, self.high = stroke
+        self.reference: tuple[float, float] | None = None
+        self.streaming = StreamingSystematic(
+            self.low, self.high, bin_width_m=params["bin_width_m"], k_lim=params["k_lim"],
+            window=params["window"], reselect_every=params["reselect_every"],
+            memory_samples=params["memory_samples"], initial_k=min(20, params["k_lim"]))
+        self.baseline: np.ndarray | None = None
+        self.alarm = False
+
+
 class YawEstimator(Node):
-    """Turns ScaleBatch messages into YawBatch messages per configured axis."""
+    """ScaleBatch + TemperatureArray -> YawBatch, SystematicProfile, diagnostics."""
 
     def __init__(self, **kwargs) -> None:
         super().__init__("yaw_estimator", **kwargs)
-        self.declare_parameter("axes", ["x"], plain_descriptor(
-            "Axes to estimate; channels '<axis>1' and '<axis>2' must be in the batches",
+        self.declare_parameter("machine", "kidani_hmc", plain_descriptor(
+            "Machine description (bundled name or path): strokes and scale distances",
             read_only=True))
-        self.declare_parameter("scale_distance_m", [0.24], plain_descriptor(
-            "Distance D between the two scales of each axis [m], same order as 'axes'"))
+        self.declare_parameter("axes", [""], plain_descriptor(
+            "Axes to estimate (empty: every pair in the batches)", read_only=True))
+        self.declare_parameter("thermal_correction", True, plain_descriptor(
+            "Remove the relative scale expansion (eq. 3.17)"))
+        self.declare_parameter("thermocouple_spacing_m", 0.11, float_descriptor(
+            "Spacing of the thermocouples on each scale [m]", 0.001, 10.0, read_only=True))
+        self.declare_parameter("expansion_per_k", SQ57_EXPANSION_PER_K, float_descriptor(
+            "Scale expansion coefficient C [1/K]", 0.0, 1e-4))
+        self.declare_parameter("bin_width_m", 0.5e-3, float_descriptor(
+            "Position resolution of the streaming summary [m]", 1e-6, 0.1, read_only=True))
+        self.declare_parameter("k_lim", 100, int_descriptor("Largest k tried by CV", 1, 1000,
+                                                            read_only=True))
+        self.declare_parameter("window", 20000, int_descriptor(
+            "Raw samples kept for re-selecting k", 1000, 10_000_000, read_only=True))
+        self.declare_parameter("reselect_every", 5000, int_descriptor(
+            "Samples between re-selections of k", 100, 10_000_000, read_only=True))
+        self.declare_parameter("memory_s", 20.0, float_descriptor(
+            "Forgetting horizon of the profile [s of data] (0: never forget)", 0.0, 1e7,
+            read_only=True))
+        self.declare_parameter("profile_period_s", 1.0, float_descriptor(
+            "Data time between two published profiles [s]", 0.01, 3600.0))
+        self.declare_parameter("profile_points", 100, int_descriptor(
+            "Query positions of a published profile", 2, 10000))
+        self.declare_parameter("baseline_after_s", 40.0, float_descriptor(
+            "Data time after which the profile becomes the baseline [s] (0: no baseline)",
+            0.0, 1e7))
+        self.declare_parameter("tolerance_rad", 10e-6, float_descriptor(
+            "Deterioration tolerance dE_TOL on the yaw [rad]", 1e-9, 1.0))
         self.add_on_set_parameters_callback(self._validate)
-        self._axes = list(self.get_parameter("axes").value)
-        self._distances = [float(d) for d in self.get_parameter("scale_distance_m").value]
-        if len(self._distances) != len(self._axes):
-            raise ValueError("scale_distance_m needs one value per entry of 'axes'")
-        self._reference: dict[str, tuple[float, float]] = {}
-        self._yaw_publishers = {axis: self.create_publisher(YawBatch, f"yaw/{axis}", RESULT_QOS)
-                            for axis in self._axes}
-        self.create_subscription(ScaleBatch, "scales", self._on_batch, SENSOR_QOS)
 
-    def _validate(self, parameters: list[Parameter]):
+        self.machine = load_machine(str(self.get_parameter("machine").value))
+        self._wanted = [a.upper() for a in self.get_parameter("axes").value if a]
+        self._axes: dict[str, AxisState] = {}
+        self._yaw_publishers: dict = {}
+        self._profile_publishers: dict = {}
+        self._temperature_reference: dict[str, float] = {}
+        self._rises: dict[str, float] = {}
+        self._last_index: int | None = None
+        self._last_stamp = -1
+        self._data_time_s = 0.0
+        self._next_profile_s = 0.0
+        self._problems: list[tuple[int, str]] = []
+        self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.create_subscription(ScaleBatch, "scales", self._on_batch, SENSOR_QOS)
+        self.create_subscription(TemperatureArray, "temperatures", self._on_temperatures,
+                                 SENSOR_QOS)
+
+    # ---------------------------------------------------------------- parameters
+    def _validate(self, parameters):
         for parameter in parameters:
-            if parameter.name == "scale_distance_m":
-                values = list(parameter.value)
-                if len(values) != len(self._axes):
-                    return refuse(f"scale_distance_m needs {len(self._axes)} values")
-                if any(not np.isfinite(v) or v <= 0.0 for v in values):
-                    return refuse("scale_distance_m values must be finite and > 0 [m]")
-                self._distances = [float(v) for v in values]
+            if parameter.name in ("expansion_per_k", "tolerance_rad", "profile_period_s") and \
+                    not np.isfinite(parameter.value):
+                return refuse(f"{parameter.name} must be finite")
+            if parameter.name == "baseline_after_s" and self._data_time_s > parameter.value > 0 \
+                    and any(s.baseline is None for s in self._axes.values()):
+                pass  # taken at the next profile
         return accept()
+
+    def _axis(self, axis: str) -> AxisState | None:
+        if axis in self._axes:
+            return self._axes[axis]
+        if self._wanted and axis not in self._wanted:
+            return None
+        if axis not in self.machine.axes:
+            self._report(DiagnosticStatus.WARN, f"axis {axis} is not an axis of "
+                                                f"{self.machine.name}; ignored")
+            self._axes[axis] = None
+            return None
+        rate = 1.0 / self._sample_period if self._sample_period else 1000.0
+        memory_s = float(self.get_parameter("memory_s").value)
+        params = {"bin_width_m": float(self.get_parameter("bin_width_m").value),
+                  "k_lim": int(self.get_parameter("k_lim").value),
+                  "window": int(self.get_parameter("window").value),
+                  "reselect_every": int(self.get_parameter("reselect_every").value),
+                  "memory_samples": memory_s * rate if memory_s > 0 else np.inf}
+        distance = float(self.machine.scale_distance_m.get(axis, 0.5))
+        state = AxisState(axis, distance, self.machine.axes[axis].stroke, params)
+        self._axes[axis] = state
+        self._yaw_publishers[axis] = self.create_publisher(YawBatch, f"yaw/{axis.lower()}",
+                                                           RESULT_QOS)
+        self._profile_publishers[axis] = self.create_publisher(
+            SystematicProfile, f"systematic/{axis.lower()}", RESULT_QOS)
+        return state
+
+    # ---------------------------------------------------------------- inputs
+    def _on_temperatures(self, message: TemperatureArray) -> None:
+        values = unpack_float64(message.temperatures)
+        names = list(message.sensor_names)
+        if len(values) != len(names):
+            self._report(DiagnosticStatus.ERROR, "temperature message: names and values differ "
+                                                 "in length; skipped")
+            return
+        dead = []
+        for name, value in zip(names, values):
+            if not np.isfinite(value):
+                dead.append(name)
+                continue
+            self._temperature_reference.setdefault(name, float(value))
+            self._rises[name] = float(value) - self._temperature_reference[name]
+        if dead:
+            self._report(DiagnosticStatus.WARN, f"no valid reading from {', '.join(dead)}; "
+                                                "their last value is used")
+
+    _sample_period = 0.0
 
     def _on_batch(self, message: ScaleBatch) -> None:
         channels = list(message.channel_names)
-        data = unpack_float64(message.positions).reshape(-1, len(channels))
-        for axis, distance in zip(self._axes, self._distances):
+        data = unpack_float64(message.positions)
+        if not channels or data.size % len(channels):
+            self._report(DiagnosticStatus.ERROR, "scale batch: positions do not fill "
+                                                 "n_samples x n_channels; skipped")
+            return
+        data = data.reshape(-1, len(channels))
+        stamp = stamp_to_nanoseconds(message.header.stamp)
+        if stamp <= self._last_stamp:
+            self._report(DiagnosticStatus.WARN, f"stamp went back or repeated "
+                                                f"({stamp} after {self._last_stamp} ns); batch "
+                                                "skipped")
+            return
+        if self._last_index is not None and message.first_sample_index != self._last_index:
+            lost = int(message.first_sample_index) - self._last_index
+            self._report(DiagnosticStatus.WARN, f"{lost} samples lost before index "
+                                                f"{message.first_sample_index}")
+        self._last_stamp = stamp
+        self._last_index = int(message.first_sample_index) + data.shape[0]
+        self._sample_period = float(message.sample_period)
+        self._data_time_s = self._last_index * self._sample_period
+        for axis in sorted({c[:-1].upper() for c in channels if c[-1:] in "12"}):
             try:
-                first = data[:, channels.index(f"{axis}1")]
-                second = data[:, channels.index(f"{axis}2")]
+                first = data[:, channels.index(f"{axis.lower()}1")]
+                second = data[:, channels.index(f"{axis.lower()}2")]
             except ValueError:
                 continue
-            if axis not in self._reference:
-                self._reference[axis] = (float(first[0]), float(second[0]))
-            try:
-                yaw = yaw_from_scales(first, second, distance, reference=self._reference[axis])
-            except InputDataError as exc:
-                self.get_logger().warning(f"axis {axis}: batch skipped: {exc}")
+            state = self._axis(axis)
+            if state is None:
                 continue
-            out = YawBatch()
-            out.header = message.header
-            out.axis = axis
-            out.first_sample_index = message.first_sample_index
-            out.sample_period = message.sample_period
-            out.positions = pack_float64(0.5 * (first + second))
-            out.yaw = pack_float64(yaw)
-            self._yaw_publishers[axis].publish(out)
+            self._process(state, message, first, second)
+        if self._data_time_s >= self._next_profile_s:
+            self._next_profile_s = self._data_time_s + float(
+                self.get_parameter("profile_period_s").value)
+            for state in self._axes.values():
+                if state is not None:
+                    self._publish_profile(state, message)
+            self._publish_diagnostics()
+
+    def _process(self, state: AxisState, message: ScaleBatch, first, second) -> None:
+        good = np.isfinite(first) & np.isfinite(second)
+        if not good.all():
+            self._report(DiagnosticStatus.WARN, f"axis {state.axis}: {int((~good).sum())} "
+                                                "non-finite readings dropped")
+        if state.reference is None:
+            if not good.any():
+                return
+            index = int(np.argmax(good))
+            state.reference = (float(first[index]), float(second[index]))
+        try:
+            raw = np.full(first.shape, np.nan)
+            raw[good] = yaw_from_scales(first[good], second[good], state.distance,
+                                        reference=state.reference)
+        except InputDataError as exc:
+            self._report(DiagnosticStatus.ERROR, f"axis {state.axis}: {exc}")
+            return
+        correction = self._thermal_term(state, first)
+        yaw = raw - correction if correction is not None else raw
+        positions = 0.5 * (first + second)
+        state.streaming.add(positions[good], yaw[good])
+        out = YawBatch()
+        out.header = message.header
+        out.axis = state.axis.lower()
+        out.first_sample_index = message.first_sample_index
+        out.sample_period = message.sample_period
+        out.positions = pack_float64(positions)
+        out.yaw = pack_float64(yaw)
+        out.thermal_correction = pack_float64(correction if correction is not None
+                                              else np.zeros(0))
+        self._yaw_publishers[state.axis].publish(out)
+
+    def _thermal_term(self, state: AxisState, first) -> np.ndarray | None:
+        if not self.get_parameter("thermal_correction").value:
+            return None
+        length = state.high - state.low
+        positions = thermocouple_positions(
+            length, float(self.get_parameter("thermocouple_spacing_m").value))
+        rises = []
+        for i in (1, 2):
+            names = [f"{state.axis.lower()}{i}_s{j}" for j in range(positions.size)]
+            if not all(n in self._rises for n in names):
+                return None  # no (complete) thermocouple data yet
+            rises.append(np.array([self._rises[n] for n in names]))
+        travel = np.clip(np.nan_to_num(first - state.low), 0.0, length)
+        c = float(self.get_parameter("expansion_per_k").value)
+        dl1 = scale_expansion(travel, rises[0], c, sensor_positions_m=positions)
+        dl2 = scale_expansion(travel, rises[1], c, sensor_positions_m=positions)
+        return thermal_yaw_error(travel, dl1, dl2, state.distance)
+
+    # ---------------------------------------------------------------- outputs
+    def _publish_profile(self, state: AxisState, message: ScaleBatch) -> None:
+        try:
+            query = np.linspace(state.low, state.high, int(self.get_parameter("profile_points").value))
+            profile = state.streaming.profile(query)
+        except MtAccuracyError:
+            return
+        out = SystematicProfile()
+        out.header = message.header
+        out.axis = state.axis.lower()
+        out.error_name = f"E{YAW_COMPONENT.get(state.axis, 'C')}{state.axis}"
+        out.unit = "rad"
+        out.positions = pack_float64(profile.positions)
+        out.systematic = pack_float64(profile.systematic)
+        out.random_sigma = pack_float64(np.nan_to_num(profile.random_sigma))
+        out.k = int(profile.k)
+        out.cv_rmse = float(profile.cv_rmse)
+        out.sample_count = int(profile.sample_count)
+        tolerance = float(self.get_parameter("tolerance_rad").value)
+        out.tolerance = tolerance
+        after = float(self.get_parameter("baseline_after_s").value)
+        if state.baseline is None and after > 0 and self._data_time_s >= after:
+            state.baseline = profile.systematic.copy()
+            self.get_logger().info(f"axis {state.axis}: baseline taken at {self._data_time_s:.1f} s")
+        if state.baseline is not None:
+            report = detect_deterioration(query, state.baseline, profile.systematic, tolerance)
+            out.baseline_difference = pack_float64(report.change)
+            out.deterioration = bool(report.deteriorated)
+            if report.deteriorated and not state.alarm:
+                ranges = ", ".join(f"{a * 1e3:.0f}..{b * 1e3:.0f} mm"
+                                   for a, b in report.flagged_ranges())
+                self.get_logger().warning(
+                    f"axis {state.axis}: yaw deteriorated by up to "
+                    f"{report.max_abs_change * 1e6:.1f} urad over {ranges}")
+            state.alarm = bool(report.deteriorated)
+        self._profile_publishers[state.axis].publish(out)
+
+    def _report(self, level: int, text: str) -> None:
+        self._problems.append((level, text))
+        if len(self._problems) > 50:
+            self._problems = self._problems[-50:]
+
+    def _publish_diagnostics(self) -> None:
+        statuses = []
+        for axis, state in sorted((a, s) for a, s in self._axes.items() if s is not None):
+            level = DiagnosticStatus.ERROR if state.alarm else DiagnosticStatus.OK
+            status = DiagnosticStatus(
+                level=level, name=f"{self.get_fully_qualified_name()}: axis {axis}",
+                hardware_id=self.machine.name,
+                message="yaw deterioration beyond tolerance" if state.alarm else "ok")
+            status.values = [KeyValue(key="samples", value=str(state.streaming.sample_count)),
+                             KeyValue(key="k", value=str(state.streaming.k)),
+                             KeyValue(key="baseline", value=str(state.baseline is not None))]
+            statuses.append(status)
+        worst = max((level for level, _ in self._problems), default=DiagnosticStatus.OK)
+        statuses.append(DiagnosticStatus(
+            level=worst, name=f"{self.get_fully_qualified_name()}: input",
+            hardware_id=self.machine.name,
+            message="; ".join(text for _, text in self._problems[-3:]) or "ok"))
+        self._problems.clear()
+        array = DiagnosticArray(status=statuses)
+        array.header.stamp = self.get_clock().now().to_msg()
+        self._diagnostics.publish(array)
 
 
 def main(args: list[str] | None = None) -> int:
     rclpy.init(args=args if args is not None else sys.argv)
-    node = YawEstimator()
+    try:
+        node = YawEstimator()
+    except MtAccuracyError as exc:
+        print(f"yaw_estimator: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
     try:
         rclpy.spin(node)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
         node.destroy_node()

@@ -195,6 +195,23 @@ def diagonal(machine: MachineDescription, kind: str = "body", feed_m_per_min: fl
     return _build(axes, points, [feed] * len(points), [dwell_s] * len(points))
 
 
+def random_points(machine: MachineDescription, axes=None, points: int = 30, seed: int = 0,
+                  dwell_s: float = 1.0, feed_m_per_min: float = 10.0,
+                  margin: float = 0.02) -> Program:
+    """Stops at ``points`` random positions of the work volume (a volumetric survey,
+    e.g. with a laser tracker); every axis moves independently, so position-dependent
+    effects (squareness) are separable from one another."""
+    axes = tuple(axes or [a for a in machine.axis_order if not machine.axes[a].is_rotary])
+    rng = np.random.default_rng(seed)
+    lows = np.array([_stroke(machine, a)[0] for a in axes])
+    highs = np.array([_stroke(machine, a)[1] for a in axes])
+    span = highs - lows
+    stops = lows + span * margin + rng.random((int(points), len(axes))) * span * (1 - 2 * margin)
+    feed = _feed(feed_m_per_min)
+    path = [list(p) for p in stops] + [list(stops[0])]
+    return _build(axes, path, [feed] * len(path), [dwell_s] * len(stops) + [0.0])
+
+
 @dataclass
 class CircleProgram:
     """A circle in the plane of two linear axes at constant feed (ball bar, ISO 230-4)."""
@@ -252,4 +269,5 @@ def _feed(feed_m_per_min: float) -> float:
 
 
 PROGRAMS = {"back_and_forth": back_and_forth, "cutting_passes": cutting_passes,
-            "stop_and_measure": stop_and_measure, "diagonal": diagonal, "circle": circle}
+            "stop_and_measure": stop_and_measure, "diagonal": diagonal, "circle": circle,
+            "random_points": random_points}

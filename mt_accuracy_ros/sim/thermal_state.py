@@ -17,8 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import lfilter
 
-#: Thermocouple spacing along each scale [m] (Kidani section 3.3.3).
-THERMOCOUPLE_SPACING_M = 0.11
+from ..core.dual_scale import THERMOCOUPLE_SPACING_M, thermocouple_positions  # noqa: F401
 
 
 def first_order_response(u: NDArray[np.float64], dt_s: float, tau_s: float,
@@ -52,12 +51,3 @@ def scale_expansion_m(travel_m: NDArray[np.float64], length_m: float, shaped_ris
     shape = np.interp(travel_m, grid, scale_shape_integral(grid, length_m))
     return expansion_per_k * (np.asarray(shaped_rise_k) * shape
                               + np.asarray(uniform_rise_k) * travel_m)
-
-
-def thermocouple_positions(length_m: float) -> NDArray[np.float64]:
-    """Positions along a scale of thermocouples every 110 mm, both ends included."""
-    count = int(np.floor(length_m / THERMOCOUPLE_SPACING_M + 1e-9)) + 1
-    positions = np.arange(count) * THERMOCOUPLE_SPACING_M
-    if length_m - positions[-1] > 1e-6:
-        positions = np.append(positions, length_m)
-    return positions

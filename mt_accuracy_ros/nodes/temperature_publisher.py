@@ -1,0 +1,106 @@
+"""Temperature publisher: the virtual machine tool's thermocouples, streamed live.
+
+Publishes ``temperatures`` (``mt_accuracy_msgs/TemperatureArray``, sensor-data
+QoS, degrees Celsius as ``sensor_msgs/Temperature``) at the scenario's
+temperature rate (x ``rate_factor``): the thermocouples every 110 mm on each
+scale and the structure sensors. ``dead_sensors`` makes chosen sensors report
+NaN (a broken thermocouple) for testing the consumers.
+"""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+
+from mt_accuracy_msgs.msg import TemperatureArray
+
+from ..core.errors import MtAccuracyError
+from ..sim.machine_tool import simulate
+from ._common import (SENSOR_QOS, accept, float_descriptor, int_descriptor, nanoseconds_to_stamp,
+                      pack_float64, plain_descriptor, refuse)
+from ._scenario import ScenarioClock, resolve_scenario
+
+
+class TemperaturePublisher(Node):
+    """Streams the temperatures of one virtual machine."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("temperature_publisher", **kwargs)
+        self.declare_parameter("scenario", "demo", plain_descriptor(
+            "Bundled scenario name or path (the same as the encoder publisher's)", read_only=True))
+        self.declare_parameter("rate_factor", 1.0, float_descriptor(
+            "Sim seconds per wall second", 0.01, 1000.0, read_only=True))
+        self.declare_parameter("start_stamp_ns", 0, int_descriptor(
+            "Stamp of sim time 0 [ns] (0: now)", 0, 2**63 - 1, read_only=True))
+        self.declare_parameter("dead_sensors", [""], plain_descriptor(
+            "Sensors that report NaN (fault injection)"))
+        self.declare_parameter("frame_id", "", plain_descriptor("frame_id (empty: machine name)"))
+        self.add_on_set_parameters_callback(self._validate)
+        self.scenario = resolve_scenario(str(self.get_parameter("scenario").value))
+        result = simulate(self.scenario, start_index=0, stop_index=1)
+        self._names = list(result.temperature_names)
+        self._time = result.temperature_time_s
+        self._values = result.temperatures_c
+        self._variance = float(self.scenario.noise["thermocouple_k"]) ** 2
+        self._next = 0
+        start = int(self.get_parameter("start_stamp_ns").value) or \
+            self.get_clock().now().nanoseconds
+        self._clock = ScenarioClock(start, float(self.get_parameter("rate_factor").value))
+        self.finished = False
+        self._publisher = self.create_publisher(TemperatureArray, "temperatures", SENSOR_QOS)
+        self.create_timer(0.05, self._tick)
+
+    def _validate(self, parameters):
+        for parameter in parameters:
+            if parameter.name == "dead_sensors":
+                unknown = [s for s in parameter.value if s and s not in self._names]
+                if unknown:
+                    return refuse(f"unknown sensor(s) {', '.join(unknown)}; known: "
+                                  f"{', '.join(self._names)}")
+        return accept()
+
+    def _tick(self) -> None:
+        now_s = self._clock.sim_time_s(self.get_clock().now().nanoseconds)
+        dead = {s for s in self.get_parameter("dead_sensors").value if s}
+        while self._next < self._time.size and self._time[self._next] <= now_s:
+            values = self._values[self._next].copy()
+            for name in dead:
+                if name in self._names:
+                    values[self._names.index(name)] = np.nan
+            message = TemperatureArray()
+            message.header.stamp = nanoseconds_to_stamp(self._clock.stamp_ns(self._time[self._next]))
+            message.header.frame_id = str(self.get_parameter("frame_id").value) or \
+                self.scenario.machine.name
+            message.sensor_names = self._names
+            message.temperatures = pack_float64(values)
+            message.variances = pack_float64(np.full(len(self._names), self._variance))
+            self._publisher.publish(message)
+            self._next += 1
+        if self._next >= self._time.size:
+            self.finished = True
+
+
+def main(args: list[str] | None = None) -> int:
+    rclpy.init(args=args if args is not None else sys.argv)
+    try:
+        node = TemperaturePublisher()
+    except MtAccuracyError as exc:
+        print(f"temperature_publisher: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    try:
+        while rclpy.ok() and not node.finished:
+            rclpy.spin_once(node, timeout_sec=0.05)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
