@@ -11,7 +11,10 @@ PACKAGE_NAME = "mt_accuracy_ros"
 # agreement and the CLI can start every node by name.
 NODE_ENTRY_POINTS = {
     "encoder_publisher": "mt_accuracy_ros.nodes.encoder_publisher:main",
+    "temperature_publisher": "mt_accuracy_ros.nodes.temperature_publisher:main",
     "yaw_estimator": "mt_accuracy_ros.nodes.yaw_estimator:main",
+    "compensation_broadcaster": "mt_accuracy_ros.nodes.compensation_broadcaster:main",
+    "model_monitor": "mt_accuracy_ros.nodes.model_monitor:main",
     "recorder": "mt_accuracy_ros.nodes.recorder:main",
     "bag_player": "mt_accuracy_ros.nodes.player:main",
 }
@@ -20,7 +23,7 @@ setup(
     name=PACKAGE_NAME,
     version="0.1.0",
     packages=find_packages(exclude=["test", "test.*"]),
-    package_data={PACKAGE_NAME: ["machines/*.yaml", "scenarios/*.yaml"]},
+    package_data={PACKAGE_NAME: ["machines/*.yaml", "scenarios/*.yaml", "models/*.yaml"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE_NAME}"]),
         (f"share/{PACKAGE_NAME}", ["package.xml"]),

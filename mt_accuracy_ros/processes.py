@@ -12,7 +12,10 @@ from dataclasses import dataclass, field
 #: node name -> module, the same table as setup.py's console_scripts.
 NODE_MODULES = {
     "encoder_publisher": "mt_accuracy_ros.nodes.encoder_publisher",
+    "temperature_publisher": "mt_accuracy_ros.nodes.temperature_publisher",
     "yaw_estimator": "mt_accuracy_ros.nodes.yaw_estimator",
+    "compensation_broadcaster": "mt_accuracy_ros.nodes.compensation_broadcaster",
+    "model_monitor": "mt_accuracy_ros.nodes.model_monitor",
     "recorder": "mt_accuracy_ros.nodes.recorder",
     "bag_player": "mt_accuracy_ros.nodes.player",
 }

@@ -27,12 +27,13 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .error_functions import ErrorFunction
-from .errors import InputDataError, ParameterError
+from .errors import InputDataError, MachineDescriptionError, ParameterError
 from .kinematics import ErrorOverrides, KinematicModel
 from .machine import MachineDescription, load_machine
 
@@ -199,6 +200,13 @@ class ErrorModel:
         return -self.tcp_error(positions, temperatures, velocities)[0]
 
 
+def model_to_dict(model: ErrorModel) -> dict:
+    """The YAML form of a model (profiles excluded: they stream in live)."""
+    return {"machine": model.machine.name, "version": int(model.version),
+            "effects": {name: copy.deepcopy(params) for name, params in model.effects.items()},
+            "reference_temperatures_c": dict(model.reference_temperatures_c)}
+
+
 def model_from_dict(data: dict, source: str = "<dict>") -> ErrorModel:
     """``{machine: NAME|PATH, effects: {name: {params} | true}, reference_temperatures_c: {}}``."""
     if not isinstance(data, dict) or "machine" not in data:
@@ -209,17 +217,41 @@ def model_from_dict(data: dict, source: str = "<dict>") -> ErrorModel:
             continue
         effects[str(name)] = {} if value is True or value is None else dict(value)
     try:
-        return ErrorModel(load_machine(str(data["machine"])), effects,
-                          {str(k): float(v) for k, v in
-                           (data.get("reference_temperatures_c") or {}).items()})
-    except ParameterError as exc:
+        model = ErrorModel(load_machine(str(data["machine"])), effects,
+                           {str(k): float(v) for k, v in
+                            (data.get("reference_temperatures_c") or {}).items()})
+    except (ParameterError, MachineDescriptionError) as exc:
         raise ParameterError(f"{source}: {exc}") from exc
+    model.version = int(data.get("version", 1))
+    return model
+
+
+BUNDLED_MODELS = Path(__file__).resolve().parents[1] / "models"
+
+
+def resolve_model(text: str) -> ErrorModel:
+    """A bundled model name (``demo``), a path to a model YAML, or inline YAML text."""
+    import yaml
+
+    text = str(text).strip()
+    if "\n" in text or text.startswith("{"):
+        try:
+            return model_from_dict(yaml.safe_load(text), "<inline model>")
+        except yaml.YAMLError as exc:
+            raise ParameterError(f"inline model is not valid YAML: {exc}") from exc
+    path = Path(text)
+    if path.suffix in (".yaml", ".yml") or path.exists():
+        return load_model(path)
+    bundled = BUNDLED_MODELS / f"{text}.yaml"
+    if not bundled.is_file():
+        raise ParameterError(f"no model {text!r} (bundled: "
+                             f"{', '.join(sorted(p.stem for p in BUNDLED_MODELS.glob('*.yaml')))}; "
+                             "or a path, or inline YAML)")
+    return load_model(bundled)
 
 
 def load_model(path) -> ErrorModel:
     import yaml
-
-    from pathlib import Path
 
     path = Path(path)
     try:

@@ -64,7 +64,7 @@ class EncoderPublisher(Node):
         self._next_index = 0
         self._next_reference_s = 0.0
         self._window: SimulationResult | None = None
-        self._clock: ScenarioClock | None = None
+        self._scenario_clock: ScenarioClock | None = None
         self._matched_at: float | None = None
         self.finished = False
         self._scales = self.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
@@ -92,7 +92,7 @@ class EncoderPublisher(Node):
                 return False
         start = int(self.get_parameter("start_stamp_ns").value) or \
             self.get_clock().now().nanoseconds
-        self._clock = ScenarioClock(start, float(self.get_parameter("rate_factor").value))
+        self._scenario_clock = ScenarioClock(start, float(self.get_parameter("rate_factor").value))
         return True
 
     def _window_for(self, index: int) -> SimulationResult:
@@ -106,9 +106,9 @@ class EncoderPublisher(Node):
     def _tick(self) -> None:
         if self.finished:
             return
-        if self._clock is None and not self._start():
+        if self._scenario_clock is None and not self._start():
             return
-        due = int(self._clock.sim_time_s(self.get_clock().now().nanoseconds) * self._rate)
+        due = int(self._scenario_clock.sim_time_s(self.get_clock().now().nanoseconds) * self._rate)
         total = self.scenario.n_samples
         try:
             while self._next_index + self._batch <= min(due, total):
@@ -130,7 +130,7 @@ class EncoderPublisher(Node):
         rows = slice(offset, offset + self._batch)
         frame = str(self.get_parameter("frame_id").value) or self.scenario.machine.name
         message = ScaleBatch()
-        message.header.stamp = nanoseconds_to_stamp(self._clock.stamp_ns(first / self._rate))
+        message.header.stamp = nanoseconds_to_stamp(self._scenario_clock.stamp_ns(first / self._rate))
         message.header.frame_id = frame
         message.first_sample_index = int(first)
         message.sample_period = 1.0 / self._rate
@@ -155,7 +155,7 @@ class EncoderPublisher(Node):
             self._rng.normal(0.0, uncertainty / 2, 3)
         message = ReferenceMeasurement()
         message.header.stamp = nanoseconds_to_stamp(
-            self._clock.stamp_ns((window.first_index + index) / self._rate))
+            self._scenario_clock.stamp_ns((window.first_index + index) / self._rate))
         message.header.frame_id = frame
         message.instrument = "reference_probe"
         message.command_axes = [a.lower() for a in self._axes]

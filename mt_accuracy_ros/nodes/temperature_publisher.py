@@ -48,7 +48,7 @@ class TemperaturePublisher(Node):
         self._next = 0
         start = int(self.get_parameter("start_stamp_ns").value) or \
             self.get_clock().now().nanoseconds
-        self._clock = ScenarioClock(start, float(self.get_parameter("rate_factor").value))
+        self._scenario_clock = ScenarioClock(start, float(self.get_parameter("rate_factor").value))
         self.finished = False
         self._publisher = self.create_publisher(TemperatureArray, "temperatures", SENSOR_QOS)
         self.create_timer(0.05, self._tick)
@@ -63,7 +63,7 @@ class TemperaturePublisher(Node):
         return accept()
 
     def _tick(self) -> None:
-        now_s = self._clock.sim_time_s(self.get_clock().now().nanoseconds)
+        now_s = self._scenario_clock.sim_time_s(self.get_clock().now().nanoseconds)
         dead = {s for s in self.get_parameter("dead_sensors").value if s}
         while self._next < self._time.size and self._time[self._next] <= now_s:
             values = self._values[self._next].copy()
@@ -71,7 +71,7 @@ class TemperaturePublisher(Node):
                 if name in self._names:
                     values[self._names.index(name)] = np.nan
             message = TemperatureArray()
-            message.header.stamp = nanoseconds_to_stamp(self._clock.stamp_ns(self._time[self._next]))
+            message.header.stamp = nanoseconds_to_stamp(self._scenario_clock.stamp_ns(self._time[self._next]))
             message.header.frame_id = str(self.get_parameter("frame_id").value) or \
                 self.scenario.machine.name
             message.sensor_names = self._names

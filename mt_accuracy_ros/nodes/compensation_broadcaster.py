@@ -1,0 +1,183 @@
+"""Volumetric compensation broadcaster: the model's TCP error and correction, live.
+
+From the CNC command positions in ``scales`` (``ScaleBatch``), the latest
+``temperatures`` and the measured yaw profiles (``systematic/<axis>``), the
+current :class:`~mt_accuracy_ros.core.error_model.ErrorModel` gives the TCP
+error at the command position, published on ``compensation``
+(``VolumetricCompensation``, reliable) at ``publish_rate_hz`` of data time
+(every n-th sample, whatever the batch boundaries), with correction = -error.
+Whenever the model changes (a new profile, a new effect) the per-axis
+component tables go out on ``compensation_table`` (``CompensationTable``,
+reliable + transient local, so a node started later still gets them).
+
+The model comes from the ``model`` parameter (bundled name, path or inline
+YAML; changeable at run time) and, with ``follow_model_topic``, from the
+model monitor's ``model`` topic.
+"""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+
+from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompensation
+
+from ..core.error_model import resolve_model
+from ..core.errors import MtAccuracyError
+from ._common import (RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
+                      nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse,
+                      stamp_to_nanoseconds, unpack_float64)
+from ._model_inputs import TABLE_QOS, ModelInputs
+
+COMPONENTS = "XYZABC"
+
+
+class CompensationBroadcaster(Node):
+    """ScaleBatch command positions -> VolumetricCompensation; tables on model change."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("compensation_broadcaster", **kwargs)
+        self.declare_parameter("model", "demo", plain_descriptor(
+            "Error model: bundled name, path to a model YAML, or inline YAML"))
+        self.declare_parameter("follow_model_topic", True, plain_descriptor(
+            "Also take models published on 'model' (by the model monitor)", read_only=True))
+        self.declare_parameter("publish_rate_hz", 100.0, float_descriptor(
+            "Compensation messages per second of data time", 1.0, 20000.0))
+        self.declare_parameter("table_points", 40, int_descriptor(
+            "Positions per axis in a compensation table", 2, 10000))
+        self.add_on_set_parameters_callback(self._validate)
+        self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
+                                  follow_topic=bool(self.get_parameter("follow_model_topic").value),
+                                  on_change=self._model_changed)
+        self._compensation = self.create_publisher(VolumetricCompensation, "compensation",
+                                                   RESULT_QOS)
+        self._tables = self.create_publisher(CompensationTable, "compensation_table", TABLE_QOS)
+        self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self._published_version = -1
+        self._last_stamp = -1
+        self.create_subscription(ScaleBatch, "scales", self._on_batch, SENSOR_QOS)
+        self._publish_tables()
+
+    def _validate(self, parameters):
+        for parameter in parameters:
+            if parameter.name == "model":
+                try:
+                    model = resolve_model(str(parameter.value))
+                except MtAccuracyError as exc:
+                    return refuse(f"model refused: {exc}")
+                self.inputs.set_model(model)
+            if parameter.name == "publish_rate_hz" and not np.isfinite(parameter.value):
+                return refuse("publish_rate_hz must be finite")
+        return accept()
+
+    def _model_changed(self) -> None:
+        self._publish_tables()
+
+    def _on_batch(self, message: ScaleBatch) -> None:
+        axes = [a.upper() for a in message.command_axes]
+        commands = unpack_float64(message.command_positions)
+        if not axes or commands.size % len(axes):
+            return
+        commands = commands.reshape(-1, len(axes))
+        stamp = stamp_to_nanoseconds(message.header.stamp)
+        if stamp <= self._last_stamp:
+            return  # out of order or repeated: the estimator reports it
+        self._last_stamp = stamp
+        period = float(message.sample_period)
+        step = max(1, int(round(1.0 / (period * float(self.get_parameter("publish_rate_hz").value)))))
+        first = int(message.first_sample_index)
+        rows = np.flatnonzero((first + np.arange(commands.shape[0])) % step == 0)
+        if rows.size == 0:
+            return
+        velocity = np.gradient(commands, period, axis=0) if commands.shape[0] > 1 \
+            else np.zeros_like(commands)
+        positions = {a: commands[rows, j] for j, a in enumerate(axes)}
+        velocities = {a: velocity[rows, j] for j, a in enumerate(axes)}
+        model = self.inputs.model
+        try:
+            error, orientation = model.tcp_error(positions, self.inputs.temperatures, velocities)
+        except MtAccuracyError as exc:
+            self._warn(f"no compensation for this batch: {exc}")
+            return
+        if self._published_version != model.version:
+            self._publish_tables()
+        for k, row in enumerate(rows):
+            out = VolumetricCompensation()
+            out.header.stamp = nanoseconds_to_stamp(stamp + int(round(row * period * 1e9)))
+            out.header.frame_id = message.header.frame_id
+            linear = [a for a in axes if a in "XYZ"]
+            point = {a: float(positions[a][k]) for a in linear}
+            out.command_position.x = point.get("X", 0.0)
+            out.command_position.y = point.get("Y", 0.0)
+            out.command_position.z = point.get("Z", 0.0)
+            out.rotary_positions = [float(positions[a][k]) for a in axes if a in "ABC"]
+            out.error.x, out.error.y, out.error.z = (float(v) for v in error[k])
+            (out.orientation_error.x, out.orientation_error.y,
+             out.orientation_error.z) = (float(v) for v in orientation[k])
+            out.correction.x, out.correction.y, out.correction.z = (float(-v) for v in error[k])
+            out.uncertainty = 0.0
+            out.model_version = int(model.version)
+            self._compensation.publish(out)
+
+    def _publish_tables(self) -> None:
+        model = self.inputs.model
+        points = int(self.get_parameter("table_points").value)
+        for axis in model.machine.axis_order:
+            spec = model.machine.axes[axis]
+            if spec.is_rotary:
+                continue
+            grid = np.linspace(*spec.stroke, points)
+            columns = [f"{axis}_m"]
+            values = [grid]
+            for component in COMPONENTS:
+                name = f"E{component}{axis}"
+                unit = "m" if component in "XYZ" else "rad"
+                columns.append(f"{name}_{unit}")
+                function = model.profiles.get(name) if "geometric" in model.effects else None
+                values.append(function(grid) if function is not None
+                              else spec.motion_errors[component](grid))
+            table = CompensationTable()
+            table.header.stamp = self.get_clock().now().to_msg()
+            table.header.frame_id = model.machine.name
+            table.model_version = int(model.version)
+            table.axis = axis.lower()
+            table.columns = columns
+            table.values = pack_float64(np.column_stack(values).ravel())
+            squareness = model.effects.get("squareness", {}).get("errors_rad", {})
+            table.squareness_names = list(squareness)
+            table.squareness = [float(v) for v in squareness.values()]
+            self._tables.publish(table)
+        self._published_version = model.version
+
+    def _warn(self, text: str) -> None:
+        status = DiagnosticStatus(level=DiagnosticStatus.WARN,
+                                  name=f"{self.get_fully_qualified_name()}: model", message=text)
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self._diagnostics.publish(array)
+
+
+def main(args: list[str] | None = None) -> int:
+    rclpy.init(args=args if args is not None else sys.argv)
+    try:
+        node = CompensationBroadcaster()
+    except MtAccuracyError as exc:
+        print(f"compensation_broadcaster: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,230 @@
+"""Model monitor: the model against reference measurements, live, and what is missing.
+
+Subscribes ``reference/tcp_error`` (``ReferenceMeasurement``), the latest
+``temperatures`` and the measured profiles ``systematic/<axis>``; keeps the
+last ``window`` readings and every ``check_every`` readings runs the
+workbench diagnosis (:func:`mt_accuracy_ros.core.workbench.diagnose`):
+residual statistics (offset per component removed - instruments measure from
+their own zero), the readings outside the instrument's 2u band, and the
+candidate effects ranked by time-blocked cross-validated error reduction.
+Publishes ``model_check`` (``ModelCheck``, reliable), ``/diagnostics`` (WARN
+while the residual is outside the band, naming the likely missing effect) and
+the current model as YAML on ``model`` (``std_msgs/String``, transient local)
+for the compensation broadcaster.
+
+Adding an effect at run time: set ``add_effects`` (e.g. ``["structural_thermal_drift"]``);
+the monitor fits it to the readings it holds, adds it and publishes the new
+model version. ``auto_add`` does that itself for the top significant candidate.
+"""
+from __future__ import annotations
+
+import sys
+from collections import deque
+
+import numpy as np
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from std_msgs.msg import String
+
+from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ReferenceMeasurement
+
+from ..core.error_model import MODEL_EFFECTS, resolve_model
+from ..core.errors import MtAccuracyError
+from ..core.workbench import Observations, add_effect, diagnose
+from ._common import (LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
+                      plain_descriptor, refuse, stamp_to_nanoseconds)
+from ._model_inputs import ModelInputs
+
+
+class ModelMonitor(Node):
+    """ReferenceMeasurement stream -> ModelCheck, diagnostics, model versions."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("model_monitor", **kwargs)
+        self.declare_parameter("model", "demo", plain_descriptor(
+            "Error model: bundled name, path or inline YAML (setting it starts a new version)"))
+        self.declare_parameter("window", 200, int_descriptor(
+            "Reference readings kept for the comparison", 10, 100000))
+        self.declare_parameter("check_every", 10, int_descriptor(
+            "Readings between two checks", 1, 100000))
+        self.declare_parameter("min_readings", 30, int_descriptor(
+            "Readings before the first check", 10, 100000))
+        self.declare_parameter("min_reduction", 0.1, float_descriptor(
+            "Smallest cross-validated error reduction that counts as an effect", 0.0, 1.0))
+        self.declare_parameter("add_effects", [""], plain_descriptor(
+            "Effects to fit and add to the model now (run-time action)"))
+        self.declare_parameter("auto_add", False, plain_descriptor(
+            "Add the top significant candidate by itself"))
+        self.add_on_set_parameters_callback(self._validate)
+        self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
+                                  follow_topic=False, on_change=self._publish_model)
+        self._readings: deque = deque(maxlen=int(self.get_parameter("window").value))
+        self._since_check = 0
+        self.last_diagnosis = None
+        self.history: list[dict] = []
+        self._check = self.create_publisher(ModelCheck, "model_check", RESULT_QOS)
+        self._model_topic = self.create_publisher(String, "model", LATCHED_QOS)
+        self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.create_subscription(ReferenceMeasurement, "reference/tcp_error", self._on_reading,
+                                 RESULT_QOS)
+        self._publish_model()
+
+    # ---------------------------------------------------------------- parameters
+    def _validate(self, parameters):
+        for parameter in parameters:
+            if parameter.name == "model":
+                try:
+                    self.inputs.set_model(resolve_model(str(parameter.value)))
+                except MtAccuracyError as exc:
+                    return refuse(f"model refused: {exc}")
+            elif parameter.name == "window":
+                self._readings = deque(self._readings, maxlen=int(parameter.value))
+            elif parameter.name == "add_effects":
+                names = [n for n in parameter.value if n]
+                unknown = [n for n in names if n not in MODEL_EFFECTS]
+                if unknown:
+                    return refuse(f"unknown effect(s) {', '.join(unknown)}; known: "
+                                  f"{', '.join(MODEL_EFFECTS)}")
+                for name in names:
+                    reason = self._add(name)
+                    if reason:
+                        return refuse(reason)
+        return accept()
+
+    def _add(self, name: str) -> str | None:
+        if name in self.inputs.model.effects:
+            return None
+        obs = self._observations()
+        if obs is None:
+            return f"cannot fit {name}: only {len(self._readings)} reference readings yet"
+        try:
+            diagnosis = diagnose(self.inputs.model, obs,
+                                 min_reduction=float(self.get_parameter("min_reduction").value))
+        except MtAccuracyError as exc:
+            return f"cannot fit {name}: {exc}"
+        candidate = next((c for c in diagnosis.ranking if c.effect == name), None)
+        if candidate is None:
+            return f"cannot fit {name}: it has no regressors in these readings"
+        self.inputs.set_model(add_effect(self.inputs.model, candidate, obs))
+        self.get_logger().info(f"added {name} {candidate.parameters}; model version "
+                               f"{self.inputs.model.version}")
+        self._since_check = int(self.get_parameter("check_every").value)  # check at once
+        return None
+
+    # ---------------------------------------------------------------- data
+    def _on_reading(self, message: ReferenceMeasurement) -> None:
+        axes = [a.upper() for a in message.command_axes]
+        if len(axes) != len(message.command_positions) or not np.all(
+                np.isfinite(message.command_positions)):
+            self._status(DiagnosticStatus.WARN, "reference reading with bad positions skipped")
+            return
+        error = np.array([message.error.x, message.error.y, message.error.z])
+        measured = np.array(message.measured, dtype=bool)
+        if not np.all(np.isfinite(error[measured])):
+            self._status(DiagnosticStatus.WARN, "reference reading with NaN error skipped")
+            return
+        velocities = list(message.command_velocities) if len(message.command_velocities) == \
+            len(axes) else [0.0] * len(axes)
+        self._readings.append({
+            "time": stamp_to_nanoseconds(message.header.stamp) * 1e-9,
+            "positions": dict(zip(axes, message.command_positions)),
+            "velocities": dict(zip(axes, velocities)), "error": error, "measured": measured,
+            "temperatures": dict(self.inputs.temperatures),
+            "uncertainty": float(message.uncertainty)})
+        self._since_check += 1
+        if len(self._readings) >= int(self.get_parameter("min_readings").value) and \
+                self._since_check >= int(self.get_parameter("check_every").value):
+            self._since_check = 0
+            self._run_check()
+
+    def _observations(self) -> Observations | None:
+        readings = [r for r in self._readings]
+        if len(readings) < 10:
+            return None
+        sensors = set.intersection(*(set(r["temperatures"]) for r in readings)) \
+            if readings else set()
+        axes = list(readings[0]["positions"])
+        return Observations(
+            positions={a: np.array([r["positions"][a] for r in readings]) for a in axes},
+            measured_m=np.array([r["error"] for r in readings]),
+            measured_mask=np.array([r["measured"] for r in readings]),
+            time_s=np.array([r["time"] for r in readings]),
+            velocities={a: np.array([r["velocities"][a] for r in readings]) for a in axes},
+            temperatures={s: np.array([r["temperatures"][s] for r in readings])
+                          for s in sorted(sensors)},
+            uncertainty_m=float(np.median([r["uncertainty"] for r in readings])) or 1e-6)
+
+    def _run_check(self) -> None:
+        obs = self._observations()
+        if obs is None:
+            return
+        model = self.inputs.model
+        try:
+            diagnosis = diagnose(model, obs,
+                                 min_reduction=float(self.get_parameter("min_reduction").value))
+        except MtAccuracyError as exc:
+            self._status(DiagnosticStatus.WARN, f"no check: {exc}")
+            return
+        self.last_diagnosis = diagnosis
+        check = ModelCheck()
+        check.header.stamp = self.get_clock().now().to_msg()
+        check.model_version = int(model.version)
+        check.quantity = "tcp_error"
+        check.unit = "m"
+        check.effects_included = sorted(model.effects)
+        check.sample_count = obs.n
+        check.rmse = diagnosis.baseline_rmse
+        check.max_abs_error = diagnosis.max_abs_error
+        check.band = obs.uncertainty_m
+        check.fraction_outside_band = diagnosis.fraction_outside_band
+        check.ranking = [EffectScore(effect=c.effect, cv_rmse_after=c.cv_rmse_after,
+                                     error_reduction=max(0.0, c.error_reduction),
+                                     explanation=c.explanation)
+                         for c in diagnosis.ranking]
+        check.diagnosis = diagnosis.text()
+        self._check.publish(check)
+        self.history.append({"version": model.version, "rmse": diagnosis.baseline_rmse})
+        found = diagnosis.found
+        level = DiagnosticStatus.OK if found is None and diagnosis.baseline_rmse <= obs.uncertainty_m \
+            else DiagnosticStatus.WARN
+        self._status(level, diagnosis.text(), [
+            KeyValue(key="rmse_m", value=f"{diagnosis.baseline_rmse:.3e}"),
+            KeyValue(key="model_version", value=str(model.version)),
+            KeyValue(key="missing_effect", value=found.effect if found else "")])
+        if found is not None and self.get_parameter("auto_add").value:
+            self._add(found.effect)
+
+    def _publish_model(self) -> None:
+        self._model_topic.publish(String(data=self.inputs.model_yaml()))
+
+    def _status(self, level: int, text: str, values=None) -> None:
+        status = DiagnosticStatus(level=level, name=f"{self.get_fully_qualified_name()}: model",
+                                  hardware_id=self.inputs.model.machine.name, message=text)
+        status.values = values or []
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self._diagnostics.publish(array)
+
+
+def main(args: list[str] | None = None) -> int:
+    rclpy.init(args=args if args is not None else sys.argv)
+    try:
+        node = ModelMonitor()
+    except MtAccuracyError as exc:
+        print(f"model_monitor: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
