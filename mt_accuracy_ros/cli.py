@@ -8,7 +8,7 @@ import sys
 def _demo(args: argparse.Namespace) -> int:
     from .demo import run_demo
 
-    return run_demo(out_dir=args.out, duration_s=args.duration)
+    return run_demo(out_dir=args.out, rate_factor=args.rate, scenario=args.scenario)
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -112,8 +112,9 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     demo = commands.add_parser("demo", help="run the main job on the virtual machine tool")
     demo.add_argument("--out", default="demo_output", help="output directory")
-    demo.add_argument("--duration", type=float, default=6.0,
-                      help="simulated run time [s]")
+    demo.add_argument("--rate", type=float, default=2.0,
+                      help="sim seconds per wall second (the 90 s scenario takes 90/rate s)")
+    demo.add_argument("--scenario", default="demo", help="bundled scenario or path")
     demo.set_defaults(handler=_demo)
     info = commands.add_parser("info", help="counts, duration, topics and types of a bag")
     info.add_argument("bag", help="bag directory or .mcap file")

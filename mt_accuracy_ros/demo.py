@@ -1,9 +1,15 @@
-"""The main job on the virtual machine tool: real nodes in separate processes.
+"""The main job on the virtual machine tool: the whole graph, recorded, and a report.
 
-The encoder publisher streams dual-scale samples of a simulated X axis, the yaw
-estimator turns them into yaw (Kidani eq. 2.13) in another process, and this
-process listens like any other ROS tool, compares the estimate with the yaw the
-simulator put in, and writes a summary.
+1. The virtual machine's installation calibration is simulated (laser, every
+   20 mm) and written as the machine description the model starts from.
+2. Separate processes: encoder and temperature publishers (the scenario
+   ``demo``: warm-up, a Y guideway deterioration at 50 s, a column thermal drift
+   the model does not hold), the yaw/systematic estimator, the compensation
+   broadcaster, the model monitor and the recorder (MCAP).
+3. This process listens like any ROS tool and acts as the user: when the
+   monitor names a missing effect, it asks the monitor to add it (the
+   ``add_effects`` parameter) and watches the error fall.
+4. At the end: a printed summary and ``report.html`` + ``summary.json``.
 """
 from __future__ import annotations
 
@@ -12,71 +18,158 @@ import time
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 
-def run_demo(out_dir: str = "demo_output", duration_s: float = 6.0) -> int:
+def _prepare(out: Path, scenario_name: str) -> Path:
+    from .nodes._scenario import resolve_scenario
+    from .sim.instruments import calibrate_machine
+    from .sim.machine_tool import simulate
+
+    scenario = resolve_scenario(scenario_name)
+    calibration = calibrate_machine(simulate(scenario, start_index=0, stop_index=1))
+    (out / "machine_calibrated.yaml").write_text(yaml.safe_dump(calibration, sort_keys=False))
+    model = out / "model.yaml"
+    model.write_text(yaml.safe_dump({"machine": "machine_calibrated.yaml",
+                                     "effects": {"geometric": {}}}, sort_keys=False))
+    return model
+
+
+def _set_parameter(node, target: str, name: str, value) -> tuple[bool, str]:
+    """Set a parameter of another node through its set_parameters service."""
     import rclpy
-    from rclpy.node import Node
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.parameter import Parameter
 
-    from mt_accuracy_msgs.msg import YawBatch
+    client = node.create_client(SetParameters, f"{target}/set_parameters")
+    if not client.wait_for_service(timeout_sec=10.0):
+        return False, f"{target}/set_parameters not available"
+    request = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
+    future = client.call_async(request)
+    deadline = time.monotonic() + 30.0
+    while not future.done() and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    node.destroy_client(client)
+    if not future.done():
+        return False, "no answer"
+    result = future.result().results[0]
+    return bool(result.successful), str(result.reason)
 
-    from .nodes._common import RESULT_QOS, unpack_float64
+
+def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
+             scenario: str = "demo") -> int:
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    from mt_accuracy_msgs.msg import (ModelCheck, ReferenceMeasurement, SystematicProfile,
+                                      VolumetricCompensation)
+
+    from .nodes._common import RESULT_QOS, stamp_to_nanoseconds
     from .processes import start_node
-    from .sim.scale_pair import YawProfile
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    bag = out / "bag"
+    if bag.exists():
+        import shutil
+
+        shutil.rmtree(bag)
     started = time.monotonic()
-    estimator = start_node("yaw_estimator", {"axes": ["x"], "scale_distance_m": [0.24]})
-    publisher = start_node("encoder_publisher", {
-        "sample_rate_hz": 1000, "batch_period_s": 0.05, "duration_s": duration_s,
-        "feed_m_per_s": 0.39, "noise_m": 20e-9})
-    positions: list[np.ndarray] = []
-    yaws: list[np.ndarray] = []
-    indices: list[int] = []
+    model = _prepare(out, scenario)
+    start_ns = time.time_ns() + 4_000_000_000
+    machine = {"scenario": scenario, "start_stamp_ns": start_ns, "rate_factor": rate_factor}
+    nodes = [start_node("recorder", {"output": str(bag), "discovery_period_s": 0.2}, quiet=True),
+             start_node("yaw_estimator", {"baseline_after_s": 40.0}, quiet=True),
+             start_node("compensation_broadcaster", {"model": str(model)}, quiet=True),
+             start_node("model_monitor", {"model": str(model)}, quiet=True),
+             start_node("temperature_publisher", machine, quiet=True)]
+    encoder = start_node("encoder_publisher", machine, quiet=True)
     rclpy.init()
-    listener = Node("demo_listener")
+    listener = rclpy.create_node("demo_user")
+    checks: list[tuple[float, ModelCheck]] = []
+    alarms: list[tuple[float, str]] = []
+    compensation: list[tuple[int, float]] = []
+    actions: list[dict] = []
 
-    def on_yaw(message: YawBatch) -> None:
-        positions.append(unpack_float64(message.positions).copy())
-        yaws.append(unpack_float64(message.yaw).copy())
-        indices.append(int(message.first_sample_index))
+    def now_s() -> float:
+        return (time.time_ns() - start_ns) / 1e9 * rate_factor
 
-    listener.create_subscription(YawBatch, "yaw/x", on_yaw, RESULT_QOS)
+    def on_profile(message: SystematicProfile) -> None:
+        if message.deterioration and not any(a[1] == message.axis for a in alarms):
+            alarms.append((now_s(), message.axis))
+
+    listener.create_subscription(ModelCheck, "model_check", lambda m: checks.append((now_s(), m)),
+                                 RESULT_QOS)
+    for axis in ("x", "y", "z"):
+        listener.create_subscription(SystematicProfile, f"systematic/{axis}", on_profile,
+                                     RESULT_QOS)
+    listener.create_subscription(VolumetricCompensation, "compensation", lambda m: compensation.append(
+        (stamp_to_nanoseconds(m.header.stamp), float(np.linalg.norm([m.error.x, m.error.y,
+                                                                   m.error.z])))), RESULT_QOS)
+    listener.create_subscription(DiagnosticArray, "/diagnostics", lambda m: None, 10)
+    references: list[np.ndarray] = []
+    listener.create_subscription(ReferenceMeasurement, "reference/tcp_error", lambda m: references.append(
+        np.array([m.error.x, m.error.y, m.error.z])), RESULT_QOS)
     try:
-        deadline = time.monotonic() + duration_s + 20.0
-        while time.monotonic() < deadline and publisher.popen.poll() is None:
-            rclpy.spin_once(listener, timeout_sec=0.1)
-        settle = time.monotonic() + 1.0
+        deadline = time.monotonic() + 90.0 / rate_factor + 60.0
+        while time.monotonic() < deadline and encoder.popen.poll() is None:
+            rclpy.spin_once(listener, timeout_sec=0.05)
+            latest = checks[-1][1] if checks else None
+            # The user looks once the machine has warmed for a while (35 s of the run).
+            if latest is not None and not actions and latest.ranking and checks[-1][0] > 35 \
+                    and "most likely missing" in latest.diagnosis:
+                effect = latest.ranking[0].effect
+                ok, reason = _set_parameter(listener, "/model_monitor", "add_effects", [effect])
+                actions.append({"time_s": now_s(), "added": effect, "accepted": ok,
+                                "reason": reason, "rmse_before_m": latest.rmse})
+        settle = time.monotonic() + 2.0
         while time.monotonic() < settle:
             rclpy.spin_once(listener, timeout_sec=0.05)
     finally:
-        publisher.stop()
-        estimator.stop()
+        encoder.stop()
+        for process in nodes:
+            process.stop()
         listener.destroy_node()
         rclpy.try_shutdown()
+    summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
+                         references)
+    print("mt_accuracy_ros demo - virtual HMC, scenario 'demo' (warm-up, Y guideway "
+          "deterioration at 50 s, column drift missing from the model)")
+    for key, value in summary.items():
+        if not isinstance(value, (list, dict)):
+            print(f"  {key:42s} {value:.4g}" if isinstance(value, float) else
+                  f"  {key:42s} {value}")
+    print(f"  report: {out / 'report.html'}   bag: {bag}")
+    return 0 if checks and summary["bag_messages"] > 0 else 1
 
-    if not yaws:
-        print("demo: no yaw received from the estimator - is the ROS graph working?")
-        return 1
-    position = np.concatenate(positions)
-    yaw = np.concatenate(yaws)
-    # The estimator measures relative to its first sample; the simulator's
-    # truth is absolute, so compare after removing the same reference.
-    truth = YawProfile()(position)
-    truth -= YawProfile()(np.array([position[0]]))[0]
-    rmse_urad = float(np.sqrt(np.mean((yaw - truth) ** 2)) * 1e6)
+
+def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
+               references) -> dict:
+    from .io.bag_reader import bag_info
+    from .report import write_report
+
+    info = bag_info(out / "bag")
+    before = [c.rmse for t, c in checks if not actions or t < actions[0]["time_s"]]
+    after = [c.rmse for t, c in checks if actions and t > actions[0]["time_s"] + 5]
+    raw = np.array(references) if references else np.zeros((0, 3))
+    raw = raw - raw.mean(axis=0) if raw.size else raw
     summary = {
-        "batches_received": len(yaws),
-        "samples_received": int(yaw.size),
-        "first_batch_index": min(indices),
-        "yaw_peak_to_peak_urad": float(np.ptp(yaw) * 1e6),
-        "yaw_rmse_vs_simulator_truth_urad": rmse_urad,
-        "wall_time_s": time.monotonic() - started,
+        "tcp_error_uncompensated_rms_um": float(np.sqrt(np.mean(raw ** 2)) * 1e6) if raw.size
+        else float("nan"),
+        "model_checks": len(checks),
+        "residual_rmse_before_um": float(np.mean(before[-3:]) * 1e6) if before else float("nan"),
+        "missing_effect_found": actions[0]["added"] if actions else "",
+        "effect_added_accepted": bool(actions and actions[0]["accepted"]),
+        "residual_rmse_after_um": float(np.mean(after[:3]) * 1e6) if after else float("nan"),
+        "deterioration_alarm_axis": ",".join(a[1] for a in alarms),
+        "deterioration_alarm_at_s": alarms[0][0] if alarms else float("nan"),
+        "compensation_messages": len(compensation),
+        "max_model_tcp_error_um": max((e for _, e in compensation), default=0.0) * 1e6,
+        "bag_messages": int(info["message_count"]),
+        "bag_topics": len(info["topics"]),
+        "wall_time_s": wall_s,
+        "final_diagnosis": checks[-1][1].diagnosis if checks else "",
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    print("mt_accuracy_ros demo - virtual machine tool, X axis, dual scales D = 240 mm")
-    for key, value in summary.items():
-        print(f"  {key:36s} {value:.4g}" if isinstance(value, float) else f"  {key:36s} {value}")
-    print(f"  summary written to {out / 'summary.json'}")
-    return 0 if rmse_urad < 1.0 else 1
+    write_report(out, checks, actions, alarms, compensation, summary)
+    return summary

@@ -63,6 +63,8 @@ class ErrorModel:
     reference_temperatures_c: dict[str, float] = field(default_factory=dict)
     profiles: dict[str, ErrorFunction] = field(default_factory=dict)
     version: int = 1
+    machine_source: str = ""     # bundled name or path the machine was loaded from
+    profile_offsets: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in list(self.effects):
@@ -87,12 +89,14 @@ class ErrorModel:
         effects = copy.deepcopy(self.effects)
         effects[name] = parameters or {}
         return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),
-                          dict(self.profiles), self.version + 1)
+                          dict(self.profiles), self.version + 1, self.machine_source,
+                          dict(self.profile_offsets))
 
     def without_effect(self, name: str) -> "ErrorModel":
         effects = {k: v for k, v in self.effects.items() if k != name}
         return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),
-                          dict(self.profiles), self.version + 1)
+                          dict(self.profiles), self.version + 1, self.machine_source,
+                          dict(self.profile_offsets))
 
     def set_profile(self, error_name: str, positions_m: ArrayLike, values: ArrayLike) -> None:
         """Use a measured profile (e.g. the kNN systematic yaw ECY) as that motion error."""
@@ -103,6 +107,19 @@ class ErrorModel:
                                  "one value each")
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
             raise InputDataError(f"profile {error_name}: NaN/inf values")
+        # A live profile is relative to its estimator's zero reference. Where the
+        # machine carries a calibrated table of the same error, the first profile
+        # is aligned to it (mean difference) and that offset kept for the run, so a
+        # later change - a deterioration - shows as a change of the error itself.
+        axis = error_name[-1]
+        if error_name not in self.profile_offsets:
+            calibrated = None
+            if axis in self.machine.axes and error_name[1] in self.machine.axes[axis].motion_errors:
+                function = self.machine.axes[axis].motion_errors[error_name[1]]
+                calibrated = None if function.is_zero else function(x)
+            self.profile_offsets[error_name] = float(np.mean(calibrated - y)) \
+                if calibrated is not None else 0.0
+        y = y + self.profile_offsets[error_name]
         self.profiles[error_name] = ErrorFunction(kind="profile", positions=x, values=y)
         self.version += 1
 
@@ -123,7 +140,8 @@ class ErrorModel:
         """Kinematic-model inputs of the included effects at N positions."""
         temperatures = temperatures or {}
         n = int(np.size(next(iter(positions.values()))))
-        out = ErrorOverrides()
+        # "geometric" = the description's calibrated errors plus the live profiles.
+        out = ErrorOverrides(use_description="geometric" in self.effects)
         if "geometric" in self.effects:
             for name, function in self.profiles.items():
                 axis = name[-1]
@@ -202,12 +220,13 @@ class ErrorModel:
 
 def model_to_dict(model: ErrorModel) -> dict:
     """The YAML form of a model (profiles excluded: they stream in live)."""
-    return {"machine": model.machine.name, "version": int(model.version),
+    return {"machine": model.machine_source or model.machine.name, "version": int(model.version),
             "effects": {name: copy.deepcopy(params) for name, params in model.effects.items()},
             "reference_temperatures_c": dict(model.reference_temperatures_c)}
 
 
-def model_from_dict(data: dict, source: str = "<dict>") -> ErrorModel:
+def model_from_dict(data: dict, source: str = "<dict>", base_dir: Path | None = None
+                    ) -> ErrorModel:
     """``{machine: NAME|PATH, effects: {name: {params} | true}, reference_temperatures_c: {}}``."""
     if not isinstance(data, dict) or "machine" not in data:
         raise ParameterError(f"{source}: a model needs 'machine' (bundled name or path)")
@@ -217,9 +236,14 @@ def model_from_dict(data: dict, source: str = "<dict>") -> ErrorModel:
             continue
         effects[str(name)] = {} if value is True or value is None else dict(value)
     try:
-        model = ErrorModel(load_machine(str(data["machine"])), effects,
+        machine_source = str(data["machine"])
+        if not Path(machine_source).is_absolute() and base_dir is not None and \
+                (base_dir / machine_source).is_file():
+            machine_source = str((base_dir / machine_source).resolve())
+        model = ErrorModel(load_machine(machine_source), effects,
                            {str(k): float(v) for k, v in
-                            (data.get("reference_temperatures_c") or {}).items()})
+                            (data.get("reference_temperatures_c") or {}).items()},
+                           machine_source=machine_source)
     except (ParameterError, MachineDescriptionError) as exc:
         raise ParameterError(f"{source}: {exc}") from exc
     model.version = int(data.get("version", 1))
@@ -258,4 +282,4 @@ def load_model(path) -> ErrorModel:
         data = yaml.safe_load(path.read_text())
     except (OSError, yaml.YAMLError) as exc:
         raise ParameterError(f"{path}: cannot read model ({exc})") from exc
-    return model_from_dict(data, str(path))
+    return model_from_dict(data, str(path), base_dir=path.parent)

@@ -8,8 +8,10 @@ them to first order). Each candidate is scored by **time-blocked K-fold
 cross-validation** (contiguous folds, never in-sample) of the residual fit,
 against the same CV of a constant offset alone. The guard against explaining
 noise: a candidate counts only if it lowers the CV RMSE by at least
-``min_reduction`` and its fitted parameters are significant (|p| > 3 sigma);
-otherwise the diagnosis is "no missing effect found".
+``min_reduction``, its fitted parameters are significant (|p| > 3 sigma), and
+the residual is clearly above the instrument's noise (RMSE >= 1.5 sigma, sigma
+= the readings' k = 2 uncertainty / 2); otherwise the diagnosis is "no missing
+effect found".
 
 Candidates (names as the simulator and the model name them):
 
@@ -235,6 +237,7 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.1
     baseline_cv = blocked_cv(np.zeros((y.size, 0)), offsets, y, sample_of_row, obs.n, folds)
     in_sample = float(np.sqrt(np.mean(residual[mask] ** 2)))
     band = obs.uncertainty_m
+    noise_sigma = band / 2.0  # the instrument's k = 2 uncertainty
     candidates: dict[str, Candidate] = {}
     for effect, variant, names, design in candidate_designs(model, obs):
         x, offsets, y = _flatten(design, residual, mask)
@@ -252,7 +255,10 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.1
             standard = np.full(len(names), np.inf)
         values = coefficients[3:]
         reduction = 1.0 - cv / baseline_cv if baseline_cv > 0 else 0.0
-        significant = bool(reduction >= min_reduction and np.any(np.abs(values) > 3 * standard))
+        # Guard against explaining noise: a real reduction, parameters well above their
+        # standard errors, and a residual clearly above the instrument's own noise.
+        significant = bool(reduction >= min_reduction and np.any(np.abs(values) > 3 * standard)
+                           and in_sample >= 1.5 * noise_sigma)
         axis, _, sensor = variant.partition(":")
         text = EXPLANATIONS[effect].format(variant=variant, axis=axis, sensor=sensor,
                                            names=", ".join(names))

@@ -43,6 +43,8 @@ class ModelInputs:
                                if k not in model.profiles})
         for sensor, value in self.model.reference_temperatures_c.items():
             model.reference_temperatures_c.setdefault(sensor, value)
+        for name, value in self.model.profile_offsets.items():
+            model.profile_offsets.setdefault(name, value)
         model.version = max(model.version, self.model.version + 1)
         self.model = model
         self.on_change()

@@ -102,3 +102,52 @@ def ball_bar(result: SimulationResult, *, stride: int = 1, seed: int = 0,
     if resolution_m > 0:
         radial = np.round(radial / resolution_m) * resolution_m
     return BallBarReading(np.arctan2(cy, cx), radial)
+
+
+def calibrate_machine(result: SimulationResult, *, step_m: float = 0.02, seed: int = 0) -> dict:
+    """A machine description as a laser calibration of this virtual machine would give it.
+
+    Every motion error of every linear axis measured at ``step_m`` steps over
+    its stroke (ISO 230-2 style), with XM60-like noise (Table 3.3, k = 2), and
+    the squareness errors as a ball-bar/diagonal test would give them; returned
+    as a machine-description mapping (``machine_from_dict``) with error tables -
+    what a machine carries from its installation calibration.
+    """
+    import copy
+
+    from ..core.machine import COMPONENTS
+
+    scenario = result.scenario
+    machine = scenario.machine
+    rng = np.random.default_rng(np.random.SeedSequence([scenario.seed, 0xCA1, seed]))
+    axes = {}
+    for axis in machine.axis_order:
+        spec = machine.axes[axis]
+        entry = {"stroke": list(spec.stroke), "offset": spec.offset.tolist(), "sign": spec.sign}
+        if not spec.is_rotary and axis in result._profiles and \
+                "geometric" in scenario.enabled:
+            low, high = spec.stroke
+            grid = np.arange(low, high + 1e-9, step_m)
+            errors = {}
+            for component in COMPONENTS:
+                truth = result._profiles[axis][component](grid)
+                if component in "XYZ":
+                    noise = rng.normal(0.0, 0.5 * xm60_linear_accuracy_m(grid - low) + 0.05e-6)
+                else:
+                    noise = rng.normal(0.0, 0.5 * xm60_angular_accuracy_rad(truth, 1.0))
+                errors[f"E{component}{axis}"] = {"table": {"positions": grid.tolist(),
+                                                           "values": (truth + noise).tolist()}}
+            entry["errors"] = errors
+        location = {f"E{c}0{axis}": v for c, v in spec.location_errors.items()}
+        if "squareness" in scenario.enabled:
+            for name, value in scenario.parameters("squareness")["errors_rad"].items():
+                if name.endswith(axis):
+                    location[name] = float(value) + float(rng.normal(0.0, 0.5e-6))
+        if location:
+            entry["location_errors"] = location
+        axes[axis] = entry
+    return {"name": f"{machine.name}_calibrated", "description":
+            f"{machine.name} as calibrated on the virtual machine tool (seed {scenario.seed})",
+            "chain": machine.chain, "tool": machine.tool.tolist(),
+            "workpiece": machine.workpiece.tolist(),
+            "scale_distance_m": dict(machine.scale_distance_m), "axes": axes}
