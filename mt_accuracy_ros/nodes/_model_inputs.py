@@ -10,7 +10,7 @@ from mt_accuracy_msgs.msg import SystematicProfile, TemperatureArray
 
 from ..core.error_model import ErrorModel, model_to_dict, resolve_model
 from ..core.errors import MtAccuracyError
-from ._common import LATCHED_QOS, RESULT_QOS, SENSOR_QOS, unpack_float64
+from ._common import LATCHED_QOS, RESULT_QOS, SENSOR_QOS, stamp_to_nanoseconds, unpack_float64
 
 #: Compensation tables, one message per axis: a late joiner must get all of them.
 TABLE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
@@ -20,15 +20,25 @@ TABLE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
 class ModelInputs:
     """Subscribes temperatures and systematic/<axis>; holds the current ErrorModel.
 
+    Inputs are applied by **data time**, not arrival: for data stamped t the
+    model uses the temperatures and profiles stamped at or before
+    t - ``delay_s``. Live and replayed runs then compute the same thing
+    whatever the order in which messages of different topics arrived.
+
     ``follow_topic``: also take whole models published (YAML) on ``model``.
     """
 
-    def __init__(self, node, model_text: str, *, follow_topic: bool, on_change) -> None:
+    def __init__(self, node, model_text: str, *, follow_topic: bool, on_change,
+                 delay_s: float = 0.5, on_profiles=None) -> None:
+        self.on_profiles = on_profiles
         self.node = node
         self.model: ErrorModel = resolve_model(model_text)
         self.temperatures: dict[str, float] = {}
         self.dead: set[str] = set()
         self.on_change = on_change
+        self.delay_ns = int(delay_s * 1e9)
+        self._pending_temperatures: list[tuple[int, dict, set]] = []
+        self._pending_profiles: list[tuple[int, str, np.ndarray, np.ndarray]] = []
         node.create_subscription(TemperatureArray, "temperatures", self._on_temperatures,
                                  SENSOR_QOS)
         for axis in ("x", "y", "z"):
@@ -61,21 +71,37 @@ class ModelInputs:
 
     def _on_temperatures(self, message: TemperatureArray) -> None:
         values = unpack_float64(message.temperatures)
-        self.dead = set()
-        for name, value in zip(message.sensor_names, values):
-            if np.isfinite(value):
-                self.temperatures[name] = float(value)
-            else:
-                self.dead.add(name)
+        good = {name: float(v) for name, v in zip(message.sensor_names, values) if np.isfinite(v)}
+        dead = {name for name, v in zip(message.sensor_names, values) if not np.isfinite(v)}
+        self._pending_temperatures.append((stamp_to_nanoseconds(message.header.stamp), good, dead))
+        self._pending_temperatures.sort(key=lambda item: item[0])
 
     def _on_profile(self, message: SystematicProfile) -> None:
         if message.unit != "rad" or not message.error_name:
             return
-        try:
-            self.model.set_profile(message.error_name, unpack_float64(message.positions).copy(),
-                                   unpack_float64(message.systematic).copy())
-        except MtAccuracyError as exc:
-            self.node.get_logger().warning(f"profile {message.error_name} ignored: {exc}")
+        self._pending_profiles.append((stamp_to_nanoseconds(message.header.stamp),
+                                       message.error_name,
+                                       unpack_float64(message.positions).copy(),
+                                       unpack_float64(message.systematic).copy()))
+        self._pending_profiles.sort(key=lambda item: item[0])
+
+    def advance(self, stamp_ns: int) -> None:
+        """Apply every input stamped at or before ``stamp_ns - delay``, in stamp order."""
+        limit = stamp_ns - self.delay_ns
+        while self._pending_temperatures and self._pending_temperatures[0][0] <= limit:
+            _, good, dead = self._pending_temperatures.pop(0)
+            self.temperatures.update(good)  # a dead sensor keeps its last valid value
+            self.dead = dead
+        changed = False
+        while self._pending_profiles and self._pending_profiles[0][0] <= limit:
+            _, name, positions, values = self._pending_profiles.pop(0)
+            try:
+                self.model.set_profile(name, positions, values)
+                changed = True
+            except MtAccuracyError as exc:
+                self.node.get_logger().warning(f"profile {name} ignored: {exc}")
+        if changed and self.on_profiles is not None:
+            self.on_profiles()
 
     def model_yaml(self) -> str:
         return yaml.safe_dump(model_to_dict(self.model), sort_keys=False)

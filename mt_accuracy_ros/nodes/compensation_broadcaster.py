@@ -49,10 +49,14 @@ class CompensationBroadcaster(Node):
             "Compensation messages per second of data time", 1.0, 20000.0))
         self.declare_parameter("table_points", 40, int_descriptor(
             "Positions per axis in a compensation table", 2, 10000))
+        self.declare_parameter("input_delay_s", 0.5, float_descriptor(
+            "Use temperatures/profiles stamped this much before the data (deterministic "
+            "replay) [s]", 0.0, 60.0, read_only=True))
         self.add_on_set_parameters_callback(self._validate)
         self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
                                   follow_topic=bool(self.get_parameter("follow_model_topic").value),
-                                  on_change=self._model_changed)
+                                  on_change=self._model_changed,
+                                  delay_s=float(self.get_parameter("input_delay_s").value))
         self._compensation = self.create_publisher(VolumetricCompensation, "compensation",
                                                    RESULT_QOS)
         self._tables = self.create_publisher(CompensationTable, "compensation_table", TABLE_QOS)
@@ -75,7 +79,7 @@ class CompensationBroadcaster(Node):
         return accept()
 
     def _model_changed(self) -> None:
-        self._publish_tables()
+        pass  # tables go out with the next batch, stamped in data time
 
     def _on_batch(self, message: ScaleBatch) -> None:
         axes = [a.upper() for a in message.command_axes]
@@ -87,6 +91,7 @@ class CompensationBroadcaster(Node):
         if stamp <= self._last_stamp:
             return  # out of order or repeated: the estimator reports it
         self._last_stamp = stamp
+        self.inputs.advance(stamp)
         period = float(message.sample_period)
         step = max(1, int(round(1.0 / (period * float(self.get_parameter("publish_rate_hz").value)))))
         first = int(message.first_sample_index)

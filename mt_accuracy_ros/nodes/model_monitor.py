@@ -125,6 +125,7 @@ class ModelMonitor(Node):
         if not np.all(np.isfinite(error[measured])):
             self._status(DiagnosticStatus.WARN, "reference reading with NaN error skipped")
             return
+        self.inputs.advance(stamp_to_nanoseconds(message.header.stamp))
         velocities = list(message.command_velocities) if len(message.command_velocities) == \
             len(axes) else [0.0] * len(axes)
         self._readings.append({
@@ -140,11 +141,14 @@ class ModelMonitor(Node):
             self._run_check()
 
     def _observations(self) -> Observations | None:
-        readings = [r for r in self._readings]
+        if not self._readings:
+            return None
+        # Readings taken before the first temperatures arrived cannot enter a
+        # thermal comparison: keep those that have every sensor the latest has.
+        sensors = set(self._readings[-1]["temperatures"])
+        readings = [r for r in self._readings if sensors <= set(r["temperatures"])]
         if len(readings) < 10:
             return None
-        sensors = set.intersection(*(set(r["temperatures"]) for r in readings)) \
-            if readings else set()
         axes = list(readings[0]["positions"])
         return Observations(
             positions={a: np.array([r["positions"][a] for r in readings]) for a in axes},
