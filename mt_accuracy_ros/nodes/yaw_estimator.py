@@ -94,6 +94,9 @@ class YawEstimator(Node):
             0.0, 1e7))
         self.declare_parameter("tolerance_rad", 10e-6, float_descriptor(
             "Deterioration tolerance dE_TOL on the yaw [rad]", 1e-9, 1.0))
+        self.declare_parameter("input_delay_s", 0.5, float_descriptor(
+            "Use temperatures stamped this much before the batch (deterministic replay) [s]",
+            0.0, 60.0, read_only=True))
         self.add_on_set_parameters_callback(self._validate)
 
         self.machine = load_machine(str(self.get_parameter("machine").value))
@@ -108,7 +111,12 @@ class YawEstimator(Node):
         self._data_time_s = 0.0
         self._next_profile_s = 0.0
         self._problems: list[tuple[int, str]] = []
+        self._pending_temperatures: list = []
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        # Publishers up front, so that recorders and listeners match before data flows.
+        for axis in self._wanted or [a for a in self.machine.axis_order
+                                     if a in self.machine.scale_distance_m]:
+            self._create_publishers(axis)
         self.create_subscription(ScaleBatch, "scales", self._on_batch, SENSOR_QOS)
         self.create_subscription(TemperatureArray, "temperatures", self._on_temperatures,
                                  SENSOR_QOS)
@@ -144,20 +152,37 @@ class YawEstimator(Node):
         distance = float(self.machine.scale_distance_m.get(axis, 0.5))
         state = AxisState(axis, distance, self.machine.axes[axis].stroke, params)
         self._axes[axis] = state
+        self._create_publishers(axis)
+        return state
+
+    def _create_publishers(self, axis: str) -> None:
+        if axis in self._yaw_publishers:
+            return
         self._yaw_publishers[axis] = self.create_publisher(YawBatch, f"yaw/{axis.lower()}",
                                                            RESULT_QOS)
         self._profile_publishers[axis] = self.create_publisher(
             SystematicProfile, f"systematic/{axis.lower()}", RESULT_QOS)
-        return state
 
     # ---------------------------------------------------------------- inputs
     def _on_temperatures(self, message: TemperatureArray) -> None:
-        values = unpack_float64(message.temperatures)
+        values = unpack_float64(message.temperatures).copy()
         names = list(message.sensor_names)
         if len(values) != len(names):
             self._report(DiagnosticStatus.ERROR, "temperature message: names and values differ "
                                                  "in length; skipped")
             return
+        # Applied in data time (see _apply_temperatures), not on arrival.
+        self._pending_temperatures.append((stamp_to_nanoseconds(message.header.stamp), names,
+                                           values))
+        self._pending_temperatures.sort(key=lambda item: item[0])
+
+    def _apply_temperatures(self, batch_stamp_ns: int) -> None:
+        limit = batch_stamp_ns - int(float(self.get_parameter("input_delay_s").value) * 1e9)
+        while self._pending_temperatures and self._pending_temperatures[0][0] <= limit:
+            _, names, values = self._pending_temperatures.pop(0)
+            self._use_temperatures(names, values)
+
+    def _use_temperatures(self, names, values) -> None:
         dead = []
         for name, value in zip(names, values):
             if not np.isfinite(value):
@@ -190,6 +215,7 @@ class YawEstimator(Node):
             self._report(DiagnosticStatus.WARN, f"{lost} samples lost before index "
                                                 f"{message.first_sample_index}")
         self._last_stamp = stamp
+        self._apply_temperatures(stamp)
         self._last_index = int(message.first_sample_index) + data.shape[0]
         self._sample_period = float(message.sample_period)
         self._data_time_s = self._last_index * self._sample_period

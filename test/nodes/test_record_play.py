@@ -18,81 +18,117 @@ from mt_accuracy_ros.io.bag_writer import BagWriter, qos_dict
 from mt_accuracy_ros.processes import start_node
 
 
-def _yaw_by_index(bag: Path) -> dict[int, tuple[int, np.ndarray]]:
+SCENARIO = """machine: kidani_hmc
+seed: 12
+duration_s: 4
+sample_rate_hz: 2000
+temperature_rate_hz: 4
+program: {type: back_and_forth, axes: [X, Y], feed_m_per_min: 30}
+effects: {scale_thermal_expansion: {time_constant_s: 2}}
+"""
+
+
+def _by_stamp(bag: Path, topic: str) -> dict[int, object]:
     out = {}
-    for message in read_messages(bag, ["/yaw/x"]):
+    for message in read_messages(bag, [topic]):
         decoded = decode(message)
-        stamp = decoded.header.stamp.sec * 10**9 + decoded.header.stamp.nanosec
-        out[decoded.first_sample_index] = (stamp, np.asarray(decoded.yaw))
+        out[decoded.header.stamp.sec * 10**9 + decoded.header.stamp.nanosec] = decoded
     return out
 
 
+def _graph(probe, out: Path, topics: list[str], sim_time: bool):
+    """Recorder, estimator and compensator; returns the processes once they listen."""
+    extra = {"use_sim_time": True} if sim_time else {}
+    processes = [start_node("recorder", {"output": str(out), "topics": topics,
+                                         "discovery_period_s": 0.1, "chunk_size": 65536, **extra}),
+                 start_node("yaw_estimator", {"baseline_after_s": 0.0, "profile_period_s": 0.5,
+                                              **extra}),
+                 start_node("compensation_broadcaster", {"model": "demo", **extra})]
+    assert spin_until(probe, lambda: probe.count_subscribers("/yaw/y") >= 1 and
+                      probe.count_subscribers("/compensation") >= 1 and
+                      probe.count_subscribers("/scales") >= 2, timeout_s=60)
+    return processes
+
+
 def test_live_recording_validates_independently_and_replays_identically(rclpy_context, tmp_path):
+    import time as wall
+
     import rclpy
     from rosbags.rosbag2 import Reader
     from rosbags.typesys import Stores, get_typestore
     from rosbags.typesys.msg import get_types_from_msg
 
+    (tmp_path / "s.yaml").write_text(SCENARIO)
     probe = rclpy.create_node("probe")
     live = tmp_path / "live"
-    processes = [start_node("recorder", {"output": str(live), "topics": ["/scales", "/yaw/x"],
-                                         "discovery_period_s": 0.1, "chunk_size": 65536}),
-                 start_node("yaw_estimator", {"axes": ["x"], "scale_distance_m": [0.24]})]
+    topics = ["/scales", "/temperatures", "/yaw/y", "/compensation"]
+    processes = _graph(probe, live, topics, sim_time=False)
     try:
-        assert spin_until(probe, lambda: probe.count_subscribers("/yaw/x") >= 1)
-        encoder = start_node("encoder_publisher", {
-            "sample_rate_hz": 2000, "batch_period_s": 0.05, "duration_s": 2.0,
-            "min_subscribers": 2})
+        # Far enough ahead that the encoder has matched its subscribers before sample 0
+        # is due: no catch-up burst, which best-effort transport may thin out on replay.
+        start = wall.time_ns() + 5_000_000_000
+        machine = {"scenario": str(tmp_path / "s.yaml"), "start_stamp_ns": start}
+        temperatures = start_node("temperature_publisher", machine)
+        encoder = start_node("encoder_publisher", {**machine, "min_subscribers": 3})
         assert encoder.popen.wait(timeout=60) == 0
+        temperatures.stop()
         spin_for(probe, 1.0)
     finally:
         for process in processes:
             assert process.stop() == 0
     info = bag_info(live)
-    assert info["topics"]["/scales"]["count"] == 40  # 2 s at 20 batches/s, none lost
-    assert info["topics"]["/yaw/x"]["count"] == 40
+    assert info["topics"]["/scales"]["count"] == 80  # 4 s at 20 batches/s, none lost
+    assert info["topics"]["/yaw/y"]["count"] == 80
+    assert info["topics"]["/compensation"]["count"] == 400  # 100 Hz of data time
+    assert info["topics"]["/temperatures"]["count"] >= 16
 
     # The independent reader sees the same topics, types, counts, times, QoS, contents.
     store = get_typestore(Stores.ROS2_JAZZY)
     ours = list(read_messages(live))
     with Reader(live) as reader:
         assert {c.topic: c.msgtype for c in reader.connections} == {
-            "/scales": "mt_accuracy_msgs/msg/ScaleBatch", "/yaw/x": "mt_accuracy_msgs/msg/YawBatch"}
+            "/scales": "mt_accuracy_msgs/msg/ScaleBatch",
+            "/temperatures": "mt_accuracy_msgs/msg/TemperatureArray",
+            "/yaw/y": "mt_accuracy_msgs/msg/YawBatch",
+            "/compensation": "mt_accuracy_msgs/msg/VolumetricCompensation"}
         qos = {c.topic: c.ext.offered_qos_profiles[0] for c in reader.connections}
         assert qos["/scales"].reliability.name.lower() == "best_effort"
-        assert qos["/yaw/x"].reliability.name.lower() == "reliable"
+        assert qos["/yaw/y"].reliability.name.lower() == "reliable"
         for connection in reader.connections:
             store.register(get_types_from_msg(connection.msgdef.data, connection.msgtype))
         theirs = [(c.topic, t, store.deserialize_cdr(raw, c.msgtype))
                   for c, t, raw in reader.messages()]
     assert [(m.topic, m.log_time_ns) for m in ours] == [(t, ts) for t, ts, _ in theirs]
-    for mine, (_, _, other) in zip(ours, theirs):
-        decoded = decode(mine)
-        assert decoded.first_sample_index == other.first_sample_index
-        field = "positions"
-        np.testing.assert_array_equal(np.asarray(getattr(decoded, field)), getattr(other, field))
+    for mine, (topic, _, other) in zip(ours, theirs):
+        if topic == "/scales":
+            decoded = decode(mine)
+            assert decoded.first_sample_index == other.first_sample_index
+            np.testing.assert_array_equal(np.asarray(decoded.positions), other.positions)
 
-    # Replay /scales through a fresh estimator on sim time; record its output.
+    # Replay /scales and /temperatures through a fresh estimator and compensator on sim time.
     replay = tmp_path / "replay"
-    processes = [start_node("recorder", {"output": str(replay), "topics": ["/yaw/x"],
-                                         "discovery_period_s": 0.1, "use_sim_time": True}),
-                 start_node("yaw_estimator", {"axes": ["x"], "scale_distance_m": [0.24],
-                                              "use_sim_time": True})]
+    processes = _graph(probe, replay, ["/yaw/y", "/compensation"], sim_time=True)
     try:
-        assert spin_until(probe, lambda: probe.count_subscribers("/yaw/x") >= 1)
-        player = start_node("bag_player", {"bag": str(live), "topics": ["/scales"],
+        player = start_node("bag_player", {"bag": str(live), "topics": ["/scales", "/temperatures"],
                                            "wait_for_subscribers_s": 20.0})
         assert player.popen.wait(timeout=60) == 0
-        spin_for(probe, 1.0)
+        spin_for(probe, 1.5)
     finally:
         for process in processes:
             assert process.stop() == 0
         probe.destroy_node()
-    live_yaw, replayed_yaw = _yaw_by_index(live), _yaw_by_index(replay)
-    assert sorted(replayed_yaw) == sorted(live_yaw)
-    for index, (stamp, yaw) in live_yaw.items():
-        assert replayed_yaw[index][0] == stamp
-        np.testing.assert_array_equal(replayed_yaw[index][1], yaw)  # bit-identical
+    for topic, field in (("/yaw/y", "yaw"), ("/compensation", "error")):
+        live_out, replayed = _by_stamp(live, topic), _by_stamp(replay, topic)
+        assert sorted(replayed) == sorted(live_out)
+        for stamp, message in live_out.items():
+            if field == "yaw":
+                np.testing.assert_array_equal(np.asarray(replayed[stamp].yaw),
+                                              np.asarray(message.yaw))  # bit-identical
+                np.testing.assert_array_equal(np.asarray(replayed[stamp].thermal_correction),
+                                              np.asarray(message.thermal_correction))
+            else:
+                assert replayed[stamp].error == message.error  # bit-identical
+                assert replayed[stamp].model_version == message.model_version
     # The replay recorder logged on the played /clock: recorded time, not today's.
     scale_times = [m.log_time_ns for m in read_messages(live, ["/scales"])]
     replay_times = [m.log_time_ns for m in read_messages(replay)]

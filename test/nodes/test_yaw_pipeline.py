@@ -5,45 +5,48 @@ import time
 
 import numpy as np
 
+from graph_helpers import spin_for, spin_until
 from mt_accuracy_ros.processes import start_node
 
+SCENARIO = """machine: kidani_hmc
+seed: 8
+duration_s: 6
+sample_rate_hz: 2000
+program: {type: back_and_forth, axes: [X, Y], feed_m_per_min: 30}
+effects: {timing_skew: {skew_s: 2e-6}}
+"""
 
-def test_yaw_estimated_in_another_process_matches_the_simulated_yaw(rclpy_context):
+
+def test_yaw_estimated_in_another_process_equals_the_offline_computation(rclpy_context, tmp_path):
     import rclpy
 
     from mt_accuracy_msgs.msg import YawBatch
+    from mt_accuracy_ros.core.dual_scale import yaw_from_scales
     from mt_accuracy_ros.nodes._common import RESULT_QOS, unpack_float64
-    from mt_accuracy_ros.sim.scale_pair import YawProfile
+    from mt_accuracy_ros.sim.machine_tool import simulate
+    from mt_accuracy_ros.sim.scenario import load_scenario
 
-    estimator = start_node("yaw_estimator", {"axes": ["x"], "scale_distance_m": [0.24]})
-    publisher = start_node("encoder_publisher", {"sample_rate_hz": 1000, "batch_period_s": 0.05,
-                                                 "duration_s": 3.0, "noise_m": 0.0})
+    (tmp_path / "s.yaml").write_text(SCENARIO)
     node = rclpy.create_node("yaw_listener")
     batches: list[YawBatch] = []
-    node.create_subscription(YawBatch, "yaw/x", batches.append, RESULT_QOS)
+    node.create_subscription(YawBatch, "yaw/y", batches.append, RESULT_QOS)
+    estimator = start_node("yaw_estimator", {"thermal_correction": False})
     try:
-        # A timeout against a hung graph, not a speed requirement.
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and publisher.popen.poll() is None:
-            rclpy.spin_once(node, timeout_sec=0.1)
-        for _ in range(10):
-            rclpy.spin_once(node, timeout_sec=0.05)
+        assert spin_until(node, lambda: node.count_publishers("yaw/y") >= 0 and
+                          node.count_subscribers("scales") >= 1)
+        publisher = start_node("encoder_publisher", {"scenario": str(tmp_path / "s.yaml"),
+                                                     "rate_factor": 3.0, "min_subscribers": 1})
+        assert spin_until(node, lambda: publisher.popen.poll() is not None, timeout_s=60)
+        spin_for(node, 0.5)
     finally:
-        assert publisher.stop() == 0
         estimator.stop()
         node.destroy_node()
-    assert len(batches) >= 20
+    assert publisher.popen.returncode == 0
     indices = [b.first_sample_index for b in batches]
-    assert indices == sorted(indices)
-    # Consecutive batches, no gap once the estimator is up.
-    assert np.all(np.diff(indices) == 50)
-    position = np.concatenate([unpack_float64(b.positions) for b in batches])
+    assert indices == list(range(0, 12000, 100))  # every batch, in order, none lost
     yaw = np.concatenate([unpack_float64(b.yaw) for b in batches])
-    # The estimator's zero reference is the first sample it heard, which the
-    # listener may not have heard: compare changes relative to our first sample.
-    truth = YawProfile()(position)
-    error = (yaw - yaw[0]) - (truth - truth[0])
-    # Without noise only the 10 nm quantisation of the heads remains: each
-    # yaw carries <= 2 * 5 nm / 0.24 m, a difference of two yaws twice that.
-    assert np.max(np.abs(error)) < 2 * 2 * 5e-9 / 0.24 + 1e-12
-    assert np.ptp(yaw) > 3e-6
+    result = simulate(load_scenario(tmp_path / "s.yaml"))
+    first, second = result.channel("y1"), result.channel("y2")
+    offline = yaw_from_scales(first, second, 0.60, reference=(first[0], second[0]))
+    np.testing.assert_array_equal(yaw, offline)  # same numbers, bit for bit
+    assert np.ptp(yaw) > 1e-6
