@@ -96,3 +96,15 @@ def unpack_float64(field):
         return np.frombuffer(field, dtype=np.float64)
     except (TypeError, ValueError, BufferError):
         return np.asarray(field, dtype=np.float64)
+
+
+def linger(node, seconds: float = 0.5) -> None:
+    """Keep a finished node alive briefly: DDS delivers the last (best-effort) messages
+    from the writer's history only while the writer exists."""
+    import time
+
+    import rclpy
+
+    end = time.monotonic() + seconds
+    while rclpy.ok() and time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.05)

@@ -27,7 +27,7 @@ from mt_accuracy_msgs.msg import ReferenceMeasurement, ScaleBatch
 
 from ..core.errors import MtAccuracyError
 from ..sim.machine_tool import SimulationResult, simulate
-from ._common import (MATCH_SETTLE_S, RESULT_QOS, SENSOR_QOS, accept, float_descriptor,
+from ._common import (linger, MATCH_SETTLE_S, RESULT_QOS, SENSOR_QOS, accept, float_descriptor,
                       int_descriptor, nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse)
 from ._scenario import ScenarioClock, resolve_scenario
 
@@ -178,6 +178,7 @@ def main(args: list[str] | None = None) -> int:
     try:
         while rclpy.ok() and not node.finished:
             rclpy.spin_once(node, timeout_sec=0.05)
+        linger(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

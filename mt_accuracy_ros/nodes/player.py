@@ -218,8 +218,8 @@ def main(args: list[str] | None = None) -> int:
     try:
         while rclpy.ok() and not node.finished.is_set():
             executor.spin_once(timeout_sec=0.05)
-        # Let reliable subscribers drain the last messages before the publishers go.
-        for _ in range(10):
+        # Let subscribers drain the last messages before the publishers go.
+        for _ in range(25):
             executor.spin_once(timeout_sec=0.02)
         if node.error is not None:
             print(f"bag_player: {node.error}", file=sys.stderr)

@@ -19,7 +19,7 @@ from mt_accuracy_msgs.msg import TemperatureArray
 
 from ..core.errors import MtAccuracyError
 from ..sim.machine_tool import simulate
-from ._common import (SENSOR_QOS, accept, float_descriptor, int_descriptor, nanoseconds_to_stamp,
+from ._common import (linger, SENSOR_QOS, accept, float_descriptor, int_descriptor, nanoseconds_to_stamp,
                       pack_float64, plain_descriptor, refuse)
 from ._scenario import ScenarioClock, resolve_scenario
 
@@ -94,6 +94,7 @@ def main(args: list[str] | None = None) -> int:
     try:
         while rclpy.ok() and not node.finished:
             rclpy.spin_once(node, timeout_sec=0.05)
+        linger(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
