@@ -12,6 +12,7 @@ BENCHES = [
     ["bench.sim_speed"],
     ["bench.thesis_results"],
     ["bench.thermal_report"],
+    ["bench.graph_throughput"],
 ]
 
 

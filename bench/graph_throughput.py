@@ -1,0 +1,149 @@
+"""End-to-end throughput and latency of the live graph (issue 7).
+
+Sustained 20 kHz x 6 scale heads for ``--seconds``: encoder publisher ->
+yaw estimator -> compensation broadcaster, each its own process, this process
+listening. Reports batches published / received by the estimator (every
+first_sample_index accounted for), compensation messages (expected: 100 Hz of
+data time), and the latency from a sample's stamp to the arrival of its
+compensation here, p50 and p99.
+
+Baseline in the same run: the per-sample design - one ``sensor_msgs/JointState``
+(6 positions) per sample - publishing as fast as it can from one process to a
+subscriber in another, messages/s received.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+
+SCENARIO = """machine: kidani_hmc
+seed: 1
+duration_s: {seconds}
+sample_rate_hz: 20000
+temperature_rate_hz: 1
+program: {{type: back_and_forth, axes: [X, Y, Z], feed_m_per_min: 30}}
+effects: {{scale_thermal_expansion: true, timing_skew: true}}
+"""
+
+JOINT_STATE_PUBLISHER = textwrap.dedent("""
+    import time, rclpy
+    from sensor_msgs.msg import JointState
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    rclpy.init()
+    node = rclpy.create_node('joint_state_source')
+    pub = node.create_publisher(JointState, '/per_sample', QoSProfile(depth=1000,
+                                reliability=ReliabilityPolicy.RELIABLE))
+    while pub.get_subscription_count() < 1:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    time.sleep(0.5)
+    end = time.monotonic() + {seconds}
+    i = 0
+    while time.monotonic() < end:
+        msg = JointState(name=['x1', 'x2', 'y1', 'y2', 'z1', 'z2'], position=[float(i)] * 6)
+        msg.header.stamp = node.get_clock().now().to_msg()
+        pub.publish(msg)
+        i += 1
+    print(i, flush=True)
+    time.sleep(1.0)
+    node.destroy_node()
+    rclpy.try_shutdown()
+    """)
+
+
+def bench_graph(seconds: float) -> dict:
+    import rclpy
+
+    from mt_accuracy_msgs.msg import VolumetricCompensation, YawBatch
+    from mt_accuracy_ros.nodes._common import RESULT_QOS, stamp_to_nanoseconds
+    from mt_accuracy_ros.processes import start_node
+
+    workdir = Path(tempfile.mkdtemp(prefix="graph_bench_"))
+    (workdir / "s.yaml").write_text(SCENARIO.format(seconds=seconds))
+    rclpy.init()
+    node = rclpy.create_node("bench_listener")
+    yaw_indices: list[int] = []
+    latencies: list[float] = []
+    counts = {"compensation": 0}
+
+    def on_compensation(message: VolumetricCompensation) -> None:
+        counts["compensation"] += 1
+        latencies.append((time.time_ns() - stamp_to_nanoseconds(message.header.stamp)) / 1e6)
+
+    node.create_subscription(YawBatch, "yaw/x", lambda m: yaw_indices.append(
+        int(m.first_sample_index)), RESULT_QOS)
+    node.create_subscription(VolumetricCompensation, "compensation", on_compensation, RESULT_QOS)
+    estimator = start_node("yaw_estimator", {"thermal_correction": False}, quiet=True)
+    compensator = start_node("compensation_broadcaster", {"model": "demo"}, quiet=True)
+    while node.count_subscribers("/scales") < 2 or node.count_publishers("/compensation") < 1:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    encoder = start_node("encoder_publisher", {"scenario": str(workdir / "s.yaml"),
+                                               "min_subscribers": 2}, quiet=True)
+    started = time.monotonic()
+    while encoder.popen.poll() is None and time.monotonic() - started < seconds + 60:
+        rclpy.spin_once(node, timeout_sec=0.01)
+    end = time.monotonic() + 2.0
+    while time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.01)
+    for process in (estimator, compensator):
+        process.stop()
+    node.destroy_node()
+    rclpy.try_shutdown()
+    batches = int(seconds * 20)
+    expected_indices = list(range(0, int(seconds * 20000), 1000))
+    return {"samples_per_s": 20000, "channels": 6, "seconds": seconds,
+            "batches_expected": batches, "yaw_batches_received": len(yaw_indices),
+            "lost_samples": (len(expected_indices) - len(set(yaw_indices))) * 1000,
+            "compensation_expected": int(seconds * 100),
+            "compensation_received": counts["compensation"],
+            "latency_ms_p50": float(np.percentile(latencies, 50)) if latencies else None,
+            "latency_ms_p99": float(np.percentile(latencies, 99)) if latencies else None,
+            "latency_ms_max": float(np.max(latencies)) if latencies else None}
+
+
+def bench_joint_state(seconds: float) -> dict:
+    import rclpy
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+
+    rclpy.init()
+    node = rclpy.create_node("per_sample_sink")
+    received = {"n": 0}
+    node.create_subscription(JointState, "/per_sample", lambda m: received.__setitem__(
+        "n", received["n"] + 1), QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+    source = subprocess.Popen([sys.executable, "-c", JOINT_STATE_PUBLISHER.format(
+        seconds=seconds)], stdout=subprocess.PIPE, text=True)
+    first = None
+    while source.poll() is None:
+        rclpy.spin_once(node, timeout_sec=0.01)
+        if first is None and received["n"]:
+            first = (time.monotonic(), received["n"])
+    published = int(source.stdout.read().strip() or 0)
+    node.destroy_node()
+    rclpy.try_shutdown()
+    return {"published": published, "received": received["n"],
+            "received_per_s": received["n"] / seconds,
+            "samples_per_s_needed": 20000}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--seconds", type=float, default=20.0)
+    args = parser.parse_args()
+    graph = bench_graph(args.seconds)
+    per_sample = bench_joint_state(min(args.seconds, 10.0))
+    out = {"batched_graph": graph, "per_sample_joint_state": per_sample,
+           "ratio_samples_per_s": 20000 / max(per_sample["received_per_s"], 1e-9)}
+    print(json.dumps(out, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
