@@ -105,6 +105,38 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .check import check_bag, check_csv, write_outputs
+    from .core.errors import MtAccuracyError
+
+    data = Path(args.data)
+    try:
+        if data.suffix.lower() == ".csv":
+            if not args.target:
+                raise SystemExit("mt-accuracy check: a CSV needs --target COLUMN")
+            result = check_csv(data, args.target, args.time_column, args.inputs or ["*"],
+                               args.driver or [], args.add or [], args.auto, args.train_fraction,
+                               args.min_reduction, args.term or [])
+        else:
+            result = check_bag(data, args.model, args.add or [], args.auto, args.namespace,
+                               args.min_reduction)
+    except (MtAccuracyError, OSError) as exc:
+        print(f"mt-accuracy check: {exc}", file=sys.stderr)
+        return 2
+    write_outputs(result, args.json, args.report)
+    unit = "m" if result["kind"] == "bag" else result.get("target", "")
+    print(f"baseline RMSE {result['baseline_rmse']:.4g} {unit}")
+    for entry in result["ranking"][:5]:
+        flag = "*" if entry["significant"] else " "
+        print(f" {flag} {entry['effect']:40s} CV RMSE after {entry['cv_rmse_after']:.4g} "
+              f"({100 * entry['error_reduction']:.1f} %)")
+    print(f"added: {', '.join(result['added']) or 'nothing'}; final RMSE "
+          f"{result['final_rmse']:.4g} {unit}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mt-accuracy",
@@ -135,6 +167,25 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--csv-stride", type=int, default=1, help="write every N-th sample")
     sim.add_argument("-q", "--quiet", action="store_true")
     sim.set_defaults(handler=_simulate)
+    check = commands.add_parser("check", help="model vs measurement: rank missing effects, add them")
+    check.add_argument("data", help="bag (this package's topics) or CSV file")
+    check.add_argument("--model", default="demo", help="model: bundled name, path or inline YAML")
+    check.add_argument("--add", action="append", metavar="EFFECT", help="add this effect (repeat)")
+    check.add_argument("--auto", type=int, default=0, metavar="N",
+                       help="add up to N top significant candidates by themselves")
+    check.add_argument("--report", help="HTML report path")
+    check.add_argument("--json", help="JSON summary path")
+    check.add_argument("--namespace", default="", help="machine namespace in the bag (/mt1)")
+    check.add_argument("--min-reduction", type=float, default=0.1,
+                       help="smallest CV error reduction that counts")
+    check.add_argument("--time-column", default="time_s", help="CSV: time column [s]")
+    check.add_argument("--target", help="CSV: the measured error column")
+    check.add_argument("--inputs", nargs="+", help="CSV: temperature columns (names or patterns)")
+    check.add_argument("--driver", nargs="+", help="CSV: operating inputs for lag terms")
+    check.add_argument("--term", action="append", help="CSV: terms the starting model holds")
+    check.add_argument("--train-fraction", type=float, default=0.5,
+                       help="CSV: fit on this leading fraction, judge on the rest")
+    check.set_defaults(handler=_check)
     play = commands.add_parser("play", help="publish a bag's messages in recorded time, with /clock")
     play.add_argument("bag", help="bag directory or .mcap file")
     play.add_argument("--topics", nargs="+", help="topics to play (default all)")

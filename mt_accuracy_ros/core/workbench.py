@@ -52,6 +52,19 @@ class Observations:
     velocities: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     temperatures: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     uncertainty_m: float = 1e-6                     # k = 2
+    #: Optional: (N, 3) position and orientation predictions made elsewhere (e.g. with
+    #: the profiles that were live at each reading); used instead of model.tcp_error.
+    predicted_m: NDArray[np.float64] | None = None
+    predicted_orientation: NDArray[np.float64] | None = None
+
+    def subset(self, rows) -> "Observations":
+        pick = lambda d: {k: np.asarray(v)[rows] for k, v in d.items()}  # noqa: E731
+        return Observations(pick(self.positions), self.measured_m[rows], self.measured_mask[rows],
+                            self.time_s[rows], pick(self.velocities), pick(self.temperatures),
+                            self.uncertainty_m,
+                            None if self.predicted_m is None else self.predicted_m[rows],
+                            None if self.predicted_orientation is None
+                            else self.predicted_orientation[rows])
 
     @property
     def n(self) -> int:
@@ -137,8 +150,9 @@ def candidate_designs(model: ErrorModel, obs: Observations) -> list[tuple[str, s
                 location={name: 1e-6}, use_description=False), check_stroke=False)["position"]
             design[:, :, j] = (moved - base) / 1e-6
         out.append(("squareness", "", names, design))
-    if "abbe_offset" not in model.effects and model.profiles:
-        _, orientation = model.tcp_error(q, obs.temperatures, obs.velocities or None)
+    if "abbe_offset" not in model.effects and ("geometric" in model.effects or model.profiles):
+        orientation = obs.predicted_orientation if obs.predicted_orientation is not None else \
+            model.tcp_error(q, obs.temperatures, obs.velocities or None)[1]
         design = np.stack([np.cross(orientation, unit) for unit in np.eye(3)], axis=2)
         out.append(("abbe_offset", "", ["ox", "oy", "oz"], design))
     for effect, form in (("reversal", "sign"), ("servo_lag", "velocity")):
@@ -207,7 +221,8 @@ def residuals(model: ErrorModel, obs: Observations) -> NDArray[np.float64]:
     Reference instruments measure from a zero reference of their own, so a
     constant offset per component carries no information about the model.
     """
-    predicted, _ = model.tcp_error(obs.positions, obs.temperatures, obs.velocities or None)
+    predicted = obs.predicted_m if obs.predicted_m is not None else \
+        model.tcp_error(obs.positions, obs.temperatures, obs.velocities or None)[0]
     residual = obs.measured_m - predicted
     for c in range(3):
         measured = obs.measured_mask[:, c]

@@ -1,0 +1,304 @@
+"""``mt-accuracy check``: compare a model with measurements, find and add what is missing.
+
+DATA is a bag of this package's topics (``reference/tcp_error`` readings,
+``temperatures``, ``systematic/<axis>`` profiles) checked against an
+:class:`~mt_accuracy_ros.core.error_model.ErrorModel`, or a CSV table checked
+with the thermal-regression workbench (:mod:`~mt_accuracy_ros.core.regression_workbench`).
+Effects are ranked by time-blocked cross-validation; ``--add`` adds named ones,
+``--auto`` keeps adding the top significant candidate. The JSON holds
+``baseline_rmse``, ``ranking`` [{effect, cv_rmse_after, explanation}], ``added``
+and ``final_rmse``; the HTML report shows where the model fails and the error
+falling.
+"""
+from __future__ import annotations
+
+import fnmatch
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .core.errors import InputDataError, MtAccuracyError
+
+
+# ------------------------------------------------------------------ bag path
+def observations_from_bag(bag: Path, namespace: str = ""):
+    """Readings, temperatures at their stamps, and the profile history of a bag."""
+    from .core.workbench import Observations
+    from .io.bag_reader import decode, read_messages, topics
+    from .nodes._common import stamp_to_nanoseconds, unpack_float64
+
+    prefix = namespace.rstrip("/")
+    available = topics(bag)
+    wanted = {f"{prefix}/reference/tcp_error", f"{prefix}/temperatures"} | \
+        {f"{prefix}/systematic/{a}" for a in "xyz"}
+    if f"{prefix}/reference/tcp_error" not in available:
+        raise InputDataError(f"{bag}: no {prefix}/reference/tcp_error topic; topics: "
+                             f"{', '.join(sorted(available))}")
+    readings, temps, profiles = [], [], []
+    for message in read_messages(bag, sorted(wanted & set(available))):
+        data = decode(message)
+        stamp = stamp_to_nanoseconds(data.header.stamp)
+        if message.topic.endswith("reference/tcp_error"):
+            readings.append((stamp, data))
+        elif message.topic.endswith("temperatures"):
+            temps.append((stamp, list(data.sensor_names), unpack_float64(data.temperatures).copy()))
+        else:
+            profiles.append((stamp, data.error_name, unpack_float64(data.positions).copy(),
+                             unpack_float64(data.systematic).copy()))
+    if len(readings) < 10:
+        raise InputDataError(f"{bag}: only {len(readings)} reference readings")
+    readings.sort(key=lambda r: r[0])
+    axes = [a.upper() for a in readings[0][1].command_axes]
+    stamps = np.array([r[0] for r in readings], dtype=np.int64)
+    temperatures = {}
+    if temps:
+        temps.sort(key=lambda t: t[0])
+        names = temps[-1][1]
+        t_stamps = np.array([t[0] for t in temps], dtype=np.float64)
+        for j, name in enumerate(names):
+            values = np.array([t[2][j] if j < len(t[2]) else np.nan for t in temps])
+            ok = np.isfinite(values)
+            if ok.sum() >= 2:
+                temperatures[name] = np.interp(stamps.astype(float), t_stamps[ok], values[ok])
+    obs = Observations(
+        positions={a: np.array([r[1].command_positions[i] for r in readings]) for i, a in
+                   enumerate(axes)},
+        measured_m=np.array([[r[1].error.x, r[1].error.y, r[1].error.z] for r in readings]),
+        measured_mask=np.array([list(r[1].measured) for r in readings], dtype=bool),
+        time_s=(stamps - stamps[0]) / 1e9,
+        velocities={a: np.array([r[1].command_velocities[i] if len(r[1].command_velocities) ==
+                                 len(axes) else 0.0 for r in readings])
+                    for i, a in enumerate(axes)},
+        temperatures=temperatures,
+        uncertainty_m=float(np.median([r[1].uncertainty for r in readings])) or 1e-6)
+    return obs, stamps, sorted(profiles, key=lambda p: p[0])
+
+
+def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_000):
+    """Model prediction at each reading with the profiles live at that time (like the monitor)."""
+    import copy
+
+    position = np.zeros((obs.n, 3))
+    orientation = np.zeros((obs.n, 3))
+    state = copy.deepcopy(model)
+    next_profile = 0
+    group_start = 0
+    for i in range(obs.n + 1):
+        limit = stamps[i] - delay_ns if i < obs.n else None
+        due = i < obs.n and next_profile < len(profiles) and profiles[next_profile][0] <= limit
+        if due or i == obs.n:
+            if i > group_start:
+                rows = np.arange(group_start, i)
+                sub = obs.subset(rows)
+                p, o = state.tcp_error(sub.positions, sub.temperatures, sub.velocities or None)
+                position[rows], orientation[rows] = p, o
+            group_start = i
+            while i < obs.n and next_profile < len(profiles) and profiles[next_profile][0] <= limit:
+                _, name, x, y = profiles[next_profile]
+                try:
+                    state.set_profile(name, x, y)
+                except MtAccuracyError:
+                    pass
+                next_profile += 1
+    return position, orientation
+
+
+def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: str,
+              min_reduction: float) -> dict:
+    from .core.error_model import resolve_model
+    from .core.workbench import add_effect, diagnose, residuals
+
+    obs, stamps, profiles = observations_from_bag(bag, namespace)
+    model = resolve_model(model_text)
+    for sensor, values in obs.temperatures.items():
+        model.reference_temperatures_c.setdefault(sensor, float(values[0]))
+    steps = []
+
+    def evaluate(current):
+        obs.predicted_m, obs.predicted_orientation = predict_with_history(current, obs, stamps,
+                                                                          profiles)
+        return diagnose(current, obs, min_reduction=min_reduction)
+
+    diagnosis = evaluate(model)
+    first = diagnosis
+    queue = list(add)
+    while True:
+        steps.append({"model_version": model.version, "effects": sorted(model.effects),
+                      "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text()})
+        if queue:
+            name = queue.pop(0)
+        elif auto and diagnosis.found is not None and len(steps) <= auto:
+            name = diagnosis.found.effect
+        else:
+            break
+        candidate = next((c for c in diagnosis.ranking if c.effect == name), None)
+        if candidate is None:
+            raise InputDataError(f"cannot add {name}: not a candidate here (in the model "
+                                 f"already, or no regressors in this data)")
+        model = add_effect(model, candidate, obs)
+        steps[-1]["added"] = name
+        steps[-1]["parameters"] = candidate.parameters
+        diagnosis = evaluate(model)
+    residual = residuals(model, obs)
+    return {"data": str(bag), "kind": "bag", "readings": obs.n,
+            "baseline_rmse": first.baseline_rmse,
+            "ranking": [{"effect": c.effect, "variant": c.variant, "cv_rmse_after": c.cv_rmse_after,
+                         "error_reduction": c.error_reduction, "significant": c.significant,
+                         "explanation": c.explanation} for c in first.ranking],
+            "added": [s["added"] for s in steps if "added" in s],
+            "final_rmse": diagnosis.baseline_rmse, "steps": steps,
+            "band": obs.uncertainty_m, "final_diagnosis": diagnosis.text(),
+            "_plot": {"time": obs.time_s, "positions": obs.positions,
+                      "residual_before": obs.measured_m - 0, "residual_after": residual,
+                      "temperatures": obs.temperatures}}
+
+
+# ------------------------------------------------------------------ CSV path
+def check_csv(path: Path, target: str, time_column: str, inputs: list[str], drivers: list[str],
+              add: list[str], auto: int, train_fraction: float, min_reduction: float,
+              model_terms: list[str]) -> dict:
+    from .core.regression_workbench import table_workbench
+
+    table = np.genfromtxt(path, delimiter=",", names=True)
+    names = list(table.dtype.names or [])
+    if time_column not in names:
+        raise InputDataError(f"{path}: no time column {time_column!r}; columns: {', '.join(names)}")
+    selected = [n for n in names if any(fnmatch.fnmatch(n, p) for p in inputs)]
+    if not selected:
+        raise InputDataError(f"{path}: no input column matches {inputs}")
+    columns = {n: table[n] for n in names}
+    bench = table_workbench(columns, table[time_column], target, selected, drivers,
+                            train_fraction, included=model_terms)
+    first = bench.rank(min_reduction)
+    baseline = bench.judged_rmse(bench.included)
+    steps = [{"terms": list(bench.included), "held_out_rmse": baseline,
+              "cv_rmse": bench.cv_rmse(bench.included)}]
+    queue = list(add)
+    ranking = first
+    while True:
+        if queue:
+            name = queue.pop(0)
+            if name not in bench.candidates:
+                raise InputDataError(f"no candidate {name!r}")
+        elif auto and len(bench.included) - len(model_terms) < auto and ranking and \
+                ranking[0].significant:
+            name = ranking[0].name
+        else:
+            break
+        bench.included.append(name)
+        ranking = bench.rank(min_reduction)
+        steps.append({"terms": list(bench.included), "added": name,
+                      "held_out_rmse": bench.judged_rmse(bench.included),
+                      "cv_rmse": bench.cv_rmse(bench.included)})
+    prediction_before = bench.fit_predict(model_terms)
+    prediction_after = bench.fit_predict(bench.included)
+    return {"data": str(path), "kind": "csv", "target": target, "rows": int(bench.target.size),
+            "train_rows": int(bench.train.sum()),
+            "baseline_rmse": baseline,
+            "ranking": [{"effect": s.name, "cv_rmse_after": s.cv_rmse_after,
+                         "error_reduction": s.error_reduction, "significant": s.significant,
+                         "explanation": s.explanation} for s in first[:20]],
+            "added": [s["added"] for s in steps if "added" in s],
+            "final_rmse": steps[-1]["held_out_rmse"], "steps": steps,
+            "judged_on": "held-out rows after the training rows",
+            "_plot": {"time": np.asarray(table[time_column])[:bench.target.size],
+                      "target": bench.target, "before": prediction_before,
+                      "after": prediction_after, "train": bench.train}}
+
+
+# ------------------------------------------------------------------ report
+def write_outputs(result: dict, json_path: str | None, report_path: str | None) -> None:
+    plot = result.pop("_plot")
+    if json_path:
+        Path(json_path).write_text(json.dumps(result, indent=2, default=float))
+    if report_path:
+        _report(result, plot, Path(report_path))
+
+
+def _report(result: dict, plot: dict, path: Path) -> None:
+    import html
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    stem = path.with_suffix("")
+    images = []
+    if result["kind"] == "csv":
+        fig, ax = plt.subplots(figsize=(10, 4))
+        hours = (plot["time"] - plot["time"][0]) / 3600
+        ax.plot(hours, plot["target"], "k-", lw=0.8, label="measured")
+        ax.plot(hours, plot["before"], "b-", lw=0.8,
+                label=f"model before ({result['baseline_rmse']:.3g} held out)")
+        ax.plot(hours, plot["after"], "r-", lw=0.8,
+                label=f"after adding {', '.join(result['added']) or 'nothing'} "
+                      f"({result['final_rmse']:.3g})")
+        split = hours[np.argmin(plot["train"])] if not plot["train"].all() else hours[-1]
+        ax.axvline(split, color="0.5", ls="--")
+        ax.set(xlabel="time [h] (trained left of the dashed line, judged right)",
+               ylabel=result["target"], title="model vs measurement")
+        ax.legend(fontsize=8)
+        images.append(_save(fig, stem, "fit"))
+    else:
+        residual_before = plot["residual_before"]
+        residual_after = plot["residual_after"]
+        fig, axes = plt.subplots(2, 2, figsize=(11, 7))
+        band = result["band"] * 1e6
+        for c, label in enumerate("xyz"):
+            axes[0, 0].plot(plot["time"], residual_after[:, c] * 1e6, ".", ms=3, label=f"e_{label}")
+        axes[0, 0].axhspan(-band, band, color="g", alpha=0.15, label="2u band")
+        axes[0, 0].set(xlabel="time [s]", ylabel="residual after [µm]",
+                       title="where it fails: time")
+        axes[0, 0].legend(fontsize=7)
+        for axis, values in plot["positions"].items():
+            axes[0, 1].plot(values * 1e3, np.linalg.norm(residual_after, axis=1) * 1e6, ".",
+                            ms=3, label=axis)
+        axes[0, 1].set(xlabel="position [mm]", ylabel="|residual| [µm]",
+                       title="where it fails: position")
+        axes[0, 1].legend(fontsize=7)
+        for sensor in list(plot["temperatures"])[-4:]:
+            values = plot["temperatures"][sensor]
+            axes[1, 0].plot(values - values[0], np.linalg.norm(residual_after, axis=1) * 1e6, ".",
+                            ms=3, label=sensor)
+        axes[1, 0].set(xlabel="temperature rise [K]", ylabel="|residual| [µm]",
+                       title="where it fails: temperature")
+        axes[1, 0].legend(fontsize=7)
+        rmse = [s["rmse"] * 1e6 for s in result["steps"]]
+        axes[1, 1].bar(range(len(rmse)), rmse, color="tab:red")
+        axes[1, 1].set_xticks(range(len(rmse)), [f"v{s['model_version']}" for s in result["steps"]])
+        axes[1, 1].set(ylabel="residual RMSE [µm]", title="the error falling, model versions")
+        images.append(_save(fig, stem, "residuals"))
+    fig, ax = plt.subplots(figsize=(10, 4))
+    top = result["ranking"][:10]
+    ax.barh([r["effect"] for r in top][::-1], [max(0, r["error_reduction"]) * 100 for r in top][::-1],
+            color=["tab:green" if r["significant"] else "0.6" for r in top][::-1])
+    ax.set(xlabel="cross-validated error reduction [%]", title="candidate effects")
+    images.append(_save(fig, stem, "ranking"))
+    rows = "".join(f"<tr><td>{html.escape(r['effect'])}</td><td>{r['cv_rmse_after']:.4g}</td>"
+                   f"<td>{100 * r['error_reduction']:.1f} %</td><td>{r['significant']}</td>"
+                   f"<td>{html.escape(r['explanation'])}</td></tr>" for r in result["ranking"][:15])
+    steps = "".join(f"<li>{html.escape(json.dumps({k: v for k, v in s.items()}, default=float))}</li>"
+                    for s in result["steps"])
+    body = (f"<h1>mt-accuracy check</h1><p>data: {html.escape(result['data'])}</p>"
+            f"<p><b>baseline RMSE {result['baseline_rmse']:.4g}, final RMSE "
+            f"{result['final_rmse']:.4g}</b> after adding {html.escape(', '.join(result['added']) or 'nothing')}"
+            f"{' (judged on held-out rows)' if result['kind'] == 'csv' else ''}</p>"
+            + "".join(f"<img src='{html.escape(i)}'><br>" for i in images)
+            + "<h2>Candidates</h2><table border=1><tr><th>effect</th><th>CV RMSE after</th>"
+            f"<th>reduction</th><th>significant</th><th>why</th></tr>{rows}</table>"
+            f"<h2>Model versions</h2><ol>{steps}</ol>")
+    path.write_text(f"<html><head><meta charset='utf-8'><title>check</title></head>"
+                    f"<body>{body}</body></html>")
+
+
+def _save(fig, stem: Path, name: str) -> str:
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    target = stem.parent / f"{stem.name}_{name}.png"
+    fig.savefig(target, dpi=100)
+    plt.close(fig)
+    return target.name
