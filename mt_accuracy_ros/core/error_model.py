@@ -155,7 +155,12 @@ class ErrorModel:
             name = f"E{axis}{axis}"
             growth = float(p["alpha_per_k"]) * (positions[axis] - float(p["reference_m"])) * \
                 self._rise(p["sensor"], temperatures, n)
-            out.motion[name] = out.motion.get(name, 0.0) + growth
+            # An override replaces the description's function: start from it.
+            base = out.motion.get(name)
+            if base is None:
+                base = self.machine.axes[axis].motion_errors[axis](positions[axis]) \
+                    if out.use_description else 0.0
+            out.motion[name] = base + growth
         drift = np.zeros((n, 6))
         if "structural_thermal_drift" in self.effects:
             p = self.effects["structural_thermal_drift"]
@@ -171,9 +176,15 @@ class ErrorModel:
         return out
 
     def tcp_error(self, positions: dict[str, ArrayLike], temperatures: dict | None = None,
-                  velocities: dict[str, ArrayLike] | None = None
+                  velocities: dict[str, ArrayLike] | None = None,
+                  directions: dict[str, ArrayLike] | None = None
                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """(position error (N, 3) [m], orientation error (N, 3) [rad]) at command positions."""
+        """(position error (N, 3) [m], orientation error (N, 3) [rad]) at command positions.
+
+        ``directions`` (axis -> +-1, the direction of the last motion) serves the
+        reversal effect where the axis stands still; without it sign(v) is used
+        (0 at a standstill).
+        """
         q = {a: np.atleast_1d(np.asarray(positions[a], dtype=np.float64))
              for a in self.machine.axis_order if a in positions}
         missing = [a for a in self.machine.axis_order if a not in q]
@@ -196,7 +207,9 @@ class ErrorModel:
                 if axis not in q or self.machine.axes[axis].is_rotary:
                     continue
                 v = np.broadcast_to(np.asarray(velocities[axis], dtype=np.float64), q[axis].shape)
-                shift = -np.sign(v) * 0.5 * float(p["backlash_m"]) if sign_of \
+                direction = np.sign(v) if directions is None or axis not in directions else \
+                    np.broadcast_to(np.asarray(directions[axis], dtype=np.float64), q[axis].shape)
+                shift = -direction * 0.5 * float(p["backlash_m"]) if sign_of \
                     else -v * float(p["lag_s"])
                 drive += shift[:, None] * self.axis_direction(axis, q)
         return position + drive, orientation

@@ -56,6 +56,8 @@ class Observations:
     #: the profiles that were live at each reading); used instead of model.tcp_error.
     predicted_m: NDArray[np.float64] | None = None
     predicted_orientation: NDArray[np.float64] | None = None
+    #: Optional: axis -> +-1, the direction of the last motion (for reversal at a standstill).
+    directions: dict[str, NDArray[np.float64]] = field(default_factory=dict)
 
     def subset(self, rows) -> "Observations":
         pick = lambda d: {k: np.asarray(v)[rows] for k, v in d.items()}  # noqa: E731
@@ -64,7 +66,7 @@ class Observations:
                             self.uncertainty_m,
                             None if self.predicted_m is None else self.predicted_m[rows],
                             None if self.predicted_orientation is None
-                            else self.predicted_orientation[rows])
+                            else self.predicted_orientation[rows], pick(self.directions))
 
     @property
     def n(self) -> int:
@@ -162,8 +164,10 @@ def candidate_designs(model: ErrorModel, obs: Observations) -> list[tuple[str, s
         design = np.zeros((n, 3, len(axes)))
         for j, axis in enumerate(axes):
             v = np.asarray(obs.velocities[axis], float)
+            sign = np.asarray(obs.directions[axis], float) if axis in obs.directions \
+                else np.sign(v)
             along = model.axis_direction(axis, q)
-            design[:, :, j] = (-0.5 * np.sign(v) if form == "sign" else -v)[:, None] * along
+            design[:, :, j] = (-0.5 * sign if form == "sign" else -v)[:, None] * along
         out.append((effect, "", [f"{a}" for a in axes], design))
     return out
 
@@ -222,7 +226,8 @@ def residuals(model: ErrorModel, obs: Observations) -> NDArray[np.float64]:
     constant offset per component carries no information about the model.
     """
     predicted = obs.predicted_m if obs.predicted_m is not None else \
-        model.tcp_error(obs.positions, obs.temperatures, obs.velocities or None)[0]
+        model.tcp_error(obs.positions, obs.temperatures, obs.velocities or None,
+                        obs.directions or None)[0]
     residual = obs.measured_m - predicted
     for c in range(3):
         measured = obs.measured_mask[:, c]
