@@ -43,8 +43,23 @@ def main() -> int:
             "falls_every_step": sum(all(a > b for a, b in zip(r.step_rmse, r.step_rmse[1:3]))
                                     for r in runs),
             "of": len(runs), "removed_median": float(np.median([r.removed for r in runs]))}
+    from mt_accuracy_ros.sim.proof import HIDDEN_YAW, yaw_trial
+
+    yaw_rows = {}
+    for effect in sorted(HIDDEN_YAW):
+        for scale in (0.3, 1.0, 3.0):
+            runs = [yaw_trial((effect,), s, scale) for s in tqdm(seeds, desc=f"{effect} x{scale}")]
+            yaw_rows[f"{effect} x{scale:g}"] = {
+                "effect_rmse_urad_median": float(np.median([r.truth_rmse_before for r in runs]) * 1e6),
+                "named_first": sum(r.ranked_first for r in runs), "of": len(runs),
+                "wrong_effect_named": sum(r.false_alarm for r in runs),
+                "removed_median": float(np.median([r.removed for r in runs])),
+                "removed_min": float(min(r.removed for r in runs))}
+    yaw_null = [yaw_trial((), s) for s in range(300, 300 + 2 * args.seeds)]
     print(json.dumps({"single": rows, "false_alarms": sum(bool(r.found) for r in null),
-                      "null_trials": len(null), "pairs": pairs}, indent=2))
+                      "null_trials": len(null), "pairs": pairs, "yaw": yaw_rows,
+                      "yaw_false_alarms": sum(bool(r.found) for r in yaw_null),
+                      "yaw_null_trials": len(yaw_null)}, indent=2))
     return 0
 
 

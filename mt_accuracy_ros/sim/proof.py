@@ -131,3 +131,90 @@ def trial(hidden_names: tuple[str, ...], seed: int, scale: float = 1.0,
                  1.0 - after / before if before > 0 else 0.0,
                  false_alarm=bool(found) and not any(f.split(":")[0] in hidden_names
                                                      for f in found), step_rmse=steps)
+
+
+# --------------------------------------------------------------------------- yaw
+HIDDEN_YAW = {
+    "scale_thermal_expansion": lambda s: {"time_constant_s": 60, "rise_scale_1_k": 3.0 * s,
+                                          "rise_scale_2_k": 1.0 * s},
+    "timing_skew": lambda s: {"skew_s": 20e-6 * s},
+    "scale_parallelism": lambda s: {"delta_rad": 5e-3 * np.sqrt(s)},
+}
+
+
+def yaw_survey(hidden: dict[str, dict], seed: int, stops: int = 12,
+               noise_seed: int | None = None):
+    """Y stops every 40 mm (Fig. 3.15), back and forth, for ~4 min; readings at the stops
+    and on the fly; the laser's yaw (XM60 accuracy) as the reference."""
+    from ..core.dual_scale import scale_expansion, thermocouple_positions, yaw_from_scales
+    from ..core.workbench import YawObservations
+    from .instruments import xm60_angular_accuracy_rad
+
+    data = {"machine": "kidani_hmc", "seed": seed, "duration_s": 240.0, "sample_rate_hz": 200,
+            "noise_seed": seed if noise_seed is None else noise_seed,
+            "temperature_rate_hz": 1,
+            "program": {"type": "stop_and_measure", "axis": "Y", "dwell_s": 1.0,
+                        "feed_m_per_min": 6.0, "both_directions": True},
+            "effects": dict(hidden)}
+    result = simulate(scenario_from_dict(data, f"yaw trial {seed}"))
+    low, high = result.scenario.machine.axes["Y"].stroke
+    distance = result.scale_distance_m["Y"]
+    groups = result.dwell_groups(settle_s=0.3)
+    settle = int(0.3 * result.sample_rate_hz)
+    picks = np.sort(np.concatenate([[g[len(g) // 2] for g in groups],
+                                    [g[0] - settle - 10 for g in groups if g[0] > settle + 10]]))
+    y1, y2 = result.channel("y1"), result.channel("y2")
+    scale_yaw = yaw_from_scales(y1[picks], y2[picks], distance, reference=(y1[0], y2[0]))
+    truth = result.yaw_truth["Y"][picks] - result.yaw_truth["Y"][0]
+    rng = np.random.default_rng(np.random.SeedSequence([data["noise_seed"], 0x1A5]))
+    laser = truth + rng.normal(0.0, 0.5 * xm60_angular_accuracy_rad(truth, 1.0))
+    sensors = thermocouple_positions(high - low)
+    travel = result.actual["Y"][picks] - low
+    thermal = np.zeros(picks.size)
+    rises = {i: np.column_stack([np.interp(result.time_s[picks], result.temperature_time_s,
+                                           result.temperature_rise(f"y{i}_s{j}"))
+                                 for j in range(sensors.size)]) for i in (1, 2)}
+    for k in range(picks.size):
+        dl1 = scale_expansion(travel[k:k + 1], rises[1][k], 1.0, sensor_positions_m=sensors)
+        dl2 = scale_expansion(travel[k:k + 1], rises[2][k], 1.0, sensor_positions_m=sensors)
+        thermal[k] = (dl1[0] - dl2[0]) / distance
+    return YawObservations("Y", scale_yaw, laser, travel, result.velocity["Y"][picks], thermal,
+                           result.time_s[picks], distance, 2 * 0.5e-6)
+
+
+def yaw_trial(hidden_names: tuple[str, ...], seed: int, scale: float = 1.0) -> Trial:
+    from ..core.workbench import diagnose_yaw, yaw_corrections
+
+    hidden = {name: HIDDEN_YAW[name](scale) for name in hidden_names}
+    obs = yaw_survey(hidden, seed)
+    floor_obs = yaw_survey({}, seed)
+    floor = floor_obs.scale_yaw - floor_obs.reference_yaw
+
+    def error(included: dict) -> float:
+        residual = obs.scale_yaw - yaw_corrections(included, obs) - obs.reference_yaw - \
+            (floor - yaw_corrections({"installation_slope": included["installation_slope"]},
+                                     floor_obs))
+        return float(np.sqrt(np.mean((residual - residual.mean()) ** 2)))
+
+    # Installation: the pair checked against the laser on the healthy machine (another
+    # run, other noise); its linear difference is the calibrated slope.
+    installation = yaw_survey({}, seed, noise_seed=seed + 10_000)
+    difference = installation.scale_yaw - installation.reference_yaw
+    basis = np.column_stack([np.ones_like(difference), installation.travel_m / installation.distance_m])
+    slope = float(np.linalg.lstsq(basis, difference, rcond=None)[0][1])
+    included: dict[str, float] = {"installation_slope": slope}
+    steps = [error(included)]
+    found = []
+    first_ok = False
+    for step in range(len(hidden_names) + 1):
+        candidate = diagnose_yaw(included, obs).found
+        if candidate is None:
+            break
+        if step == 0:
+            first_ok = candidate.effect in hidden_names
+        found.append(candidate.effect)
+        included[candidate.effect] = candidate.parameters["value"]
+        steps.append(error(included))
+    return Trial(tuple(hidden_names), found, first_ok, steps[0], steps[-1],
+                 1.0 - steps[-1] / steps[0] if steps[0] > 0 else 0.0,
+                 bool(found) and not any(f in hidden_names for f in found), steps)

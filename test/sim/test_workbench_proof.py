@@ -36,3 +36,22 @@ def test_two_hidden_effects_are_found_one_after_the_other(pair):
     assert {f.split(":")[0] for f in result.found[:2]} == set(pair), result.found
     assert result.step_rmse[0] > result.step_rmse[1] > result.step_rmse[2]  # falls each step
     assert result.removed >= 0.8
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+@pytest.mark.parametrize("effect", ["scale_thermal_expansion", "timing_skew", "scale_parallelism"])
+def test_scale_effects_are_named_from_scale_versus_laser_yaw(effect, seed):
+    from mt_accuracy_ros.sim.proof import yaw_trial
+
+    result = yaw_trial((effect,), seed)
+    assert result.ranked_first, result.found
+    assert result.removed >= 0.80
+
+
+def test_scale_effects_no_claim_on_a_healthy_pair_and_two_at_once():
+    from mt_accuracy_ros.sim.proof import yaw_trial
+
+    assert [yaw_trial((), seed).found for seed in (10, 11, 12)] == [[], [], []]
+    both = yaw_trial(("scale_thermal_expansion", "timing_skew"), 3)
+    assert set(both.found[:2]) == {"scale_thermal_expansion", "timing_skew"}
+    assert both.step_rmse[0] > both.step_rmse[1] > both.step_rmse[2]
