@@ -36,8 +36,7 @@ from ..core.machine import location_error_name, motion_error_name
 from .effects import YAW_COMPONENT, SineProfile, deterioration_bump, random_profiles
 from .programs import PROGRAMS
 from .scenario import Scenario
-from .thermal_state import (first_order_response, scale_expansion_m, scale_shape,
-                            thermocouple_positions)
+from .thermal_state import ScaleTemperatureField, first_order_response, thermocouple_positions
 
 #: Default distance between the scales of a pair when the machine file has none [m].
 DEFAULT_SCALE_DISTANCE_M = 0.5
@@ -389,18 +388,20 @@ def simulate(scenario: Scenario, *, start_index: int = 0, stop_index: int | None
                     deterioration_bump(q, float(params["start_m"]), float(params["end_m"])) * \
                     masks["guideway_deterioration"]
         yaw_truth[axis] = yaw
-        # Motion heat of this axis warms its scales; rise_i at steady full-duty motion.
-        h_axis = first_order_response(np.minimum(motion_input[axis] * 10, 1), dt_thermal,
-                                      float(expansion["time_constant_s"]), 1.0)
+        # Motion heat of this axis warms its scales: FE field of each scale body.
+        heat = np.minimum(motion_input[axis] * 10, 1)
         accuracy = float(noise["scale_accuracy_fraction"]) * (1.5e-6 + 1.5e-6 * length)
         for i in (1, 2):
-            rise = float(expansion[f"rise_scale_{i}_k"]) * h_axis
+            field = ScaleTemperatureField(length, heat, dt_thermal,
+                                          float(expansion["time_constant_s"]),
+                                          float(expansion[f"rise_scale_{i}_k"]))
             name = f"{axis.lower()}{i}"
             positions = thermocouple_positions(length)
             tc_positions[name] = positions
-            for j, s in enumerate(positions):
+            sensor_rises = field.at_sensors(positions)
+            for j in range(positions.size):
                 temperature_names.append(f"{name}_s{j}")
-                temperature_columns.append(rise * scale_shape(s, length) + ambient)
+                temperature_columns.append(sensor_rises[:, j] + ambient)
             graduation = SineProfile(
                 tuple(accuracy * rng_graduation.uniform(0.3, 1.0) / (1 + r) for r in range(3)),
                 tuple(float(w) for w in rng_graduation.uniform([0.5, 0.15, 0.05],
@@ -409,11 +410,10 @@ def simulate(scenario: Scenario, *, start_index: int = 0, stop_index: int | None
             reading = q + (-0.5 if i == 1 else 0.5) * distance * yaw
             reading = reading + graduation.tabulated(0.0, length)(travel) - graduation(np.zeros(1))
             if scenario.ever_enabled("scale_thermal_expansion"):
-                shaped = np.interp(time_s, temperature_time, rise)
                 uniform = np.interp(time_s, temperature_time, ambient - ambient[0])
-                reading = reading - scale_expansion_m(
-                    travel, length, shaped, uniform,
-                    float(expansion["expansion_per_k"])) * masks["scale_thermal_expansion"]
+                expansion_m = float(expansion["expansion_per_k"]) * (
+                    field.expansion_integral(time_s, travel) + uniform * travel)
+                reading = reading - expansion_m * masks["scale_thermal_expansion"]
             if i == 2 and scenario.ever_enabled("scale_parallelism"):
                 reading = reading + travel * (1.0 / np.cos(delta) - 1.0) * \
                     masks["scale_parallelism"]
