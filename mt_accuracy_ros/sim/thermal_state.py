@@ -82,8 +82,7 @@ class ScaleTemperatureField:
 
     def at_sensors(self, positions_m) -> NDArray[np.float64]:
         """(M, n_sensors) rise at the thermocouples [K]."""
-        return np.column_stack([np.interp(p, self.nodes_m, np.zeros(self.nodes_m.size))
-                                + self._column(p) for p in np.atleast_1d(positions_m)])
+        return np.column_stack([self._column(p) for p in np.atleast_1d(positions_m)])
 
     def _column(self, position_m: float) -> NDArray[np.float64]:
         j = int(np.clip(np.searchsorted(self.nodes_m, position_m) - 1, 0, self.nodes_m.size - 2))
