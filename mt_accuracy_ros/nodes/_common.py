@@ -108,3 +108,43 @@ def linger(node, seconds: float = 0.5) -> None:
     end = time.monotonic() + seconds
     while rclpy.ok() and time.monotonic() < end:
         rclpy.spin_once(node, timeout_sec=0.05)
+
+
+def run_node(node_class, args: list[str] | None, *, until_finished: bool = False,
+             on_exit=None) -> int:
+    """The Jazzy main-loop idiom every node module's ``main()`` shares.
+
+    ``rclpy.init``; construct the node (a configuration error -> message and exit
+    code 2); spin - or, ``until_finished``, spin until ``node.finished`` and let
+    the last messages out; always ``on_exit(node)``, ``destroy_node()`` and
+    ``rclpy.try_shutdown()``.
+    """
+    import sys
+
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    from ..core.errors import MtAccuracyError
+
+    rclpy.init(args=args if args is not None else sys.argv)
+    try:
+        node = node_class()
+    except MtAccuracyError as exc:
+        print(f"{node_class.__name__}: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    try:
+        if until_finished:
+            while rclpy.ok() and not node.finished:
+                rclpy.spin_once(node, timeout_sec=0.05)
+            linger(node)
+        else:
+            rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if on_exit is not None:
+            on_exit(node)
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0

@@ -19,16 +19,14 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompensation
 
 from ..core.error_model import resolve_model
 from ..core.errors import MtAccuracyError
-from ._common import (RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
+from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse,
                       stamp_to_nanoseconds, unpack_float64)
 from ._model_inputs import TABLE_QOS, ModelInputs
@@ -167,21 +165,8 @@ class CompensationBroadcaster(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args if args is not None else sys.argv)
-    try:
-        node = CompensationBroadcaster()
-    except MtAccuracyError as exc:
-        print(f"compensation_broadcaster: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Entry point (console_scripts)."""
+    return run_node(CompensationBroadcaster, args)
 
 
 if __name__ == "__main__":

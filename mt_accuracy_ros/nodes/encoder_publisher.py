@@ -19,15 +19,13 @@ import sys
 import time
 
 import numpy as np
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import ReferenceMeasurement, ScaleBatch
 
 from ..core.errors import MtAccuracyError
 from ..sim.machine_tool import SimulationResult, simulate
-from ._common import (linger, MATCH_SETTLE_S, RESULT_QOS, SENSOR_QOS, accept, float_descriptor,
+from ._common import (run_node, MATCH_SETTLE_S, RESULT_QOS, SENSOR_QOS, accept, float_descriptor,
                       int_descriptor, nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse)
 from ._scenario import ScenarioClock, resolve_scenario
 
@@ -168,23 +166,8 @@ class EncoderPublisher(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args if args is not None else sys.argv)
-    try:
-        node = EncoderPublisher()
-    except MtAccuracyError as exc:
-        print(f"encoder_publisher: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    try:
-        while rclpy.ok() and not node.finished:
-            rclpy.spin_once(node, timeout_sec=0.05)
-        linger(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Entry point (console_scripts)."""
+    return run_node(EncoderPublisher, args, until_finished=True)
 
 
 if __name__ == "__main__":

@@ -22,9 +22,7 @@ import sys
 from collections import deque
 
 import numpy as np
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from std_msgs.msg import String
 
@@ -33,7 +31,7 @@ from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ReferenceMeasurement
 from ..core.error_model import MODEL_EFFECTS, resolve_model
 from ..core.errors import MtAccuracyError
 from ..core.workbench import Observations, add_effect, diagnose
-from ._common import (LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
+from ._common import (run_node, LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
                       plain_descriptor, refuse, stamp_to_nanoseconds)
 from ._model_inputs import ModelInputs
 
@@ -213,21 +211,8 @@ class ModelMonitor(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args if args is not None else sys.argv)
-    try:
-        node = ModelMonitor()
-    except MtAccuracyError as exc:
-        print(f"model_monitor: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Entry point (console_scripts)."""
+    return run_node(ModelMonitor, args)
 
 
 if __name__ == "__main__":

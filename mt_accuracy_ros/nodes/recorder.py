@@ -16,20 +16,17 @@ SIGINT/SIGTERM close the bag completely (summary, statistics,
 from __future__ import annotations
 
 import sys
-import time
 from datetime import datetime
 
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.clock import Clock, ClockType
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from ..core.errors import BagError
 from ..io.bag_reader import message_class
 from ..io.bag_writer import BagWriter, qos_from_rclpy
-from ._common import accept, float_descriptor, int_descriptor, plain_descriptor, refuse
+from ._common import run_node, accept, float_descriptor, int_descriptor, plain_descriptor, refuse
 
 
 class Recorder(Node):
@@ -160,23 +157,8 @@ class Recorder(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args if args is not None else sys.argv)
-    try:
-        node = Recorder()
-    except BagError as exc:
-        print(f"recorder: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        # Whatever stopped the spin, finish the file: summary, statistics, metadata.yaml.
-        node.close()
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Entry point; whatever stops the spin, the bag is finished (summary, metadata)."""
+    return run_node(Recorder, args, on_exit=lambda node: node.close())
 
 
 if __name__ == "__main__":

@@ -9,17 +9,15 @@ NaN (a broken thermocouple) for testing the consumers.
 from __future__ import annotations
 
 import sys
+import time
 
 import numpy as np
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import TemperatureArray
 
-from ..core.errors import MtAccuracyError
 from ..sim.machine_tool import simulate
-from ._common import (linger, SENSOR_QOS, accept, float_descriptor, int_descriptor, nanoseconds_to_stamp,
+from ._common import (MATCH_SETTLE_S, run_node, SENSOR_QOS, accept, float_descriptor, int_descriptor, nanoseconds_to_stamp,
                       pack_float64, plain_descriptor, refuse)
 from ._scenario import ScenarioClock, resolve_scenario
 
@@ -38,6 +36,9 @@ class TemperaturePublisher(Node):
         self.declare_parameter("dead_sensors", [""], plain_descriptor(
             "Sensors that report NaN (fault injection)"))
         self.declare_parameter("frame_id", "", plain_descriptor("frame_id (empty: machine name)"))
+        self.declare_parameter("min_subscribers", 0, int_descriptor(
+            "Hold the stream until this many subscriptions match 'temperatures'", 0, 100,
+            read_only=True))
         self.add_on_set_parameters_callback(self._validate)
         self.scenario = resolve_scenario(str(self.get_parameter("scenario").value))
         result = simulate(self.scenario, start_index=0, stop_index=1)
@@ -50,6 +51,8 @@ class TemperaturePublisher(Node):
             self.get_clock().now().nanoseconds
         self._scenario_clock = ScenarioClock(start, float(self.get_parameter("rate_factor").value))
         self.finished = False
+        self._released = False
+        self._matched_at: float | None = None
         self._publisher = self.create_publisher(TemperatureArray, "temperatures", SENSOR_QOS)
         self.create_timer(0.05, self._tick)
 
@@ -63,6 +66,15 @@ class TemperaturePublisher(Node):
         return accept()
 
     def _tick(self) -> None:
+        wanted = int(self.get_parameter("min_subscribers").value)
+        if not self._released:
+            if self._publisher.get_subscription_count() < wanted:
+                return
+            if wanted and self._matched_at is None:
+                self._matched_at = time.monotonic()
+            if wanted and time.monotonic() - self._matched_at < MATCH_SETTLE_S:
+                return
+            self._released = True
         now_s = self._scenario_clock.sim_time_s(self.get_clock().now().nanoseconds)
         dead = {s for s in self.get_parameter("dead_sensors").value if s}
         while self._next < self._time.size and self._time[self._next] <= now_s:
@@ -84,23 +96,8 @@ class TemperaturePublisher(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args if args is not None else sys.argv)
-    try:
-        node = TemperaturePublisher()
-    except MtAccuracyError as exc:
-        print(f"temperature_publisher: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    try:
-        while rclpy.ok() and not node.finished:
-            rclpy.spin_once(node, timeout_sec=0.05)
-        linger(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Entry point (console_scripts)."""
+    return run_node(TemperaturePublisher, args, until_finished=True)
 
 
 if __name__ == "__main__":

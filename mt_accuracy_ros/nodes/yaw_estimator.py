@@ -23,9 +23,7 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import ScaleBatch, SystematicProfile, TemperatureArray, YawBatch
@@ -37,7 +35,7 @@ from ..core.errors import InputDataError, MtAccuracyError
 from ..core.machine import load_machine
 from ..core.streaming import StreamingSystematic
 from ..sim.effects import YAW_COMPONENT
-from ._common import (RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
+from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       pack_float64, plain_descriptor, refuse, stamp_to_nanoseconds,
                       unpack_float64)
 
@@ -353,21 +351,8 @@ class YawEstimator(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args if args is not None else sys.argv)
-    try:
-        node = YawEstimator()
-    except MtAccuracyError as exc:
-        print(f"yaw_estimator: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Entry point (console_scripts)."""
+    return run_node(YawEstimator, args)
 
 
 if __name__ == "__main__":

@@ -68,7 +68,7 @@ def test_live_recording_validates_independently_and_replays_identically(rclpy_co
         # is due: no catch-up burst, which best-effort transport may thin out on replay.
         start = wall.time_ns() + 5_000_000_000
         machine = {"scenario": str(tmp_path / "s.yaml"), "start_stamp_ns": start}
-        temperatures = start_node("temperature_publisher", machine)
+        temperatures = start_node("temperature_publisher", {**machine, "min_subscribers": 3})
         encoder = start_node("encoder_publisher", {**machine, "min_subscribers": 3})
         assert encoder.popen.wait(timeout=60) == 0
         temperatures.stop()
