@@ -21,6 +21,18 @@ import numpy as np
 from .core.errors import InputDataError, MtAccuracyError
 
 
+def error_figures(residual: np.ndarray, unit_scale: float = 1.0) -> dict:
+    """RMSE, max |error| and the ISO 230-2-style range (max - min, the E/M-like spread
+    of the deviations) of a residual, per component for (N, 3) residuals."""
+    r = np.atleast_2d(np.asarray(residual, dtype=np.float64).T).T
+    figures = {"rmse": float(np.sqrt(np.mean(r ** 2))) * unit_scale,
+               "max_abs": float(np.max(np.abs(r))) * unit_scale}
+    labels = "xyz" if r.shape[1] == 3 else [""]
+    for c, label in enumerate(labels):
+        figures[f"range{'_' + label if label else ''}"] = float(np.ptp(r[:, c])) * unit_scale
+    return figures
+
+
 # ------------------------------------------------------------------ bag path
 def observations_from_bag(bag: Path, namespace: str = ""):
     """Readings, temperatures at their stamps, and the profile history of a bag."""
@@ -141,7 +153,15 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
         steps[-1]["parameters"] = candidate.parameters
         diagnosis = evaluate(model)
     residual = residuals(model, obs)
+    obs.predicted_m, obs.predicted_orientation = predict_with_history(resolve_model(model_text),
+                                                                      obs, stamps, profiles)
+    first_model = resolve_model(model_text)
+    for sensor, values in obs.temperatures.items():
+        first_model.reference_temperatures_c.setdefault(sensor, float(values[0]))
+    residual_before = residuals(first_model, obs)
     return {"data": str(bag), "kind": "bag", "readings": obs.n,
+            "figures_before_m": error_figures(residual_before),
+            "figures_after_m": error_figures(residual),
             "baseline_rmse": first.baseline_rmse,
             "ranking": [{"effect": c.effect, "variant": c.variant, "cv_rmse_after": c.cv_rmse_after,
                          "error_reduction": c.error_reduction, "significant": c.significant,
@@ -150,7 +170,7 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
             "final_rmse": diagnosis.baseline_rmse, "steps": steps,
             "band": obs.uncertainty_m, "final_diagnosis": diagnosis.text(),
             "_plot": {"time": obs.time_s, "positions": obs.positions,
-                      "residual_before": obs.measured_m - 0, "residual_after": residual,
+                      "residual_before": residual_before, "residual_after": residual,
                       "temperatures": obs.temperatures}}
 
 
@@ -193,7 +213,10 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                       "cv_rmse": bench.cv_rmse(bench.included)})
     prediction_before = bench.fit_predict(model_terms)
     prediction_after = bench.fit_predict(bench.included)
+    judge = ~bench.train
     return {"data": str(path), "kind": "csv", "target": target, "rows": int(bench.target.size),
+            "figures_before_held_out": error_figures((bench.target - prediction_before)[judge]),
+            "figures_after_held_out": error_figures((bench.target - prediction_after)[judge]),
             "train_rows": int(bench.train.sum()),
             "baseline_rmse": baseline,
             "ranking": [{"effect": s.name, "cv_rmse_after": s.cv_rmse_after,

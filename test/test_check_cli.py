@@ -20,6 +20,8 @@ def test_csv_path_on_real_fl_thermal_improves_held_out_error(shared_data, tmp_pa
     held_out = [s["held_out_rmse"] for s in summary["steps"]]
     assert held_out == pytest.approx([10.26, 5.97, 4.33, 4.02], abs=0.01)
     assert summary["added"][0] == "difference:t2_C-t3_C"
+    assert summary["figures_after_held_out"]["rmse"] == pytest.approx(4.02, abs=0.01)
+    assert summary["figures_after_held_out"]["max_abs"] < summary["figures_before_held_out"]["max_abs"]
     html = (tmp_path / "r.html").read_text()
     assert "r_fit.png" in html and (tmp_path / "r_fit.png").is_file()
     assert "final RMSE" in capsys.readouterr().out
@@ -75,4 +77,5 @@ def test_bag_path_finds_the_hidden_column_drift(tmp_path):
     assert summary["ranking"][0]["effect"] == "structural_thermal_drift"
     assert summary["added"] == ["structural_thermal_drift"]
     assert summary["final_rmse"] < 0.5 * summary["baseline_rmse"]
+    assert summary["figures_after_m"]["range_y"] < summary["figures_before_m"]["range_y"]
     assert np.isfinite(summary["final_rmse"])

@@ -259,3 +259,27 @@ def test_all_nodes_composed_in_one_executor(rclpy_context, tmp_path):
     assert nodes[-1].finished
     assert len(compensation) == pytest.approx(2000, abs=10)  # 20 s of data at 100 Hz
     assert checks and "structural_thermal_drift" in {s.effect for s in checks[-1].ranking}
+
+
+def test_parameters_load_from_the_config_yaml(rclpy_context):
+    """config/demo.yaml (ros2 --params-file format) reaches the node."""
+    import rclpy
+    from rcl_interfaces.srv import GetParameters
+
+    from conftest import REPO_ROOT
+
+    estimator = start_node("yaw_estimator", params_file=str(REPO_ROOT / "config" / "demo.yaml"))
+    probe = rclpy.create_node("probe")
+    try:
+        client = probe.create_client(GetParameters, "/yaw_estimator/get_parameters")
+        assert client.wait_for_service(timeout_sec=20)
+        future = client.call_async(GetParameters.Request(names=["tolerance_rad",
+                                                                "baseline_after_s"]))
+        assert spin_until(probe, future.done, timeout_s=10)
+        values = [v.double_value for v in future.result().values]
+    finally:
+        estimator.stop()
+        probe.destroy_node()
+    expected = yaml.safe_load((REPO_ROOT / "config" / "demo.yaml").read_text())
+    parameters = expected["yaw_estimator"]["ros__parameters"]
+    assert values == [parameters["tolerance_rad"], parameters["baseline_after_s"]]

@@ -230,16 +230,18 @@ def test_player_refuses_non_cdr_bags_clearly(shared_data):
     assert "only 'cdr'" in result.stderr
 
 
-def test_player_plays_rosbag2_split_bag_without_metadata(rclpy_context, shared_data):
+@pytest.mark.parametrize("sample, topic", [("multiple_files", "/chatter"), ("talker", "/topic")])
+def test_player_plays_rosbag2_written_bags(rclpy_context, shared_data, sample, topic):
+    """A bag split over files without metadata.yaml, and one with zstd chunks."""
     import rclpy
     from std_msgs.msg import String
 
-    bag = shared_data / "rosbag2_samples" / "multiple_files"
-    expected = [decode(m).data for m in read_messages(bag)]
+    bag = shared_data / "rosbag2_samples" / sample
+    expected = [decode(m).data for m in read_messages(bag, [topic])]
     node = rclpy.create_node("listener")
     received: list[str] = []
-    node.create_subscription(String, "/chatter", lambda m: received.append(m.data), 5000)
-    process = _player(bag, "--rate", "1000")
+    node.create_subscription(String, topic, lambda m: received.append(m.data), 5000)
+    process = _player(bag, "--rate", "1000", "--topics", topic)
     try:
         assert spin_until(node, lambda: process.poll() is not None, timeout_s=60)
         spin_for(node, 0.5)
