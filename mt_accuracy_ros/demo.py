@@ -150,7 +150,8 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
 
     info = bag_info(out / "bag")
     before = [c.rmse for t, c in checks if not actions or t < actions[0]["time_s"]]
-    after = [c.rmse for t, c in checks if actions and t > actions[0]["time_s"] + 5]
+    # The checks right after the change (before anything else happens to the machine).
+    after = [c.rmse for t, c in checks if actions and t > actions[0]["time_s"]][:2]
     raw = np.array(references) if references else np.zeros((0, 3))
     raw = raw - raw.mean(axis=0) if raw.size else raw
     summary = {
@@ -160,7 +161,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "residual_rmse_before_um": float(np.mean(before[-3:]) * 1e6) if before else float("nan"),
         "missing_effect_found": actions[0]["added"] if actions else "",
         "effect_added_accepted": bool(actions and actions[0]["accepted"]),
-        "residual_rmse_after_um": float(np.mean(after[:3]) * 1e6) if after else float("nan"),
+        "residual_rmse_after_um": float(np.mean(after) * 1e6) if after else float("nan"),
         "deterioration_alarm_axis": ",".join(a[1] for a in alarms),
         "deterioration_alarm_at_s": alarms[0][0] if alarms else float("nan"),
         "compensation_messages": len(compensation),

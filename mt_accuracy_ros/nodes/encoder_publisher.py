@@ -25,8 +25,9 @@ from mt_accuracy_msgs.msg import ReferenceMeasurement, ScaleBatch
 
 from ..core.errors import MtAccuracyError
 from ..sim.machine_tool import SimulationResult, simulate
-from ._common import (run_node, MATCH_SETTLE_S, RESULT_QOS, SENSOR_QOS, accept, float_descriptor,
-                      int_descriptor, nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse)
+from ._common import (MATCH_SETTLE_S, RESULT_QOS, SENSOR_QOS, accept, float_descriptor,
+                      int_descriptor, nanoseconds_to_stamp, pack_float64, plain_descriptor,
+                      refuse, run_node)
 from ._scenario import ScenarioClock, resolve_scenario
 
 #: Simulated seconds generated per window.

@@ -131,6 +131,9 @@ class ModelMonitor(Node):
             "positions": dict(zip(axes, message.command_positions)),
             "velocities": dict(zip(axes, velocities)), "error": error, "measured": measured,
             "temperatures": dict(self.inputs.temperatures),
+            # The measured profiles live at this reading: it is judged against the
+            # machine as it was then, not against a later (e.g. deteriorated) profile.
+            "profiles": dict(self.inputs.model.profiles),
             "uncertainty": float(message.uncertainty)})
         self._since_check += 1
         if len(self._readings) >= int(self.get_parameter("min_readings").value) and \
@@ -138,7 +141,25 @@ class ModelMonitor(Node):
             self._since_check = 0
             self._run_check()
 
-    def _observations(self) -> Observations | None:
+    def _predict(self, model, readings, obs: Observations) -> None:
+        """Model predictions of each reading with the profiles live when it was taken."""
+        import copy
+
+        position = np.zeros((obs.n, 3))
+        orientation = np.zeros((obs.n, 3))
+        groups: dict[tuple, list[int]] = {}
+        for i, reading in enumerate(readings):
+            key = tuple(sorted((name, id(f)) for name, f in reading["profiles"].items()))
+            groups.setdefault(key, []).append(i)
+        for rows in groups.values():
+            state = copy.copy(model)
+            state.profiles = readings[rows[0]]["profiles"]
+            sub = obs.subset(np.asarray(rows))
+            position[rows], orientation[rows] = state.tcp_error(
+                sub.positions, sub.temperatures, sub.velocities or None)
+        obs.predicted_m, obs.predicted_orientation = position, orientation
+
+    def _observations(self, model=None) -> Observations | None:
         if not self._readings:
             return None
         # Readings taken before the first temperatures arrived cannot enter a
@@ -148,7 +169,7 @@ class ModelMonitor(Node):
         if len(readings) < 10:
             return None
         axes = list(readings[0]["positions"])
-        return Observations(
+        obs = Observations(
             positions={a: np.array([r["positions"][a] for r in readings]) for a in axes},
             measured_m=np.array([r["error"] for r in readings]),
             measured_mask=np.array([r["measured"] for r in readings]),
@@ -157,6 +178,8 @@ class ModelMonitor(Node):
             temperatures={s: np.array([r["temperatures"][s] for r in readings])
                           for s in sorted(sensors)},
             uncertainty_m=float(np.median([r["uncertainty"] for r in readings])) or 1e-6)
+        self._predict(model or self.inputs.model, readings, obs)
+        return obs
 
     def _run_check(self) -> None:
         obs = self._observations()

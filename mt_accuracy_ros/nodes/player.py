@@ -28,7 +28,8 @@ from std_srvs.srv import Trigger
 from ..core.errors import BagError
 from ..io.bag_reader import message_class, read_messages, topics
 from ..io.playback import PlaybackClock, playback_policies
-from ._common import MATCH_SETTLE_S, accept, float_descriptor, nanoseconds_to_stamp, plain_descriptor, refuse
+from ._common import (MATCH_SETTLE_S, accept, float_descriptor, int_descriptor,
+                      nanoseconds_to_stamp, plain_descriptor, refuse)
 
 #: What ``use_sim_time`` subscribers use for /clock.
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
@@ -56,8 +57,11 @@ class BagPlayer(Node):
         self.declare_parameter("start_paused", False, plain_descriptor(
             "Wait for ~/resume before playing", read_only=True))
         self.declare_parameter("wait_for_subscribers_s", 0.0, float_descriptor(
-            "Wait up to this long for a subscriber on every played topic [s]", 0.0, 60.0,
+            "Wait up to this long for subscribers on every played topic [s]", 0.0, 60.0,
             read_only=True))
+        self.declare_parameter("min_subscribers", 1, int_descriptor(
+            "Subscribers every played topic must have before playing (with "
+            "wait_for_subscribers_s)", 1, 100, read_only=True))
         self.add_on_set_parameters_callback(self._validate)
 
         self.bag = str(self.get_parameter("bag").value)
@@ -146,8 +150,9 @@ class BagPlayer(Node):
     def _wait_for_subscribers(self) -> None:
         deadline = time.monotonic() + float(self.get_parameter("wait_for_subscribers_s").value)
         waited = False
+        wanted = int(self.get_parameter("min_subscribers").value)
         while time.monotonic() < deadline and not all(
-                p.get_subscription_count() > 0 for p in self._topic_publishers.values()):
+                p.get_subscription_count() >= wanted for p in self._topic_publishers.values()):
             waited = True
             time.sleep(0.02)
         if waited or self.get_parameter("wait_for_subscribers_s").value > 0:

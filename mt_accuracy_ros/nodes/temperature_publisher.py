@@ -17,8 +17,8 @@ from rclpy.node import Node
 from mt_accuracy_msgs.msg import TemperatureArray
 
 from ..sim.machine_tool import simulate
-from ._common import (MATCH_SETTLE_S, run_node, SENSOR_QOS, accept, float_descriptor, int_descriptor, nanoseconds_to_stamp,
-                      pack_float64, plain_descriptor, refuse)
+from ._common import (MATCH_SETTLE_S, SENSOR_QOS, accept, float_descriptor, int_descriptor,
+                      nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse, run_node)
 from ._scenario import ScenarioClock, resolve_scenario
 
 

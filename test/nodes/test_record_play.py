@@ -110,7 +110,8 @@ def test_live_recording_validates_independently_and_replays_identically(rclpy_co
     processes = _graph(probe, replay, ["/yaw/y", "/compensation"], sim_time=True)
     try:
         player = start_node("bag_player", {"bag": str(live), "topics": ["/scales", "/temperatures"],
-                                           "wait_for_subscribers_s": 20.0})
+                                           "wait_for_subscribers_s": 20.0,
+                                           "min_subscribers": 2})
         assert player.popen.wait(timeout=60) == 0
         spin_for(probe, 1.5)
     finally:
