@@ -1,6 +1,7 @@
 """Start nodes of this package as separate processes (a small stand-in for ros2 launch)."""
 from __future__ import annotations
 
+import atexit
 import json
 import os
 import signal
@@ -66,6 +67,18 @@ class NodeProcess:
         return self.popen.returncode
 
 
+#: Every node process started here; whatever is still running when this interpreter
+#: exits (a failed test, an interrupted demo) is stopped rather than left behind.
+_STARTED: list["NodeProcess"] = []
+
+
+@atexit.register
+def _stop_leftovers() -> None:
+    for process in _STARTED:
+        if process.popen.poll() is None:
+            process.stop(timeout_s=3.0)
+
+
 def start_node(name: str, parameters: Mapping[str, object] | None = None, *,
                namespace: str | None = None, params_file: str | None = None,
                remappings: Mapping[str, str] | None = None,
@@ -80,4 +93,6 @@ def start_node(name: str, parameters: Mapping[str, object] | None = None, *,
     process_env.update(env or {})
     output = subprocess.DEVNULL if quiet else None
     popen = subprocess.Popen(command, env=process_env, stdout=output, stderr=output)
-    return NodeProcess(name=name, popen=popen, command=command)
+    process = NodeProcess(name=name, popen=popen, command=command)
+    _STARTED[:] = [p for p in _STARTED if p.popen.poll() is None] + [process]
+    return process

@@ -44,9 +44,13 @@ def _graph(probe, out: Path, topics: list[str], sim_time: bool):
                  start_node("yaw_estimator", {"baseline_after_s": 0.0, "profile_period_s": 0.5,
                                               **extra}),
                  start_node("compensation_broadcaster", {"model": "demo", **extra})]
-    assert spin_until(probe, lambda: probe.count_subscribers("/yaw/y") >= 1 and
-                      probe.count_subscribers("/compensation") >= 1 and
-                      probe.count_subscribers("/scales") >= 2, timeout_s=60)
+    ready = spin_until(probe, lambda: probe.count_subscribers("/yaw/y") >= 1 and
+                       probe.count_subscribers("/compensation") >= 1 and
+                       probe.count_subscribers("/scales") >= 2, timeout_s=60)
+    if not ready:
+        for process in processes:
+            process.stop()
+    assert ready
     return processes
 
 
