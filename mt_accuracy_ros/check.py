@@ -84,6 +84,11 @@ def observations_from_bag(bag: Path, namespace: str = ""):
                     for i, a in enumerate(axes)},
         temperatures=temperatures,
         uncertainty_m=float(np.median([r[1].uncertainty for r in readings])) or 1e-6)
+    if all(len(r[1].command_directions) == len(axes) for r in readings):
+        obs.directions = {a: np.array([r[1].command_directions[i] or
+                                       np.sign(obs.velocities[a][k])
+                                       for k, r in enumerate(readings)], dtype=float)
+                          for i, a in enumerate(axes)}
     return obs, stamps, sorted(profiles, key=lambda p: p[0])
 
 
@@ -103,7 +108,8 @@ def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_0
             if i > group_start:
                 rows = np.arange(group_start, i)
                 sub = obs.subset(rows)
-                p, o = state.tcp_error(sub.positions, sub.temperatures, sub.velocities or None)
+                p, o = state.tcp_error(sub.positions, sub.temperatures, sub.velocities or None,
+                                       sub.directions or None)
                 position[rows], orientation[rows] = p, o
             group_start = i
             while i < obs.n and next_profile < len(profiles) and profiles[next_profile][0] <= limit:

@@ -19,9 +19,9 @@ def _scalar(type_name: str, salt: int):
     if type_name in ("octet", "uint8", "byte", "char"):
         return (salt * 7) % 256 if type_name != "char" else "a"
     if type_name.startswith("uint"):
-        return salt * 3 + 1
+        return (salt * 3 + 1) % (100 if type_name in ("uint8", "uint16") else 10**6)
     if type_name.startswith("int"):
-        return -salt * 3 - 1
+        return -((salt * 3 + 1) % (100 if type_name in ("int8", "int16") else 10**6))
     return None
 
 

@@ -35,8 +35,10 @@ def test_csv_errors_are_clear(tmp_path, capsys):
     assert "no target column 'nope'" in capsys.readouterr().err
 
 
-def test_bag_path_finds_the_hidden_column_drift(tmp_path):
-    """A bag written like the live graph's: reference readings and temperatures."""
+@pytest.mark.parametrize("hidden", ["structural_thermal_drift", "reversal"])
+def test_bag_path_finds_the_hidden_effect(tmp_path, hidden):
+    """A bag written like the live graph's: reference readings (with the CNC's last
+    directions of motion) and temperatures."""
     import numpy as np
     from rclpy.serialization import serialize_message
 
@@ -46,7 +48,7 @@ def test_bag_path_finds_the_hidden_column_drift(tmp_path):
     from mt_accuracy_ros.nodes._common import nanoseconds_to_stamp, pack_float64
     from mt_accuracy_ros.sim.proof import HIDDEN, calibrated_model, survey
 
-    result, obs, truth = survey({"structural_thermal_drift": HIDDEN["structural_thermal_drift"](1)}, 7)
+    result, obs, truth = survey({hidden: HIDDEN[hidden](1)}, 7)
     base, _, _ = survey({}, 7, points=2)
     import yaml
 
@@ -69,13 +71,14 @@ def test_bag_path_finds_the_hidden_column_drift(tmp_path):
             message.header.stamp = nanoseconds_to_stamp(stamp)
             message.command_positions = [float(obs.positions[a][i]) for a in "XYZ"]
             message.command_velocities = [float(obs.velocities[a][i]) for a in "XYZ"]
+            message.command_directions = [int(obs.directions[a][i]) for a in "XYZ"]
             message.error.x, message.error.y, message.error.z = (float(v) for v in obs.measured_m[i])
             message.measured = [True, True, True]
             message.uncertainty = 1e-6
             bag.write("/reference/tcp_error", serialize_message(message), stamp)
     summary = check_bag(tmp_path / "bag", str(tmp_path / "model.yaml"), [], 1, "", 0.1)
-    assert summary["ranking"][0]["effect"] == "structural_thermal_drift"
-    assert summary["added"] == ["structural_thermal_drift"]
+    assert summary["ranking"][0]["effect"] == hidden
+    assert summary["added"] == [hidden]
     assert summary["final_rmse"] < 0.5 * summary["baseline_rmse"]
-    assert summary["figures_after_m"]["range_y"] < summary["figures_before_m"]["range_y"]
+    assert summary["figures_after_m"]["rmse"] < summary["figures_before_m"]["rmse"]
     assert np.isfinite(summary["final_rmse"])

@@ -60,6 +60,7 @@ class CompensationBroadcaster(Node):
         self._tables = self.create_publisher(CompensationTable, "compensation_table", TABLE_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self._published_version = -1
+        self._last_direction: dict[str, float] = {}
         self._last_stamp = -1
         self.create_subscription(ScaleBatch, "scales", self._on_batch, SENSOR_QOS)
         self._publish_tables()
@@ -100,9 +101,11 @@ class CompensationBroadcaster(Node):
             else np.zeros_like(commands)
         positions = {a: commands[rows, j] for j, a in enumerate(axes)}
         velocities = {a: velocity[rows, j] for j, a in enumerate(axes)}
+        directions = {a: self._held_directions(a, velocity[:, j])[rows] for j, a in enumerate(axes)}
         model = self.inputs.model
         try:
-            error, orientation = model.tcp_error(positions, self.inputs.temperatures, velocities)
+            error, orientation = model.tcp_error(positions, self.inputs.temperatures, velocities,
+                                                 directions)
         except MtAccuracyError as exc:
             self._warn(f"no compensation for this batch: {exc}")
             return
@@ -125,6 +128,17 @@ class CompensationBroadcaster(Node):
             out.uncertainty = 0.0
             out.model_version = int(model.version)
             self._compensation.publish(out)
+
+    def _held_directions(self, axis: str, velocity: np.ndarray) -> np.ndarray:
+        """Sign of each sample's last motion, carried across batches (backlash at a stop)."""
+        moving = np.abs(velocity) > 1e-9
+        index = np.where(moving, np.arange(velocity.size), -1)
+        np.maximum.accumulate(index, out=index)
+        previous = self._last_direction.get(axis, 0.0)
+        held = np.where(index >= 0, np.sign(velocity[np.maximum(index, 0)]), previous)
+        if held.size:
+            self._last_direction[axis] = float(held[-1])
+        return held
 
     def _publish_tables(self) -> None:
         model = self.inputs.model

@@ -70,6 +70,7 @@ class EncoderPublisher(Node):
         self._reference = self.create_publisher(ReferenceMeasurement, "reference/tcp_error",
                                                 RESULT_QOS)
         self._axes = list(self.scenario.machine.axis_order)
+        self._last_direction: dict[str, int] = {}
         self._rng = np.random.default_rng(np.random.SeedSequence([self.scenario.seed, 0xEEF]))
         self.create_timer(min(self._batch / self._rate, 0.05), self._tick)
 
@@ -148,6 +149,13 @@ class EncoderPublisher(Node):
                 self._publish_reference(window, index, frame)
                 self._next_reference_s += period
 
+    def _direction(self, window: SimulationResult, axis: str, index: int) -> int:
+        """Sign of the axis' last motion up to ``index`` (what the CNC knows), 0 if none yet."""
+        moving = np.flatnonzero(np.abs(window.velocity[axis][:index + 1]) > 1e-9)
+        if moving.size:
+            self._last_direction[axis] = int(np.sign(window.velocity[axis][moving[-1]]))
+        return self._last_direction.get(axis, 0)
+
     def _publish_reference(self, window: SimulationResult, index: int, frame: str) -> None:
         uncertainty = 1e-6  # k = 2
         error = window.tcp_error(np.array([index]))[0] + \
@@ -160,6 +168,7 @@ class EncoderPublisher(Node):
         message.command_axes = [a.lower() for a in self._axes]
         message.command_positions = [float(window.command[a][index]) for a in self._axes]
         message.command_velocities = [float(window.velocity[a][index]) for a in self._axes]
+        message.command_directions = [int(self._direction(window, a, index)) for a in self._axes]
         message.error.x, message.error.y, message.error.z = (float(v) for v in error)
         message.measured = [True, True, True]
         message.uncertainty = uncertainty

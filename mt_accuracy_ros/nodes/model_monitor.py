@@ -126,7 +126,10 @@ class ModelMonitor(Node):
         self.inputs.advance(stamp_to_nanoseconds(message.header.stamp))
         velocities = list(message.command_velocities) if len(message.command_velocities) == \
             len(axes) else [0.0] * len(axes)
+        directions = list(message.command_directions) if len(message.command_directions) == \
+            len(axes) else []
         self._readings.append({
+            "directions": dict(zip(axes, directions)),
             "time": stamp_to_nanoseconds(message.header.stamp) * 1e-9,
             "positions": dict(zip(axes, message.command_positions)),
             "velocities": dict(zip(axes, velocities)), "error": error, "measured": measured,
@@ -156,7 +159,7 @@ class ModelMonitor(Node):
             state.profiles = readings[rows[0]]["profiles"]
             sub = obs.subset(np.asarray(rows))
             position[rows], orientation[rows] = state.tcp_error(
-                sub.positions, sub.temperatures, sub.velocities or None)
+                sub.positions, sub.temperatures, sub.velocities or None, sub.directions or None)
         obs.predicted_m, obs.predicted_orientation = position, orientation
 
     def _observations(self, model=None) -> Observations | None:
@@ -178,6 +181,10 @@ class ModelMonitor(Node):
             temperatures={s: np.array([r["temperatures"][s] for r in readings])
                           for s in sorted(sensors)},
             uncertainty_m=float(np.median([r["uncertainty"] for r in readings])) or 1e-6)
+        if all(r["directions"] for r in readings):
+            # The CNC's last direction per axis; where unknown (0), the feed's sign.
+            obs.directions = {a: np.array([r["directions"][a] or np.sign(r["velocities"][a])
+                                           for r in readings], dtype=float) for a in axes}
         self._predict(model or self.inputs.model, readings, obs)
         return obs
 
