@@ -84,7 +84,7 @@ def observations_from_bag(bag: Path, namespace: str = ""):
                     for i, a in enumerate(axes)},
         temperatures=temperatures,
         uncertainty_m=float(np.median([r[1].uncertainty for r in readings])) or 1e-6)
-    if all(len(r[1].command_directions) == len(axes) for r in readings):
+    if all(len(getattr(r[1], "command_directions", [])) == len(axes) for r in readings):
         obs.directions = {a: np.array([r[1].command_directions[i] or
                                        np.sign(obs.velocities[a][k])
                                        for k, r in enumerate(readings)], dtype=float)
@@ -240,6 +240,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
 def write_outputs(result: dict, json_path: str | None, report_path: str | None) -> None:
     plot = result.pop("_plot")
     if json_path:
+        Path(json_path).parent.mkdir(parents=True, exist_ok=True)
         Path(json_path).write_text(json.dumps(result, indent=2, default=float))
     if report_path:
         _report(result, plot, Path(report_path))

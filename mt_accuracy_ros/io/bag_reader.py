@@ -23,13 +23,20 @@ from ..core.errors import BagError
 
 @dataclass(frozen=True)
 class BagMessage:
-    """One message: topic, type (pkg/msg/Type), CDR bytes, times [ns]."""
+    """One message: topic, type (pkg/msg/Type), CDR bytes, times [ns].
+
+    ``schema`` (the recorded ``.msg`` text) and ``type_hash`` (the recorded
+    RIHS01 hash) let :func:`decode` read a message recorded with another
+    version of its type.
+    """
 
     topic: str
     type: str
     data: bytes
     log_time_ns: int
     publish_time_ns: int
+    schema: bytes = b""
+    type_hash: str = ""
 
 
 def mcap_files(path: str | Path) -> list[Path]:
@@ -55,7 +62,9 @@ def _file_messages(path: Path, topics: set[str] | None) -> Iterator[BagMessage]:
                     raise BagError(f"{path.name}: topic {channel.topic} has message encoding "
                                    f"{channel.message_encoding!r}; only 'cdr' (ROS 2) is supported")
                 yield BagMessage(channel.topic, schema.name if schema else "", message.data,
-                                 message.log_time, message.publish_time)
+                                 message.log_time, message.publish_time,
+                                 schema.data if schema else b"",
+                                 channel.metadata.get("topic_type_hash", ""))
     except McapError as exc:
         raise BagError(f"{path}: not a readable MCAP file ({exc}); "
                        "a truncated file can be salvaged with mt_accuracy_ros.io.bag_reader.recover") from exc
@@ -79,11 +88,71 @@ def message_class(type_name: str):
         raise BagError(f"message type {type_name} is not installed") from exc
 
 
+_INSTALLED_HASHES: dict[str, str] = {}
+_RECORDED_TYPES: dict[tuple[str, bytes], object] = {}
+
+
+def _installed_hash(type_name: str) -> str:
+    if type_name not in _INSTALLED_HASHES:
+        from .msg_definitions import type_hash
+
+        try:
+            _INSTALLED_HASHES[type_name] = type_hash(type_name)
+        except (BagError, OSError):
+            _INSTALLED_HASHES[type_name] = ""
+    return _INSTALLED_HASHES[type_name]
+
+
 def decode(message: BagMessage):
-    """Deserialize a :class:`BagMessage` into its ROS message object."""
+    """Deserialize a :class:`BagMessage` into a message object.
+
+    With the installed type when it is the recorded one (rclpy); when the bag
+    recorded another version of the type (its hash differs), with the bag's own
+    definition (the ``rosbags`` type system), so old bags stay readable - fields
+    the old version lacks are simply absent.
+    """
     from rclpy.serialization import deserialize_message
 
-    return deserialize_message(message.data, message_class(message.type))
+    installed = _installed_hash(message.type)
+    if not message.type_hash or not message.schema or message.type_hash == installed:
+        try:
+            return deserialize_message(message.data, message_class(message.type))
+        except BagError:
+            if not message.schema:
+                raise
+        except Exception as exc:  # rclpy raises its own RMWError types
+            if not message.schema:
+                raise BagError(f"{message.topic}: cannot decode as {message.type} ({exc})") from exc
+    return _decode_recorded(message)
+
+
+def _decode_recorded(message: BagMessage):
+    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys.msg import get_types_from_msg
+
+    key = (message.type, message.schema)
+    store = _RECORDED_TYPES.get(key)
+    if store is None:
+        store = get_typestore(Stores.EMPTY)
+        try:
+            text = message.schema.decode()
+            blocks = text.split("=" * 80 + "\n")
+            store.register(get_types_from_msg(blocks[0], message.type))
+            for block in blocks[1:]:
+                header, _, body = block.partition("\n")
+                name = header.removeprefix("MSG: ").strip()
+                if "/msg/" not in name:
+                    name = name.replace("/", "/msg/")
+                store.register(get_types_from_msg(body, name))
+        except Exception as exc:  # noqa: BLE001 - any schema problem is the bag's
+            raise BagError(f"{message.topic}: the recorded definition of {message.type} "
+                           f"cannot be parsed ({exc})") from exc
+        _RECORDED_TYPES[key] = store
+    try:
+        return store.deserialize_cdr(message.data, message.type)
+    except Exception as exc:  # noqa: BLE001
+        raise BagError(f"{message.topic}: cannot decode with the recorded definition of "
+                       f"{message.type} ({exc})") from exc
 
 
 def bag_info(path: str | Path) -> dict:

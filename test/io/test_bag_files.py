@@ -179,3 +179,37 @@ def test_schema_skips_constants_and_resolves_same_package_types():
     # DiagnosticStatus declares byte constants (OK=0 ...): none may become a dependency.
     assert headers == ["MSG: std_msgs/Header", "MSG: builtin_interfaces/Time",
                        "MSG: diagnostic_msgs/DiagnosticStatus", "MSG: diagnostic_msgs/KeyValue"]
+
+
+def test_a_bag_recorded_with_an_older_type_version_still_decodes(tmp_path):
+    """The installed type changed since recording (a field added): decode with the
+    definition the bag carries, not with the installed one."""
+    from mcap.writer import Writer
+    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys.msg import get_types_from_msg
+
+    old = "std_msgs/Header header\nstring instrument\nfloat64[] command_positions\n"
+    schema = old + "=" * 80 + "\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n" \
+        + "=" * 80 + "\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
+    store = get_typestore(Stores.ROS2_JAZZY)
+    store.register(get_types_from_msg(old, "mt_accuracy_msgs/msg/ReferenceMeasurement"))
+    Message = store.types["mt_accuracy_msgs/msg/ReferenceMeasurement"]
+    Header = store.types["std_msgs/msg/Header"]
+    Time = store.types["builtin_interfaces/msg/Time"]
+    raw = store.serialize_cdr(Message(Header(Time(5, 6), "m"), "laser", np.array([0.1, -0.2])),
+                              "mt_accuracy_msgs/msg/ReferenceMeasurement")
+    with open(tmp_path / "old.mcap", "wb") as stream:
+        writer = Writer(stream)
+        writer.start(profile="ros2", library="test")
+        schema_id = writer.register_schema("mt_accuracy_msgs/msg/ReferenceMeasurement", "ros2msg",
+                                           schema.encode())
+        channel = writer.register_channel("/reference/tcp_error", "cdr", schema_id,
+                                          {"topic_type_hash": "RIHS01_" + "0" * 64})
+        writer.add_message(channel, log_time=1, publish_time=1, data=bytes(raw))
+        writer.finish()
+    message = next(read_messages(tmp_path / "old.mcap"))
+    decoded = decode(message)
+    assert decoded.instrument == "laser"
+    assert list(decoded.command_positions) == [0.1, -0.2]
+    assert decoded.header.stamp.sec == 5
+    assert not hasattr(decoded, "command_directions")  # the field the old version lacked
