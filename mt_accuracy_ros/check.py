@@ -140,6 +140,7 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
 
     diagnosis = evaluate(model)
     first = diagnosis
+    residual_before = residuals(model, obs)
     queue = list(add)
     while True:
         steps.append({"model_version": model.version, "effects": sorted(model.effects),
@@ -158,13 +159,7 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
         steps[-1]["added"] = name
         steps[-1]["parameters"] = candidate.parameters
         diagnosis = evaluate(model)
-    residual = residuals(model, obs)
-    obs.predicted_m, obs.predicted_orientation = predict_with_history(resolve_model(model_text),
-                                                                      obs, stamps, profiles)
-    first_model = resolve_model(model_text)
-    for sensor, values in obs.temperatures.items():
-        first_model.reference_temperatures_c.setdefault(sensor, float(values[0]))
-    residual_before = residuals(first_model, obs)
+    residual = residuals(model, obs)  # obs holds the final model's predictions
     return {"data": str(bag), "kind": "bag", "readings": obs.n,
             "figures_before_m": error_figures(residual_before),
             "figures_after_m": error_figures(residual),

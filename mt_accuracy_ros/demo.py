@@ -59,8 +59,6 @@ def _set_parameter(node, target: str, name: str, value) -> tuple[bool, str]:
 def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
              scenario: str = "demo") -> int:
     import rclpy
-    from diagnostic_msgs.msg import DiagnosticArray
-
     from mt_accuracy_msgs.msg import (ModelCheck, ReferenceMeasurement, SystematicProfile,
                                       VolumetricCompensation)
 
@@ -106,7 +104,6 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     listener.create_subscription(VolumetricCompensation, "compensation", lambda m: compensation.append(
         (stamp_to_nanoseconds(m.header.stamp), float(np.linalg.norm([m.error.x, m.error.y,
                                                                    m.error.z])))), RESULT_QOS)
-    listener.create_subscription(DiagnosticArray, "/diagnostics", lambda m: None, 10)
     references: list[np.ndarray] = []
     listener.create_subscription(ReferenceMeasurement, "reference/tcp_error", lambda m: references.append(
         np.array([m.error.x, m.error.y, m.error.z])), RESULT_QOS)

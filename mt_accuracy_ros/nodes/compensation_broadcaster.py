@@ -61,6 +61,7 @@ class CompensationBroadcaster(Node):
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self._published_version = -1
         self._last_direction: dict[str, float] = {}
+        self._reported_dead: set[str] = set()
         self._last_stamp = -1
         self.create_subscription(ScaleBatch, "scales", self._on_batch, SENSOR_QOS)
         self._publish_tables()
@@ -91,6 +92,11 @@ class CompensationBroadcaster(Node):
             return  # out of order or repeated: the estimator reports it
         self._last_stamp = stamp
         self.inputs.advance(stamp)
+        if self.inputs.dead != self._reported_dead:
+            self._reported_dead = set(self.inputs.dead)
+            if self._reported_dead:
+                self._warn(f"no valid reading from {', '.join(sorted(self._reported_dead))}; "
+                           "their last valid value is used")
         period = float(message.sample_period)
         step = max(1, int(round(1.0 / (period * float(self.get_parameter("publish_rate_hz").value)))))
         first = int(message.first_sample_index)

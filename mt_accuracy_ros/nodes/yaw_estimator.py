@@ -107,6 +107,7 @@ class YawEstimator(Node):
         self._last_index: int | None = None
         self._last_stamp = -1
         self._data_time_s = 0.0
+        self._sample_period = 0.0
         self._next_profile_s = 0.0
         self._problems: list[tuple[int, str]] = []
         self._pending_temperatures: list = []
@@ -125,9 +126,6 @@ class YawEstimator(Node):
             if parameter.name in ("expansion_per_k", "tolerance_rad", "profile_period_s") and \
                     not np.isfinite(parameter.value):
                 return refuse(f"{parameter.name} must be finite")
-            if parameter.name == "baseline_after_s" and self._data_time_s > parameter.value > 0 \
-                    and any(s.baseline is None for s in self._axes.values()):
-                pass  # taken at the next profile
         return accept()
 
     def _axis(self, axis: str) -> AxisState | None:
@@ -191,8 +189,6 @@ class YawEstimator(Node):
         if dead:
             self._report(DiagnosticStatus.WARN, f"no valid reading from {', '.join(dead)}; "
                                                 "their last value is used")
-
-    _sample_period = 0.0
 
     def _on_batch(self, message: ScaleBatch) -> None:
         channels = list(message.channel_names)

@@ -75,8 +75,18 @@ def test_graph_topics_types_and_refused_parameters(rclpy_context, tmp_path):
             ok, text = _set(probe, target, name, value)
             assert not ok, (target, name)
             assert reason.lower() in text.lower(), text
+        from diagnostic_msgs.msg import DiagnosticArray
+
+        reports: list[str] = []
+        probe.create_subscription(DiagnosticArray, "/diagnostics", lambda m: reports.extend(
+            f"{s.name}: {s.message}" for s in m.status), 10)
         ok, _ = _set(probe, "/temperature_publisher", "dead_sensors", ["column"])
         assert ok
+        # A dead thermocouple: the nodes keep running and say so on /diagnostics.
+        for node in ("compensation_broadcaster", "yaw_estimator"):
+            assert spin_until(probe, lambda: any(
+                node in r and "no valid reading from column" in r for r in reports),
+                timeout_s=20), node
     finally:
         for process in processes:
             process.stop()

@@ -5,7 +5,6 @@ from __future__ import annotations
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -177,10 +176,9 @@ def test_player_timing_offset_remap_clock_and_unknown_type(rclpy_context, tmp_pa
 
     _chatter_bag(tmp_path / "bag")
     node = rclpy.create_node("listener")
-    received: list[tuple[float, str]] = []
+    received: list[str] = []
     clocks: list[int] = []
-    node.create_subscription(String, "/talk", lambda m: received.append((time.monotonic(), m.data)),
-                             10)
+    node.create_subscription(String, "/talk", lambda m: received.append(m.data), 10)
     node.create_subscription(Clock, "/clock", lambda m: clocks.append(
         m.clock.sec * 10**9 + m.clock.nanosec), CLOCK_QOS)
     process = _player(tmp_path / "bag", "--rate", str(rate), "--start-offset", str(offset),
@@ -194,9 +192,8 @@ def test_player_timing_offset_remap_clock_and_unknown_type(rclpy_context, tmp_pa
         node.destroy_node()
     assert process.returncode == 0, stderr
     assert stderr.count("fake_msgs/msg/Nothing is not installed") == 1
-    assert [text for _, text in received] == [f"m{i}" for i in range(11 - expected_count, 11)]
-    span = received[-1][0] - received[0][0]
-    assert span == pytest.approx((expected_count - 1) * 0.1 / rate, abs=0.08)
+    assert received == [f"m{i}" for i in range(11 - expected_count, 11)]
+    # The rate's arithmetic is tested exactly, without wall time, in io/test_playback.py.
     assert clocks == sorted(clocks)
     assert clocks[-1] == 10**18 + 10 * 10**8  # /clock reaches the last message's bag time
     assert clocks[0] >= 10**18 + int(offset * 1e9)
