@@ -22,8 +22,10 @@ NODE_ENTRY_POINTS = {
 setup(
     name=PACKAGE_NAME,
     version="0.1.0",
-    packages=find_packages(exclude=["test", "test.*"]),
-    package_data={PACKAGE_NAME: ["machines/*.yaml", "scenarios/*.yaml", "models/*.yaml"]},
+    # Only the library: bench/, studies/ and test/ stay in the repository.
+    packages=find_packages(include=[PACKAGE_NAME, f"{PACKAGE_NAME}.*"]),
+    package_data={PACKAGE_NAME: ["machines/*.yaml", "scenarios/*.yaml", "models/*.yaml",
+                                 "templates/*.j2"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE_NAME}"]),
         (f"share/{PACKAGE_NAME}", ["package.xml"]),

@@ -29,7 +29,7 @@ CHANNELS = ["x1", "x2", "y1", "y2", "z1", "z2"]
 def _batch(index: int, rng):
     from mt_accuracy_msgs.msg import ScaleBatch
 
-    from mt_accuracy_ros.nodes._common import nanoseconds_to_stamp, pack_float64
+    from mt_accuracy_ros.io.fields import nanoseconds_to_stamp, pack_float64
 
     per_batch = SAMPLE_RATE_HZ // BATCH_HZ
     message = ScaleBatch()

@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from mt_accuracy_ros.core.knn import cross_validate_k, shuffled_folds
+from mt_accuracy_ros.core.scales.knn import cross_validate_k, shuffled_folds
 
 
 def run(n: int, k_lim: int, n_folds: int, seed: int = 0) -> dict:

@@ -2,12 +2,11 @@
 
 ``python -m bench.thermal_report`` writes docs/figures/thermal_*.png and prints
 the numbers: Table 3.1 time constants and placements, robustness, placement
-comparison over seeds, and the held-out errors on shared/data/fl_thermal.
+comparison over seeds, and the held-out errors on data/fl_thermal.
 """
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import matplotlib
@@ -17,13 +16,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
-from mt_accuracy_ros.core import thermal_studies as studies  # noqa: E402
-from mt_accuracy_ros.core.thermal_data_study import load_thermal_csv, study  # noqa: E402
-from mt_accuracy_ros.core.thermal_fem import beam_model, rod_model, thermal_modes  # noqa: E402
+from studies import thermal_fe as studies  # noqa: E402
+from studies.thermal_data import load_thermal_csv, study  # noqa: E402
+from mt_accuracy_ros.core.thermal.fem import beam_model, rod_model, thermal_modes  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURES = ROOT / "docs" / "figures"
-SHARED = Path(os.environ.get("MT_ACCURACY_SHARED", ROOT.parent / "shared"))
+DATA = ROOT / "data"
 
 
 def main() -> int:
@@ -72,7 +71,7 @@ def main() -> int:
         "reduced_median_um2": {m: float(np.median([s["reduced"][m] for s in sweep]))
                                for m in ("modal", "gaussian", "statistical")},
         "statistical_pick_changed_share": float(np.mean([s["changed"] for s in sweep]))}
-    record = load_thermal_csv(SHARED / "data" / "fl_thermal" / "fl_thermal.csv")
+    record = load_thermal_csv(DATA / "fl_thermal" / "fl_thermal.csv")
     result = study(record)
     out["fl_thermal_held_out_rmse_um"] = {m: {c: round(v, 2) for c, v in r.items()}
                                           for m, r in result.held_out_rmse_um.items()}

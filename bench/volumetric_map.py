@@ -15,9 +15,9 @@ import time
 
 import numpy as np
 
-from mt_accuracy_ros.core.htm import error_htm_exact, rotation, translation
-from mt_accuracy_ros.core.kinematics import KinematicModel, volumetric_map
-from mt_accuracy_ros.core.machine import load_machine, machine_from_dict
+from mt_accuracy_ros.core.kinematics.htm import error_htm_exact, rotation, translation
+from mt_accuracy_ros.core.kinematics.chain import KinematicModel, volumetric_map
+from mt_accuracy_ros.core.kinematics.machine import load_machine, machine_from_dict
 
 
 def machine_with_errors(name: str):

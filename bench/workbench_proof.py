@@ -10,7 +10,7 @@ import json
 import numpy as np
 from tqdm import tqdm
 
-from mt_accuracy_ros.sim.proof import HIDDEN, trial
+from studies.hidden_effects import HIDDEN, trial
 
 
 def main() -> int:
@@ -43,7 +43,7 @@ def main() -> int:
             "falls_every_step": sum(all(a > b for a, b in zip(r.step_rmse, r.step_rmse[1:3]))
                                     for r in runs),
             "of": len(runs), "removed_median": float(np.median([r.removed for r in runs]))}
-    from mt_accuracy_ros.sim.proof import HIDDEN_YAW, yaw_trial
+    from studies.hidden_effects import HIDDEN_YAW, yaw_trial
 
     yaw_rows = {}
     for effect in sorted(HIDDEN_YAW):

@@ -1,12 +1,13 @@
 """mt_accuracy_ros: live accuracy monitor and volumetric compensation for CNC machine tools.
 
-Layout
-------
-core/   ROS-free numerics (numpy/scipy only): dual-scale yaw, kNN systematic error,
-        kinematic and thermal models. Never imports rclpy.
-sim/    the virtual machine tool (ROS-free).
-io/     MCAP bag reading and writing (ROS-free where possible).
-nodes/  thin rclpy nodes: convert -> call core -> publish.
-cli.py  the ``mt-accuracy`` command.
+Layout (docs/architecture.md has the picture)
+---------------------------------------------
+core/       ROS-free numerics (numpy/scipy only), by domain: scales, kinematics,
+            thermal, compensation, workbench. Never imports rclpy.
+sim/        the virtual machine tool (ROS-free); only its own nodes import it.
+io/         MCAP bag reading and writing, message-field conversions.
+nodes/      thin rclpy nodes: convert -> call core -> publish.
+report.py   every HTML report (templates/report.html.j2).
+cli.py      the ``mt-accuracy`` command; demo.py the main job; check.py the workbench CLI.
 """
 __version__ = "0.1.0"

@@ -2,8 +2,8 @@
 
 DATA is a bag of this package's topics (``reference/tcp_error`` readings,
 ``temperatures``, ``systematic/<axis>`` profiles) checked against an
-:class:`~mt_accuracy_ros.core.error_model.ErrorModel`, or a CSV table checked
-with the thermal-regression workbench (:mod:`~mt_accuracy_ros.core.regression_workbench`).
+:class:`~mt_accuracy_ros.core.compensation.error_model.ErrorModel`, or a CSV table checked
+with the thermal-regression workbench (:mod:`~mt_accuracy_ros.core.workbench.tabular`).
 Effects are ranked by time-blocked cross-validation; ``--add`` adds named ones,
 ``--auto`` keeps adding the top significant candidate. The JSON holds
 ``baseline_rmse``, ``ranking`` [{effect, cv_rmse_after, explanation}], ``added``
@@ -36,9 +36,9 @@ def error_figures(residual: np.ndarray, unit_scale: float = 1.0) -> dict:
 # ------------------------------------------------------------------ bag path
 def observations_from_bag(bag: Path, namespace: str = ""):
     """Readings, temperatures at their stamps, and the profile history of a bag."""
-    from .core.workbench import Observations
+    from .core.workbench.diagnosis import Observations
     from .io.bag_reader import decode, read_messages, topics
-    from .nodes._common import stamp_to_nanoseconds, unpack_float64
+    from .io.fields import stamp_to_nanoseconds, unpack_float64
 
     prefix = namespace.rstrip("/")
     available = topics(bag)
@@ -124,8 +124,8 @@ def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_0
 
 def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: str,
               min_reduction: float) -> dict:
-    from .core.error_model import resolve_model
-    from .core.workbench import add_effect, diagnose, residuals
+    from .core.compensation.error_model import resolve_model
+    from .core.workbench.diagnosis import add_effect, diagnose, residuals
 
     obs, stamps, profiles = observations_from_bag(bag, namespace)
     model = resolve_model(model_text)
@@ -179,7 +179,7 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
 def check_csv(path: Path, target: str, time_column: str, inputs: list[str], drivers: list[str],
               add: list[str], auto: int, train_fraction: float, min_reduction: float,
               model_terms: list[str]) -> dict:
-    from .core.regression_workbench import table_workbench
+    from .core.workbench.tabular import table_workbench
 
     table = np.genfromtxt(path, delimiter=",", names=True)
     names = list(table.dtype.names or [])
@@ -238,92 +238,6 @@ def write_outputs(result: dict, json_path: str | None, report_path: str | None) 
         Path(json_path).parent.mkdir(parents=True, exist_ok=True)
         Path(json_path).write_text(json.dumps(result, indent=2, default=float))
     if report_path:
-        _report(result, plot, Path(report_path))
+        from .report import write_check_report
 
-
-def _report(result: dict, plot: dict, path: Path) -> None:
-    import html
-
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    stem = path.with_suffix("")
-    images = []
-    if result["kind"] == "csv":
-        fig, ax = plt.subplots(figsize=(10, 4))
-        hours = (plot["time"] - plot["time"][0]) / 3600
-        ax.plot(hours, plot["target"], "k-", lw=0.8, label="measured")
-        ax.plot(hours, plot["before"], "b-", lw=0.8,
-                label=f"model before ({result['baseline_rmse']:.3g} held out)")
-        ax.plot(hours, plot["after"], "r-", lw=0.8,
-                label=f"after adding {', '.join(result['added']) or 'nothing'} "
-                      f"({result['final_rmse']:.3g})")
-        split = hours[np.argmin(plot["train"])] if not plot["train"].all() else hours[-1]
-        ax.axvline(split, color="0.5", ls="--")
-        ax.set(xlabel="time [h] (trained left of the dashed line, judged right)",
-               ylabel=result["target"], title="model vs measurement")
-        ax.legend(fontsize=8)
-        images.append(_save(fig, stem, "fit"))
-    else:
-        residual_before = plot["residual_before"]
-        residual_after = plot["residual_after"]
-        fig, axes = plt.subplots(2, 2, figsize=(11, 7))
-        band = result["band"] * 1e6
-        for c, label in enumerate("xyz"):
-            axes[0, 0].plot(plot["time"], residual_after[:, c] * 1e6, ".", ms=3, label=f"e_{label}")
-        axes[0, 0].axhspan(-band, band, color="g", alpha=0.15, label="2u band")
-        axes[0, 0].set(xlabel="time [s]", ylabel="residual after [µm]",
-                       title="where it fails: time")
-        axes[0, 0].legend(fontsize=7)
-        for axis, values in plot["positions"].items():
-            axes[0, 1].plot(values * 1e3, np.linalg.norm(residual_after, axis=1) * 1e6, ".",
-                            ms=3, label=axis)
-        axes[0, 1].set(xlabel="position [mm]", ylabel="|residual| [µm]",
-                       title="where it fails: position")
-        axes[0, 1].legend(fontsize=7)
-        for sensor in list(plot["temperatures"])[-4:]:
-            values = plot["temperatures"][sensor]
-            axes[1, 0].plot(values - values[0], np.linalg.norm(residual_after, axis=1) * 1e6, ".",
-                            ms=3, label=sensor)
-        axes[1, 0].set(xlabel="temperature rise [K]", ylabel="|residual| [µm]",
-                       title="where it fails: temperature")
-        axes[1, 0].legend(fontsize=7)
-        rmse = [s["rmse"] * 1e6 for s in result["steps"]]
-        axes[1, 1].bar(range(len(rmse)), rmse, color="tab:red")
-        axes[1, 1].set_xticks(range(len(rmse)), [f"v{s['model_version']}" for s in result["steps"]])
-        axes[1, 1].set(ylabel="residual RMSE [µm]", title="the error falling, model versions")
-        images.append(_save(fig, stem, "residuals"))
-    fig, ax = plt.subplots(figsize=(10, 4))
-    top = result["ranking"][:10]
-    ax.barh([r["effect"] for r in top][::-1], [max(0, r["error_reduction"]) * 100 for r in top][::-1],
-            color=["tab:green" if r["significant"] else "0.6" for r in top][::-1])
-    ax.set(xlabel="cross-validated error reduction [%]", title="candidate effects")
-    images.append(_save(fig, stem, "ranking"))
-    rows = "".join(f"<tr><td>{html.escape(r['effect'])}</td><td>{r['cv_rmse_after']:.4g}</td>"
-                   f"<td>{100 * r['error_reduction']:.1f} %</td><td>{r['significant']}</td>"
-                   f"<td>{html.escape(r['explanation'])}</td></tr>" for r in result["ranking"][:15])
-    steps = "".join(f"<li>{html.escape(json.dumps({k: v for k, v in s.items()}, default=float))}</li>"
-                    for s in result["steps"])
-    body = (f"<h1>mt-accuracy check</h1><p>data: {html.escape(result['data'])}</p>"
-            f"<p><b>baseline RMSE {result['baseline_rmse']:.4g}, final RMSE "
-            f"{result['final_rmse']:.4g}</b> after adding {html.escape(', '.join(result['added']) or 'nothing')}"
-            f"{' (judged on held-out rows)' if result['kind'] == 'csv' else ''}</p>"
-            + "".join(f"<img src='{html.escape(i)}'><br>" for i in images)
-            + "<h2>Candidates</h2><table border=1><tr><th>effect</th><th>CV RMSE after</th>"
-            f"<th>reduction</th><th>significant</th><th>why</th></tr>{rows}</table>"
-            f"<h2>Model versions</h2><ol>{steps}</ol>")
-    path.write_text(f"<html><head><meta charset='utf-8'><title>check</title></head>"
-                    f"<body>{body}</body></html>")
-
-
-def _save(fig, stem: Path, name: str) -> str:
-    import matplotlib.pyplot as plt
-
-    fig.tight_layout()
-    target = stem.parent / f"{stem.name}_{name}.png"
-    fig.savefig(target, dpi=100)
-    plt.close(fig)
-    return target.name
+        write_check_report(result, plot, Path(report_path))

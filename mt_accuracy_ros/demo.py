@@ -143,7 +143,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
 def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
                references) -> dict:
     from .io.bag_reader import bag_info
-    from .report import write_report
+    from .report import write_demo_report
 
     info = bag_info(out / "bag")
     before = [c.rmse for t, c in checks if not actions or t < actions[0]["time_s"]]
@@ -169,5 +169,5 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "final_diagnosis": checks[-1][1].diagnosis if checks else "",
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    write_report(out, checks, actions, alarms, compensation, summary)
+    write_demo_report(out, checks, actions, alarms, compensation, summary)
     return summary

@@ -14,10 +14,12 @@ os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 os.environ.setdefault("AMENT_PREFIX_PATH", sys.prefix)
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
-# shared/ sits beside the checkout (as in CI); MT_ACCURACY_SHARED points elsewhere.
-SHARED = Path(os.environ.get("MT_ACCURACY_SHARED", REPO_ROOT.parent / "shared"))
-SHARED_DATA = SHARED / "data"
-SEEDS = SHARED / "seeds"
+# studies/ (outside the installed package) imports from the repository root.
+if str(REPO_ROOT) not in sys.path:
+    sys.path.insert(0, str(REPO_ROOT))
+#: Third-party data the tests read, copied into the repository with its licences:
+#: a clone needs nothing beside it.
+DATA = REPO_ROOT / "data"
 
 
 @pytest.fixture
@@ -33,7 +35,6 @@ def rclpy_context():
 
 
 @pytest.fixture
-def shared_data() -> Path:
-    if not SHARED_DATA.is_dir():
-        pytest.fail(f"shared data not found at {SHARED_DATA}")
-    return SHARED_DATA
+def data_dir() -> Path:
+    """The repository's ``data/`` folder (fl_thermal, rosbag2 samples)."""
+    return DATA

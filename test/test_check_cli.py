@@ -6,10 +6,10 @@ import json
 import pytest
 
 
-def test_csv_path_on_real_fl_thermal_improves_held_out_error(shared_data, tmp_path, capsys):
+def test_csv_path_on_real_fl_thermal_improves_held_out_error(data_dir, tmp_path, capsys):
     from mt_accuracy_ros.cli import main
 
-    code = main(["check", str(shared_data / "fl_thermal" / "fl_thermal.csv"), "--target", "ch5_um",
+    code = main(["check", str(data_dir / "fl_thermal" / "fl_thermal.csv"), "--target", "ch5_um",
                  "--inputs", "t*_C", "--driver", "spindle_rpm", "--auto", "3",
                  "--json", str(tmp_path / "s.json"), "--report", str(tmp_path / "r.html")])
     assert code == 0
@@ -45,8 +45,8 @@ def test_bag_path_finds_the_hidden_effect(tmp_path, hidden):
     from mt_accuracy_msgs.msg import ReferenceMeasurement, TemperatureArray
     from mt_accuracy_ros.check import check_bag
     from mt_accuracy_ros.io.bag_writer import BagWriter
-    from mt_accuracy_ros.nodes._common import nanoseconds_to_stamp, pack_float64
-    from mt_accuracy_ros.sim.proof import HIDDEN, calibrated_model, survey
+    from mt_accuracy_ros.io.fields import nanoseconds_to_stamp, pack_float64
+    from studies.hidden_effects import HIDDEN, calibrated_model, survey
 
     result, obs, truth = survey({hidden: HIDDEN[hidden](1)}, 7)
     base, _, _ = survey({}, 7, points=2)

@@ -1,1 +1,17 @@
-"""ROS-free numerical core. Only numpy and scipy; importable without rclpy."""
+"""ROS-free numerical core: numpy and scipy only, importable without rclpy.
+
+One subpackage per domain a metrologist knows:
+
+``scales``        dual linear scales: yaw, kNN systematic error, streaming,
+                  repeatability/ISO 230-2, uncertainty, deterioration (Kidani).
+``kinematics``    HTMs, machine descriptions, error functions, the kinematic
+                  error chain (Kidani ch. 2, Khan & Chen, Zhu App. A).
+``thermal``       FE heat conduction and modal analysis, regression models,
+                  thermal links, sensor placement (Zhu ch. 3-4, Krulewich).
+``compensation``  the volumetric error model the nodes run and the CNC
+                  compensation tables built from it.
+``workbench``     model versus measurement: where the model fails, which
+                  effect is missing (reference surveys and tabular logs).
+
+``errors`` and ``validation`` are shared by all of them.
+"""

@@ -5,6 +5,11 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescr
                                 SetParametersResult)
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+# Message-field conversions live in io (the simulator's bag export needs them too);
+# re-exported here for the nodes.
+from ..io.fields import (nanoseconds_to_stamp, pack_float64, stamp_to_nanoseconds,  # noqa: F401
+                         unpack_float64)
+
 #: Raw sensor streams (scales, temperatures): best effort and volatile like
 #: ``qos_profile_sensor_data`` - a retransmitted sample is worth less than the
 #: next one - but keep last 100 instead of 5: a batch holds many samples, and a
@@ -28,16 +33,6 @@ LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                          history=HistoryPolicy.KEEP_LAST)
 
 
-def nanoseconds_to_stamp(nanoseconds: int):
-    """``builtin_interfaces/Time`` for an integer number of nanoseconds."""
-    from builtin_interfaces.msg import Time
-
-    return Time(sec=int(nanoseconds // 1_000_000_000), nanosec=int(nanoseconds % 1_000_000_000))
-
-
-def stamp_to_nanoseconds(stamp) -> int:
-    """Integer nanoseconds of a ``builtin_interfaces/Time``."""
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
 def float_descriptor(description: str, low: float, high: float,
@@ -71,31 +66,6 @@ def accept() -> SetParametersResult:
     return SetParametersResult(successful=True)
 
 
-def pack_float64(values) -> "array.array":
-    """``array('d')`` of ``values`` - the fast path into rosidl float64[] fields.
-
-    Assigning an ``array.array('d')`` skips rosidl's per-element type checks,
-    which dominate at 20 kHz x 6 channels.
-    """
-    import array
-
-    import numpy as np
-
-    packed = array.array("d")
-    packed.frombytes(np.ascontiguousarray(values, dtype=np.float64).tobytes())
-    return packed
-
-
-def unpack_float64(field):
-    """numpy float64 view of a rosidl float64[] field (no copy for array('d'))."""
-    import numpy as np
-
-    if len(field) == 0:
-        return np.zeros(0, dtype=np.float64)
-    try:
-        return np.frombuffer(field, dtype=np.float64)
-    except (TypeError, ValueError, BufferError):
-        return np.asarray(field, dtype=np.float64)
 
 
 def linger(node, seconds: float = 0.5) -> None:

@@ -8,7 +8,7 @@ from std_msgs.msg import String
 
 from mt_accuracy_msgs.msg import SystematicProfile, TemperatureArray
 
-from ..core.error_model import ErrorModel, model_to_dict, resolve_model
+from ..core.compensation.error_model import ErrorModel, model_to_dict, resolve_model
 from ..core.errors import MtAccuracyError
 from ._common import LATCHED_QOS, RESULT_QOS, SENSOR_QOS, stamp_to_nanoseconds, unpack_float64
 

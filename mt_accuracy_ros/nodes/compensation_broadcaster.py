@@ -2,7 +2,7 @@
 
 From the CNC command positions in ``scales`` (``ScaleBatch``), the latest
 ``temperatures`` and the measured yaw profiles (``systematic/<axis>``), the
-current :class:`~mt_accuracy_ros.core.error_model.ErrorModel` gives the TCP
+current :class:`~mt_accuracy_ros.core.compensation.error_model.ErrorModel` gives the TCP
 error at the command position, published on ``compensation``
 (``VolumetricCompensation``, reliable) at ``publish_rate_hz`` of data time
 (every n-th sample, whatever the batch boundaries), with correction = -error.
@@ -24,7 +24,7 @@ from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompensation
 
-from ..core.error_model import resolve_model
+from ..core.compensation.error_model import resolve_model
 from ..core.errors import MtAccuracyError
 from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse,

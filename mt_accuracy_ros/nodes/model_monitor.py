@@ -3,7 +3,7 @@
 Subscribes ``reference/tcp_error`` (``ReferenceMeasurement``), the latest
 ``temperatures`` and the measured profiles ``systematic/<axis>``; keeps the
 last ``window`` readings and every ``check_every`` readings runs the
-workbench diagnosis (:func:`mt_accuracy_ros.core.workbench.diagnose`):
+workbench diagnosis (:func:`mt_accuracy_ros.core.workbench.diagnosis.diagnose`):
 residual statistics (offset per component removed - instruments measure from
 their own zero), the readings outside the instrument's 2u band, and the
 candidate effects ranked by time-blocked cross-validated error reduction.
@@ -28,9 +28,9 @@ from std_msgs.msg import String
 
 from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ReferenceMeasurement
 
-from ..core.error_model import MODEL_EFFECTS, resolve_model
+from ..core.compensation.error_model import MODEL_EFFECTS, resolve_model
 from ..core.errors import MtAccuracyError
-from ..core.workbench import Observations, add_effect, diagnose
+from ..core.workbench.diagnosis import Observations, add_effect, diagnose
 from ._common import (run_node, LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
                       plain_descriptor, refuse, stamp_to_nanoseconds)
 from ._model_inputs import ModelInputs

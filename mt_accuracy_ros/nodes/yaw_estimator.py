@@ -28,13 +28,13 @@ from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import ScaleBatch, SystematicProfile, TemperatureArray, YawBatch
 
-from ..core.deterioration import detect_deterioration
-from ..core.dual_scale import (SQ57_EXPANSION_PER_K, scale_expansion, thermal_yaw_error,
-                               thermocouple_positions, yaw_from_scales)
+from ..core.scales.deterioration import detect_deterioration
+from ..core.scales.dual_scale import (SQ57_EXPANSION_PER_K, YAW_COMPONENT, scale_expansion,
+                                      thermal_yaw_error, thermocouple_positions,
+                                      yaw_from_scales)
 from ..core.errors import InputDataError, MtAccuracyError
-from ..core.machine import load_machine
-from ..core.streaming import StreamingSystematic
-from ..sim.effects import YAW_COMPONENT
+from ..core.kinematics.machine import load_machine
+from ..core.scales.streaming import StreamingSystematic
 from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       pack_float64, plain_descriptor, refuse, stamp_to_nanoseconds,
                       unpack_float64)

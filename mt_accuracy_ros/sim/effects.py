@@ -100,11 +100,6 @@ EFFECTS: dict[str, EffectSpec] = {spec.name: spec for spec in [
 #: Effects on unless a scenario switches them off.
 DEFAULT_ON = ("geometric",)
 
-#: The rotation each axis' scale pair measures: the pair of an axis lies in a
-#: plane, and the yaw is the rotation about that plane's normal (Kidani Fig. 2.3).
-YAW_COMPONENT = {"X": "C", "Y": "C", "Z": "B"}
-
-
 def deterioration_bump(q: NDArray[np.float64], start_m: float, end_m: float) -> NDArray[np.float64]:
     """0 outside [start, end], rising smoothly (raised cosine) to 1 at ``end``.
 

@@ -51,7 +51,7 @@ def write_bag(result: SimulationResult, bag_dir: str | Path, *, batch_period_s: 
     from mt_accuracy_msgs.msg import ScaleBatch, TemperatureArray
 
     from ..io.bag_writer import BagWriter, qos_dict
-    from ..nodes._common import nanoseconds_to_stamp, pack_float64
+    from ..io.fields import nanoseconds_to_stamp, pack_float64
 
     prefix = namespace.rstrip("/")
     scales_topic, temperatures_topic = f"{prefix}/scales", f"{prefix}/temperatures"

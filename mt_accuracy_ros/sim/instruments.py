@@ -115,7 +115,7 @@ def calibrate_machine(result: SimulationResult, *, step_m: float = 0.02, seed: i
     """
     import copy
 
-    from ..core.machine import COMPONENTS
+    from ..core.kinematics.machine import COMPONENTS
 
     scenario = result.scenario
     machine = scenario.machine

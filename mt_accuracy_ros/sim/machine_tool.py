@@ -21,7 +21,7 @@ scale pair (distance D, Kidani Table 3.1):
 * thermocouples every 110 mm on each scale and on the structure, with noise
   and 0.01 K resolution;
 * the TCP error relative to the workpiece against the command, from the
-  kinematic model (:class:`~mt_accuracy_ros.core.kinematics.KinematicModel`)
+  kinematic model (:class:`~mt_accuracy_ros.core.kinematics.chain.KinematicModel`)
   with every enabled effect, on demand at chosen samples (:meth:`tcp_error`).
 """
 from __future__ import annotations
@@ -31,9 +31,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.kinematics import ErrorOverrides, KinematicModel
-from ..core.machine import location_error_name, motion_error_name
-from .effects import YAW_COMPONENT, SineProfile, deterioration_bump, random_profiles
+from ..core.kinematics.chain import ErrorOverrides, KinematicModel
+from ..core.kinematics.machine import location_error_name, motion_error_name
+from ..core.scales.dual_scale import YAW_COMPONENT
+from .effects import SineProfile, deterioration_bump, random_profiles
 from .programs import PROGRAMS
 from .scenario import Scenario
 from .thermal_state import ScaleTemperatureField, first_order_response, thermocouple_positions

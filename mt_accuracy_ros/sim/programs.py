@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core.errors import ScenarioError
-from ..core.machine import MachineDescription
+from ..core.kinematics.machine import MachineDescription
 
 MM_PER_MIN = 1e-3 / 60.0  # [m/s] per mm/min
 

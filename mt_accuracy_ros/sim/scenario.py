@@ -33,7 +33,7 @@ from pathlib import Path
 import yaml
 
 from ..core.errors import MachineDescriptionError, ScenarioError
-from ..core.machine import MachineDescription, load_machine
+from ..core.kinematics.machine import MachineDescription, load_machine
 from .effects import DEFAULT_ON, EFFECTS
 from .programs import PROGRAMS
 

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import lfilter
 
-from ..core.dual_scale import THERMOCOUPLE_SPACING_M, thermocouple_positions  # noqa: F401
+from ..core.scales.dual_scale import THERMOCOUPLE_SPACING_M, thermocouple_positions  # noqa: F401
 
 
 def first_order_response(u: NDArray[np.float64], dt_s: float, tau_s: float,
@@ -46,7 +46,7 @@ DRIVE_END_SHARE = 0.5
 class ScaleTemperatureField:
     """Temperature rise along a scale over time from the thermal FE model (issue 5).
 
-    A 1-D FE model of the scale body (:func:`~mt_accuracy_ros.core.thermal_fem.rod_model`,
+    A 1-D FE model of the scale body (:func:`~mt_accuracy_ros.core.thermal.fem.rod_model`,
     Zhu eq. 3.1) solved by its thermal modes (eqs. 3.2-3.10), heated by the axis'
     motion - ``DRIVE_END_SHARE`` at the drive end (s = 0), the rest spread along
     the stroke. The mode shapes are the model's; the time axis is scaled so that
@@ -58,7 +58,7 @@ class ScaleTemperatureField:
 
     def __init__(self, length_m: float, heat_input, dt_s: float, time_constant_s: float,
                  rise_k: float, n_elements: int = 44) -> None:
-        from ..core.thermal_fem import ThermalModes, rod_model, thermal_modes
+        from ..core.thermal.fem import ThermalModes, rod_model, thermal_modes
 
         model = rod_model(length_m, SCALE_AREA_M2, n_elements, SCALE_CONVECTION_W_M2K,
                           perimeter_m=SCALE_PERIMETER_M)

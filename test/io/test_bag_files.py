@@ -20,7 +20,7 @@ from mt_accuracy_ros.io.msg_definitions import SEPARATOR, schema_text
 
 def _scale_batch(i: int):
     from mt_accuracy_msgs.msg import ScaleBatch
-    from mt_accuracy_ros.nodes._common import nanoseconds_to_stamp, pack_float64
+    from mt_accuracy_ros.io.fields import nanoseconds_to_stamp, pack_float64
 
     m = ScaleBatch()
     m.header.stamp = nanoseconds_to_stamp(1_700_000_000_000_000_000 + i * 50_000_000)
@@ -108,18 +108,18 @@ def test_own_reader_decodes_and_reports_info(tmp_path):
     assert meta["rosbag2_bagfile_information"]["version"] == 9
 
 
-def test_rosbag2_written_samples_are_read(shared_data):
-    talker = list(read_messages(shared_data / "rosbag2_samples" / "talker"))
+def test_rosbag2_written_samples_are_read(data_dir):
+    talker = list(read_messages(data_dir / "rosbag2_samples" / "talker"))
     assert sum(m.topic == "/topic" for m in talker) == 10
     assert decode(next(m for m in talker if m.topic == "/topic")).data.startswith("Hello")
-    split = list(read_messages(shared_data / "rosbag2_samples" / "multiple_files"))
+    split = list(read_messages(data_dir / "rosbag2_samples" / "multiple_files"))
     assert len(split) > 0 and all(m.topic == "/chatter" for m in split)
     assert [m.log_time_ns for m in split] == sorted(m.log_time_ns for m in split)
 
 
-def test_non_cdr_bag_is_refused_clearly(shared_data):
+def test_non_cdr_bag_is_refused_clearly(data_dir):
     with pytest.raises(BagError, match="only 'cdr'"):
-        list(read_messages(shared_data / "rosbag2_samples" / "wrong_rmw_test"))
+        list(read_messages(data_dir / "rosbag2_samples" / "wrong_rmw_test"))
 
 
 def test_foreign_and_missing_files_raise_bag_error(tmp_path):
@@ -163,14 +163,14 @@ def test_killed_writer_leaves_closed_chunks_recoverable(tmp_path):
     assert decode(salvaged[-1]).first_sample_index == (len(salvaged) - 1) * 50
 
 
-def test_info_command_prints_like_ros2_bag_info(shared_data, capsys):
+def test_info_command_prints_like_ros2_bag_info(data_dir, capsys):
     from mt_accuracy_ros.cli import main
 
-    assert main(["info", str(shared_data / "rosbag2_samples" / "talker")]) == 0
+    assert main(["info", str(data_dir / "rosbag2_samples" / "talker")]) == 0
     out = capsys.readouterr().out
     assert "Messages:       20" in out
     assert "Topic: /topic | Type: std_msgs/msg/String | Count: 10 | Serialization Format: cdr" in out
-    assert main(["info", str(shared_data / "no_such_bag")]) == 2
+    assert main(["info", str(data_dir / "no_such_bag")]) == 2
 
 
 def test_schema_skips_constants_and_resolves_same_package_types():

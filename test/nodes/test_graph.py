@@ -98,7 +98,7 @@ def test_broadcast_compensation_equals_the_core_model(rclpy_context, tmp_path):
     import rclpy
 
     from mt_accuracy_msgs.msg import ScaleBatch, TemperatureArray, VolumetricCompensation
-    from mt_accuracy_ros.core.error_model import model_from_dict
+    from mt_accuracy_ros.core.compensation.error_model import model_from_dict
     from mt_accuracy_ros.nodes._common import (RESULT_QOS, SENSOR_QOS, nanoseconds_to_stamp,
                                                pack_float64)
 

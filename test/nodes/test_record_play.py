@@ -224,21 +224,21 @@ def test_player_pause_resume_and_loop(rclpy_context, tmp_path):
     assert received[:22] == [f"m{i}" for i in range(11)] * 2  # looped, in order
 
 
-def test_player_refuses_non_cdr_bags_clearly(shared_data):
+def test_player_refuses_non_cdr_bags_clearly(data_dir):
     result = subprocess.run([sys.executable, "-m", "mt_accuracy_ros.cli", "play",
-                             str(shared_data / "rosbag2_samples" / "wrong_rmw_test")],
+                             str(data_dir / "rosbag2_samples" / "wrong_rmw_test")],
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 2
     assert "only 'cdr'" in result.stderr
 
 
 @pytest.mark.parametrize("sample, topic", [("multiple_files", "/chatter"), ("talker", "/topic")])
-def test_player_plays_rosbag2_written_bags(rclpy_context, shared_data, sample, topic):
+def test_player_plays_rosbag2_written_bags(rclpy_context, data_dir, sample, topic):
     """A bag split over files without metadata.yaml, and one with zstd chunks."""
     import rclpy
     from std_msgs.msg import String
 
-    bag = shared_data / "rosbag2_samples" / sample
+    bag = data_dir / "rosbag2_samples" / sample
     expected = [decode(m).data for m in read_messages(bag, [topic])]
     node = rclpy.create_node("listener")
     received: list[str] = []

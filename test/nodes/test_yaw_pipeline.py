@@ -21,7 +21,7 @@ def test_yaw_estimated_in_another_process_equals_the_offline_computation(rclpy_c
     import rclpy
 
     from mt_accuracy_msgs.msg import YawBatch
-    from mt_accuracy_ros.core.dual_scale import yaw_from_scales
+    from mt_accuracy_ros.core.scales.dual_scale import yaw_from_scales
     from mt_accuracy_ros.nodes._common import RESULT_QOS, unpack_float64
     from mt_accuracy_ros.sim.machine_tool import simulate
     from mt_accuracy_ros.sim.scenario import load_scenario

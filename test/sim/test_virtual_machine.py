@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mt_accuracy_ros.core.dual_scale import (parallelism_yaw_error, scale_expansion,
+from mt_accuracy_ros.core.scales.dual_scale import (parallelism_yaw_error, scale_expansion,
                                              thermal_yaw_error, timing_yaw_error, yaw_from_scales)
 from mt_accuracy_ros.core.errors import ScenarioError
-from mt_accuracy_ros.core.kinematics import ErrorOverrides, KinematicModel
+from mt_accuracy_ros.core.kinematics.chain import ErrorOverrides, KinematicModel
 from mt_accuracy_ros.sim.effects import EFFECTS
 from mt_accuracy_ros.sim.machine_tool import simulate
 from mt_accuracy_ros.sim.scenario import scenario_from_yaml

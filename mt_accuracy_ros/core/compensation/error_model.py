@@ -1,0 +1,298 @@
+"""The volumetric error model the nodes run: kinematic chain + the effects it includes.
+
+A model is a machine description plus a set of **effects**, named as the
+virtual machine tool names them (:mod:`mt_accuracy_ros.sim.effects`), each with
+the parameters the model believes. The same names are the workbench's
+candidate library, so "adding the missing effect" means adding its name and
+parameters here. Effects a model can hold:
+
+==============================  =============================================  ===========================
+effect                          parameters (model form)                        enters as
+==============================  =============================================  ===========================
+``geometric``                   measured profiles (``set_profile``), e.g. ECY  motion errors (Kidani 2.12)
+``squareness``                  ``errors_rad: {EC0Y: ...}``                    location errors
+``structural_thermal_drift``    ``beta_m_per_k: [bx, by, bz]``, ``sensor``     TCP offset beta dT (Zhu 3.12)
+``position_dependent_thermal``  ``axis``, ``alpha_per_k``, ``sensor``,         positioning alpha (q - q0) dT
+                                ``reference_m``                                (Zhu 3.13)
+``spindle_thermal_growth``      ``m_per_k``, ``sensor``, ``direction``          TCP offset along the tool
+``abbe_offset``                 ``offset_m: [x, y, z]``                        eps x offset
+``reversal``                    ``backlash_m``, ``axes``                       -sign(v) b/2 per axis
+``servo_lag``                   ``lag_s``, ``axes``                            -v tau per axis
+==============================  =============================================  ===========================
+
+Temperatures enter as rises over ``reference_temperatures_c`` (the first
+reading, unless given). Everything is vectorised over N command positions.
+"""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..kinematics.error_functions import ErrorFunction
+from ..errors import InputDataError, MachineDescriptionError, ParameterError
+from ..kinematics.chain import ErrorOverrides, KinematicModel
+from ..kinematics.machine import MachineDescription, load_machine
+
+MODEL_EFFECTS = ("geometric", "squareness", "structural_thermal_drift",
+                 "position_dependent_thermal", "spindle_thermal_growth", "abbe_offset",
+                 "reversal", "servo_lag")
+
+_DEFAULTS = {
+    "geometric": {},
+    "squareness": {"errors_rad": {}},
+    "structural_thermal_drift": {"beta_m_per_k": [0.0, 0.0, 0.0], "sensor": "column"},
+    "position_dependent_thermal": {"axis": "X", "alpha_per_k": 0.0, "sensor": "bed",
+                                   "reference_m": 0.0},
+    "spindle_thermal_growth": {"m_per_k": 0.0, "sensor": "spindle", "direction": [0.0, 0.0, 1.0]},
+    "abbe_offset": {"offset_m": [0.0, 0.0, 0.0]},
+    "reversal": {"backlash_m": 0.0, "axes": ["X", "Y", "Z"]},
+    "servo_lag": {"lag_s": 0.0, "axes": ["X", "Y", "Z"]},
+}
+
+
+@dataclass
+class ErrorModel:
+    """Machine + included effects; evaluate the TCP error at command positions."""
+
+    machine: MachineDescription
+    effects: dict[str, dict] = field(default_factory=dict)
+    reference_temperatures_c: dict[str, float] = field(default_factory=dict)
+    profiles: dict[str, ErrorFunction] = field(default_factory=dict)
+    version: int = 1
+    machine_source: str = ""     # bundled name or path the machine was loaded from
+    profile_offsets: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in list(self.effects):
+            self.effects[name] = self._validated(name, self.effects[name])
+        self._kinematics = KinematicModel(self.machine)
+
+    @staticmethod
+    def _validated(name: str, parameters: dict | None) -> dict:
+        if name not in _DEFAULTS:
+            raise ParameterError(f"unknown model effect {name!r}; known: {', '.join(MODEL_EFFECTS)}")
+        merged = copy.deepcopy(_DEFAULTS[name])
+        for key, value in (parameters or {}).items():
+            if key not in merged:
+                raise ParameterError(f"effect {name} has no parameter {key!r}; "
+                                     f"known: {', '.join(merged)}")
+            merged[key] = value
+        return merged
+
+    # ------------------------------------------------------------ changes
+    def with_effect(self, name: str, parameters: dict | None = None) -> "ErrorModel":
+        """A new model version that also holds ``name`` (or holds it with new parameters)."""
+        effects = copy.deepcopy(self.effects)
+        effects[name] = parameters or {}
+        return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),
+                          dict(self.profiles), self.version + 1, self.machine_source,
+                          dict(self.profile_offsets))
+
+    def without_effect(self, name: str) -> "ErrorModel":
+        effects = {k: v for k, v in self.effects.items() if k != name}
+        return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),
+                          dict(self.profiles), self.version + 1, self.machine_source,
+                          dict(self.profile_offsets))
+
+    def set_profile(self, error_name: str, positions_m: ArrayLike, values: ArrayLike) -> None:
+        """Use a measured profile (e.g. the kNN systematic yaw ECY) as that motion error."""
+        x = np.asarray(positions_m, dtype=np.float64)
+        y = np.asarray(values, dtype=np.float64)
+        if x.shape != y.shape or x.ndim != 1 or x.size < 2 or not np.all(np.diff(x) > 0):
+            raise InputDataError(f"profile {error_name}: need >= 2 ascending positions with "
+                                 "one value each")
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+            raise InputDataError(f"profile {error_name}: NaN/inf values")
+        # A live profile is relative to its estimator's zero reference. Where the
+        # machine carries a calibrated table of the same error, the first profile
+        # is aligned to it (mean difference) and that offset kept for the run, so a
+        # later change - a deterioration - shows as a change of the error itself.
+        axis = error_name[-1]
+        if error_name not in self.profile_offsets:
+            calibrated = None
+            if axis in self.machine.axes and error_name[1] in self.machine.axes[axis].motion_errors:
+                function = self.machine.axes[axis].motion_errors[error_name[1]]
+                calibrated = None if function.is_zero else function(x)
+            self.profile_offsets[error_name] = float(np.mean(calibrated - y)) \
+                if calibrated is not None else 0.0
+        y = y + self.profile_offsets[error_name]
+        self.profiles[error_name] = ErrorFunction(kind="profile", positions=x, values=y)
+        self.version += 1
+
+    # ------------------------------------------------------------ evaluation
+    def _rise(self, sensor: str, temperatures: dict, n: int) -> NDArray[np.float64]:
+        if sensor not in temperatures:
+            raise InputDataError(f"the model needs temperature {sensor!r}; have "
+                                 f"{', '.join(sorted(temperatures)) or 'none'}")
+        value = np.broadcast_to(np.asarray(temperatures[sensor], dtype=np.float64), (n,))
+        reference = self.reference_temperatures_c.get(sensor)
+        if reference is None:
+            reference = float(value[0])
+            self.reference_temperatures_c[sensor] = reference
+        return value - reference
+
+    def overrides(self, positions: dict[str, NDArray], temperatures: dict | None = None
+                  ) -> ErrorOverrides:
+        """Kinematic-model inputs of the included effects at N positions."""
+        temperatures = temperatures or {}
+        n = int(np.size(next(iter(positions.values()))))
+        # "geometric" = the description's calibrated errors plus the live profiles.
+        out = ErrorOverrides(use_description="geometric" in self.effects)
+        if "geometric" in self.effects:
+            for name, function in self.profiles.items():
+                axis = name[-1]
+                out.motion[name] = function(positions[axis])
+        if "squareness" in self.effects:
+            for name, value in self.effects["squareness"]["errors_rad"].items():
+                out.location[name] = float(value)
+        if "position_dependent_thermal" in self.effects:
+            p = self.effects["position_dependent_thermal"]
+            axis = p["axis"]
+            name = f"E{axis}{axis}"
+            growth = float(p["alpha_per_k"]) * (positions[axis] - float(p["reference_m"])) * \
+                self._rise(p["sensor"], temperatures, n)
+            # An override replaces the description's function: start from it.
+            base = out.motion.get(name)
+            if base is None:
+                base = self.machine.axes[axis].motion_errors[axis](positions[axis]) \
+                    if out.use_description else 0.0
+            out.motion[name] = base + growth
+        drift = np.zeros((n, 6))
+        if "structural_thermal_drift" in self.effects:
+            p = self.effects["structural_thermal_drift"]
+            drift[:, :3] += np.outer(self._rise(p["sensor"], temperatures, n),
+                                     np.asarray(p["beta_m_per_k"], dtype=np.float64))
+        if "spindle_thermal_growth" in self.effects:
+            p = self.effects["spindle_thermal_growth"]
+            direction = np.asarray(p["direction"], dtype=np.float64)
+            drift[:, :3] += np.outer(float(p["m_per_k"]) * self._rise(p["sensor"], temperatures, n),
+                                     direction / np.linalg.norm(direction))
+        if np.any(drift):
+            out.thermal["bed_tool"] = drift
+        return out
+
+    def tcp_error(self, positions: dict[str, ArrayLike], temperatures: dict | None = None,
+                  velocities: dict[str, ArrayLike] | None = None,
+                  directions: dict[str, ArrayLike] | None = None
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(position error (N, 3) [m], orientation error (N, 3) [rad]) at command positions.
+
+        ``directions`` (axis -> +-1, the direction of the last motion) serves the
+        reversal effect where the axis stands still; without it sign(v) is used
+        (0 at a standstill).
+        """
+        q = {a: np.atleast_1d(np.asarray(positions[a], dtype=np.float64))
+             for a in self.machine.axis_order if a in positions}
+        missing = [a for a in self.machine.axis_order if a not in q]
+        if missing:
+            raise InputDataError(f"positions missing for axis {', '.join(missing)}")
+        result = self._kinematics.tcp_error(q, overrides=self.overrides(q, temperatures),
+                                            check_stroke=False)
+        position, orientation = result["position"], result["orientation"]
+        if "abbe_offset" in self.effects:
+            offset = np.asarray(self.effects["abbe_offset"]["offset_m"], dtype=np.float64)
+            position = position + np.cross(orientation, offset)
+        drive = np.zeros_like(position)
+        for name, sign_of in (("reversal", True), ("servo_lag", False)):
+            if name not in self.effects:
+                continue
+            if velocities is None:
+                raise InputDataError(f"effect {name} needs axis velocities")
+            p = self.effects[name]
+            for axis in p["axes"]:
+                if axis not in q or self.machine.axes[axis].is_rotary:
+                    continue
+                v = np.broadcast_to(np.asarray(velocities[axis], dtype=np.float64), q[axis].shape)
+                direction = np.sign(v) if directions is None or axis not in directions else \
+                    np.broadcast_to(np.asarray(directions[axis], dtype=np.float64), q[axis].shape)
+                shift = -direction * 0.5 * float(p["backlash_m"]) if sign_of \
+                    else -v * float(p["lag_s"])
+                drive += shift[:, None] * self.axis_direction(axis, q)
+        return position + drive, orientation
+
+    def axis_direction(self, axis: str, positions: dict[str, NDArray]) -> NDArray[np.float64]:
+        """d(tool - workpiece)/d q_axis (N, 3): where a unit move of the axis takes the TCP.
+
+        +unit for a tool-branch linear axis, -unit for one carrying the workpiece.
+        """
+        q = {a: np.asarray(v, dtype=np.float64) for a, v in positions.items()}
+        step = 1e-6
+        moved = dict(q)
+        moved[axis] = q[axis] + step
+        return (self._kinematics.nominal_relative(moved) - self._kinematics.nominal_relative(q)) \
+            / step
+
+    def correction(self, positions, temperatures=None, velocities=None) -> NDArray[np.float64]:
+        """Value to add to the command [m]: minus the position error (first order)."""
+        return -self.tcp_error(positions, temperatures, velocities)[0]
+
+
+def model_to_dict(model: ErrorModel) -> dict:
+    """The YAML form of a model (profiles excluded: they stream in live)."""
+    return {"machine": model.machine_source or model.machine.name, "version": int(model.version),
+            "effects": {name: copy.deepcopy(params) for name, params in model.effects.items()},
+            "reference_temperatures_c": dict(model.reference_temperatures_c)}
+
+
+def model_from_dict(data: dict, source: str = "<dict>", base_dir: Path | None = None
+                    ) -> ErrorModel:
+    """``{machine: NAME|PATH, effects: {name: {params} | true}, reference_temperatures_c: {}}``."""
+    if not isinstance(data, dict) or "machine" not in data:
+        raise ParameterError(f"{source}: a model needs 'machine' (bundled name or path)")
+    effects = {}
+    for name, value in (data.get("effects") or {}).items():
+        if value is False:
+            continue
+        effects[str(name)] = {} if value is True or value is None else dict(value)
+    try:
+        machine_source = str(data["machine"])
+        if not Path(machine_source).is_absolute() and base_dir is not None and \
+                (base_dir / machine_source).is_file():
+            machine_source = str((base_dir / machine_source).resolve())
+        model = ErrorModel(load_machine(machine_source), effects,
+                           {str(k): float(v) for k, v in
+                            (data.get("reference_temperatures_c") or {}).items()},
+                           machine_source=machine_source)
+    except (ParameterError, MachineDescriptionError) as exc:
+        raise ParameterError(f"{source}: {exc}") from exc
+    model.version = int(data.get("version", 1))
+    return model
+
+
+BUNDLED_MODELS = Path(__file__).resolve().parents[2] / "models"
+
+
+def resolve_model(text: str) -> ErrorModel:
+    """A bundled model name (``demo``), a path to a model YAML, or inline YAML text."""
+    import yaml
+
+    text = str(text).strip()
+    if "\n" in text or text.startswith("{"):
+        try:
+            return model_from_dict(yaml.safe_load(text), "<inline model>")
+        except yaml.YAMLError as exc:
+            raise ParameterError(f"inline model is not valid YAML: {exc}") from exc
+    path = Path(text)
+    if path.suffix in (".yaml", ".yml") or path.exists():
+        return load_model(path)
+    bundled = BUNDLED_MODELS / f"{text}.yaml"
+    if not bundled.is_file():
+        raise ParameterError(f"no model {text!r} (bundled: "
+                             f"{', '.join(sorted(p.stem for p in BUNDLED_MODELS.glob('*.yaml')))}; "
+                             "or a path, or inline YAML)")
+    return load_model(bundled)
+
+
+def load_model(path) -> ErrorModel:
+    import yaml
+
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise ParameterError(f"{path}: cannot read model ({exc})") from exc
+    return model_from_dict(data, str(path), base_dir=path.parent)

@@ -1,0 +1,405 @@
+"""Kinematic (rigid-body) error model of a machine tool from its description.
+
+Each joint j of a branch contributes, following Khan & Chen eq. 8,
+
+    T_j = T_p . T_pe . T_s(q_j) . T_se(q_j) [. T_thermal]
+
+with T_p the nominal position of the joint frame in its parent (the previous
+axis' ``offset``, Kidani's L_*), T_pe the location errors (squareness, offsets,
+zero errors), T_s the commanded motion, T_se the six position-dependent error
+motions (exact product, or Kidani eq. 2.7 to first order) and an optional
+thermal-link HTM (Zhu eq. 4.2). The tool branch (Khan & Chen's M loop) carries
+the tool vector t, the workpiece branch (N loop) the workpiece point w, and the
+TCP error is
+
+    e = (P_t - P_w)_actual - (P_t - P_w)_nominal          (Kidani eq. 2.10, K&C eq. 17)
+
+in the bed (reference) frame. Two independent formulations are provided:
+
+* :meth:`KinematicModel.tcp_error` - the full matrix products (exact, or with
+  the first-order error matrices);
+* :meth:`KinematicModel.tcp_error_linear` - the first-order sum
+  ``sum_j R_j (d_j + eps_j x r_j)`` of every joint's error twist moved to the
+  TCP through its nominal lever arm r_j; no error matrix is multiplied.
+
+Everything is vectorised over N configurations: positions are dicts of arrays.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import MachineDescriptionError
+from .htm import (identity, rotation, rotation_matrix_first_order, rotation_matrix_xyz,
+                  rotation_vector, translation)
+from .machine import COMPONENTS, MachineDescription, location_error_name, motion_error_name
+
+Positions = dict[str, NDArray[np.float64]]
+
+
+@dataclass
+class ErrorOverrides:
+    """Error values to use instead of (or on top of) the description's.
+
+    ``motion[name]`` : array (N,) or scalar replacing the function of e.g. 'ECX'.
+    ``location[name]`` : scalar or (N,) replacing e.g. 'EC0Y'.
+    ``thermal[axis]`` : (N, 6) or (6,) small-displacement twist (dx, dy, dz, ex, ey, ez)
+    of the body carried by ``axis`` (or ``'bed_tool'`` / ``'bed_work'``), a thermal link.
+    ``scale`` : multiplies every error (for order-of-magnitude checks).
+    """
+
+    motion: dict[str, object] = field(default_factory=dict)
+    location: dict[str, object] = field(default_factory=dict)
+    thermal: dict[str, object] = field(default_factory=dict)
+    scale: float = 1.0
+    use_description: bool = True
+
+
+class KinematicModel:
+    """HTM chain model built from a :class:`MachineDescription`."""
+
+    def __init__(self, machine: MachineDescription) -> None:
+        self.machine = machine
+
+    # ----------------------------------------------------------------- inputs
+    def _n(self, positions: Positions) -> int:
+        sizes = {np.asarray(v).size for v in positions.values()}
+        if len(sizes) > 1:
+            raise MachineDescriptionError(f"axis position arrays differ in length: {sorted(sizes)}")
+        return sizes.pop() if sizes else 1
+
+    def _positions(self, positions: Positions, check_stroke: bool) -> tuple[Positions, int]:
+        missing = [a for a in self.machine.axis_order if a not in positions]
+        if missing:
+            raise MachineDescriptionError(f"positions missing for axis {', '.join(missing)}")
+        if check_stroke:
+            self.machine.check_positions(positions)
+        else:
+            unknown = set(positions) - set(self.machine.axis_order)
+            if unknown:
+                raise MachineDescriptionError(f"unknown axis {sorted(unknown)[0]!r}")
+        n = self._n(positions)
+        return {a: np.broadcast_to(np.asarray(positions[a], dtype=np.float64).ravel(), (n,))
+                for a in self.machine.axis_order}, n
+
+    def motion_errors(self, axis: str, q: NDArray, overrides: ErrorOverrides) -> NDArray:
+        """(N, 6) error motions (dx, dy, dz, ex, ey, ez) of ``axis`` at positions ``q``."""
+        spec = self.machine.axes[axis]
+        out = np.zeros((q.size, 6))
+        for i, component in enumerate(COMPONENTS):
+            name = motion_error_name(component, axis)
+            if name in overrides.motion:
+                out[:, i] = np.broadcast_to(np.asarray(overrides.motion[name], float), (q.size,))
+            elif overrides.use_description:
+                out[:, i] = spec.motion_errors[component](q)
+        return out * overrides.scale
+
+    def location_errors(self, axis: str, n: int, overrides: ErrorOverrides) -> NDArray:
+        """(N, 6) location errors (EX0., EY0., EZ0., EA0., EB0., EC0.) of ``axis``."""
+        spec = self.machine.axes[axis]
+        out = np.zeros((n, 6))
+        for i, component in enumerate(COMPONENTS):
+            name = location_error_name(component, axis)
+            if name in overrides.location:
+                out[:, i] = np.broadcast_to(np.asarray(overrides.location[name], float), (n,))
+            elif overrides.use_description:
+                out[:, i] = spec.location_errors.get(component, 0.0)
+        return out * overrides.scale
+
+    def _thermal(self, key: str, n: int, overrides: ErrorOverrides) -> NDArray | None:
+        if key not in overrides.thermal:
+            return None
+        twist = np.broadcast_to(np.asarray(overrides.thermal[key], dtype=np.float64), (n, 6))
+        return twist * overrides.scale
+
+    # ----------------------------------------------------------------- chains
+    def _motion(self, axis: str, q: NDArray) -> NDArray:
+        spec = self.machine.axes[axis]
+        value = spec.sign * q
+        if spec.is_rotary:
+            return rotation("xyz"[spec.direction], value)
+        d = np.zeros((q.size, 3))
+        d[:, spec.direction] = value
+        return translation(d[:, 0], d[:, 1], d[:, 2])
+
+    def branch(self, which: str, positions: Positions, *, errors: bool = True,
+               first_order: bool = False, overrides: ErrorOverrides | None = None,
+               check_stroke: bool = True) -> NDArray:
+        """(N, 4, 4) HTM from the bed to the branch's end point frame.
+
+        ``which`` is ``"tool"`` (M loop, ending at the tool vector) or
+        ``"workpiece"`` (N loop, ending at the workpiece point); the returned
+        frame's origin is that point.
+        """
+        rot, pos = self._branch_rp(which, positions, errors, first_order,
+                                   overrides or ErrorOverrides(), check_stroke)
+        out = identity((rot.shape[0],))
+        out[:, :3, :3] = rot
+        out[:, :3, 3] = pos
+        return out
+
+    def _branch_rp(self, which: str, positions: Positions, errors: bool, first_order: bool,
+                   overrides: ErrorOverrides, check_stroke: bool) -> tuple[NDArray, NDArray]:
+        """The branch product kept as rotation (N, 3, 3) and translation (N, 3).
+
+        Composing T1 T2 as (R1 R2, R1 p2 + p1) skips the constant last row of
+        every 4x4 product and lets linear motions add a column instead of
+        multiplying a matrix.
+        """
+        q, n = self._positions(positions, check_stroke)
+        axes = self.machine.tool_branch if which == "tool" else self.machine.workpiece_branch
+        end = self.machine.tool if which == "tool" else self.machine.workpiece
+        rotation_of = rotation_matrix_first_order if first_order else rotation_matrix_xyz
+        rot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+        pos = np.zeros((n, 3))
+
+        def apply_error(twist):
+            # The error HTM D_X D_Y D_Z D_A D_B D_C (or eq. 2.7) as (R_e, d).
+            nonlocal rot, pos
+            pos = pos + np.einsum("nij,nj->ni", rot, twist[:, :3])
+            rot = rot @ rotation_of(twist[:, 3], twist[:, 4], twist[:, 5])
+
+        def apply(htm):
+            nonlocal rot, pos
+            pos = pos + np.einsum("nij,nj->ni", rot, htm[:, :3, 3])
+            rot = rot @ htm[:, :3, :3]
+
+        thermal = self._thermal("bed_tool" if which == "tool" else "bed_work", n, overrides)
+        if errors and thermal is not None:
+            apply_error(thermal)
+        parent_offset = np.zeros(3)
+        for axis in axes:
+            pos = pos + rot @ parent_offset
+            if errors:
+                location = self.location_errors(axis, n, overrides)
+                if np.any(location):
+                    apply_error(location)
+            spec = self.machine.axes[axis]
+            if spec.is_rotary:
+                apply(rotation("xyz"[spec.direction], spec.sign * q[axis]))
+            else:
+                pos = pos + rot[:, :, spec.direction] * (spec.sign * q[axis])[:, None]
+            if errors:
+                apply_error(self.motion_errors(axis, q[axis], overrides))
+                thermal = self._thermal(axis, n, overrides)
+                if thermal is not None:
+                    apply_error(thermal)
+            parent_offset = spec.offset
+        pos = pos + rot @ (parent_offset + end)
+        return rot, pos
+
+    def tcp_error(self, positions: Positions, *, first_order: bool = False,
+                  overrides: ErrorOverrides | None = None,
+                  check_stroke: bool = True) -> dict[str, NDArray]:
+        """TCP position and tool-orientation error from the matrix products.
+
+        Returns
+        -------
+        dict with ``position`` (N, 3) [m] = (P_t - P_w)_actual - (P_t - P_w)_nominal
+        (Kidani eq. 2.10) and ``orientation`` (N, 3) [rad], the rotation vector of
+        the actual tool orientation relative to the workpiece against the nominal
+        one, in the bed frame.
+        """
+        overrides = overrides or ErrorOverrides()
+        args = (overrides, check_stroke)
+        tool_r, tool_p = self._branch_rp("tool", positions, True, first_order, *args)
+        work_r, work_p = self._branch_rp("workpiece", positions, True, first_order, *args)
+        tool0_r, tool0_p = self._branch_rp("tool", positions, False, False, *args)
+        work0_r, work0_p = self._branch_rp("workpiece", positions, False, False, *args)
+        position = (tool_p - work_p) - (tool0_p - work0_p)
+        # Orientation error: (work rotation error)^T (tool rotation error), both as
+        # R_actual R_nominal^T in the bed frame.
+        tool_rot = tool_r @ np.swapaxes(tool0_r, 1, 2)
+        work_rot = work_r @ np.swapaxes(work0_r, 1, 2)
+        relative = np.swapaxes(work_rot, 1, 2) @ tool_rot
+        return {"position": position, "orientation": rotation_vector(relative)}
+
+    def tcp_error_linear(self, positions: Positions, *, overrides: ErrorOverrides | None = None,
+                         check_stroke: bool = True) -> dict[str, NDArray]:
+        """First-order TCP error as a sum of joint error twists (independent of the matrices).
+
+        For every error HTM in a branch, with R the nominal rotation of the frame
+        it acts in and r the nominal vector from that frame's origin to the branch
+        end point (both in the bed frame): dP = R d + (R eps) x r, dTheta = R eps.
+        The workpiece branch enters with a minus sign.
+        """
+        overrides = overrides or ErrorOverrides()
+        q, n = self._positions(positions, check_stroke)
+        position = np.zeros((n, 3))
+        orientation = np.zeros((n, 3))
+        for which, sign in (("tool", 1.0), ("workpiece", -1.0)):
+            axes = self.machine.tool_branch if which == "tool" else self.machine.workpiece_branch
+            end_frame = self.branch(which, positions, errors=False, overrides=overrides,
+                                    check_stroke=check_stroke)
+            end = end_frame[:, :3, 3]
+            # (frame, twist) pairs in chain order, frames nominal.
+            frames_and_twists = []
+            frame = identity((n,))
+            thermal = self._thermal("bed_tool" if which == "tool" else "bed_work", n, overrides)
+            if thermal is not None:
+                frames_and_twists.append((frame.copy(), thermal))
+            parent_offset = np.zeros(3)
+            for axis in axes:
+                frame = frame @ translation(*parent_offset)
+                frames_and_twists.append((frame.copy(), self.location_errors(axis, n, overrides)))
+                frame = frame @ self._motion(axis, q[axis])
+                frames_and_twists.append((frame.copy(), self.motion_errors(axis, q[axis],
+                                                                           overrides)))
+                thermal = self._thermal(axis, n, overrides)
+                if thermal is not None:
+                    frames_and_twists.append((frame.copy(), thermal))
+                parent_offset = self.machine.axes[axis].offset
+            for frame, twist in frames_and_twists:
+                rot = frame[:, :3, :3]
+                d = np.einsum("nij,nj->ni", rot, twist[:, :3])
+                eps = np.einsum("nij,nj->ni", rot, twist[:, 3:])
+                lever = end - frame[:, :3, 3]
+                position += sign * (d + np.cross(eps, lever))
+                orientation += sign * eps
+        return {"position": position, "orientation": orientation}
+
+    def nominal_relative(self, positions: Positions, check_stroke: bool = False) -> NDArray:
+        """(N, 3) nominal tool point relative to the workpiece point, bed frame."""
+        tool0 = self.branch("tool", positions, errors=False, check_stroke=check_stroke)
+        work0 = self.branch("workpiece", positions, errors=False, check_stroke=check_stroke)
+        return tool0[:, :3, 3] - work0[:, :3, 3]
+
+    # ----------------------------------------------------------- compensation
+    def compensate(self, positions: Positions, *, iterations: int = 4,
+                   overrides: ErrorOverrides | None = None) -> dict[str, object]:
+        """Modified linear-axis commands that cancel the TCP position error.
+
+        One step is Kidani eq. 2.2, p2 = p1 - e(p1), mapped to the axes through
+        the nominal kinematics; further steps evaluate e at the modified command
+        (the error varies with position): p_{i+1} = p1 - e(p_i). Rotary axes
+        keep their commands here (see :meth:`compensate_orientation`).
+
+        Returns
+        -------
+        dict: ``positions`` (corrected commands), ``residual`` (N, 3) TCP error
+        left after compensation [m], ``initial`` (N, 3) the error before [m].
+        """
+        q, n = self._positions(positions, check_stroke=True)
+        linear = [a for a in self.machine.axis_order if not self.machine.axes[a].is_rotary]
+        target = self.nominal_relative(q)
+        jacobian = self._linear_jacobian(q, linear)
+        initial = self.tcp_error(q, overrides=overrides, check_stroke=False)["position"]
+        current = dict(q)
+        for _ in range(max(1, int(iterations))):
+            actual = self.nominal_relative(current) + self.tcp_error(
+                current, overrides=overrides, check_stroke=False)["position"]
+            step = np.linalg.solve(jacobian, (target - actual)[..., None])[..., 0]
+            for i, axis in enumerate(linear):
+                current[axis] = current[axis] + step[:, i]
+        actual = self.nominal_relative(current) + self.tcp_error(
+            current, overrides=overrides, check_stroke=False)["position"]
+        return {"positions": current, "residual": actual - target, "initial": initial}
+
+    def _linear_jacobian(self, q: Positions, linear: list[str]) -> NDArray:
+        if len(linear) != 3:
+            raise MachineDescriptionError("position compensation needs exactly three linear axes")
+        base = self.nominal_relative(q)
+        jac = np.empty((base.shape[0], 3, 3))
+        for i, axis in enumerate(linear):
+            shifted = dict(q)
+            shifted[axis] = q[axis] + 1e-3
+            jac[:, :, i] = (self.nominal_relative(shifted) - base) / 1e-3
+        return jac
+
+    def compensate_orientation(self, positions: Positions, *, iterations: int = 3,
+                               overrides: ErrorOverrides | None = None) -> dict[str, object]:
+        """Rotary-axis corrections that cancel the tool-orientation error where possible.
+
+        The tool orientation relative to the workpiece, R_rel = R_w^T R_t, is
+        driven back to its nominal value at the original command by least squares
+        on the numeric Jacobian of the nominal R_rel w.r.t. the rotary axes;
+        components no rotary axis can produce (e.g. a rotation about the tool
+        axis) remain in ``residual`` (rotation vectors in the workpiece frame [rad]).
+        """
+        q, n = self._positions(positions, check_stroke=True)
+        rotary = [a for a in self.machine.axis_order if self.machine.axes[a].is_rotary]
+        if not rotary:
+            raise MachineDescriptionError("this machine has no rotary axis to correct orientation")
+        target = self._relative_rotation(q, errors=False)
+
+        def error_at(command):
+            actual = self._relative_rotation(command, errors=True, overrides=overrides)
+            return rotation_vector(actual @ np.swapaxes(target, 1, 2))
+
+        initial = error_at(q)
+        current = dict(q)
+        for _ in range(max(1, int(iterations))):
+            error = error_at(current)
+            base = self._relative_rotation(current, errors=False)
+            jac = np.empty((n, 3, len(rotary)))
+            for i, axis in enumerate(rotary):
+                nudged = dict(current)
+                nudged[axis] = current[axis] + 1e-6
+                moved = self._relative_rotation(nudged, errors=False) @ np.swapaxes(base, 1, 2)
+                jac[:, :, i] = rotation_vector(moved) / 1e-6
+            step = np.stack([np.linalg.lstsq(jac[k], -error[k], rcond=None)[0] for k in range(n)])
+            for i, axis in enumerate(rotary):
+                current[axis] = current[axis] + step[:, i]
+        return {"positions": current, "initial": initial, "residual": error_at(current)}
+
+    def _relative_rotation(self, q: Positions, errors: bool = False,
+                           overrides: ErrorOverrides | None = None) -> NDArray:
+        """R_w^T R_t: tool orientation in the workpiece frame, (N, 3, 3)."""
+        tool = self.branch("tool", q, errors=errors, overrides=overrides, check_stroke=False)
+        work = self.branch("workpiece", q, errors=errors, overrides=overrides, check_stroke=False)
+        return np.swapaxes(work[:, :3, :3], 1, 2) @ tool[:, :3, :3]
+
+    # ------------------------------------------------------------- inventory
+    def error_inventory(self) -> dict[str, list[str]]:
+        """Potential and considered error parameters (Khan & Chen section 5).
+
+        Potential: six position-dependent errors per joint; location errors of
+        each joint (linear: two orientations and the zero position; rotary: two
+        positions, two orientations and the zero angle); three of the machine
+        coordinate system. Considered: every position-dependent error plus the
+        location errors the description declares.
+        """
+        potential: list[str] = []
+        considered: list[str] = []
+        for axis in self.machine.axis_order:
+            spec = self.machine.axes[axis]
+            names = [motion_error_name(c, axis) for c in COMPONENTS]
+            potential += names
+            considered += names
+            direction = "XYZ"[spec.direction]
+            others = [c for c in "XYZ" if c != direction]
+            rot_of = {"X": "A", "Y": "B", "Z": "C"}
+            if spec.is_rotary:
+                location = ([location_error_name(c, axis) for c in others]
+                            + [location_error_name(rot_of[c], axis) for c in others]
+                            + [location_error_name(rot_of[direction], axis)])
+            else:
+                location = ([location_error_name(rot_of[c], axis) for c in others]
+                            + [location_error_name(direction, axis)])
+            potential += location
+            considered += [location_error_name(c, axis) for c in spec.location_errors]
+        potential += ["machine coordinate system: " + n for n in ("EA0M", "EB0M", "EC0M")]
+        return {"potential": potential, "considered": considered}
+
+
+def volumetric_map(model: KinematicModel, positions: Positions, *, chunk: int = 100_000,
+                   overrides_factory=None, first_order: bool = False) -> dict[str, NDArray]:
+    """TCP position and orientation errors at many configurations, in chunks.
+
+    ``positions`` maps each axis to an (N,) array. Chunks bound the memory of the
+    (chunk, 4, 4) temporaries. ``overrides_factory(slice)`` may return the
+    :class:`ErrorOverrides` for a chunk.
+    """
+    n = len(next(iter(positions.values())))
+    position = np.empty((n, 3))
+    orientation = np.empty((n, 3))
+    for start in range(0, n, chunk):
+        part = slice(start, min(n, start + chunk))
+        overrides = overrides_factory(part) if overrides_factory else None
+        out = model.tcp_error({a: np.asarray(v)[part] for a, v in positions.items()},
+                              overrides=overrides, first_order=first_order)
+        position[part] = out["position"]
+        orientation[part] = out["orientation"]
+    return {"position": position, "orientation": orientation}

@@ -1,0 +1,217 @@
+"""Declarative machine descriptions (YAML) for the kinematic error model.
+
+A description names the kinematic chain in ISO 10791-1 notation, e.g.
+Kidani's horizontal machining centre ``[w Z b X Y t]`` (workpiece on Z, bed,
+tool on X then Y) or Khan & Chen's RPPPR grinder ``[w A X b Y Z B t]``.
+Upper-case letters are axes (X, Y, Z linear along x, y, z; A, B, C rotary
+about x, y, z); ``w``, ``b``, ``t`` are workpiece, bed and tool.
+
+For each axis: its stroke, the ``offset`` (Kidani's L_*: the position of the
+next body's origin in this axis' moving frame, e.g. [L_XY, L_YY, L_ZY] for Y),
+its six error motions in ISO 230-1 names (EXX, EYX, EZX, EAX, EBX, ECX for X)
+and its location errors (EX0Y ... EC0Y; e.g. the squareness EC0Y).
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from .error_functions import ErrorFunction, parse_error_function
+from ..errors import MachineDescriptionError
+
+AXIS_LETTERS = "XYZABC"
+COMPONENTS = "XYZABC"  # error motion components: translations X, Y, Z; rotations A, B, C
+_DIRECTION = {"X": 0, "Y": 1, "Z": 2, "A": 0, "B": 1, "C": 2}
+
+
+def motion_error_name(component: str, axis: str) -> str:
+    """ISO 230-1 name of a position-dependent error, e.g. ('C', 'X') -> 'ECX'."""
+    return f"E{component}{axis}"
+
+
+def location_error_name(component: str, axis: str) -> str:
+    """ISO 230-1 name of a location error, e.g. ('C', 'Y') -> 'EC0Y' (squareness)."""
+    return f"E{component}0{axis}"
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One axis of the chain.
+
+    Attributes
+    ----------
+    name : str                   axis letter
+    stroke : (float, float)      travel [m] or [rad]
+    offset : ndarray, shape (3,) position of the next body in this axis' frame [m]
+    sign : float                 +1, or -1 when positive command moves the body backwards
+    motion_errors : dict         component letter -> ErrorFunction (6 entries)
+    location_errors : dict       component letter -> value [m or rad] (declared ones)
+    """
+
+    name: str
+    stroke: tuple[float, float]
+    offset: np.ndarray
+    sign: float = 1.0
+    motion_errors: dict[str, ErrorFunction] = field(default_factory=dict)
+    location_errors: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def is_rotary(self) -> bool:
+        return self.name in "ABC"
+
+    @property
+    def direction(self) -> int:
+        return _DIRECTION[self.name]
+
+
+@dataclass(frozen=True)
+class MachineDescription:
+    """A parsed machine description.
+
+    ``workpiece_branch`` and ``tool_branch`` list axis letters from the bed
+    outwards (Khan & Chen's N and M loops).
+    """
+
+    name: str
+    chain: str
+    workpiece_branch: tuple[str, ...]
+    tool_branch: tuple[str, ...]
+    axes: dict[str, Axis]
+    tool: np.ndarray
+    workpiece: np.ndarray
+    description: str = ""
+    scale_distance_m: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def axis_order(self) -> tuple[str, ...]:
+        return self.workpiece_branch + self.tool_branch
+
+    def check_positions(self, positions: dict[str, np.ndarray], tolerance: float = 1e-9) -> None:
+        """Raise :class:`MachineDescriptionError` for unknown axes or positions outside the stroke."""
+        for name, values in positions.items():
+            if name not in self.axes:
+                raise MachineDescriptionError(f"unknown axis {name!r}; this machine has "
+                                              f"{', '.join(self.axis_order)}")
+            low, high = self.axes[name].stroke
+            values = np.asarray(values, dtype=np.float64)
+            if not np.all(np.isfinite(values)):
+                raise MachineDescriptionError(f"axis {name}: non-finite position")
+            if values.size and (values.min() < low - tolerance or values.max() > high + tolerance):
+                raise MachineDescriptionError(
+                    f"axis {name}: position {values.min():.6g} .. {values.max():.6g} outside "
+                    f"the stroke [{low:.6g}, {high:.6g}]")
+
+
+_CHAIN = re.compile(r"^\[\s*w((?:\s+[XYZABC])*)\s+b((?:\s+[XYZABC])*)\s+t\s*\]$")
+
+
+def parse_chain(chain: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Workpiece and tool branches (from the bed outwards) of an ISO 10791-1 chain string.
+
+    ``"[w Z b X Y t]"`` -> ``(("Z",), ("X", "Y"))``.
+    """
+    if not isinstance(chain, str):
+        raise MachineDescriptionError(f"chain: expected a string like '[w Z b X Y t]', got {chain!r}")
+    match = _CHAIN.match(chain.strip())
+    if not match:
+        raise MachineDescriptionError(
+            f"chain: {chain!r} is not of the form '[w <axes> b <axes> t]' with axes from "
+            f"{', '.join(AXIS_LETTERS)} (e.g. '[w Z b X Y t]')")
+    workpiece = tuple(reversed(match.group(1).split()))
+    tool = tuple(match.group(2).split())
+    letters = workpiece + tool
+    if len(set(letters)) != len(letters):
+        raise MachineDescriptionError(f"chain: {chain!r} names an axis twice")
+    return workpiece, tool
+
+
+def _vector(spec, where: str) -> np.ndarray:
+    try:
+        vector = np.asarray(spec, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise MachineDescriptionError(f"{where}: expected three numbers [m], got {spec!r}") from exc
+    if vector.shape != (3,) or not np.all(np.isfinite(vector)):
+        raise MachineDescriptionError(f"{where}: expected three finite numbers [m], got {spec!r}")
+    return vector
+
+
+def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
+    """Build and validate a description from its parsed YAML mapping."""
+    if not isinstance(data, dict):
+        raise MachineDescriptionError(f"{source}: top level must be a mapping")
+    for key in ("name", "chain", "axes", "tool", "workpiece"):
+        if key not in data:
+            raise MachineDescriptionError(f"{source}: missing required field '{key}'")
+    workpiece_branch, tool_branch = parse_chain(data["chain"])
+    axes_spec = data["axes"]
+    if not isinstance(axes_spec, dict):
+        raise MachineDescriptionError(f"{source}: 'axes' must map axis letters to their data")
+    unknown = set(axes_spec) - set(workpiece_branch + tool_branch)
+    if unknown:
+        raise MachineDescriptionError(
+            f"{source}: axes.{sorted(unknown)[0]} is not in the chain {data['chain']!r}")
+    axes: dict[str, Axis] = {}
+    for letter in workpiece_branch + tool_branch:
+        where = f"{source}: axes.{letter}"
+        if letter not in axes_spec:
+            raise MachineDescriptionError(f"{where}: missing (the chain names axis {letter})")
+        spec = axes_spec[letter] or {}
+        for key in ("stroke", "offset"):
+            if key not in spec:
+                raise MachineDescriptionError(f"{where}: missing required field '{key}'")
+        stroke = np.asarray(spec["stroke"], dtype=np.float64)
+        if stroke.shape != (2,) or not np.all(np.isfinite(stroke)) or stroke[1] <= stroke[0]:
+            raise MachineDescriptionError(f"{where}.stroke: expected [low, high] with low < high")
+        offset = _vector(spec["offset"], f"{where}.offset")
+        sign = float(spec.get("sign", 1.0))
+        if sign not in (1.0, -1.0):
+            raise MachineDescriptionError(f"{where}.sign: must be 1 or -1")
+        errors_spec = spec.get("errors", {}) or {}
+        motion: dict[str, ErrorFunction] = {}
+        for name in errors_spec:
+            if not re.fullmatch(rf"E[{COMPONENTS}]{letter}", str(name)):
+                raise MachineDescriptionError(
+                    f"{where}.errors.{name}: not an error of axis {letter} "
+                    f"(expected one of {', '.join(motion_error_name(c, letter) for c in COMPONENTS)})")
+        for component in COMPONENTS:
+            name = motion_error_name(component, letter)
+            motion[component] = parse_error_function(errors_spec.get(name, 0.0),
+                                                     f"{where}.errors.{name}")
+        location: dict[str, float] = {}
+        for name, value in (spec.get("location_errors", {}) or {}).items():
+            match = re.fullmatch(rf"E([{COMPONENTS}])0{letter}", str(name))
+            if not match:
+                raise MachineDescriptionError(
+                    f"{where}.location_errors.{name}: expected E<X|Y|Z|A|B|C>0{letter}")
+            value = float(value)
+            if not np.isfinite(value):
+                raise MachineDescriptionError(f"{where}.location_errors.{name}: non-finite")
+            location[match.group(1)] = value
+        axes[letter] = Axis(name=letter, stroke=(float(stroke[0]), float(stroke[1])),
+                            offset=offset, sign=sign, motion_errors=motion,
+                            location_errors=location)
+    return MachineDescription(
+        name=str(data["name"]), chain=str(data["chain"]), workpiece_branch=workpiece_branch,
+        tool_branch=tool_branch, axes=axes, tool=_vector(data["tool"], f"{source}: tool"),
+        workpiece=_vector(data["workpiece"], f"{source}: workpiece"),
+        description=str(data.get("description", "")),
+        scale_distance_m={str(k): float(v) for k, v in (data.get("scale_distance_m") or {}).items()})
+
+
+def load_machine(path_or_name: str | Path) -> MachineDescription:
+    """Load a description from a YAML file, or a bundled one by name
+    (``kidani_hmc``, ``khan_chen_rpppr``)."""
+    path = Path(path_or_name)
+    if not path.suffix:
+        path = Path(__file__).resolve().parents[2] / "machines" / f"{path_or_name}.yaml"
+    try:
+        data = yaml.safe_load(path.read_text())
+    except FileNotFoundError as exc:
+        raise MachineDescriptionError(f"machine description not found: {path}") from exc
+    except yaml.YAMLError as exc:
+        raise MachineDescriptionError(f"{path}: not valid YAML ({exc})") from exc
+    return machine_from_dict(data, str(path))

@@ -1,0 +1,151 @@
+"""Systematic and random error at repeated positions; ISO 230-2 evaluation.
+
+Kidani section 2.4.1: with m repeated measurements E_ir at position i, the
+systematic error is their mean (eq. 2.22) and the random error their sample
+standard deviation (eq. 2.23). ISO 230-2 judges bidirectional positioning
+runs of a reference instrument (laser interferometer) by the same statistics
+per direction of approach.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import InputDataError, InsufficientDataError
+from ..validation import finite_array
+
+
+def systematic_and_random(errors: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Mean (eq. 2.22) and sample standard deviation (eq. 2.23) per position.
+
+    Parameters
+    ----------
+    errors : array_like, shape (n_positions, m)
+        Error E_ir at position i in repetition r [any unit], m >= 2.
+
+    Returns
+    -------
+    systematic, random : ndarray, shape (n_positions,)
+    """
+    e = finite_array(errors, "errors", ndim=2)
+    if e.shape[1] < 2:
+        raise InsufficientDataError(
+            f"random error (eq. 2.23) needs >= 2 repetitions per position, got {e.shape[1]}")
+    return e.mean(axis=1), e.std(axis=1, ddof=1)
+
+
+def group_by_position(positions: ArrayLike, values: ArrayLike,
+                      tolerance_m: float = 1e-6) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Eqs. 2.22/2.23 for data recorded at (nearly) repeated positions, e.g. stop-and-measure.
+
+    Positions within ``tolerance_m`` of the previous one (after sorting) form one
+    group. Returns ``(group_position, systematic, random, count)``; ``random`` is
+    NaN for groups of one sample.
+    """
+    x = finite_array(positions, "positions", ndim=1)
+    y = finite_array(values, "values", ndim=1)
+    if x.size != y.size:
+        raise InputDataError(f"positions has {x.size} values but values has {y.size}")
+    order = np.argsort(x, kind="stable")
+    xs, ys = x[order], y[order]
+    starts = np.concatenate(([0], np.nonzero(np.diff(xs) > tolerance_m)[0] + 1))
+    counts = np.diff(np.concatenate((starts, [xs.size])))
+    sums = np.add.reduceat(ys, starts)
+    means = sums / counts
+    group_x = np.add.reduceat(xs, starts) / counts
+    deviations = ys - np.repeat(means, counts)
+    squares = np.add.reduceat(deviations ** 2, starts)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sigma = np.where(counts > 1, np.sqrt(squares / np.maximum(counts - 1, 1)), np.nan)
+    return group_x, means, sigma, counts
+
+
+@dataclass(frozen=True)
+class Iso2302Result:
+    """ISO 230-2 evaluation of bidirectional positioning runs (all lengths in the input unit).
+
+    Per target position (arrays, shape (m,)): ``mean_up``, ``mean_down`` (mean
+    unidirectional positional deviations), ``mean_bidirectional``, ``reversal``
+    (B_i), ``s_up``, ``s_down`` (estimators of unidirectional repeatability),
+    ``repeatability_up``, ``repeatability_down`` (4 s), ``repeatability_bidirectional``.
+    Axis figures (floats): ``reversal_value`` B = max |B_i|, ``mean_reversal``,
+    ``repeatability`` R, ``repeatability_up``/``_down`` maxima,
+    ``systematic_deviation`` E (bidirectional), ``systematic_deviation_up``/``_down``,
+    ``mean_deviation_range`` M, ``accuracy`` A, ``accuracy_up``/``_down``.
+    """
+
+    targets: NDArray[np.float64]
+    mean_up: NDArray[np.float64]
+    mean_down: NDArray[np.float64]
+    mean_bidirectional: NDArray[np.float64]
+    reversal: NDArray[np.float64]
+    s_up: NDArray[np.float64]
+    s_down: NDArray[np.float64]
+    repeatability_bidirectional: NDArray[np.float64]
+    reversal_value: float
+    mean_reversal: float
+    repeatability: float
+    repeatability_up_axis: float
+    repeatability_down_axis: float
+    systematic_deviation: float
+    systematic_deviation_up: float
+    systematic_deviation_down: float
+    mean_deviation_range: float
+    accuracy: float
+    accuracy_up: float
+    accuracy_down: float
+
+    def summary(self) -> dict[str, float]:
+        """The axis figures as a plain dict."""
+        return {name: getattr(self, name) for name in (
+            "accuracy", "accuracy_up", "accuracy_down", "repeatability",
+            "repeatability_up_axis", "repeatability_down_axis", "reversal_value",
+            "mean_reversal", "systematic_deviation", "systematic_deviation_up",
+            "systematic_deviation_down", "mean_deviation_range")}
+
+
+def iso230_2(targets: ArrayLike, deviations_up: ArrayLike,
+             deviations_down: ArrayLike) -> Iso2302Result:
+    """Evaluate bidirectional positioning runs per ISO 230-2.
+
+    Parameters
+    ----------
+    targets : array_like, shape (m,)
+        Target positions P_i.
+    deviations_up, deviations_down : array_like, shape (m, n)
+        Positional deviations x_ij (actual - target) approached in the positive
+        and negative direction in n >= 2 runs.
+    """
+    p = finite_array(targets, "targets", ndim=1)
+    up = finite_array(deviations_up, "deviations_up", ndim=2)
+    down = finite_array(deviations_down, "deviations_down", ndim=2)
+    if up.shape != down.shape or up.shape[0] != p.size:
+        raise InputDataError(
+            f"targets {p.shape}, deviations_up {up.shape} and deviations_down {down.shape} "
+            "must agree: (m,), (m, n), (m, n)")
+    mean_up, s_up = systematic_and_random(up)
+    mean_down, s_down = systematic_and_random(down)
+    reversal = mean_up - mean_down
+    r_up, r_down = 4.0 * s_up, 4.0 * s_down
+    r_bi = np.maximum.reduce([2 * s_up + 2 * s_down + np.abs(reversal), r_up, r_down])
+    mean_bi = 0.5 * (mean_up + mean_down)
+    both_means = np.concatenate((mean_up, mean_down))
+    return Iso2302Result(
+        targets=p, mean_up=mean_up, mean_down=mean_down, mean_bidirectional=mean_bi,
+        reversal=reversal, s_up=s_up, s_down=s_down, repeatability_bidirectional=r_bi,
+        reversal_value=float(np.max(np.abs(reversal))),
+        mean_reversal=float(np.mean(reversal)),
+        repeatability=float(np.max(r_bi)),
+        repeatability_up_axis=float(np.max(r_up)),
+        repeatability_down_axis=float(np.max(r_down)),
+        systematic_deviation=float(np.ptp(both_means)),
+        systematic_deviation_up=float(np.ptp(mean_up)),
+        systematic_deviation_down=float(np.ptp(mean_down)),
+        mean_deviation_range=float(np.ptp(mean_bi)),
+        accuracy=float(max(np.max(mean_up + 2 * s_up), np.max(mean_down + 2 * s_down))
+                       - min(np.min(mean_up - 2 * s_up), np.min(mean_down - 2 * s_down))),
+        accuracy_up=float(np.max(mean_up + 2 * s_up) - np.min(mean_up - 2 * s_up)),
+        accuracy_down=float(np.max(mean_down + 2 * s_down) - np.min(mean_down - 2 * s_down)),
+    )

@@ -1,0 +1,46 @@
+"""Conversions between ROS message fields and numbers: stamps, float64[] arrays.
+
+Shared by the nodes, the bag tools and the simulator's bag export, so that none
+of them imports another's layer. Needs the ROS message runtime only when a
+``builtin_interfaces/Time`` is built.
+"""
+from __future__ import annotations
+
+
+def nanoseconds_to_stamp(nanoseconds: int):
+    """``builtin_interfaces/Time`` for an integer number of nanoseconds."""
+    from builtin_interfaces.msg import Time
+
+    return Time(sec=int(nanoseconds // 1_000_000_000), nanosec=int(nanoseconds % 1_000_000_000))
+
+
+def stamp_to_nanoseconds(stamp) -> int:
+    """Integer nanoseconds of a ``builtin_interfaces/Time``."""
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def pack_float64(values) -> "array.array":
+    """``array('d')`` of ``values`` - the fast path into rosidl float64[] fields.
+
+    Assigning an ``array.array('d')`` skips rosidl's per-element type checks,
+    which dominate at 20 kHz x 6 channels.
+    """
+    import array
+
+    import numpy as np
+
+    packed = array.array("d")
+    packed.frombytes(np.ascontiguousarray(values, dtype=np.float64).tobytes())
+    return packed
+
+
+def unpack_float64(field):
+    """numpy float64 view of a rosidl float64[] field (no copy for array('d'))."""
+    import numpy as np
+
+    if len(field) == 0:
+        return np.zeros(0, dtype=np.float64)
+    try:
+        return np.frombuffer(field, dtype=np.float64)
+    except (TypeError, ValueError, BufferError):
+        return np.asarray(field, dtype=np.float64)
