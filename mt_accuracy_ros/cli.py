@@ -32,6 +32,28 @@ def _info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _recover(args: argparse.Namespace) -> int:
+    """Every message of the closed chunks of a damaged bag, into a new complete bag."""
+    from .core.errors import BagError
+    from .io.bag_reader import mcap_files, recover
+    from .io.bag_writer import BagWriter
+
+    try:
+        messages = [m for f in mcap_files(args.bag) for m in recover(f)]
+        messages.sort(key=lambda m: m.log_time_ns)
+        with BagWriter(args.output) as bag:
+            for message in messages:
+                bag.add_topic(message.topic, message.type)
+                bag.write(message.topic, message.data, message.log_time_ns,
+                          message.publish_time_ns)
+    except BagError as exc:
+        print(f"mt-accuracy recover: {exc}", file=sys.stderr)
+        return 2
+    print(f"recovered {len(messages)} messages on "
+          f"{len({m.topic for m in messages})} topics into {args.output}")
+    return 0
+
+
 def _ros_args(parameters: dict, remaps: list[str]) -> list[str]:
     from .processes import ros_arguments
 
@@ -151,6 +173,11 @@ def build_parser() -> argparse.ArgumentParser:
     info = commands.add_parser("info", help="counts, duration, topics and types of a bag")
     info.add_argument("bag", help="bag directory or .mcap file")
     info.set_defaults(handler=_info)
+    salvage = commands.add_parser("recover", help="save the closed chunks of a damaged bag "
+                                  "(a killed recorder) into a new complete bag")
+    salvage.add_argument("bag", help="damaged bag directory or .mcap file")
+    salvage.add_argument("output", help="new bag directory (must not exist)")
+    salvage.set_defaults(handler=_recover)
     record = commands.add_parser("record", help="record topics to a rosbag2-compatible MCAP bag")
     record.add_argument("topics", nargs="*", help="topics to record (none: all)")
     record.add_argument("-o", "--output", help="bag directory (default rosbag2_<date>)")

@@ -36,3 +36,34 @@ class ScenarioError(MtAccuracyError, ValueError):
 
 class BagError(MtAccuracyError, OSError):
     """A bag or MCAP file that cannot be read or written as asked."""
+
+
+#: What a loader of user files may raise by accident on malformed content
+#: (a list where a mapping belongs, text where a number does, a binary file).
+MALFORMED_INPUT = (TypeError, ValueError, KeyError, IndexError, AttributeError,
+                   UnicodeDecodeError, OverflowError, RecursionError)
+
+
+def reraise_as(error_class: type[MtAccuracyError], context: str):
+    """Decorator: a loader raises only this package's errors.
+
+    Any :data:`MALFORMED_INPUT` exception escaping the wrapped function becomes
+    ``error_class`` with ``context`` and the original message, chained with
+    ``from``; this package's own errors pass through unchanged.
+    """
+    import functools
+
+    def decorate(function):
+        @functools.wraps(function)
+        def wrapper(*args, **kwargs):
+            try:
+                return function(*args, **kwargs)
+            except MtAccuracyError:
+                raise
+            except MALFORMED_INPUT as exc:
+                source = args[0] if args and isinstance(args[0], (str, bytes)) or \
+                    (args and hasattr(args[0], "__fspath__")) else ""
+                where = f"{context} {str(source)[:80]!s}".strip() if source else context
+                raise error_class(f"{where}: malformed ({type(exc).__name__}: {exc})") from exc
+        return wrapper
+    return decorate

@@ -165,7 +165,7 @@ def bag_info(path: str | Path) -> dict:
                 reader = make_reader(stream)
                 summary = reader.get_summary()
                 if summary is None or summary.statistics is None:
-                    raise BagError(f"{f}: no summary/statistics (truncated?); use recover()")
+                    raise McapError("no summary section")
                 stats = summary.statistics
                 for channel_id, channel in summary.channels.items():
                     schema = summary.schemas.get(channel.schema_id)
@@ -177,8 +177,10 @@ def bag_info(path: str | Path) -> dict:
                 if stats.message_count:
                     first = stats.message_start_time if first is None else min(first, stats.message_start_time)
                     last = stats.message_end_time if last is None else max(last, stats.message_end_time)
-        except McapError as exc:
-            raise BagError(f"{f}: not a readable MCAP file ({exc})") from exc
+        except (McapError, ValueError, EOFError, struct.error) as exc:
+            raise BagError(f"{f}: damaged or incomplete MCAP file ({exc}): a recorder killed "
+                           f"mid-run leaves no summary; `mt-accuracy recover {path} NEW_BAG` "
+                           "saves every closed chunk") from exc
     return {"files": [str(f) for f in mcap_files(path)], "message_count": total,
             "start_ns": first or 0, "end_ns": last or 0,
             "duration_s": ((last or 0) - (first or 0)) / 1e9, "topics": topics}

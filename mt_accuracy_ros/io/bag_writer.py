@@ -17,10 +17,17 @@ duration (each file complete on its own, every topic declared in each).
 
 Chunks (optionally zstd-compressed) are flushed to disk as they close, so a
 process killed mid-write leaves every closed chunk readable
-(see :func:`mt_accuracy_ros.io.bag_reader.recover`).
+(see :func:`mt_accuracy_ros.io.bag_reader.recover`). A chunk closes when it
+reaches ``chunk_size`` bytes *or* has been open ``chunk_interval_s`` seconds
+(wall time; :meth:`BagWriter.flush_due` lets a timer close it even when no
+message arrives), so a kill loses at most about one second of messages. The
+file header reaches the disk when the bag opens; the schemas and channels
+travel in the first chunk (the MCAP writer keeps them in the chunk), so they
+are on disk within ``chunk_interval_s`` of the first message.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -97,6 +104,8 @@ class BagWriter:
     max_file_duration_s : float
         Split once a file spans this much log time [s] (0: never), like
         ``--max-bag-duration``.
+    chunk_interval_s : float
+        Close a chunk that has been open this long [s] (0: by size only).
     """
 
     path: Path
@@ -104,6 +113,7 @@ class BagWriter:
     chunk_size: int = 1024 * 1024
     max_file_size: int = 0
     max_file_duration_s: float = 0.0
+    chunk_interval_s: float = 1.0
     _topics: dict[str, _Topic] = field(default_factory=dict, init=False)
     _files: list[_File] = field(default_factory=list, init=False)
     _closed: bool = field(default=False, init=False)
@@ -116,6 +126,8 @@ class BagWriter:
             raise BagError(f"compression must be 'zstd' or None, got {self.compression!r}")
         if self.max_file_size < 0 or self.max_file_duration_s < 0:
             raise BagError("max_file_size and max_file_duration_s must be >= 0 (0 = no split)")
+        if not self.chunk_interval_s >= 0:
+            raise BagError("chunk_interval_s must be >= 0 (0 = close chunks by size only)")
         self.path.mkdir(parents=True)
         self._open_file()
 
@@ -128,7 +140,10 @@ class BagWriter:
             self._stream, chunk_size=self.chunk_size,
             compression=CompressionType.ZSTD if self.compression else CompressionType.NONE)
         self._writer.start(profile="ros2", library="mt_accuracy_ros")
-        self._flushed_bytes = 0
+        self._stream.flush()  # the header is on disk from the start
+        self._flushed_bytes = self._stream.tell()
+        self._chunk_opened = time.monotonic()
+        self._unflushed = 0
         self._schema_ids: dict[str, int] = {}
         self._channel_ids: dict[str, int] = {}
         # rosbag2 repeats every known topic in each split file.
@@ -194,12 +209,28 @@ class BagWriter:
         current.first_ns = log_time_ns if current.first_ns is None else min(current.first_ns,
                                                                              log_time_ns)
         current.last_ns = max(current.last_ns, log_time_ns)
+        self._unflushed += 1
         # The MCAP writer emits bytes only when a chunk closes; push each closed
         # chunk to the OS so that a killed process keeps it.
         position = self._stream.tell()
         if position != self._flushed_bytes:
             self._flushed_bytes = position
             self._stream.flush()
+            self._chunk_opened = time.monotonic()
+            self._unflushed = 0
+        else:
+            self.flush_due()
+
+    def flush_due(self) -> bool:
+        """Close the open chunk if it has been open ``chunk_interval_s``; True if it did."""
+        if self._closed or not self.chunk_interval_s or not self._unflushed or \
+                time.monotonic() - self._chunk_opened < self.chunk_interval_s:
+            return False
+        self._writer.flush()  # closes the chunk and flushes the stream
+        self._flushed_bytes = self._stream.tell()
+        self._chunk_opened = time.monotonic()
+        self._unflushed = 0
+        return True
 
     @property
     def message_count(self) -> int:

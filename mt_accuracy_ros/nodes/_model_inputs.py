@@ -9,7 +9,7 @@ from std_msgs.msg import String
 from mt_accuracy_msgs.msg import SystematicProfile, TemperatureArray
 
 from ..core.compensation.error_model import ErrorModel, model_to_dict, resolve_model
-from ..core.errors import MtAccuracyError
+from ..core.errors import InputDataError, MtAccuracyError
 from ._common import LATCHED_QOS, RESULT_QOS, SENSOR_QOS, stamp_to_nanoseconds, unpack_float64
 
 #: Compensation tables, one message per axis: a late joiner must get all of them.
@@ -28,10 +28,11 @@ class ModelInputs:
     ``follow_topic``: also take whole models published (YAML) on ``model``.
     """
 
-    def __init__(self, node, model_text: str, *, follow_topic: bool, on_change,
+    def __init__(self, node, model_text: str, *, follow_topic: bool, on_change, health,
                  delay_s: float = 0.5, on_profiles=None) -> None:
         self.on_profiles = on_profiles
         self.node = node
+        self.health = health
         self.model: ErrorModel = resolve_model(model_text)
         self.temperatures: dict[str, float] = {}
         self.dead: set[str] = set()
@@ -39,13 +40,15 @@ class ModelInputs:
         self.delay_ns = int(delay_s * 1e9)
         self._pending_temperatures: list[tuple[int, dict, set]] = []
         self._pending_profiles: list[tuple[int, str, np.ndarray, np.ndarray]] = []
-        node.create_subscription(TemperatureArray, "temperatures", self._on_temperatures,
-                                 SENSOR_QOS)
+        node.create_subscription(TemperatureArray, "temperatures",
+                                 health.guard("temperatures", self._on_temperatures), SENSOR_QOS)
         for axis in ("x", "y", "z"):
-            node.create_subscription(SystematicProfile, f"systematic/{axis}", self._on_profile,
+            node.create_subscription(SystematicProfile, f"systematic/{axis}",
+                                     health.guard(f"systematic/{axis}", self._on_profile),
                                      RESULT_QOS)
         if follow_topic:
-            node.create_subscription(String, "model", self._on_model, LATCHED_QOS)
+            node.create_subscription(String, "model", health.guard("model", self._on_model),
+                                     LATCHED_QOS)
 
     def set_model(self, model: ErrorModel) -> None:
         # Profiles and temperature references live on across model versions.
@@ -63,14 +66,21 @@ class ModelInputs:
         try:
             model = resolve_model(message.data)
         except MtAccuracyError as exc:
-            self.node.get_logger().error(f"model on topic refused: {exc}")
+            # Counted and on /diagnostics; the last good model stays live.
+            self.health.refused("model", f"model refused, version {self.model.version} kept: {exc}")
             return
+        self.health.processed("model")
         if model_to_dict(model)["effects"] != model_to_dict(self.model)["effects"] or \
                 model.reference_temperatures_c != self.model.reference_temperatures_c:
             self.set_model(model)
 
     def _on_temperatures(self, message: TemperatureArray) -> None:
         values = unpack_float64(message.temperatures)
+        if len(values) != len(message.sensor_names):
+            raise InputDataError(f"{len(message.sensor_names)} sensor names but {len(values)} "
+                                 "temperatures")
+        self.health.sequence("temperatures", message.sequence)
+        self.health.processed("temperatures")
         good = {name: float(v) for name, v in zip(message.sensor_names, values) if np.isfinite(v)}
         dead = {name for name, v in zip(message.sensor_names, values) if not np.isfinite(v)}
         self._pending_temperatures.append((stamp_to_nanoseconds(message.header.stamp), good, dead))
@@ -78,7 +88,15 @@ class ModelInputs:
 
     def _on_profile(self, message: SystematicProfile) -> None:
         if message.unit != "rad" or not message.error_name:
-            return
+            raise InputDataError(f"profile {message.error_name!r} in {message.unit!r}: only "
+                                 "angular profiles [rad] feed the model")
+        positions = unpack_float64(message.positions)
+        if positions.size != len(message.systematic) or not np.all(np.isfinite(positions)):
+            raise InputDataError(f"profile {message.error_name}: positions and values differ "
+                                 "in length or are not finite")
+        stream = f"systematic/{message.axis or '?'}"
+        self.health.sequence(stream, message.sequence)
+        self.health.processed(stream)
         self._pending_profiles.append((stamp_to_nanoseconds(message.header.stamp),
                                        message.error_name,
                                        unpack_float64(message.positions).copy(),
@@ -99,7 +117,7 @@ class ModelInputs:
                 self.model.set_profile(name, positions, values)
                 changed = True
             except MtAccuracyError as exc:
-                self.node.get_logger().warning(f"profile {name} ignored: {exc}")
+                self.health.refused(f"systematic/{name}", f"profile ignored: {exc}")
         if changed and self.on_profiles is not None:
             self.on_profiles()
 

@@ -21,17 +21,26 @@ import sys
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompensation
 
 from ..core.compensation.error_model import resolve_model
-from ..core.errors import MtAccuracyError
+from ..core.errors import InputDataError, MtAccuracyError
 from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse,
                       stamp_to_nanoseconds, unpack_float64)
+from ._health import DeliveryHealth
 from ._model_inputs import TABLE_QOS, ModelInputs
 
 COMPONENTS = "XYZABC"
+
+
+#: Reliable, keep last 2000 (20 s at the default 100 Hz): a subscriber that stalls for
+#: seconds still gets every correction; ``sequence`` shows any gap beyond that.
+COMPENSATION_QOS = QoSProfile(depth=2000, reliability=ReliabilityPolicy.RELIABLE,
+                              durability=DurabilityPolicy.VOLATILE,
+                              history=HistoryPolicy.KEEP_LAST)
 
 
 class CompensationBroadcaster(Node):
@@ -51,27 +60,39 @@ class CompensationBroadcaster(Node):
             "Use temperatures/profiles stamped this much before the data (deterministic "
             "replay) [s]", 0.0, 60.0, read_only=True))
         self.add_on_set_parameters_callback(self._validate)
+        self.health = DeliveryHealth(self)
         self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
                                   follow_topic=bool(self.get_parameter("follow_model_topic").value),
-                                  on_change=self._model_changed,
+                                  on_change=self._model_changed, health=self.health,
                                   delay_s=float(self.get_parameter("input_delay_s").value))
         self._compensation = self.create_publisher(VolumetricCompensation, "compensation",
-                                                   RESULT_QOS)
+                                                   COMPENSATION_QOS)
         self._tables = self.create_publisher(CompensationTable, "compensation_table", TABLE_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self._published_version = -1
         self._last_direction: dict[str, float] = {}
         self._reported_dead: set[str] = set()
         self._last_stamp = -1
-        self.create_subscription(ScaleBatch, "scales", self._on_batch, SENSOR_QOS)
+        self._compensation_sequence = 0
+        self._table_sequence = 0
+        self.create_subscription(ScaleBatch, "scales", self.health.guard("scales", self._on_batch),
+                                 SENSOR_QOS)
         self._publish_tables()
 
     def _validate(self, parameters):
+        try:
+            return self._apply(parameters)
+        except Exception as exc:  # noqa: BLE001 - a parameter must never kill the node
+            self.health.refused("parameters", f"{type(exc).__name__}: {exc}")
+            return refuse(f"{type(exc).__name__}: {exc}")
+
+    def _apply(self, parameters):
         for parameter in parameters:
             if parameter.name == "model":
                 try:
                     model = resolve_model(str(parameter.value))
                 except MtAccuracyError as exc:
+                    self.health.refused("parameters", f"model refused: {exc}")
                     return refuse(f"model refused: {exc}")
                 self.inputs.set_model(model)
             if parameter.name == "publish_rate_hz" and not np.isfinite(parameter.value):
@@ -85,11 +106,20 @@ class CompensationBroadcaster(Node):
         axes = [a.upper() for a in message.command_axes]
         commands = unpack_float64(message.command_positions)
         if not axes or commands.size % len(axes):
-            return
+            raise InputDataError(f"{commands.size} command positions do not fill "
+                                 f"{len(axes)} axes")
+        period = float(message.sample_period)
+        if not (np.isfinite(period) and period > 0.0):
+            raise InputDataError(f"sample_period {period!r} s: must be finite and positive")
+        if not np.all(np.isfinite(commands)):
+            raise InputDataError("command positions not finite")
         commands = commands.reshape(-1, len(axes))
         stamp = stamp_to_nanoseconds(message.header.stamp)
         if stamp <= self._last_stamp:
-            return  # out of order or repeated: the estimator reports it
+            raise InputDataError(f"stamp {stamp} ns not after the last one ({self._last_stamp} ns):"
+                                 " out of order or repeated")
+        self.health.sequence("scales", message.first_sample_index, commands.shape[0])
+        self.health.processed("scales")
         self._last_stamp = stamp
         self.inputs.advance(stamp)
         if self.inputs.dead != self._reported_dead:
@@ -97,7 +127,6 @@ class CompensationBroadcaster(Node):
             if self._reported_dead:
                 self._warn(f"no valid reading from {', '.join(sorted(self._reported_dead))}; "
                            "their last valid value is used")
-        period = float(message.sample_period)
         step = max(1, int(round(1.0 / (period * float(self.get_parameter("publish_rate_hz").value)))))
         first = int(message.first_sample_index)
         rows = np.flatnonzero((first + np.arange(commands.shape[0])) % step == 0)
@@ -133,6 +162,8 @@ class CompensationBroadcaster(Node):
             out.correction.x, out.correction.y, out.correction.z = (float(-v) for v in error[k])
             out.uncertainty = 0.0
             out.model_version = int(model.version)
+            out.sequence = self._compensation_sequence
+            self._compensation_sequence += 1
             self._compensation.publish(out)
 
     def _held_directions(self, axis: str, velocity: np.ndarray) -> np.ndarray:
@@ -167,6 +198,8 @@ class CompensationBroadcaster(Node):
             table.header.stamp = self.get_clock().now().to_msg()
             table.header.frame_id = model.machine.name
             table.model_version = int(model.version)
+            table.sequence = self._table_sequence
+            self._table_sequence += 1
             table.axis = axis.lower()
             table.columns = columns
             table.values = pack_float64(np.column_stack(values).ravel())

@@ -39,6 +39,7 @@ class EncoderPublisher(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__("encoder_publisher", **kwargs)
+        self._reference_sequence = 0  # ReferenceMeasurement.sequence
         self.declare_parameter("scenario", "demo", plain_descriptor(
             "Bundled scenario name or path to a scenario YAML", read_only=True))
         self.declare_parameter("batch_period_s", 0.05, float_descriptor(
@@ -172,6 +173,8 @@ class EncoderPublisher(Node):
         message.error.x, message.error.y, message.error.z = (float(v) for v in error)
         message.measured = [True, True, True]
         message.uncertainty = uncertainty
+        message.sequence = self._reference_sequence
+        self._reference_sequence += 1
         self._reference.publish(message)
 
 

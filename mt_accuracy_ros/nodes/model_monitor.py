@@ -29,10 +29,11 @@ from std_msgs.msg import String
 from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ReferenceMeasurement
 
 from ..core.compensation.error_model import MODEL_EFFECTS, resolve_model
-from ..core.errors import MtAccuracyError
+from ..core.errors import InputDataError, MtAccuracyError
 from ..core.workbench.diagnosis import Observations, add_effect, diagnose
 from ._common import (run_node, LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
                       plain_descriptor, refuse, stamp_to_nanoseconds)
+from ._health import DeliveryHealth
 from ._model_inputs import ModelInputs
 
 
@@ -56,8 +57,11 @@ class ModelMonitor(Node):
         self.declare_parameter("auto_add", False, plain_descriptor(
             "Add the top significant candidate by itself"))
         self.add_on_set_parameters_callback(self._validate)
+        self.health = DeliveryHealth(self)
+        self._check_sequence = 0
         self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
-                                  follow_topic=False, on_change=self._publish_model)
+                                  follow_topic=False, on_change=self._publish_model,
+                                  health=self.health)
         self._readings: deque = deque(maxlen=int(self.get_parameter("window").value))
         self._since_check = 0
         self.last_diagnosis = None
@@ -65,12 +69,22 @@ class ModelMonitor(Node):
         self._check = self.create_publisher(ModelCheck, "model_check", RESULT_QOS)
         self._model_topic = self.create_publisher(String, "model", LATCHED_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
-        self.create_subscription(ReferenceMeasurement, "reference/tcp_error", self._on_reading,
+        self.create_subscription(ReferenceMeasurement, "reference/tcp_error",
+                                 self.health.guard("reference/tcp_error", self._on_reading),
                                  RESULT_QOS)
         self._publish_model()
 
     # ---------------------------------------------------------------- parameters
     def _validate(self, parameters):
+        try:
+            result = self._apply(parameters)
+        except Exception as exc:  # noqa: BLE001 - a parameter must never kill the node
+            result = refuse(f"{type(exc).__name__}: {exc}")
+        if not result.successful:
+            self.health.refused("parameters", result.reason)
+        return result
+
+    def _apply(self, parameters):
         for parameter in parameters:
             if parameter.name == "model":
                 try:
@@ -116,13 +130,16 @@ class ModelMonitor(Node):
         axes = [a.upper() for a in message.command_axes]
         if len(axes) != len(message.command_positions) or not np.all(
                 np.isfinite(message.command_positions)):
-            self._status(DiagnosticStatus.WARN, "reference reading with bad positions skipped")
-            return
+            raise InputDataError("reference reading with bad command positions skipped")
         error = np.array([message.error.x, message.error.y, message.error.z])
         measured = np.array(message.measured, dtype=bool)
         if not np.all(np.isfinite(error[measured])):
-            self._status(DiagnosticStatus.WARN, "reference reading with NaN error skipped")
-            return
+            raise InputDataError("reference reading with a NaN/inf error skipped")
+        if not (np.isfinite(message.uncertainty) and message.uncertainty >= 0):
+            raise InputDataError(f"reference uncertainty {message.uncertainty!r} m: must be "
+                                 "finite and non-negative")
+        self.health.sequence("reference/tcp_error", message.sequence)
+        self.health.processed("reference/tcp_error")
         self.inputs.advance(stamp_to_nanoseconds(message.header.stamp))
         velocities = list(message.command_velocities) if len(message.command_velocities) == \
             len(axes) else [0.0] * len(axes)
@@ -203,6 +220,8 @@ class ModelMonitor(Node):
         check = ModelCheck()
         check.header.stamp = self.get_clock().now().to_msg()
         check.model_version = int(model.version)
+        check.sequence = self._check_sequence
+        self._check_sequence += 1
         check.quantity = "tcp_error"
         check.unit = "m"
         check.effects_included = sorted(model.effects)

@@ -42,6 +42,9 @@ class Recorder(Node):
             "Chunk compression: 'zstd' or 'none'", read_only=True))
         self.declare_parameter("chunk_size", 1024 * 1024, int_descriptor(
             "Bytes per MCAP chunk [B]", 1024, 1 << 30, read_only=True))
+        self.declare_parameter("chunk_interval_s", 1.0, float_descriptor(
+            "Close a chunk after this long even if not full: a kill loses at most this much "
+            "(0: by size only) [s]", 0.0, 3600.0, read_only=True))
         self.declare_parameter("max_bag_size", 0, int_descriptor(
             "Split to a new file after this many bytes (0: never) [B]", 0, 1 << 40,
             read_only=True))
@@ -61,7 +64,9 @@ class Recorder(Node):
                              chunk_size=int(self.get_parameter("chunk_size").value),
                              max_file_size=int(self.get_parameter("max_bag_size").value),
                              max_file_duration_s=float(
-                                 self.get_parameter("max_bag_duration").value))
+                                 self.get_parameter("max_bag_duration").value),
+                             chunk_interval_s=float(
+                                 self.get_parameter("chunk_interval_s").value))
         self._wanted = {t for t in self.get_parameter("topics").value if t}
         self._subscriptions_by_topic: dict = {}
         self._warned: set[str] = set()
@@ -74,6 +79,9 @@ class Recorder(Node):
         self._discovery_timer = self.create_timer(
             float(self.get_parameter("discovery_period_s").value), self._discover, clock=steady)
         self.create_timer(1.0, self._report, clock=steady)
+        interval = float(self.get_parameter("chunk_interval_s").value)
+        if interval > 0:
+            self.create_timer(min(interval, 1.0) / 4, self.bag.flush_due, clock=steady)
         self.get_logger().info(f"recording to {self.bag.path}")
 
     def _validate(self, parameters):

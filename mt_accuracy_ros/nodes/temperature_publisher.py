@@ -27,6 +27,7 @@ class TemperaturePublisher(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__("temperature_publisher", **kwargs)
+        self._sequence = 0  # TemperatureArray.sequence
         self.declare_parameter("scenario", "demo", plain_descriptor(
             "Bundled scenario name or path (the same as the encoder publisher's)", read_only=True))
         self.declare_parameter("rate_factor", 1.0, float_descriptor(
@@ -89,6 +90,8 @@ class TemperaturePublisher(Node):
             message.sensor_names = self._names
             message.temperatures = pack_float64(values)
             message.variances = pack_float64(np.full(len(self._names), self._variance))
+            message.sequence = self._sequence
+            self._sequence += 1
             self._publisher.publish(message)
             self._next += 1
         if self._next >= self._time.size:

@@ -35,6 +35,7 @@ from ..core.scales.dual_scale import (SQ57_EXPANSION_PER_K, YAW_COMPONENT, scale
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.kinematics.machine import load_machine
 from ..core.scales.streaming import StreamingSystematic
+from ._health import DeliveryHealth
 from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       pack_float64, plain_descriptor, refuse, stamp_to_nanoseconds,
                       unpack_float64)
@@ -112,12 +113,16 @@ class YawEstimator(Node):
         self._problems: list[tuple[int, str]] = []
         self._pending_temperatures: list = []
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.health = DeliveryHealth(self)
+        self._profile_sequence: dict[str, int] = {}  # per systematic/<axis> topic
         # Publishers up front, so that recorders and listeners match before data flows.
         for axis in self._wanted or [a for a in self.machine.axis_order
                                      if a in self.machine.scale_distance_m]:
             self._create_publishers(axis)
-        self.create_subscription(ScaleBatch, "scales", self._on_batch, SENSOR_QOS)
-        self.create_subscription(TemperatureArray, "temperatures", self._on_temperatures,
+        self.create_subscription(ScaleBatch, "scales", self.health.guard("scales", self._on_batch),
+                                 SENSOR_QOS)
+        self.create_subscription(TemperatureArray, "temperatures",
+                                 self.health.guard("temperatures", self._on_temperatures),
                                  SENSOR_QOS)
 
     # ---------------------------------------------------------------- parameters
@@ -125,6 +130,7 @@ class YawEstimator(Node):
         for parameter in parameters:
             if parameter.name in ("expansion_per_k", "tolerance_rad", "profile_period_s") and \
                     not np.isfinite(parameter.value):
+                self.health.refused("parameters", f"{parameter.name} must be finite")
                 return refuse(f"{parameter.name} must be finite")
         return accept()
 
@@ -164,9 +170,9 @@ class YawEstimator(Node):
         values = unpack_float64(message.temperatures).copy()
         names = list(message.sensor_names)
         if len(values) != len(names):
-            self._report(DiagnosticStatus.ERROR, "temperature message: names and values differ "
-                                                 "in length; skipped")
-            return
+            raise InputDataError("temperature message: names and values differ in length")
+        self.health.sequence("temperatures", message.sequence)
+        self.health.processed("temperatures")
         # Applied in data time (see _apply_temperatures), not on arrival.
         self._pending_temperatures.append((stamp_to_nanoseconds(message.header.stamp), names,
                                            values))
@@ -194,9 +200,11 @@ class YawEstimator(Node):
         channels = list(message.channel_names)
         data = unpack_float64(message.positions)
         if not channels or data.size % len(channels):
-            self._report(DiagnosticStatus.ERROR, "scale batch: positions do not fill "
-                                                 "n_samples x n_channels; skipped")
-            return
+            raise InputDataError("scale batch: positions do not fill n_samples x n_channels")
+        period = float(message.sample_period)
+        if not (np.isfinite(period) and period > 0.0):
+            raise InputDataError(f"scale batch: sample_period {period!r} s must be finite and "
+                                 "positive")
         data = data.reshape(-1, len(channels))
         stamp = stamp_to_nanoseconds(message.header.stamp)
         if stamp <= self._last_stamp:
@@ -208,6 +216,8 @@ class YawEstimator(Node):
             lost = int(message.first_sample_index) - self._last_index
             self._report(DiagnosticStatus.WARN, f"{lost} samples lost before index "
                                                 f"{message.first_sample_index}")
+        self.health.sequence("scales", message.first_sample_index, data.shape[0])
+        self.health.processed("scales")
         self._last_stamp = stamp
         self._apply_temperatures(stamp)
         self._last_index = int(message.first_sample_index) + data.shape[0]
@@ -316,6 +326,8 @@ class YawEstimator(Node):
                     f"axis {state.axis}: yaw deteriorated by up to "
                     f"{report.max_abs_change * 1e6:.1f} urad over {ranges}")
             state.alarm = bool(report.deteriorated)
+        out.sequence = self._profile_sequence.get(state.axis, 0)
+        self._profile_sequence[state.axis] = out.sequence + 1
         self._profile_publishers[state.axis].publish(out)
 
     def _report(self, level: int, text: str) -> None:

@@ -91,6 +91,7 @@ def write_bag(result: SimulationResult, bag_dir: str | Path, *, batch_period_s: 
                 bag.write(scales_topic, serialize_message(message), stamp_ns, stamp_ns)
             else:
                 message = TemperatureArray()
+                message.sequence = index
                 message.header.stamp = nanoseconds_to_stamp(stamp_ns)
                 message.header.frame_id = result.scenario.machine.name
                 message.sensor_names = list(result.temperature_names)

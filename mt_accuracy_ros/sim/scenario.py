@@ -32,7 +32,7 @@ from pathlib import Path
 
 import yaml
 
-from ..core.errors import MachineDescriptionError, ScenarioError
+from ..core.errors import MachineDescriptionError, ScenarioError, reraise_as
 from ..core.kinematics.machine import MachineDescription, load_machine
 from .effects import DEFAULT_ON, EFFECTS
 from .programs import PROGRAMS
@@ -149,6 +149,7 @@ def _subsection(data, key, allowed: dict, source: str) -> dict:
     return out
 
 
+@reraise_as(ScenarioError, "scenario")
 def scenario_from_dict(data: dict, source: str = "<dict>") -> Scenario:
     """Validate a parsed scenario mapping (see the module docstring)."""
     if not isinstance(data, dict):
@@ -270,6 +271,7 @@ def _check_effect_axes(scenario: Scenario) -> None:
                                     f"[{low}, {high}] m")
 
 
+@reraise_as(ScenarioError, "scenario")
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario YAML file."""
     path = Path(path)
@@ -277,6 +279,8 @@ def load_scenario(path: str | Path) -> Scenario:
         text = path.read_text()
     except OSError as exc:
         raise ScenarioError(f"{path}: cannot read scenario ({exc.strerror})") from exc
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{path}: not a text file ({exc.reason})") from exc
     try:
         data = yaml.load(text, Loader=_LineLoader)  # noqa: S506 - SafeLoader subclass
     except yaml.YAMLError as exc:
@@ -284,6 +288,7 @@ def load_scenario(path: str | Path) -> Scenario:
     return scenario_from_dict(data, str(path))
 
 
+@reraise_as(ScenarioError, "scenario")
 def scenario_from_yaml(text: str, source: str = "<string>") -> Scenario:
     """Parse scenario YAML text (line numbers refer to ``text``)."""
     try:

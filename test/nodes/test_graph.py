@@ -234,7 +234,8 @@ def test_all_nodes_composed_in_one_executor(rclpy_context, tmp_path):
 
     from mt_accuracy_msgs.msg import ModelCheck, VolumetricCompensation
     from mt_accuracy_ros.nodes._common import RESULT_QOS
-    from mt_accuracy_ros.nodes.compensation_broadcaster import CompensationBroadcaster
+    from mt_accuracy_ros.nodes.compensation_broadcaster import (COMPENSATION_QOS,
+                                                                CompensationBroadcaster)
     from mt_accuracy_ros.nodes.encoder_publisher import EncoderPublisher
     from mt_accuracy_ros.nodes.model_monitor import ModelMonitor
     from mt_accuracy_ros.nodes.temperature_publisher import TemperaturePublisher
@@ -251,8 +252,10 @@ def test_all_nodes_composed_in_one_executor(rclpy_context, tmp_path):
     listener = rclpy.create_node("listener")
     checks, compensation = [], []
     listener.create_subscription(ModelCheck, "model_check", checks.append, RESULT_QOS)
+    # A subscriber that one executor serves late: its history must hold the whole
+    # backlog (the broadcaster's own history is as deep) - nothing is lost silently.
     listener.create_subscription(VolumetricCompensation, "compensation", compensation.append,
-                                 RESULT_QOS)
+                                 COMPENSATION_QOS)
     executor = SingleThreadedExecutor()
     for node in nodes + [listener]:
         executor.add_node(node)
@@ -268,6 +271,9 @@ def test_all_nodes_composed_in_one_executor(rclpy_context, tmp_path):
             node.destroy_node()
     assert nodes[-1].finished
     assert len(compensation) == pytest.approx(2000, abs=10)  # 20 s of data at 100 Hz
+    # Every message the broadcaster sent arrived, in order: sequence has no gap.
+    assert [m.sequence for m in compensation] == list(range(len(compensation)))
+    assert len(compensation) == nodes[1]._compensation_sequence
     assert checks and "structural_thermal_drift" in {s.effect for s in checks[-1].ranking}
 
 

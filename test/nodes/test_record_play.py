@@ -318,3 +318,35 @@ def test_split_bag_reads_as_one(tmp_path):
     with Reader(tmp_path / "bag") as reader:
         assert reader.message_count == 2000
         assert [t for _, t, _ in reader.messages()] == [10**9 + i for i in range(2000)]
+
+
+def test_recorder_killed_early_loses_at_most_the_last_second(rclpy_context, tmp_path, capsys):
+    """Default 1 MiB chunks: before, a kill in the first ~20 s left nothing readable."""
+    import rclpy
+    from std_msgs.msg import String
+
+    from mt_accuracy_ros.cli import main
+
+    node = rclpy.create_node("talker")
+    publisher = node.create_publisher(String, "/chatter", 100)
+    recorder = start_node("recorder", {"output": str(tmp_path / "bag"), "topics": ["/chatter"],
+                                       "discovery_period_s": 0.1})
+    assert spin_until(node, lambda: publisher.get_subscription_count() >= 1)
+    for i in range(100):
+        publisher.publish(String(data=f"m{i:03d}"))
+        spin_for(node, 0.01)
+    spin_for(node, 2.5)  # > chunk_interval_s (1 s): those chunks are closed and on disk
+    recorder.popen.kill()
+    recorder.popen.wait()
+    node.destroy_node()
+    salvaged = [decode(m).data for m in recover(tmp_path / "bag" / "bag_0.mcap")]
+    assert salvaged == [f"m{i:03d}" for i in range(100)]
+    # info says the bag is damaged and how to recover it - one line, exit 2.
+    assert main(["info", str(tmp_path / "bag")]) == 2
+    error = capsys.readouterr().err.strip()
+    assert "damaged or incomplete" in error and "mt-accuracy recover" in error
+    assert len(error.splitlines()) == 1
+    assert main(["recover", str(tmp_path / "bag"), str(tmp_path / "saved")]) == 0
+    info = bag_info(tmp_path / "saved")
+    assert info["topics"]["/chatter"]["count"] == 100
+    assert [decode(m).data for m in read_messages(tmp_path / "saved")] == salvaged

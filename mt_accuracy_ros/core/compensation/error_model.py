@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..kinematics.error_functions import ErrorFunction
-from ..errors import InputDataError, MachineDescriptionError, ParameterError
+from ..errors import InputDataError, MachineDescriptionError, ParameterError, reraise_as
 from ..kinematics.chain import ErrorOverrides, KinematicModel
 from ..kinematics.machine import MachineDescription, load_machine
 
@@ -238,15 +238,35 @@ def model_to_dict(model: ErrorModel) -> dict:
             "reference_temperatures_c": dict(model.reference_temperatures_c)}
 
 
+@reraise_as(ParameterError, "model")
 def model_from_dict(data: dict, source: str = "<dict>", base_dir: Path | None = None
                     ) -> ErrorModel:
-    """``{machine: NAME|PATH, effects: {name: {params} | true}, reference_temperatures_c: {}}``."""
+    """``{machine: NAME|PATH, effects: {name: {params} | true}, reference_temperatures_c: {}}``.
+
+    Raises only :class:`ParameterError` (malformed content of any kind included).
+    """
     if not isinstance(data, dict) or "machine" not in data:
         raise ParameterError(f"{source}: a model needs 'machine' (bundled name or path)")
+    if not isinstance(data["machine"], str):
+        raise ParameterError(f"{source}: 'machine' must be a bundled name or a path")
+    raw_effects = data.get("effects") or {}
+    if not isinstance(raw_effects, dict):
+        raise ParameterError(f"{source}: 'effects' must map effect names to their parameters "
+                             f"(got a {type(raw_effects).__name__})")
+    version = data.get("version", 1)
+    if isinstance(version, bool) or not isinstance(version, int) or version < 0:
+        raise ParameterError(f"{source}: 'version' must be a non-negative integer "
+                             f"(got {version!r})")
+    temperatures = data.get("reference_temperatures_c") or {}
+    if not isinstance(temperatures, dict):
+        raise ParameterError(f"{source}: 'reference_temperatures_c' must map sensors to degC")
     effects = {}
-    for name, value in (data.get("effects") or {}).items():
+    for name, value in raw_effects.items():
         if value is False:
             continue
+        if not (value is True or value is None or isinstance(value, dict)):
+            raise ParameterError(f"{source}: effects.{name} must be true, false or a mapping "
+                                 "of parameters")
         effects[str(name)] = {} if value is True or value is None else dict(value)
     try:
         machine_source = str(data["machine"])
@@ -259,13 +279,14 @@ def model_from_dict(data: dict, source: str = "<dict>", base_dir: Path | None = 
                            machine_source=machine_source)
     except (ParameterError, MachineDescriptionError) as exc:
         raise ParameterError(f"{source}: {exc}") from exc
-    model.version = int(data.get("version", 1))
+    model.version = version
     return model
 
 
 BUNDLED_MODELS = Path(__file__).resolve().parents[2] / "models"
 
 
+@reraise_as(ParameterError, "model")
 def resolve_model(text: str) -> ErrorModel:
     """A bundled model name (``demo``), a path to a model YAML, or inline YAML text."""
     import yaml
@@ -293,6 +314,6 @@ def load_model(path) -> ErrorModel:
     path = Path(path)
     try:
         data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as exc:
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
         raise ParameterError(f"{path}: cannot read model ({exc})") from exc
     return model_from_dict(data, str(path), base_dir=path.parent)

@@ -21,7 +21,7 @@ import numpy as np
 import yaml
 
 from .error_functions import ErrorFunction, parse_error_function
-from ..errors import MachineDescriptionError
+from ..errors import MachineDescriptionError, reraise_as
 
 AXIS_LETTERS = "XYZABC"
 COMPONENTS = "XYZABC"  # error motion components: translations X, Y, Z; rotations A, B, C
@@ -139,6 +139,7 @@ def _vector(spec, where: str) -> np.ndarray:
     return vector
 
 
+@reraise_as(MachineDescriptionError, "machine description")
 def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
     """Build and validate a description from its parsed YAML mapping."""
     if not isinstance(data, dict):
@@ -202,6 +203,7 @@ def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
         scale_distance_m={str(k): float(v) for k, v in (data.get("scale_distance_m") or {}).items()})
 
 
+@reraise_as(MachineDescriptionError, "machine description")
 def load_machine(path_or_name: str | Path) -> MachineDescription:
     """Load a description from a YAML file, or a bundled one by name
     (``kidani_hmc``, ``khan_chen_rpppr``)."""
@@ -212,6 +214,8 @@ def load_machine(path_or_name: str | Path) -> MachineDescription:
         data = yaml.safe_load(path.read_text())
     except FileNotFoundError as exc:
         raise MachineDescriptionError(f"machine description not found: {path}") from exc
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MachineDescriptionError(f"{path}: cannot read ({exc})") from exc
     except yaml.YAMLError as exc:
         raise MachineDescriptionError(f"{path}: not valid YAML ({exc})") from exc
     return machine_from_dict(data, str(path))

@@ -1,0 +1,105 @@
+"""Delivery you can count: what each node processed, refused and lost, on /diagnostics.
+
+Every stream a node subscribes to has counters; every callback runs inside
+:meth:`DeliveryHealth.guard`, so a message that makes the code raise - of any
+exception type - becomes a counted refusal with its reason instead of killing
+the node. Streams that carry a ``sequence`` (or ``first_sample_index``) are
+checked for gaps, so losses between publisher and subscriber are counted too.
+A ``DiagnosticStatus`` named ``<node>: delivery`` goes out once a second
+(steady clock, so it also runs while a replay's ``/clock`` is paused), and a
+refusal is reported at once with its reason.
+"""
+from __future__ import annotations
+
+from collections import Counter, defaultdict
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.clock import Clock, ClockType
+
+#: Counters kept per stream.
+COUNTERS = ("processed", "refused", "lost", "out_of_order")
+
+
+class DeliveryHealth:
+    """Per-stream counters of one node and their diagnostics."""
+
+    def __init__(self, node, *, period_s: float = 1.0) -> None:
+        self._node = node
+        self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.counts: dict[str, Counter] = defaultdict(Counter)
+        self.last_reason: dict[str, str] = {}
+        self._next_sequence: dict[str, int] = {}
+        self._reported: dict[str, Counter] = defaultdict(Counter)
+        node.create_timer(period_s, self.publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+    # ------------------------------------------------------------------ counting
+    def processed(self, stream: str, count: int = 1) -> None:
+        self.counts[stream]["processed"] += count
+
+    def refused(self, stream: str, reason: str) -> None:
+        """Count a refused message or parameter and report the reason at once."""
+        self.counts[stream]["refused"] += 1
+        self.last_reason[stream] = reason
+        self._node.get_logger().warning(f"{stream}: refused: {reason}")
+        self._send([self._status(DiagnosticStatus.WARN, f"{stream}: refused: {reason}",
+                                 self._values(stream))])
+
+    def sequence(self, stream: str, sequence: int, count: int = 1) -> int:
+        """Check a stream's running ``sequence``; return how many were lost before it.
+
+        ``count`` is how many items the message carries (samples of a batch).
+        A sequence below the expected one (a restarted publisher, a replay) is
+        counted as out of order and restarts the count there.
+        """
+        sequence = int(sequence)
+        expected = self._next_sequence.get(stream)
+        lost = 0
+        if expected is not None:
+            if sequence > expected:
+                lost = sequence - expected
+                self.counts[stream]["lost"] += lost
+            elif sequence < expected:
+                self.counts[stream]["out_of_order"] += 1
+        self._next_sequence[stream] = sequence + count
+        return lost
+
+    def guard(self, stream: str, callback):
+        """``callback`` wrapped so that any exception is a counted refusal."""
+        def guarded(message):
+            try:
+                callback(message)
+            except Exception as exc:  # noqa: BLE001 - no message may kill the node
+                self.refused(stream, f"{type(exc).__name__}: {exc}")
+        guarded.__name__ = getattr(callback, "__name__", "guarded")
+        return guarded
+
+    # ------------------------------------------------------------------ reporting
+    def _values(self, stream: str) -> list[KeyValue]:
+        values = [KeyValue(key=f"{stream}.{name}", value=str(self.counts[stream][name]))
+                  for name in COUNTERS]
+        if stream in self.last_reason:
+            values.append(KeyValue(key=f"{stream}.last_refusal", value=self.last_reason[stream]))
+        return values
+
+    def _status(self, level: int, message: str, values: list[KeyValue]) -> DiagnosticStatus:
+        return DiagnosticStatus(level=level, name=f"{self._node.get_fully_qualified_name()}: "
+                                "delivery", message=message, hardware_id="", values=values)
+
+    def publish(self) -> None:
+        """One status with every stream's counters; WARN if anything was lost or refused since
+        the last report."""
+        values, news = [], []
+        for stream in sorted(self.counts):
+            values.extend(self._values(stream))
+            for name in ("refused", "lost"):
+                new = self.counts[stream][name] - self._reported[stream][name]
+                if new:
+                    news.append(f"{stream}: {new} {name}")
+            self._reported[stream] = Counter(self.counts[stream])
+        level = DiagnosticStatus.WARN if news else DiagnosticStatus.OK
+        self._send([self._status(level, "; ".join(news) or "all streams complete", values)])
+
+    def _send(self, statuses: list[DiagnosticStatus]) -> None:
+        array = DiagnosticArray(status=statuses)
+        array.header.stamp = self._node.get_clock().now().to_msg()
+        self._publisher.publish(array)

@@ -1,0 +1,110 @@
+"""No input kills a node: bad messages and parameters to real node processes are
+counted refusals with their reason on /diagnostics, and the node keeps working."""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from graph_helpers import spin_until
+from mt_accuracy_ros.processes import start_node
+
+BAD_MODELS = [
+    "machine: kidani_hmc\neffects: [squareness]\n",       # effects a list
+    "machine: kidani_hmc\nversion: two\n",                 # version not a number
+    "machine: /bin/ls\n",                                  # a binary machine file
+    "{machine: kidani_hmc, effects: {squareness: 3}}\n",  # effect parameters not a mapping
+]
+
+
+def _batch(first_index, stamp_ns, period, n=50):
+    from mt_accuracy_msgs.msg import ScaleBatch
+    from mt_accuracy_ros.io.fields import nanoseconds_to_stamp, pack_float64
+
+    message = ScaleBatch()
+    message.header.stamp = nanoseconds_to_stamp(stamp_ns)
+    message.first_sample_index = first_index
+    message.sample_period = period
+    message.channel_names = ["x1", "x2"]
+    message.positions = pack_float64([0.1] * (2 * n))
+    message.command_axes = ["x", "y", "z"]
+    message.command_positions = pack_float64([0.1, 0.2, -0.1] * n)
+    return message
+
+
+def _refusals(diagnostics, stream):
+    return [s.message for array in diagnostics for s in array.status
+            if s.name.endswith("delivery") and s.message.startswith(f"{stream}: refused")]
+
+
+def test_broadcaster_survives_bad_batches_and_models_and_says_why(rclpy_context):
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from std_msgs.msg import String
+
+    from mt_accuracy_msgs.msg import ScaleBatch, VolumetricCompensation
+    from mt_accuracy_ros.nodes._common import LATCHED_QOS, SENSOR_QOS
+    from mt_accuracy_ros.nodes.compensation_broadcaster import COMPENSATION_QOS
+
+    node = rclpy.create_node("fuzzer")
+    diagnostics, compensation = [], []
+    node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 100)
+    node.create_subscription(VolumetricCompensation, "compensation", compensation.append,
+                             COMPENSATION_QOS)
+    scales = node.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
+    model = node.create_publisher(String, "model", LATCHED_QOS)
+    # input_delay_s 0: temperatures/profiles need not arrive first for this test.
+    broadcaster = start_node("compensation_broadcaster", {"input_delay_s": 0.0}, quiet=True)
+    try:
+        assert spin_until(node, lambda: scales.get_subscription_count() > 0
+                          and node.count_publishers("compensation") > 0, 30)
+        assert spin_until(node, lambda: bool(diagnostics), 15)  # its 1 Hz report is flowing
+        stamp = 1_000_000_000
+        for index, period in enumerate([0.0, math.nan, -0.001, math.inf]):
+            scales.publish(_batch(index * 50, stamp + index, period))
+        assert spin_until(node, lambda: len(_refusals(diagnostics, "scales")) >= 4, 20)
+        reasons = _refusals(diagnostics, "scales")
+        assert all("sample_period" in r for r in reasons[:4]), reasons
+        for text in BAD_MODELS:
+            model.publish(String(data=text))
+            assert spin_until(node, lambda: sum("model refused" in r for r in
+                                                _refusals(diagnostics, "model"))
+                              >= BAD_MODELS.index(text) + 1, 20), text
+        assert broadcaster.popen.poll() is None, "the broadcaster died"
+        # Still working: a good batch gives compensation with the starting model.
+        scales.publish(_batch(1000, 2_000_000_000, 0.001))
+        assert spin_until(node, lambda: bool(compensation), 20)
+        assert compensation[0].model_version == 1
+        # The counters say what happened.
+        def counted():
+            for array in diagnostics:
+                for status in array.status:
+                    values = {v.key: v.value for v in status.values}
+                    if values.get("scales.refused") == "4" and \
+                            values.get("model.refused") == str(len(BAD_MODELS)):
+                        return True
+            return False
+        assert spin_until(node, counted, 15)
+    finally:
+        broadcaster.stop()
+        node.destroy_node()
+
+
+@pytest.mark.parametrize("value", ["machine: kidani_hmc\neffects: [squareness]\n",
+                                   "machine: kidani_hmc\nversion: two\n"])
+def test_a_bad_model_parameter_is_refused_and_the_monitor_lives(rclpy_context, value):
+    import rclpy
+
+    from mt_accuracy_ros.demo import _set_parameter
+
+    node = rclpy.create_node("setter")
+    monitor = start_node("model_monitor", quiet=True)
+    try:
+        successful, reason = _set_parameter(node, "model_monitor", "model", value)
+        assert not successful and "model refused" in reason, reason
+        assert monitor.popen.poll() is None
+        successful, reason = _set_parameter(node, "model_monitor", "min_reduction", 0.2)
+        assert successful, reason
+    finally:
+        monitor.stop()
+        node.destroy_node()
