@@ -17,7 +17,7 @@ BENCH_STAMP = $(VENV)/.bench-stamp
 MSG_SOURCES = $(shell find msg_defs -type f)
 PKG_SOURCES = $(shell find mt_accuracy_ros resource config -type f -not -name '*.pyc' 2>/dev/null)
 
-.PHONY: setup test demo bench clean
+.PHONY: setup test test-repeat test-loaded demo bench clean
 
 setup: $(PKG_STAMP)
 
@@ -40,6 +40,13 @@ $(PKG_STAMP): $(MSGS_STAMP) setup.py setup.cfg package.xml $(PKG_SOURCES)
 
 test: setup
 	$(PY) -m pytest test $(PYTEST_ARGS)
+
+# The suite must pass on any fresh machine, idle or loaded (issue 17).
+test-repeat: setup
+	tools/repeat_tests.sh 5 0
+
+test-loaded: setup
+	tools/repeat_tests.sh 3 2
 
 demo: setup
 	$(PY) -m mt_accuracy_ros.cli demo --out demo_output

@@ -127,8 +127,8 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
     from .core.compensation.error_model import resolve_model
     from .core.workbench.diagnosis import add_effect, diagnose, residuals
 
+    model = resolve_model(model_text)  # a bad model is refused before a long bag is read
     obs, stamps, profiles = observations_from_bag(bag, namespace)
-    model = resolve_model(model_text)
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c.setdefault(sensor, float(values[0]))
     steps = []
@@ -181,15 +181,17 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
               model_terms: list[str]) -> dict:
     from .core.workbench.tabular import table_workbench
 
-    table = np.genfromtxt(path, delimiter=",", names=True)
-    names = list(table.dtype.names or [])
+    from .io.csv_table import read_csv_table
+
+    table = read_csv_table(path)
+    names = table.names
     if time_column not in names:
         raise InputDataError(f"{path}: no time column {time_column!r}; columns: {', '.join(names)}")
     selected = [n for n in names if any(fnmatch.fnmatch(n, p) for p in inputs)]
     if not selected:
         raise InputDataError(f"{path}: no input column matches {inputs}")
-    columns = {n: table[n] for n in names}
-    bench = table_workbench(columns, table[time_column], target, selected, drivers,
+    columns = table.columns
+    bench = table_workbench(columns, columns[time_column], target, selected, drivers,
                             train_fraction, included=model_terms)
     first = bench.rank(min_reduction)
     baseline = bench.judged_rmse(bench.included)
@@ -216,6 +218,8 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     prediction_after = bench.fit_predict(bench.included)
     judge = ~bench.train
     return {"data": str(path), "kind": "csv", "target": target, "rows": int(bench.target.size),
+            "rows_read": table.rows_read, "rows_dropped": table.rows_dropped,
+            "rows_note": table.summary(),
             "figures_before_held_out": error_figures((bench.target - prediction_before)[judge]),
             "figures_after_held_out": error_figures((bench.target - prediction_after)[judge]),
             "train_rows": int(bench.train.sum()),
@@ -226,7 +230,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
             "added": [s["added"] for s in steps if "added" in s],
             "final_rmse": steps[-1]["held_out_rmse"], "steps": steps,
             "judged_on": "held-out rows after the training rows",
-            "_plot": {"time": np.asarray(table[time_column])[:bench.target.size],
+            "_plot": {"time": np.asarray(columns[time_column])[:bench.target.size],
                       "target": bench.target, "before": prediction_before,
                       "after": prediction_after, "train": bench.train}}
 

@@ -137,7 +137,8 @@ def _check(args: argparse.Namespace) -> int:
     try:
         if data.suffix.lower() == ".csv":
             if not args.target:
-                raise SystemExit("mt-accuracy check: a CSV needs --target COLUMN")
+                print("mt-accuracy check: a CSV needs --target COLUMN", file=sys.stderr)
+                return 2
             result = check_csv(data, args.target, args.time_column, args.inputs or ["*"],
                                args.driver or [], args.add or [], args.auto, args.train_fraction,
                                args.min_reduction, args.term or [])
@@ -148,6 +149,8 @@ def _check(args: argparse.Namespace) -> int:
         print(f"mt-accuracy check: {exc}", file=sys.stderr)
         return 2
     write_outputs(result, args.json, args.report)
+    if result.get("rows_note"):
+        print(result["rows_note"])
     unit = "m" if result["kind"] == "bag" else result.get("target", "")
     print(f"baseline RMSE {result['baseline_rmse']:.4g} {unit}")
     for entry in result["ranking"][:5]:
@@ -229,9 +232,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run a command; every user error is one line on stderr and exit status 2."""
+    from .core.errors import MtAccuracyError
+
     parser = build_parser()
     args = parser.parse_args(argv)
-    return int(args.handler(args) or 0)
+    try:
+        return int(args.handler(args) or 0)
+    except (MtAccuracyError, OSError, ValueError) as exc:
+        message = " ".join(str(exc).split())
+        print(f"mt-accuracy {args.command}: {message}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

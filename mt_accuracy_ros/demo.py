@@ -59,10 +59,12 @@ def _set_parameter(node, target: str, name: str, value) -> tuple[bool, str]:
 def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
              scenario: str = "demo") -> int:
     import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
     from mt_accuracy_msgs.msg import (ModelCheck, ReferenceMeasurement, SystematicProfile,
                                       VolumetricCompensation)
 
     from .nodes._common import RESULT_QOS, stamp_to_nanoseconds
+    from .nodes.compensation_broadcaster import COMPENSATION_QOS
     from .processes import start_node
 
     out = Path(out_dir)
@@ -76,12 +78,18 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     model = _prepare(out, scenario)
     start_ns = time.time_ns() + 4_000_000_000
     machine = {"scenario": scenario, "start_stamp_ns": start_ns, "rate_factor": rate_factor}
+    # The machine holds its streams until every consumer - the recorder first of all -
+    # is subscribed, so the bag holds the run from its first sample: scales go to the
+    # estimator, broadcaster and recorder; temperatures also to the monitor.
+    scales_consumers, temperature_consumers = 3, 4
     nodes = [start_node("recorder", {"output": str(bag), "discovery_period_s": 0.2}, quiet=True),
              start_node("yaw_estimator", {"baseline_after_s": 40.0}, quiet=True),
              start_node("compensation_broadcaster", {"model": str(model)}, quiet=True),
              start_node("model_monitor", {"model": str(model)}, quiet=True),
-             start_node("temperature_publisher", machine, quiet=True)]
-    encoder = start_node("encoder_publisher", machine, quiet=True)
+             start_node("temperature_publisher",
+                        {**machine, "min_subscribers": temperature_consumers}, quiet=True)]
+    encoder = start_node("encoder_publisher", {**machine, "min_subscribers": scales_consumers},
+                         quiet=True)
     rclpy.init()
     listener = rclpy.create_node("demo_user")
     checks: list[tuple[float, ModelCheck]] = []
@@ -103,7 +111,16 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
                                      RESULT_QOS)
     listener.create_subscription(VolumetricCompensation, "compensation", lambda m: compensation.append(
         (stamp_to_nanoseconds(m.header.stamp), float(np.linalg.norm([m.error.x, m.error.y,
-                                                                   m.error.z])))), RESULT_QOS)
+                                                                   m.error.z])))),
+        COMPENSATION_QOS)
+    delivery: dict[str, dict[str, str]] = {}  # node -> latest delivery counters
+
+    def on_diagnostics(message: DiagnosticArray) -> None:
+        for status in message.status:
+            if status.name.endswith(": delivery"):
+                delivery[status.name.split(":")[0]] = {v.key: v.value for v in status.values}
+
+    listener.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 50)
     references: list[np.ndarray] = []
     listener.create_subscription(ReferenceMeasurement, "reference/tcp_error", lambda m: references.append(
         np.array([m.error.x, m.error.y, m.error.z])), RESULT_QOS)
@@ -128,20 +145,46 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
             process.stop()
         listener.destroy_node()
         rclpy.try_shutdown()
+    losses = delivery_losses(delivery)
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
-                         references)
+                         references, losses)
     print("mt_accuracy_ros demo - virtual HMC, scenario 'demo' (warm-up, Y guideway "
           "deterioration at 50 s, column drift missing from the model)")
     for key, value in summary.items():
         if not isinstance(value, (list, dict)):
             print(f"  {key:42s} {value:.4g}" if isinstance(value, float) else
                   f"  {key:42s} {value}")
+    for line in losses:
+        # Overload is loud: a graph that could not keep up says so.
+        print(f"  WARNING {line}")
     print(f"  report: {out / 'report.html'}   bag: {bag}")
     return 0 if checks and summary["bag_messages"] > 0 else 1
 
 
+def delivery_losses(delivery: dict[str, dict[str, str]]) -> list[str]:
+    """Plain sentences for every stream a node lost or refused messages of.
+
+    ``delivery`` maps a node to its latest ``<stream>.<counter>`` values
+    (the ``<node>: delivery`` diagnostics).
+    """
+    lines = []
+    for node, values in sorted(delivery.items()):
+        streams = sorted({key.rsplit(".", 1)[0] for key in values if "." in key})
+        for stream in streams:
+            processed = int(values.get(f"{stream}.processed", "0"))
+            lost = int(values.get(f"{stream}.lost", "0"))
+            refused = int(values.get(f"{stream}.refused", "0"))
+            if lost or refused:
+                unit = "samples" if stream == "scales" else "messages"
+                share = 100.0 * lost / max(1, lost + processed)
+                lines.append(f"{node} lost {lost} of {lost + processed} {unit} of '{stream}' "
+                             f"({share:.0f} %) and refused {refused} messages: it could not "
+                             "keep up or the input was bad; the results above miss them")
+    return lines
+
+
 def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
-               references) -> dict:
+               references, losses: list[str]) -> dict:
     from .io.bag_reader import bag_info
     from .report import write_demo_report
 
@@ -167,6 +210,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "bag_topics": len(info["topics"]),
         "wall_time_s": wall_s,
         "final_diagnosis": checks[-1][1].diagnosis if checks else "",
+        "stream_losses": "; ".join(losses) or "none: every node processed every sample",
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     write_demo_report(out, checks, actions, alarms, compensation, summary)

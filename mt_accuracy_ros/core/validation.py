@@ -46,3 +46,18 @@ def positive(value: float, name: str) -> float:
     if not np.isfinite(value) or value <= 0.0:
         raise ParameterError(f"{name} must be a finite positive number, got {value!r}")
     return value
+
+
+#: Sample periods a scale stream may declare [s]: 10 MHz down to 0.1 Hz. Outside,
+#: the number is a unit mistake (ms or us given as s) or garbage.
+SAMPLE_PERIOD_RANGE_S = (1e-7, 10.0)
+
+
+def sample_period(value: float, name: str = "sample_period") -> float:
+    """A stream's sample period [s], checked against :data:`SAMPLE_PERIOD_RANGE_S`."""
+    value = float(value)
+    low, high = SAMPLE_PERIOD_RANGE_S
+    if not (np.isfinite(value) and low <= value <= high):
+        raise InputDataError(f"{name} {value!r} s: must be finite, within [{low:g}, {high:g}] s "
+                             "(seconds, not ms)")
+    return value

@@ -15,10 +15,19 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from mcap.exceptions import McapError
+from zstandard import ZstdError
 from mcap.reader import make_reader
 from mcap.stream_reader import StreamReader
 
 from ..core.errors import BagError
+
+
+#: What parsing a damaged or foreign file can raise inside the mcap library and
+#: its decompressors (zstd, lz4: RuntimeError). Every one is the file's fault and
+#: becomes a BagError naming the file - MemoryError too: the library allocates
+#: what a (corrupt) record length field says before it reads the record.
+DAMAGED_FILE = (McapError, ValueError, EOFError, struct.error, OSError, KeyError, IndexError,
+                TypeError, AttributeError, RuntimeError, OverflowError, MemoryError, ZstdError)
 
 
 @dataclass(frozen=True)
@@ -65,11 +74,12 @@ def _file_messages(path: Path, topics: set[str] | None) -> Iterator[BagMessage]:
                                  message.log_time, message.publish_time,
                                  schema.data if schema else b"",
                                  channel.metadata.get("topic_type_hash", ""))
-    except McapError as exc:
-        raise BagError(f"{path}: not a readable MCAP file ({exc}); "
-                       "a truncated file can be salvaged with mt_accuracy_ros.io.bag_reader.recover") from exc
-    except (ValueError, EOFError) as exc:
-        raise BagError(f"{path}: corrupt or foreign file ({exc})") from exc
+    except BagError:
+        raise
+    except DAMAGED_FILE as exc:
+        raise BagError(f"{path}: damaged, incomplete or foreign MCAP file ({exc}); a recorder "
+                       "killed mid-run leaves such a file: `mt-accuracy recover BAG NEW_BAG` "
+                       "saves its closed chunks") from exc
 
 
 def read_messages(path: str | Path, topics: list[str] | None = None) -> Iterator[BagMessage]:
@@ -177,7 +187,7 @@ def bag_info(path: str | Path) -> dict:
                 if stats.message_count:
                     first = stats.message_start_time if first is None else min(first, stats.message_start_time)
                     last = stats.message_end_time if last is None else max(last, stats.message_end_time)
-        except (McapError, ValueError, EOFError, struct.error) as exc:
+        except DAMAGED_FILE as exc:
             raise BagError(f"{f}: damaged or incomplete MCAP file ({exc}): a recorder killed "
                            f"mid-run leaves no summary; `mt-accuracy recover {path} NEW_BAG` "
                            "saves every closed chunk") from exc
@@ -204,7 +214,7 @@ def _complete_records(path: Path, schemas: dict[int, str]):
                 if isinstance(record, Schema):
                     schemas[record.id] = record.name
                 yield record
-        except (McapError, EOFError, ValueError, struct.error) as exc:
+        except DAMAGED_FILE as exc:
             raise _Truncated() from exc
 
 
@@ -269,7 +279,7 @@ def topics(path: str | Path) -> dict[str, TopicInfo]:
         try:
             with open(f, "rb") as stream:
                 summary = make_reader(stream).get_summary()
-        except (McapError, ValueError, EOFError, struct.error) as exc:
+        except DAMAGED_FILE as exc:
             raise BagError(f"{f}: not a readable MCAP file ({exc})") from exc
         if summary is not None:
             for channel in summary.channels.values():

@@ -97,10 +97,16 @@ def run_node(node_class, args: list[str] | None, *, until_finished: bool = False
     from ..core.errors import MtAccuracyError
 
     rclpy.init(args=args if args is not None else sys.argv)
+    from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
+                                  NameValidationException, ParameterException)
+
     try:
         node = node_class()
-    except MtAccuracyError as exc:
-        print(f"{node_class.__name__}: {exc}", file=sys.stderr)
+    except (MtAccuracyError, ParameterException, InvalidParameterTypeException,
+            InvalidParameterValueException, NameValidationException, TypeError,
+            ValueError) as exc:
+        # A configuration error: one line and exit 2, never a traceback.
+        print(f"{node_class.__name__}: {' '.join(str(exc).split())}", file=sys.stderr)
         rclpy.try_shutdown()
         return 2
     try:

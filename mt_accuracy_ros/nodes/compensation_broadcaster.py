@@ -27,6 +27,7 @@ from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompen
 
 from ..core.compensation.error_model import resolve_model
 from ..core.errors import InputDataError, MtAccuracyError
+from ..core.validation import sample_period
 from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse,
                       stamp_to_nanoseconds, unpack_float64)
@@ -108,9 +109,7 @@ class CompensationBroadcaster(Node):
         if not axes or commands.size % len(axes):
             raise InputDataError(f"{commands.size} command positions do not fill "
                                  f"{len(axes)} axes")
-        period = float(message.sample_period)
-        if not (np.isfinite(period) and period > 0.0):
-            raise InputDataError(f"sample_period {period!r} s: must be finite and positive")
+        period = sample_period(message.sample_period)
         if not np.all(np.isfinite(commands)):
             raise InputDataError("command positions not finite")
         commands = commands.reshape(-1, len(axes))
@@ -119,7 +118,7 @@ class CompensationBroadcaster(Node):
             raise InputDataError(f"stamp {stamp} ns not after the last one ({self._last_stamp} ns):"
                                  " out of order or repeated")
         self.health.sequence("scales", message.first_sample_index, commands.shape[0])
-        self.health.processed("scales")
+        self.health.processed("scales", commands.shape[0])
         self._last_stamp = stamp
         self.inputs.advance(stamp)
         if self.inputs.dead != self._reported_dead:
@@ -128,7 +127,8 @@ class CompensationBroadcaster(Node):
                 self._warn(f"no valid reading from {', '.join(sorted(self._reported_dead))}; "
                            "their last valid value is used")
         step = max(1, int(round(1.0 / (period * float(self.get_parameter("publish_rate_hz").value)))))
-        first = int(message.first_sample_index)
+        # Reduced first: a running index near 2**64 must not overflow int64.
+        first = int(message.first_sample_index) % step
         rows = np.flatnonzero((first + np.arange(commands.shape[0])) % step == 0)
         if rows.size == 0:
             return

@@ -138,6 +138,18 @@ class ModelMonitor(Node):
         if not (np.isfinite(message.uncertainty) and message.uncertainty >= 0):
             raise InputDataError(f"reference uncertainty {message.uncertainty!r} m: must be "
                                  "finite and non-negative")
+        velocities_in = np.asarray(message.command_velocities, dtype=np.float64)
+        if not (np.all(np.isfinite(velocities_in)) and np.all(np.abs(velocities_in) <= 100.0)):
+            raise InputDataError("reference reading with velocities that are not finite or "
+                                 "beyond 100 m/s (rad/s): skipped")
+        if np.any(np.abs(np.asarray(message.command_positions)) > 1e3) or \
+                np.any(np.abs(error[measured]) > 1.0) or message.uncertainty > 1.0:
+            raise InputDataError("reference reading beyond 1 km positions, 1 m error or 1 m "
+                                 "uncertainty: a unit mistake? skipped")
+        machine_axes = set(self.inputs.model.machine.axis_order)
+        if len(set(axes)) != len(axes) or set(axes) != machine_axes:
+            raise InputDataError(f"reference reading for axes {axes}: the model's machine has "
+                                 f"axes {sorted(machine_axes)}, each once")
         self.health.sequence("reference/tcp_error", message.sequence)
         self.health.processed("reference/tcp_error")
         self.inputs.advance(stamp_to_nanoseconds(message.header.stamp))

@@ -95,6 +95,13 @@ class BagPlayer(Node):
         missing = sorted(set(wanted) - set(available))
         if missing:
             self.get_logger().warning(f"topics not in the bag: {', '.join(missing)}")
+        if not self._topic_publishers:
+            # Playing nothing is not success: say why, exit 2.
+            reasons = [f"types not installed on {', '.join(sorted(self._skipped))}"
+                       if self._skipped else "",
+                       f"topics not in the bag: {', '.join(missing)}" if missing else "",
+                       "the bag has no topics" if not available else ""]
+            raise BagError(f"{self.bag}: nothing to play ({'; '.join(r for r in reasons if r)})")
         self._clock_publisher = (self.create_publisher(Clock, "/clock", CLOCK_QOS)
                                  if self.get_parameter("clock").value else None)
         self._pause_requested = bool(self.get_parameter("start_paused").value)

@@ -33,6 +33,7 @@ from ..core.scales.dual_scale import (SQ57_EXPANSION_PER_K, YAW_COMPONENT, scale
                                       thermal_yaw_error, thermocouple_positions,
                                       yaw_from_scales)
 from ..core.errors import InputDataError, MtAccuracyError
+from ..core.validation import sample_period
 from ..core.kinematics.machine import load_machine
 from ..core.scales.streaming import StreamingSystematic
 from ._health import DeliveryHealth
@@ -201,10 +202,7 @@ class YawEstimator(Node):
         data = unpack_float64(message.positions)
         if not channels or data.size % len(channels):
             raise InputDataError("scale batch: positions do not fill n_samples x n_channels")
-        period = float(message.sample_period)
-        if not (np.isfinite(period) and period > 0.0):
-            raise InputDataError(f"scale batch: sample_period {period!r} s must be finite and "
-                                 "positive")
+        sample_period(message.sample_period)
         data = data.reshape(-1, len(channels))
         stamp = stamp_to_nanoseconds(message.header.stamp)
         if stamp <= self._last_stamp:
@@ -217,7 +215,7 @@ class YawEstimator(Node):
             self._report(DiagnosticStatus.WARN, f"{lost} samples lost before index "
                                                 f"{message.first_sample_index}")
         self.health.sequence("scales", message.first_sample_index, data.shape[0])
-        self.health.processed("scales")
+        self.health.processed("scales", data.shape[0])
         self._last_stamp = stamp
         self._apply_temperatures(stamp)
         self._last_index = int(message.first_sample_index) + data.shape[0]

@@ -26,6 +26,7 @@ reading, unless given). Everything is vectorised over N command positions.
 from __future__ import annotations
 
 import copy
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -54,6 +55,48 @@ _DEFAULTS = {
 }
 
 
+def _finite(where: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+        raise ParameterError(f"{where}: expected a finite number, got {value!r}")
+    return float(value)
+
+
+def _checked_parameter(where: str, value, default, machine: MachineDescription):
+    """``value`` checked against the kind of its ``default``; returns the clean value."""
+    if where.endswith(".axis"):
+        if value not in machine.axes or machine.axes[value].is_rotary:
+            raise ParameterError(f"{where}: {value!r} is not a linear axis of {machine.name}")
+        return value
+    if where.endswith(".axes"):
+        if not isinstance(value, list) or any(a not in machine.axes for a in value):
+            raise ParameterError(f"{where}: expected a list of axes of {machine.name} "
+                                 f"({', '.join(machine.axis_order)}), got {value!r}")
+        return list(value)
+    if where.endswith(".errors_rad"):
+        if not isinstance(value, dict):
+            raise ParameterError(f"{where}: expected a mapping of location errors to radians")
+        out = {}
+        for name, angle in value.items():
+            match = re.fullmatch(r"E[ABC]0([A-Z])", str(name))
+            if not match or match.group(1) not in machine.axes:
+                raise ParameterError(f"{where}.{name}: not an angular location error of an axis "
+                                     f"of {machine.name} (e.g. EC0Y)")
+            out[str(name)] = _finite(f"{where}.{name}", angle)
+        return out
+    if isinstance(default, str):
+        if not isinstance(value, str) or not value:
+            raise ParameterError(f"{where}: expected a sensor name, got {value!r}")
+        return value
+    if isinstance(default, list):
+        if not isinstance(value, list) or len(value) != len(default):
+            raise ParameterError(f"{where}: expected {len(default)} numbers, got {value!r}")
+        numbers = [_finite(f"{where}[{i}]", v) for i, v in enumerate(value)]
+        if where.endswith(".direction") and not any(numbers):
+            raise ParameterError(f"{where}: the direction must not be zero")
+        return numbers
+    return _finite(where, value)
+
+
 @dataclass
 class ErrorModel:
     """Machine + included effects; evaluate the TCP error at command positions."""
@@ -71,16 +114,20 @@ class ErrorModel:
             self.effects[name] = self._validated(name, self.effects[name])
         self._kinematics = KinematicModel(self.machine)
 
-    @staticmethod
-    def _validated(name: str, parameters: dict | None) -> dict:
+    def _validated(self, name: str, parameters: dict | None) -> dict:
+        """Defaults merged with ``parameters``, each checked against its default's kind, so
+        that a model that loads also evaluates (a bad value is refused here, not mid-run)."""
         if name not in _DEFAULTS:
             raise ParameterError(f"unknown model effect {name!r}; known: {', '.join(MODEL_EFFECTS)}")
+        if parameters is not None and not isinstance(parameters, dict):
+            raise ParameterError(f"effect {name}: parameters must be a mapping")
         merged = copy.deepcopy(_DEFAULTS[name])
         for key, value in (parameters or {}).items():
             if key not in merged:
                 raise ParameterError(f"effect {name} has no parameter {key!r}; "
                                      f"known: {', '.join(merged)}")
-            merged[key] = value
+            merged[key] = _checked_parameter(f"{name}.{key}", value, _DEFAULTS[name][key],
+                                             self.machine)
         return merged
 
     # ------------------------------------------------------------ changes

@@ -1,0 +1,91 @@
+"""Read a numeric CSV table (a data logger's export) and account for every row.
+
+Header row of column names, then one row per reading. A row with the wrong
+number of fields is an error naming the row (the file is damaged or not
+what it is said to be); a row with a non-numeric, NaN or infinite cell is
+dropped and *counted*, with the first few reasons, so a user sees what
+was left out.
+"""
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import InputDataError
+
+#: Reasons kept for the report (the count covers all of them).
+KEPT_REASONS = 5
+
+
+@dataclass
+class CsvTable:
+    """Columns of the kept rows, and what was dropped."""
+
+    path: Path
+    columns: dict[str, np.ndarray]
+    rows_read: int
+    rows_dropped: int = 0
+    drop_reasons: list[str] = field(default_factory=list)
+
+    @property
+    def names(self) -> list[str]:
+        return list(self.columns)
+
+    def summary(self) -> str:
+        """One line: rows kept, and why any were dropped."""
+        kept = self.rows_read - self.rows_dropped
+        text = f"{self.path.name}: {kept} of {self.rows_read} rows used"
+        if self.rows_dropped:
+            text += f"; {self.rows_dropped} dropped ({'; '.join(self.drop_reasons)}"
+            text += ", ...)" if self.rows_dropped > len(self.drop_reasons) else ")"
+        return text
+
+
+def read_csv_table(path: str | Path, *, min_rows: int = 2) -> CsvTable:
+    """Read ``path``; raises :class:`InputDataError` naming the row or column at fault."""
+    path = Path(path)
+    try:
+        with open(path, newline="", encoding="utf-8") as stream:
+            rows = list(csv.reader(stream))
+    except OSError as exc:
+        raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputDataError(f"{path}: not a text CSV file ({exc})") from exc
+    rows = [r for r in rows if any(cell.strip() for cell in r)]
+    if not rows:
+        raise InputDataError(f"{path}: empty file")
+    header = [name.strip() for name in rows[0]]
+    if len(set(header)) != len(header) or any(not name for name in header):
+        raise InputDataError(f"{path}: the header needs unique, non-empty column names")
+    values, dropped, reasons = [], 0, []
+    for number, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
+                                 f"{len(header)}")
+        parsed, problem = [], ""
+        for name, cell in zip(header, row):
+            try:
+                value = float(cell)
+            except ValueError:
+                problem = f"row {number} column {name}: {cell.strip()[:20]!r} is not a number"
+                break
+            if not math.isfinite(value):
+                problem = f"row {number} column {name}: {cell.strip()} is not finite"
+                break
+            parsed.append(value)
+        if problem:
+            dropped += 1
+            if len(reasons) < KEPT_REASONS:
+                reasons.append(problem)
+            continue
+        values.append(parsed)
+    if len(values) < min_rows:
+        raise InputDataError(f"{path}: {len(values)} usable rows; at least {min_rows} needed"
+                             + (f" ({reasons[0]})" if reasons else ""))
+    data = np.asarray(values, dtype=np.float64)
+    return CsvTable(path, {name: data[:, j] for j, name in enumerate(header)},
+                    rows_read=len(rows) - 1, rows_dropped=dropped, drop_reasons=reasons)
