@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import tempfile
 import time
@@ -52,7 +53,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--minutes", type=float, default=30.0)
     parser.add_argument("--sample-s", type=float, default=10.0)
+    parser.add_argument("--domain", type=int, default=77,
+                        help="ROS_DOMAIN_ID of the soak's graph (kept apart from other runs)")
     args = parser.parse_args(argv)
+    # Set before rclpy starts; the node processes inherit it.
+    os.environ["ROS_DOMAIN_ID"] = str(args.domain)
     seconds = args.minutes * 60
     folder = Path(tempfile.mkdtemp(prefix="mt_soak_"))
     scenario = folder / "soak.yaml"

@@ -17,7 +17,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.clock import Clock, ClockType
 
 #: Counters kept per stream.
-COUNTERS = ("processed", "refused", "lost", "out_of_order")
+COUNTERS = ("processed", "refused", "lost", "out_of_order", "late")
 
 
 class DeliveryHealth:
@@ -35,6 +35,11 @@ class DeliveryHealth:
     # ------------------------------------------------------------------ counting
     def processed(self, stream: str, count: int = 1) -> None:
         self.counts[stream]["processed"] += count
+
+    def late(self, stream: str, count: int = 1) -> None:
+        """Count input that arrived after the data time it belonged to had been processed
+        (it is still used, from the next data on: a replay would differ there)."""
+        self.counts[stream]["late"] += count
 
     def refused(self, stream: str, reason: str) -> None:
         """Count a refused message or parameter and report the reason at once."""
@@ -91,7 +96,7 @@ class DeliveryHealth:
         values, news = [], []
         for stream in sorted(self.counts):
             values.extend(self._values(stream))
-            for name in ("refused", "lost"):
+            for name in ("refused", "lost", "late"):
                 new = self.counts[stream][name] - self._reported[stream][name]
                 if new:
                     news.append(f"{stream}: {new} {name}")

@@ -38,6 +38,7 @@ class ModelInputs:
         self.dead: set[str] = set()
         self.on_change = on_change
         self.delay_ns = int(delay_s * 1e9)
+        self._applied_until = -1  # data time [ns] up to which inputs have been applied
         self._pending_temperatures: list[tuple[int, dict, set]] = []
         self._pending_profiles: list[tuple[int, str, np.ndarray, np.ndarray]] = []
         node.create_subscription(TemperatureArray, "temperatures",
@@ -83,7 +84,10 @@ class ModelInputs:
         self.health.processed("temperatures")
         good = {name: float(v) for name, v in zip(message.sensor_names, values) if np.isfinite(v)}
         dead = {name for name, v in zip(message.sensor_names, values) if not np.isfinite(v)}
-        self._pending_temperatures.append((stamp_to_nanoseconds(message.header.stamp), good, dead))
+        stamp = stamp_to_nanoseconds(message.header.stamp)
+        if stamp <= self._applied_until:
+            self.health.late("temperatures")
+        self._pending_temperatures.append((stamp, good, dead))
         self._pending_temperatures.sort(key=lambda item: item[0])
 
     def _on_profile(self, message: SystematicProfile) -> None:
@@ -97,6 +101,8 @@ class ModelInputs:
         stream = f"systematic/{message.axis or '?'}"
         self.health.sequence(stream, message.sequence)
         self.health.processed(stream)
+        if stamp_to_nanoseconds(message.header.stamp) <= self._applied_until:
+            self.health.late(stream)
         self._pending_profiles.append((stamp_to_nanoseconds(message.header.stamp),
                                        message.error_name,
                                        unpack_float64(message.positions).copy(),
@@ -106,6 +112,7 @@ class ModelInputs:
     def advance(self, stamp_ns: int) -> None:
         """Apply every input stamped at or before ``stamp_ns - delay``, in stamp order."""
         limit = stamp_ns - self.delay_ns
+        self._applied_until = max(self._applied_until, limit)
         while self._pending_temperatures and self._pending_temperatures[0][0] <= limit:
             _, good, dead = self._pending_temperatures.pop(0)
             self.temperatures.update(good)  # a dead sensor keeps its last valid value

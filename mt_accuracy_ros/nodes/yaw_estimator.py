@@ -113,6 +113,7 @@ class YawEstimator(Node):
         self._next_profile_s = 0.0
         self._problems: list[tuple[int, str]] = []
         self._pending_temperatures: list = []
+        self._temperatures_applied_until = -1  # data time [ns]
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.health = DeliveryHealth(self)
         self._profile_sequence: dict[str, int] = {}  # per systematic/<axis> topic
@@ -175,12 +176,15 @@ class YawEstimator(Node):
         self.health.sequence("temperatures", message.sequence)
         self.health.processed("temperatures")
         # Applied in data time (see _apply_temperatures), not on arrival.
+        if stamp_to_nanoseconds(message.header.stamp) <= self._temperatures_applied_until:
+            self.health.late("temperatures")
         self._pending_temperatures.append((stamp_to_nanoseconds(message.header.stamp), names,
                                            values))
         self._pending_temperatures.sort(key=lambda item: item[0])
 
     def _apply_temperatures(self, batch_stamp_ns: int) -> None:
         limit = batch_stamp_ns - int(float(self.get_parameter("input_delay_s").value) * 1e9)
+        self._temperatures_applied_until = max(self._temperatures_applied_until, limit)
         while self._pending_temperatures and self._pending_temperatures[0][0] <= limit:
             _, names, values = self._pending_temperatures.pop(0)
             self._use_temperatures(names, values)
