@@ -17,9 +17,17 @@ BENCH_STAMP = $(VENV)/.bench-stamp
 MSG_SOURCES = $(shell find msg_defs -type f)
 PKG_SOURCES = $(shell find mt_accuracy_ros resource config -type f -not -name '*.pyc' 2>/dev/null)
 
-.PHONY: setup test test-repeat test-loaded demo bench clean
+.PHONY: setup browser test test-repeat test-loaded demo bench clean
 
-setup: $(PKG_STAMP)
+setup: $(PKG_STAMP) browser
+
+# The report test renders in a real headless Chromium (Debian's package). Installed
+# here where it can be (root with apt); elsewhere that one test is skipped.
+browser:
+	@command -v chromium >/dev/null 2>&1 || { test "$$(id -u)" = 0 && command -v apt-get >/dev/null 2>&1 && \
+	  { apt-get install -y -q chromium >/dev/null 2>&1 || { apt-get update -q >/dev/null 2>&1 && \
+	    apt-get install -y -q chromium >/dev/null 2>&1; }; }; } || \
+	  echo "chromium not installed: the browser test of the report will be skipped"
 
 $(DEPS_STAMP): requirements.txt
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)

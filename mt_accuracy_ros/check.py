@@ -141,8 +141,10 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
     diagnosis = evaluate(model)
     first = diagnosis
     residual_before = residuals(model, obs)
+    step_residuals = []
     queue = list(add)
     while True:
+        step_residuals.append(residuals(model, obs).copy())
         steps.append({"model_version": model.version, "effects": sorted(model.effects),
                       "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text()})
         if queue:
@@ -158,21 +160,29 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
         model = add_effect(model, candidate, obs)
         steps[-1]["added"] = name
         steps[-1]["parameters"] = candidate.parameters
+        steps[-1]["parameter_uncertainties"] = candidate.parameter_uncertainties
         diagnosis = evaluate(model)
     residual = residuals(model, obs)  # obs holds the final model's predictions
-    return {"data": str(bag), "kind": "bag", "readings": obs.n,
+    return {"data": str(bag), "kind": "bag", "readings": obs.n, "namespace": namespace,
             "figures_before_m": error_figures(residual_before),
             "figures_after_m": error_figures(residual),
             "baseline_rmse": first.baseline_rmse,
+            "baseline_cv_rmse": first.baseline_cv_rmse,
             "ranking": [{"effect": c.effect, "variant": c.variant, "cv_rmse_after": c.cv_rmse_after,
                          "error_reduction": c.error_reduction, "significant": c.significant,
-                         "explanation": c.explanation} for c in first.ranking],
+                         "explanation": c.explanation, "parameters": c.parameters,
+                         "parameter_uncertainties": c.parameter_uncertainties}
+                        for c in first.ranking],
             "added": [s["added"] for s in steps if "added" in s],
             "final_rmse": diagnosis.baseline_rmse, "steps": steps,
             "band": obs.uncertainty_m, "final_diagnosis": diagnosis.text(),
+            "machine": model.machine.name,
             "_plot": {"time": obs.time_s, "positions": obs.positions,
                       "residual_before": residual_before, "residual_after": residual,
-                      "temperatures": obs.temperatures}}
+                      "temperatures": obs.temperatures, "measured": obs.measured_m,
+                      "mask": obs.measured_mask, "step_residuals": step_residuals,
+                      "velocities": obs.velocities, "directions": obs.directions,
+                      "model": model}}
 
 
 # ------------------------------------------------------------------ CSV path
@@ -238,10 +248,11 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
 # ------------------------------------------------------------------ report
 def write_outputs(result: dict, json_path: str | None, report_path: str | None) -> None:
     plot = result.pop("_plot")
-    if json_path:
-        Path(json_path).parent.mkdir(parents=True, exist_ok=True)
-        Path(json_path).write_text(json.dumps(result, indent=2, default=float))
     if report_path:
         from .report import write_check_report
 
-        write_check_report(result, plot, Path(report_path))
+        # The JSON summary carries the report's content too (same sections, tables).
+        result["report"] = write_check_report(result, plot, Path(report_path)).as_dict()
+    if json_path:
+        Path(json_path).parent.mkdir(parents=True, exist_ok=True)
+        Path(json_path).write_text(json.dumps(result, indent=2, default=float))

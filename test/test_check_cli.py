@@ -25,6 +25,18 @@ def test_csv_path_on_real_fl_thermal_improves_held_out_error(data_dir, tmp_path,
     html = (tmp_path / "r.html").read_text()
     assert "r_fit.png" in html and (tmp_path / "r_fit.png").is_file()
     assert "final RMSE" in capsys.readouterr().out
+    # One report for both paths, its content in the JSON too, valid HTML, images that load.
+    from browser import chromium, page_facts, validate_html
+
+    validate_html(tmp_path / "r.html")
+    titles = [s["title"] for s in summary["report"]["sections"]]
+    assert titles == ["Data", "Headline", "The effect found and its evidence", "Model versions"]
+    statuses = {row["status"] for row in summary["report"]["sections"][2]["tables"][0]["rows"]}
+    assert statuses and statuses <= {"accepted", "rejected"}
+    if chromium() is not None:
+        facts = page_facts(tmp_path / "r.html")
+        assert facts["sections"] == titles
+        assert facts["images"] and all(i["loaded"] for i in facts["images"])
 
 
 def test_csv_errors_are_clear(tmp_path, capsys):

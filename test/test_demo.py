@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from mt_accuracy_ros.demo import delivery_losses
 
 
@@ -22,18 +24,31 @@ def test_delivery_losses_are_plain_sentences():
     assert delivery_losses({"/n": {"scales.processed": "5", "scales.lost": "0"}}) == []
 
 
-def test_demo_records_from_the_first_sample_and_accounts_for_every_stream(tmp_path, capsys):
+@pytest.fixture(scope="module")
+def demo_run(tmp_path_factory):
+    """The main job, run once for the tests below (about 40 s)."""
+    import contextlib
+    import io
+
     from mt_accuracy_ros.demo import run_demo
+
+    out = tmp_path_factory.mktemp("demo") / "out"
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        code = run_demo(out_dir=str(out), rate_factor=3.0)
+    return code, out, printed.getvalue()
+
+
+def test_demo_records_from_the_first_sample_and_accounts_for_every_stream(demo_run):
     from mt_accuracy_ros.io.bag_reader import decode, read_messages
 
-    assert run_demo(out_dir=str(tmp_path / "out"), rate_factor=3.0) == 0
-    printed = capsys.readouterr().out
-    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    code, out, printed = demo_run
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
     # The recorder was subscribed before the machine streamed: the bag starts at sample 0
     # and at the first temperature reading.
-    first_scales = next(m for m in read_messages(tmp_path / "out" / "bag", ["/scales"]))
-    first_temperatures = next(m for m in read_messages(tmp_path / "out" / "bag",
-                                                       ["/temperatures"]))
+    first_scales = next(m for m in read_messages(out / "bag", ["/scales"]))
+    first_temperatures = next(m for m in read_messages(out / "bag", ["/temperatures"]))
     assert decode(first_scales).first_sample_index == 0
     assert decode(first_temperatures).sequence == 0
     # Losses, if the machine was too loaded to keep up, are said in words - never silent.
@@ -41,5 +56,32 @@ def test_demo_records_from_the_first_sample_and_accounts_for_every_stream(tmp_pa
         assert "WARNING" not in printed
     else:
         assert "WARNING" in printed and "could not keep up" in printed
-    assert (tmp_path / "out" / "report.html").is_file()
     assert summary["missing_effect_found"] and summary["model_checks"] > 5
+
+
+REPORT_SECTIONS = ["Machine, data and instruments", "Headline: TCP error per component",
+                   "The run", "Where the model fails", "The effect found and its evidence",
+                   "Model versions", "Axes: dual-scale yaw, systematic profile, deterioration",
+                   "Temperatures", "ISO 230-2 positioning", "Compensation table"]
+
+
+def test_demo_report_renders_in_a_browser_with_every_section_and_image(demo_run):
+    from browser import chromium, page_facts, validate_html
+
+    _, out, _ = demo_run
+    page = out / "report.html"
+    validate_html(page)
+    summary = json.loads((out / "summary.json").read_text())
+    # The JSON summary carries the same sections.
+    assert [s["title"] for s in summary["report"]["sections"]] == REPORT_SECTIONS
+    headline = summary["report"]["sections"][1]["tables"][0]["rows"]
+    assert headline[0]["state"].startswith("without compensation")
+    assert all("(k = 2)" in row["RMS e_x"] for row in headline)
+    if chromium() is None:
+        pytest.skip("chromium not installed (make setup installs it where it can)")
+    facts = page_facts(page)
+    assert facts["sections"] == REPORT_SECTIONS
+    assert len(facts["images"]) >= 5
+    assert all(image["loaded"] for image in facts["images"]), facts["images"]
+    assert facts["rejected"] >= 1  # rejected candidates are marked as such
+    assert facts["width"] <= 1300  # readable on a laptop: no sideways scrolling

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputDataError, InsufficientDataError
-from ..validation import finite_array
+from ..validation import finite_array, same_length
 
 
 def systematic_and_random(errors: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -149,3 +149,41 @@ def iso230_2(targets: ArrayLike, deviations_up: ArrayLike,
         accuracy_up=float(np.max(mean_up + 2 * s_up) - np.min(mean_up - 2 * s_up)),
         accuracy_down=float(np.max(mean_down + 2 * s_down) - np.min(mean_down - 2 * s_down)),
     )
+
+
+def positioning_runs(positions: ArrayLike, deviations: ArrayLike, directions: ArrayLike, *,
+                     resolution_m: float = 1e-4, min_targets: int = 5, min_runs: int = 2,
+                     min_share: float = 0.8):
+    """Find ISO 230-2 positioning runs in readings of one axis, or None.
+
+    Readings at the same target (positions equal within ``resolution_m``)
+    approached from each direction are runs. The data holds positioning runs
+    when at least ``min_targets`` targets each have ``min_runs`` approaches
+    from both sides and at least ``min_share`` of the readings sit on such
+    targets (a continuous motion that crosses a position twice does not).
+
+    Returns
+    -------
+    (targets (m,), up (m, n), down (m, n)) ready for :func:`iso230_2`, with n
+    the smallest run count (the first n of each target), or None.
+    """
+    q = finite_array(positions, "positions", ndim=1)
+    e = finite_array(deviations, "deviations", ndim=1)
+    d = finite_array(directions, "directions", ndim=1)
+    same_length("positions", q, "deviations", e)
+    same_length("positions", q, "directions", d)
+    keys = np.round(q / resolution_m).astype(np.int64)
+    targets, up, down, used = [], [], [], 0
+    for key in np.unique(keys):
+        on = keys == key
+        rising, falling = e[on & (d > 0)], e[on & (d < 0)]
+        if rising.size >= min_runs and falling.size >= min_runs:
+            targets.append(float(np.mean(q[on])))
+            up.append(rising)
+            down.append(falling)
+            used += int(on.sum())
+    if len(targets) < min_targets or used < min_share * q.size:
+        return None
+    runs = min(min(a.size for a in up), min(a.size for a in down))
+    return (np.asarray(targets), np.array([a[:runs] for a in up]),
+            np.array([a[:runs] for a in down]))

@@ -84,6 +84,9 @@ class Candidate:
     significant: bool
     explanation: str
     variant: str = ""
+    #: Standard (k = 1) uncertainty of each fitted parameter, from the least-squares
+    #: covariance sigma^2 (X^T X)^-1 [unit of the parameter].
+    parameter_uncertainties: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -283,7 +286,8 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.1
         text = EXPLANATIONS[effect].format(variant=variant, axis=axis, sensor=sensor,
                                            names=", ".join(names))
         candidate = Candidate(effect, dict(zip(names, values.tolist())), cv, reduction,
-                              significant, text, variant)
+                              significant, text, variant,
+                              dict(zip(names, np.broadcast_to(standard, values.shape).tolist())))
         if effect not in candidates or cv < candidates[effect].cv_rmse_after:
             candidates[effect] = candidate
     ranking = sorted(candidates.values(), key=lambda c: c.cv_rmse_after)

@@ -51,3 +51,32 @@ def test_iso_refuses_mismatched_or_single_runs():
         iso230_2([0.0, 1.0], np.zeros((2, 3)), np.zeros((3, 3)))
     with pytest.raises(InsufficientDataError):
         iso230_2([0.0], np.zeros((1, 1)), np.zeros((1, 1)))
+
+
+def test_positioning_runs_are_found_and_evaluated_like_iso230_2():
+    from mt_accuracy_ros.core.scales.repeatability import iso230_2, positioning_runs
+
+    rng = np.random.default_rng(3)
+    targets = np.linspace(0.0, 0.4, 6)
+    positions, deviations, directions = [], [], []
+    for run in range(3):
+        for sign in (1, -1):
+            for target in targets[::sign]:
+                positions.append(target + rng.normal(0, 1e-6))
+                deviations.append(2e-6 * target / 0.4 + sign * 1e-6 + rng.normal(0, 2e-7))
+                directions.append(sign)
+    found = positioning_runs(np.array(positions), np.array(deviations), np.array(directions))
+    assert found is not None
+    p, up, down = found
+    np.testing.assert_allclose(p, targets, atol=1e-5)
+    assert up.shape == down.shape == (6, 3)
+    result = iso230_2(p, up, down)
+    assert result.mean_reversal == pytest.approx(2e-6, abs=3e-7)  # up - down = 2 x 1 um
+
+
+def test_continuous_motion_is_not_mistaken_for_positioning_runs():
+    from mt_accuracy_ros.core.scales.repeatability import positioning_runs
+
+    t = np.linspace(0, 60, 600)
+    q = 0.2 + 0.2 * np.sin(t)
+    assert positioning_runs(q, np.zeros_like(q), np.sign(np.cos(t))) is None

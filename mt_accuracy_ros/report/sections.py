@@ -1,0 +1,406 @@
+"""The sections of a report, each with its plots: what a metrologist reads at a glance.
+
+Every plot of a bag report uses one time base, "time since start [s]" (the
+first sample of the data), puts its legend outside the axes, and draws the
+reference instrument's k = 2 band where a residual is shown.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from ..core.scales.repeatability import iso230_2, positioning_runs
+from ..core.workbench.statistics import format_with_uncertainty, rms_with_uncertainty
+from . import Figure, Section, Table, pyplot, save_figure
+from .bag_data import BagData
+
+TIME_LABEL = "time since start [s]"
+COMPONENTS = "xyz"
+UM = 1e6
+
+
+def _legend(ax) -> None:
+    handles, labels = ax.get_legend_handles_labels()
+    if handles:
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+
+
+# ----------------------------------------------------------------------- the bag
+def bag_report_sections(data: BagData, check: dict | None, directory: Path, stem: str
+                        ) -> list[Section]:
+    sections = [_source_section(data, check), _headline_section(data, check)]
+    if check is not None:
+        sections += [_where_section(data, check, directory, stem),
+                     _evidence_section(check), _versions_section(check)]
+    else:
+        sections.append(Section("Where the model fails", paragraphs=[
+            "This data has no reference measurements (reference/tcp_error): the model cannot "
+            "be judged against it."]))
+    sections += [_axes_section(data, directory, stem), _temperature_section(data, directory, stem),
+                 _iso_section(data, directory, stem), _table_section(data, directory, stem)]
+    return sections
+
+
+def _source_section(data: BagData, check: dict | None) -> Section:
+    from .. import __version__
+
+    section = Section("Machine, data and instruments")
+    info = data.info
+    ends = [s for s in ([data.references[-1][0]] if data.references else []) +
+            ([data.temperatures[-1][0]] if data.temperatures else [])]
+    span = (max(ends) - data.start_ns) / 1e9 if ends else float("nan")
+    section.paragraphs.append(
+        f"Data: {data.path} - {info['message_count']} messages on {len(info['topics'])} topics, "
+        f"{span:.1f} s of data time recorded in {info['duration_s']:.1f} s of wall time. "
+        f"Software: mt_accuracy_ros {__version__}.")
+    if data.models:
+        model = yaml.safe_load(data.models[-1][1]) or {}
+        section.paragraphs.append(f"Machine: {model.get('machine', '?')}; model versions "
+                                  f"recorded: {len(data.models)}.")
+    elif check is not None:
+        section.paragraphs.append(f"Machine: {check.get('machine', '?')}.")
+    sensors = Table(["sensor", "what", "rate", "uncertainty / resolution"])
+    if data.scales is not None:
+        period = float(data.scales.sample_period)
+        sensors.add(", ".join(data.scales.channel_names), "linear scale heads (dual scales)",
+                    f"{1 / period:.0f} Hz in {data.batch_count} batches", "see the yaw budget")
+    instruments = {}
+    for _, reading in data.references:
+        instruments.setdefault(reading.instrument or "reference", []).append(reading.uncertainty)
+    for name, values in instruments.items():
+        span = (data.references[-1][0] - data.references[0][0]) / 1e9
+        rate = (len(values) - 1) / span if span > 0 else 0.0
+        sensors.add(name, "reference instrument (TCP error)", f"{rate:.2f} Hz",
+                    f"{np.median(values) * UM:.2g} µm (k = 2)")
+    if data.temperatures:
+        names = data.temperatures[-1][1]
+        span = (data.temperatures[-1][0] - data.temperatures[0][0]) / 1e9
+        rate = (len(data.temperatures) - 1) / span if span > 0 else 0.0
+        sensors.add(f"{len(names)} thermocouples ({', '.join(names[:6])}"
+                    f"{', ...' if len(names) > 6 else ''})", "temperatures [°C]",
+                    f"{rate:.2f} Hz", "")
+    section.tables.append(sensors)
+    return section
+
+
+def _component_figures(values: np.ndarray, mask: np.ndarray, u_k2: float) -> list[str]:
+    out = []
+    for c in range(3):
+        picked = values[mask[:, c], c]
+        if picked.size == 0:
+            out.append("not measured")
+            continue
+        figure = rms_with_uncertainty(picked * UM, u_k2 * UM)
+        out.append(format_with_uncertainty(figure.rms, figure.rms_u_k2, "µm"))
+    return out
+
+
+def _headline_section(data: BagData, check: dict | None) -> Section:
+    section = Section("Headline: TCP error per component")
+    if check is None:
+        section.paragraphs.append("No reference measurements: no TCP error to report.")
+        return section
+    plot = check["_plot"]
+    mask, band = plot["mask"], check["band"]
+    table = Table(["state", "model version"] + [f"RMS e_{c}" for c in COMPONENTS],
+                  caption="RMS of the TCP error at the reference points, per component, with "
+                          "its k = 2 uncertainty (sampling and instrument)")
+    measured = plot["measured"] - np.nanmean(np.where(mask, plot["measured"], np.nan), axis=0)
+    table.add("without compensation (mean removed)", "-",
+              *_component_figures(np.nan_to_num(measured), mask, band))
+    steps = check["steps"]
+    for k, (step, residual) in enumerate(zip(steps, plot["step_residuals"])):
+        label = "with the starting model's compensation" if k == 0 else \
+            f"after adding {steps[k - 1]['added']}"
+        table.add(label, step["model_version"], *_component_figures(residual, mask, band))
+    section.tables.append(table)
+    section.paragraphs.append(
+        f"{check['readings']} reference readings; the instrument's band is ± "
+        f"{band * UM:.2g} µm (k = 2). 'With compensation' is the error that remains when the "
+        "model's correction is applied at the reference points (reference minus model).")
+    section.paragraphs.append(f"End state: {check['final_diagnosis']}.")
+    return section
+
+
+def _where_section(data: BagData, check: dict, directory: Path, stem: str) -> Section:
+    plt = pyplot()
+    plot = check["_plot"]
+    residual, mask = plot["residual_after"], plot["mask"]
+    band = check["band"] * UM
+    offset = (data.references[0][0] - data.start_ns) / 1e9 if data.references else 0.0
+    time = plot["time"] + offset
+    variables = [(f"{axis} position [mm]", values * 1e3) for axis, values in plot["positions"].items()
+                 if np.ptp(values) > 0]
+    rising = sorted(plot["temperatures"], key=lambda s: -np.ptp(plot["temperatures"][s]))[:2]
+    variables += [(f"{s} rise [K]", plot["temperatures"][s] - plot["temperatures"][s][0])
+                  for s in rising]
+    variables.append((TIME_LABEL, time))
+    fig, axes = plt.subplots(3, len(variables), figsize=(2.6 * len(variables) + 1.5, 7),
+                             sharey="row", squeeze=False)
+    for row, component in enumerate(COMPONENTS):
+        for col, (label, values) in enumerate(variables):
+            ax = axes[row, col]
+            picked = mask[:, row]
+            ax.axhspan(-band, band, color="tab:green", alpha=0.15,
+                       label="instrument band (k = 2)" if row == 0 and col == len(variables) - 1
+                       else None)
+            ax.plot(values[picked], residual[picked, row] * UM, ".", ms=2.5, color="tab:blue",
+                    label="residual" if row == 0 and col == len(variables) - 1 else None)
+            if row == 2:
+                ax.set_xlabel(label, fontsize=8)
+            if col == 0:
+                ax.set_ylabel(f"e_{component} residual [µm]", fontsize=8)
+            ax.tick_params(labelsize=7)
+    _legend(axes[0, -1])
+    figure = save_figure(fig, directory, f"{stem}_where",
+                         "Residual (reference - final model) per component against each axis "
+                         "position, the temperatures that changed most, and time; green: the "
+                         "instrument's band.")
+    section = Section("Where the model fails", figures=[figure])
+    outside = [float(np.mean(np.abs(residual[mask[:, c], c] * UM) > band))
+               for c in range(3) if mask[:, c].any()]
+    section.paragraphs.append(
+        f"With the final model, {100 * max(outside, default=0):.0f} % of the readings of the "
+        "worst component lie outside the instrument's band.")
+    return section
+
+
+def _evidence_section(check: dict) -> Section:
+    section = Section("The effect found and its evidence")
+    baseline = check.get("baseline_cv_rmse", check["baseline_rmse"])
+    section.paragraphs.append(
+        f"Each candidate effect is fitted to the residual of the starting model and judged by "
+        f"time-blocked 5-fold cross-validation; without any candidate the cross-validated "
+        f"error is {baseline * UM:.3g} µm. A candidate is accepted when it cuts that error by "
+        "the minimum reduction, its parameters stand above 3 standard errors, and the residual "
+        "is clearly above the instrument's noise; all others are rejected.")
+    table = Table(["candidate", "status", "CV error after [µm]", "reduction", "parameters (± u, k = 1)",
+                   "physical reading"])
+    for entry in check["ranking"][:12]:
+        accepted = entry["significant"]
+        parameters = "; ".join(
+            f"{name} = {value:.3g} ± {entry.get('parameter_uncertainties', {}).get(name, np.nan):.2g}"
+            for name, value in entry.get("parameters", {}).items())
+        table.add(entry["effect"] + (f" ({entry['variant']})" if entry.get("variant") else ""),
+                  "accepted" if accepted else "rejected", entry["cv_rmse_after"] * UM,
+                  f"{100 * entry['error_reduction']:.1f} %", parameters,
+                  entry["explanation"] if accepted else f"(rejected) {entry['explanation']}",
+                  css_class="accepted" if accepted else "rejected")
+    section.tables.append(table)
+    added = [s for s in check["steps"] if "added" in s]
+    for step in added:
+        uncertainties = step.get("parameter_uncertainties", {})
+        section.paragraphs.append(
+            f"Added {step['added']}: " + ", ".join(
+                f"{name} = {value:.4g} ± {2 * uncertainties.get(name, np.nan):.2g} (k = 2)"
+                for name, value in step["parameters"].items()) + ".")
+    if not added:
+        section.paragraphs.append("No effect was added.")
+    return section
+
+
+def _versions_section(check: dict) -> Section:
+    table = Table(["model version", "effects", "residual RMS [µm]", "diagnosis"])
+    for step in check["steps"]:
+        table.add(step["model_version"], ", ".join(step["effects"]), step["rmse"] * UM,
+                  step["diagnosis"])
+    return Section("Model versions", tables=[table])
+
+
+def _axes_section(data: BagData, directory: Path, stem: str) -> Section:
+    section = Section("Axes: dual-scale yaw, systematic profile, deterioration")
+    if not data.axes:
+        section.paragraphs.append("No yaw or systematic-profile topics in this data.")
+        return section
+    plt = pyplot()
+    names = sorted(data.axes)
+    fig, axes = plt.subplots(len(names), 2, figsize=(11, 3.2 * len(names)), squeeze=False)
+    table = Table(["axis", "error", "chosen k", "CV RMSE [µrad]", "random σ (median) [µrad]",
+                   "samples", "max |change| vs baseline [µrad]", "tolerance [µrad]", "alarm"])
+    for row, name in enumerate(names):
+        axis = data.axes[name]
+        left, right = axes[row, 0], axes[row, 1]
+        if axis.yaw_rad.size:
+            left.plot(data.seconds(axis.yaw_time_ns), axis.yaw_rad * UM, ",", color="0.4")
+            right.plot(axis.yaw_position_m * 1e3, axis.yaw_rad * UM, ",", color="0.6",
+                       label="yaw samples")
+        left.set(xlabel=TIME_LABEL, ylabel=f"yaw of {name.upper()} [µrad]")
+        if axis.profiles:
+            last = axis.profiles[-1]
+            x = np.asarray(last.positions) * 1e3
+            systematic = np.asarray(last.systematic) * UM
+            sigma = np.asarray(last.random_sigma) * UM
+            right.fill_between(x, systematic - 2 * sigma, systematic + 2 * sigma, color="tab:blue",
+                               alpha=0.2, label="± 2 random σ")
+            right.plot(x, systematic, color="tab:blue", label=f"kNN systematic (k = {last.k})")
+            difference = np.asarray(last.baseline_difference) * UM
+            if difference.size == systematic.size:
+                right.plot(x, systematic - difference, "--", color="tab:orange",
+                           label="baseline profile")
+            alarm = next((p for p in axis.profiles if p.deterioration), None)
+            change = float(np.max(np.abs(difference))) if difference.size else float("nan")
+            table.add(name, last.error_name, int(last.k), last.cv_rmse * UM,
+                      float(np.median(sigma)) if sigma.size else float("nan"),
+                      int(last.sample_count), change, last.tolerance * UM,
+                      "yes" if alarm is not None else "no",
+                      css_class="rejected" if alarm is None else "")
+        right.set(xlabel=f"{name.upper()} position [mm]", ylabel="yaw [µrad]")
+        _legend(right)
+    figure = save_figure(fig, directory, f"{stem}_axes",
+                         "Per axis: the yaw E = (x2 - x1)/D of its scale pair over time (left); "
+                         "the kNN systematic profile with ± 2 random σ and the stored baseline "
+                         "against position (right).")
+    section.figures.append(figure)
+    section.tables.append(table)
+    section.paragraphs.append(
+        "The deterioration alarm compares the latest systematic profile with the baseline "
+        "(Kidani eq. 2.1): an alarm when |change| reaches the tolerance anywhere on the stroke.")
+    return section
+
+
+def _temperature_section(data: BagData, directory: Path, stem: str) -> Section:
+    section = Section("Temperatures")
+    if not data.temperatures:
+        section.paragraphs.append("No temperatures in this data.")
+        return section
+    plt = pyplot()
+    names = data.temperatures[-1][1]
+    stamps = np.array([t[0] for t in data.temperatures])
+    values = np.array([[t[2][j] if j < len(t[2]) else np.nan for j in range(len(names))]
+                       for t in data.temperatures])
+    order = np.argsort(-np.nanmax(values, axis=0) + np.nanmin(values, axis=0))
+    shown = [j for j in order if not names[j].startswith(("x1_", "x2_", "y1_", "y2_", "z1_",
+                                                          "z2_"))][:8] or list(order[:8])
+    fig, ax = plt.subplots(figsize=(10, 3.6))
+    for j in shown:
+        ax.plot(data.seconds(stamps), values[:, j], lw=1, label=names[j])
+    ax.set(xlabel=TIME_LABEL, ylabel="temperature [°C]")
+    _legend(ax)
+    section.figures.append(save_figure(fig, directory, f"{stem}_temperatures",
+                                       "Temperatures over the run (the structure's sensors that "
+                                       "changed most; scale thermocouples left out)."))
+    table = Table(["sensor", "start [°C]", "end [°C]", "min [°C]", "max [°C]"])
+    for j in shown:
+        column = values[:, j]
+        finite = column[np.isfinite(column)]
+        if finite.size:
+            table.add(names[j], finite[0], finite[-1], finite.min(), finite.max())
+    section.tables.append(table)
+    return section
+
+
+def _iso_section(data: BagData, directory: Path, stem: str) -> Section:
+    section = Section("ISO 230-2 positioning")
+    found = []
+    if data.references:
+        axes = [a.upper() for a in data.references[0][1].command_axes]
+        for j, axis in enumerate(axes):
+            if axis not in "XYZ" or any(len(r.command_positions) != len(axes)
+                                        for _, r in data.references):
+                continue
+            component = "XYZ".index(axis)
+            positions = np.array([r.command_positions[j] for _, r in data.references])
+            deviations = np.array([(r.error.x, r.error.y, r.error.z)[component]
+                                   for _, r in data.references])
+            directions = np.array([r.command_directions[j] if len(r.command_directions) ==
+                                   len(axes) else 0 for _, r in data.references], dtype=float)
+            runs = positioning_runs(positions, deviations, directions)
+            if runs is not None:
+                found.append((axis, iso230_2(*runs)))
+    if not found:
+        section.paragraphs.append(
+            "This data has no positioning runs (repeated approaches to the same targets from "
+            "both directions, ISO 230-2), so no A, E, R, B, M figures are given.")
+        return section
+    table = Table(["axis", "A [µm]", "A↑ [µm]", "A↓ [µm]", "E [µm]", "R [µm]", "B [µm]",
+                   "M [µm]"])
+    for axis, result in found:
+        table.add(axis, result.accuracy * UM, result.accuracy_up * UM, result.accuracy_down * UM,
+                  result.systematic_deviation * UM, result.repeatability * UM,
+                  result.reversal_value * UM, result.mean_deviation_range * UM)
+    section.tables.append(table)
+    return section
+
+
+def _table_section(data: BagData, directory: Path, stem: str) -> Section:
+    section = Section("Compensation table")
+    if not data.tables:
+        section.paragraphs.append("No compensation table in this data.")
+        return section
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(data.tables), figsize=(4.2 * len(data.tables) + 1.5, 3.4),
+                             squeeze=False)
+    for col, (axis, message) in enumerate(sorted(data.tables.items())):
+        values = np.asarray(message.values).reshape(-1, len(message.columns))
+        ax = axes[0, col]
+        for j, column in enumerate(message.columns[1:], start=1):
+            scale, unit = (UM, "µm") if column.endswith("_m") else (UM, "µrad")
+            ax.plot(values[:, 0] * 1e3, values[:, j] * scale,
+                    label=f"{column.rsplit('_', 1)[0]} [{unit}]")
+        ax.set(xlabel=f"{axis.upper()} position [mm]", ylabel="error [µm, µrad]",
+               title=f"axis {axis.upper()} (model v{message.model_version})")
+    _legend(axes[0, -1])
+    section.figures.append(save_figure(fig, directory, f"{stem}_table",
+                                       "The latest compensation table per axis (ISO 230-1 "
+                                       "component errors, as a CNC's tables take them)."))
+    for axis, message in sorted(data.tables.items()):
+        values = np.asarray(message.values).reshape(-1, len(message.columns))
+        step = max(1, values.shape[0] // 10)
+        headers = [message.columns[0].replace("_m", " [mm]")] + [
+            c.replace("_m", " [µm]").replace("_rad", " [µrad]") for c in message.columns[1:]]
+        table = Table(headers, caption=f"axis {axis.upper()}, every {step}. row")
+        for row in values[::step]:
+            table.add(*(float(v * (1e3 if j == 0 else UM)) for j, v in enumerate(row)))
+        section.tables.append(table)
+    if data.tables:
+        first = next(iter(data.tables.values()))
+        if len(first.squareness_names):
+            section.paragraphs.append("Squareness: " + ", ".join(
+                f"{n} = {v * UM:.3g} µrad" for n, v in zip(first.squareness_names,
+                                                          first.squareness)) + ".")
+    section.paragraphs.append("Positions in mm, linear errors in µm, angular errors in µrad.")
+    return section
+
+
+# ----------------------------------------------------------------------- CSV tables
+def csv_report_sections(result: dict, plot: dict, directory: Path, stem: str) -> list[Section]:
+    plt = pyplot()
+    source = Section("Data", paragraphs=[
+        f"Data: {result['data']} - {result.get('rows_note', '')}.",
+        f"Target: {result['target']}; trained on the first {result['train_rows']} rows, judged "
+        f"on the {result['rows'] - result['train_rows']} rows after them."])
+    hours = (plot["time"] - plot["time"][0]) / 3600
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+    top.plot(hours, plot["target"], "k-", lw=0.8, label="measured")
+    top.plot(hours, plot["before"], "b-", lw=0.8, label="model before")
+    top.plot(hours, plot["after"], "r-", lw=0.8, label="model after")
+    split = hours[np.argmin(plot["train"])] if not plot["train"].all() else hours[-1]
+    for ax in (top, bottom):
+        ax.axvline(split, color="0.5", ls="--", label="end of training" if ax is top else None)
+    bottom.plot(hours, plot["target"] - plot["before"], "b-", lw=0.8, label="residual before")
+    bottom.plot(hours, plot["target"] - plot["after"], "r-", lw=0.8, label="residual after")
+    top.set(ylabel=result["target"])
+    bottom.set(xlabel="time since start [h]", ylabel=f"residual [{result['target']}]")
+    _legend(top)
+    _legend(bottom)
+    figure = save_figure(fig, directory, f"{stem}_fit",
+                         "Measured against the model before and after (top) and the residual "
+                         "(bottom); trained left of the dashed line, judged right of it.")
+    headline = Section("Headline", figures=[figure], paragraphs=[
+        f"Held-out RMSE {result['baseline_rmse']:.4g} before, {result['final_rmse']:.4g} after "
+        f"adding {', '.join(result['added']) or 'nothing'} ({result['judged_on']})."])
+    ranking = Table(["candidate", "status", "CV RMSE after", "reduction", "physical reading"])
+    for entry in result["ranking"][:15]:
+        accepted = entry["significant"]
+        ranking.add(entry["effect"], "accepted" if accepted else "rejected",
+                    entry["cv_rmse_after"], f"{100 * entry['error_reduction']:.1f} %",
+                    entry["explanation"] if accepted else f"(rejected) {entry['explanation']}",
+                    css_class="accepted" if accepted else "rejected")
+    steps = Table(["terms", "held-out RMSE", "CV RMSE", "added"])
+    for step in result["steps"]:
+        steps.add(", ".join(step.get("terms", [])), step.get("held_out_rmse", float("nan")),
+                  step.get("cv_rmse", float("nan")), step.get("added", ""))
+    return [source, headline, Section("The effect found and its evidence", tables=[ranking]),
+            Section("Model versions", tables=[steps])]
