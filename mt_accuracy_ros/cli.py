@@ -228,6 +228,9 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--wait-for-subscribers", type=float, default=0.0, metavar="S",
                       help="wait up to S seconds for subscribers before playing")
     play.set_defaults(handler=_play)
+    from .topic_tools import add_parser as add_topic_parser
+
+    add_topic_parser(commands)
     return parser
 
 
@@ -239,8 +242,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.handler(args) or 0)
-    except (MtAccuracyError, OSError, ValueError) as exc:
-        message = " ".join(str(exc).split())
+    except (MtAccuracyError, OSError, ValueError, KeyError) as exc:
+        text = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
+        message = " ".join(str(text).split())
         print(f"mt-accuracy {args.command}: {message}", file=sys.stderr)
         return 2
 
