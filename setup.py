@@ -17,6 +17,7 @@ NODE_ENTRY_POINTS = {
     "model_monitor": "mt_accuracy_ros.nodes.model_monitor:main",
     "recorder": "mt_accuracy_ros.nodes.recorder:main",
     "bag_player": "mt_accuracy_ros.nodes.player:main",
+    "foxglove_bridge": "mt_accuracy_ros.nodes.foxglove_bridge:main",
 }
 
 setup(
@@ -30,6 +31,7 @@ setup(
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE_NAME}"]),
         (f"share/{PACKAGE_NAME}", ["package.xml"]),
         (f"share/{PACKAGE_NAME}/config", glob("config/*.yaml")),
+        (f"share/{PACKAGE_NAME}/foxglove", glob("foxglove/*.json")),
     ],
     install_requires=["setuptools"],
     zip_safe=True,

@@ -19,6 +19,7 @@ NODE_MODULES = {
     "model_monitor": "mt_accuracy_ros.nodes.model_monitor",
     "recorder": "mt_accuracy_ros.nodes.recorder",
     "bag_player": "mt_accuracy_ros.nodes.player",
+    "foxglove_bridge": "mt_accuracy_ros.nodes.foxglove_bridge",
 }
 
 

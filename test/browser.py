@@ -52,9 +52,16 @@ def evaluate_in_page(page: Path, expression: str, timeout_s: float = 60.0):
                     if reply.get("id") == ident:
                         return reply["result"]["result"].get("value")
 
-            while call("document.readyState") != "complete" and time.monotonic() < deadline:
+            # The first page may still be about:blank, navigating to ours: wait for ours,
+            # loaded, and ask again if a navigation swept the answer away.
+            ready = f"{page.resolve().as_uri()}|complete"
+            while time.monotonic() < deadline:
+                if call("location.href + '|' + document.readyState") == ready:
+                    value = call(expression)
+                    if value is not None:
+                        return value
                 time.sleep(0.1)
-            return call(expression)
+            raise AssertionError(f"{page} did not load in Chromium within {timeout_s} s")
     finally:
         process.kill()
         process.wait()

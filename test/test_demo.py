@@ -85,3 +85,23 @@ def test_demo_report_renders_in_a_browser_with_every_section_and_image(demo_run)
     assert all(image["loaded"] for image in facts["images"]), facts["images"]
     assert facts["rejected"] >= 1  # rejected candidates are marked as such
     assert facts["width"] <= 1300  # readable on a laptop: no sideways scrolling
+
+
+def test_demo_bag_decodes_with_the_mcap_ros2_decoder_foxglove_uses(demo_run):
+    """Schemas as stored (ros2msg), no installed types needed: what Foxglove reads."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    _, out, _ = demo_run
+    seen = {}
+    for path in sorted((out / "bag").glob("*.mcap")):
+        with open(path, "rb") as stream:
+            reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+            assert reader.get_header().profile == "ros2"
+            for schema, channel, _, decoded in reader.iter_decoded_messages(
+                    topics=["/temperatures", "/compensation", "/systematic/y", "/model_check"]):
+                assert schema.encoding == "ros2msg" and channel.message_encoding == "cdr"
+                seen.setdefault(channel.topic, decoded)
+    assert set(seen) == {"/temperatures", "/compensation", "/systematic/y", "/model_check"}
+    assert len(seen["/temperatures"].sensor_names) == len(seen["/temperatures"].temperatures)
+    assert seen["/systematic/y"].unit == "rad" and seen["/compensation"].model_version >= 1

@@ -124,3 +124,27 @@ def run_node(node_class, args: list[str] | None, *, until_finished: bool = False
         node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def matching_subscription_qos(node, topic: str, depth: int = 1000):
+    """QoS that receives from every current publisher of ``topic``, and what they offer.
+
+    Reliable only if every publisher is, transient local only if every one is
+    (what rosbag2 and foxglove_bridge do). Returns ``(QoSProfile, offered)``
+    with ``offered`` the publishers' profiles as rosbag2 dicts, or None while
+    the topic has no publisher.
+    """
+    from ..io.bag_writer import qos_from_rclpy
+
+    publishers = node.get_publishers_info_by_topic(topic)
+    if not publishers:
+        return None
+    offered = [qos_from_rclpy(p.qos_profile) for p in publishers]
+    reliable = all(q["reliability"] == "reliable" for q in offered)
+    latched = all(q["durability"] == "transient_local" for q in offered)
+    qos = QoSProfile(depth=depth, history=HistoryPolicy.KEEP_LAST,
+                     reliability=ReliabilityPolicy.RELIABLE if reliable
+                     else ReliabilityPolicy.BEST_EFFORT,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL if latched
+                     else DurabilityPolicy.VOLATILE)
+    return qos, offered

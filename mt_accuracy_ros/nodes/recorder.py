@@ -21,12 +21,12 @@ from datetime import datetime
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from ..core.errors import BagError
 from ..io.bag_reader import message_class
-from ..io.bag_writer import BagWriter, qos_from_rclpy
-from ._common import run_node, accept, float_descriptor, int_descriptor, plain_descriptor, refuse
+from ..io.bag_writer import BagWriter
+from ._common import (accept, float_descriptor, int_descriptor, matching_subscription_qos,
+                      plain_descriptor, refuse, run_node)
 
 
 class Recorder(Node):
@@ -106,18 +106,10 @@ class Recorder(Node):
                 self._warn_once(name, f"topic {name}: type {type_name} is not installed; "
                                       "not recorded")
                 continue
-            publishers = self.get_publishers_info_by_topic(name)
-            if not publishers:
+            matched = matching_subscription_qos(self, name)
+            if matched is None:
                 continue
-            offered = [qos_from_rclpy(p.qos_profile) for p in publishers]
-            reliable = all(q["reliability"] == "reliable" for q in offered)
-            latched = all(q["durability"] == "transient_local" for q in offered)
-            qos = QoSProfile(
-                depth=1000, history=HistoryPolicy.KEEP_LAST,
-                reliability=ReliabilityPolicy.RELIABLE if reliable
-                else ReliabilityPolicy.BEST_EFFORT,
-                durability=DurabilityPolicy.TRANSIENT_LOCAL if latched
-                else DurabilityPolicy.VOLATILE)
+            qos, offered = matched
             self.bag.add_topic(name, type_name, offered)
             self._subscriptions_by_topic[name] = self.create_subscription(
                 cls, name, self._writer_for(name), qos, raw=True)
