@@ -47,8 +47,17 @@ def observations_from_bag(bag: Path, namespace: str = ""):
     if f"{prefix}/reference/tcp_error" not in available:
         raise InputDataError(f"{bag}: no {prefix}/reference/tcp_error topic; topics: "
                              f"{', '.join(sorted(available))}")
+    from tqdm import tqdm
+
+    from .io.bag_reader import bag_info
+
     readings, temps, profiles = [], [], []
-    for message in read_messages(bag, sorted(wanted & set(available))):
+    chosen = sorted(wanted & set(available))
+    counts = bag_info(bag)["topics"]
+    # A long bag takes a while: a progress bar on a terminal (none when piped).
+    for message in tqdm(read_messages(bag, chosen), desc=f"reading {Path(bag).name}", unit="msg",
+                        total=sum(counts.get(t, {}).get("count", 0) for t in chosen),
+                        disable=None, leave=False):
         data = decode(message)
         stamp = stamp_to_nanoseconds(data.header.stamp)
         if message.topic.endswith("reference/tcp_error"):

@@ -52,7 +52,11 @@ def read_bag(bag: str | Path, namespace: str = "") -> BagData:
         list(available)
     data = BagData(bag, bag_info(bag), 0)
     yaw_stride: dict[str, int] = {}
-    for message in read_messages(bag, wanted):
+    from tqdm import tqdm
+
+    total = sum(data.info["topics"].get(t, {}).get("count", 0) for t in wanted)
+    for message in tqdm(read_messages(bag, wanted), desc="report: reading the bag", unit="msg",
+                        total=total, disable=None, leave=False):
         name = message.topic[len(prefix):]
         if name == "/scales":
             data.batch_count += 1
