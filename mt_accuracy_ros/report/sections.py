@@ -314,13 +314,18 @@ def _iso_section(data: BagData, directory: Path, stem: str) -> Section:
             "This data has no positioning runs (repeated approaches to the same targets from "
             "both directions, ISO 230-2), so no A, E, R, B, M figures are given.")
         return section
-    table = Table(["axis", "A [µm]", "A↑ [µm]", "A↓ [µm]", "E [µm]", "R [µm]", "B [µm]",
-                   "M [µm]"])
+    table = Table(["axis", "A", "A↑", "A↓", "E", "E↑", "E↓", "R", "R↑", "R↓", "B", "M"],
+                  caption="ISO 230-2 figures of the reference readings [µm]")
     for axis, result in found:
-        table.add(axis, result.accuracy * UM, result.accuracy_up * UM, result.accuracy_down * UM,
-                  result.systematic_deviation * UM, result.repeatability * UM,
-                  result.reversal_value * UM, result.mean_deviation_range * UM)
+        table.add(axis, *(getattr(result, name) * UM for name in (
+            "accuracy", "accuracy_up", "accuracy_down", "systematic_deviation",
+            "systematic_deviation_up", "systematic_deviation_down", "repeatability",
+            "repeatability_up_axis", "repeatability_down_axis", "reversal_value",
+            "mean_deviation_range")))
     section.tables.append(table)
+    section.paragraphs.append(
+        "A accuracy, E systematic deviation, R repeatability, B reversal value, M mean "
+        "deviation range; ↑ / ↓ the approaches from below / above.")
     return section
 
 
