@@ -279,8 +279,8 @@ def topics(path: str | Path) -> dict[str, TopicInfo]:
         try:
             with open(f, "rb") as stream:
                 summary = make_reader(stream).get_summary()
-        except DAMAGED_FILE as exc:
-            raise BagError(f"{f}: not a readable MCAP file ({exc})") from exc
+        except DAMAGED_FILE:
+            summary = None  # no footer (a killed writer): scan the complete records below
         if summary is not None:
             for channel in summary.channels.values():
                 schema = summary.schemas.get(channel.schema_id)

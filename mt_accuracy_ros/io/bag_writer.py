@@ -21,9 +21,9 @@ process killed mid-write leaves every closed chunk readable
 reaches ``chunk_size`` bytes *or* has been open ``chunk_interval_s`` seconds
 (wall time; :meth:`BagWriter.flush_due` lets a timer close it even when no
 message arrives), so a kill loses at most about one second of messages. The
-file header reaches the disk when the bag opens; the schemas and channels
-travel in the first chunk (the MCAP writer keeps them in the chunk), so they
-are on disk within ``chunk_interval_s`` of the first message.
+file header reaches the disk when the bag opens, and every schema and channel
+the moment its topic is declared (written between chunks as well as inside
+them), so a bag killed before any chunk closed still lists its topics.
 """
 from __future__ import annotations
 
@@ -157,13 +157,30 @@ class BagWriter:
         self._stream.close()
 
     def _register(self, topic: _Topic) -> None:
+        from mcap.data_stream import RecordBuilder
+        from mcap.records import Channel, Schema
+
+        # The MCAP writer keeps schema and channel records inside the open chunk, so a
+        # killed process would leave none of them. Each is also written to the file at
+        # once, between chunks (the MCAP spec allows identical repeats): a bag killed
+        # before its first chunk closed still says what it was recording.
+        records = RecordBuilder()
         if topic.type not in self._schema_ids:
+            data = schema_text(topic.type).encode()
             self._schema_ids[topic.type] = self._writer.register_schema(
-                name=topic.type, encoding="ros2msg", data=schema_text(topic.type).encode())
+                name=topic.type, encoding="ros2msg", data=data)
+            Schema(id=self._schema_ids[topic.type], name=topic.type, encoding="ros2msg",
+                   data=data).write(records)
+        metadata = {"offered_qos_profiles": yaml.safe_dump(topic.qos, sort_keys=False),
+                    "topic_type_hash": topic.type_hash}
         self._channel_ids[topic.name] = self._writer.register_channel(
             topic=topic.name, message_encoding="cdr", schema_id=self._schema_ids[topic.type],
-            metadata={"offered_qos_profiles": yaml.safe_dump(topic.qos, sort_keys=False),
-                      "topic_type_hash": topic.type_hash})
+            metadata=metadata)
+        Channel(id=self._channel_ids[topic.name], topic=topic.name, message_encoding="cdr",
+                schema_id=self._schema_ids[topic.type], metadata=metadata).write(records)
+        self._stream.write(records.end())
+        self._stream.flush()
+        self._flushed_bytes = self._stream.tell()
 
     def _split_due(self, log_time_ns: int) -> bool:
         current = self._files[-1]

@@ -213,3 +213,23 @@ def test_a_bag_recorded_with_an_older_type_version_still_decodes(tmp_path):
     assert list(decoded.command_positions) == [0.1, -0.2]
     assert decoded.header.stamp.sec == 5
     assert not hasattr(decoded, "command_directions")  # the field the old version lacked
+
+
+def test_header_schemas_and_channels_are_on_disk_before_the_first_chunk(tmp_path):
+    """A writer killed before its first chunk closed: the topics are still readable."""
+    from mt_accuracy_ros.io.bag_reader import recover, topics
+    from mt_accuracy_ros.io.bag_writer import BagWriter
+
+    writer = BagWriter(tmp_path / "bag")  # never closed: as if killed
+    writer.add_topic("/scales", "mt_accuracy_msgs/msg/ScaleBatch")
+    writer.add_topic("/chatter", "std_msgs/msg/String")
+    found = topics(tmp_path / "bag" / "bag_0.mcap")
+    assert {n: i.type for n, i in found.items()} == {
+        "/scales": "mt_accuracy_msgs/msg/ScaleBatch", "/chatter": "std_msgs/msg/String"}
+    assert recover(tmp_path / "bag" / "bag_0.mcap") == []
+    writer.close()
+    # Closed normally, the repeated records do not disturb an independent reader.
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([tmp_path / "bag"]) as reader:
+        assert sorted(c.topic for c in reader.connections) == ["/chatter", "/scales"]
