@@ -29,10 +29,10 @@ from rclpy.node import Node
 from mt_accuracy_msgs.msg import VolumetricCompensation
 
 from ..core.errors import BagError
-from ..io.bag_reader import message_class
 from ..io.msg_definitions import schema_text
-from ._common import (RESULT_QOS, accept, float_descriptor, int_descriptor,
-                      matching_subscription_qos, plain_descriptor, refuse, run_node)
+from ._common import (RESULT_QOS, accept, float_descriptor, int_descriptor, plain_descriptor,
+                      refuse, run_node)
+from ._raw_topics import RawTopicFollower
 
 #: Topic of the 3-D error map (a Foxglove scene, not a ROS topic).
 ERROR_MAP_TOPIC = "/error_map"
@@ -67,69 +67,46 @@ class FoxgloveBridge(Node):
         self.server = foxglove.start_server(
             name="mt_accuracy_ros", host=str(self.get_parameter("host").value),
             port=int(self.get_parameter("port").value))
-        self._wanted = {t for t in self.get_parameter("topics").value if t}
         self._channels: dict = {}
-        self._subscriptions_by_topic: dict = {}
-        self._warned: set[str] = set()
         self._points = deque(maxlen=int(self.get_parameter("error_map_points").value))
         from foxglove.channels import SceneUpdateChannel
 
         self._error_map = SceneUpdateChannel(ERROR_MAP_TOPIC)
         self.create_subscription(VolumetricCompensation, "compensation", self._on_compensation,
                                  RESULT_QOS)
-        steady = Clock(clock_type=ClockType.STEADY_TIME)
-        self._discovery_timer = self.create_timer(
-            float(self.get_parameter("discovery_period_s").value), self._discover, clock=steady)
-        self.create_timer(1.0, self._publish_error_map, clock=steady)
-        self._discover()
+        self._follower = RawTopicFollower(
+            self, {t for t in self.get_parameter("topics").value if t},
+            float(self.get_parameter("discovery_period_s").value), self._new_topic, "relaying")
+        self.create_timer(1.0, self._publish_error_map,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(f"Foxglove WebSocket server on "
                                f"ws://{self.get_parameter('host').value}:{self.server.port}")
 
     def _validate(self, parameters):
         for parameter in parameters:
             if parameter.name == "discovery_period_s":
-                if not 0.05 <= float(parameter.value) <= 60.0:
-                    return refuse("discovery_period_s must be within [0.05, 60] s")
-                self._discovery_timer.timer_period_ns = int(float(parameter.value) * 1e9)
+                reason = self._follower.set_period(parameter.value)
+                if reason:
+                    return refuse(reason)
         return accept()
 
-    def _discover(self) -> None:
-        for name, types in self.get_topic_names_and_types():
-            if name in self._subscriptions_by_topic or (self._wanted and name not in self._wanted):
-                continue
-            if len(types) != 1:
-                self._warn_once(name, f"topic {name} has several types {types}; not relayed")
-                continue
-            try:
-                cls = message_class(types[0])
-                schema = schema_text(types[0])
-            except BagError:
-                self._warn_once(name, f"topic {name}: type {types[0]} is not installed; "
-                                      "not relayed")
-                continue
-            matched = matching_subscription_qos(self, name)
-            if matched is None:
-                continue
-            self._channels[name] = self._foxglove.Channel(
-                name, schema=self._foxglove.Schema(name=types[0], encoding="ros2msg",
-                                                   data=schema.encode()),
-                message_encoding="cdr")
-            self._subscriptions_by_topic[name] = self.create_subscription(
-                cls, name, self._relay_for(name), matched[0], raw=True)
-            self.get_logger().info(f"relaying {name} [{types[0]}]")
-
-    def _relay_for(self, topic: str):
-        channel = self._channels[topic]
+    def _new_topic(self, name: str, type_name: str, _offered: list[dict]):
+        """A Foxglove channel for the topic (its ros2msg schema); the relay callback."""
+        try:
+            schema = schema_text(type_name)
+        except BagError as exc:
+            self.get_logger().warning(f"topic {name}: no schema ({exc}); not relayed")
+            return None
+        channel = self._foxglove.Channel(
+            name, schema=self._foxglove.Schema(name=type_name, encoding="ros2msg",
+                                               data=schema.encode()),
+            message_encoding="cdr")
+        self._channels[name] = channel
         clock = self.get_clock()
 
         def relay(data: bytes) -> None:
             channel.log(bytes(data), log_time=clock.now().nanoseconds)
         return relay
-
-    def _warn_once(self, topic: str, text: str) -> None:
-        if topic not in self._warned:
-            self._warned.add(topic)
-            self.get_logger().warning(text)
 
     def _on_compensation(self, message: VolumetricCompensation) -> None:
         error = (message.error.x, message.error.y, message.error.z)

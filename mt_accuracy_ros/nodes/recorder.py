@@ -23,10 +23,9 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 
 from ..core.errors import BagError
-from ..io.bag_reader import message_class
 from ..io.bag_writer import BagWriter
-from ._common import (accept, float_descriptor, int_descriptor, matching_subscription_qos,
-                      plain_descriptor, refuse, run_node)
+from ._common import accept, float_descriptor, int_descriptor, plain_descriptor, refuse, run_node
+from ._raw_topics import RawTopicFollower
 
 
 class Recorder(Node):
@@ -67,17 +66,13 @@ class Recorder(Node):
                                  self.get_parameter("max_bag_duration").value),
                              chunk_interval_s=float(
                                  self.get_parameter("chunk_interval_s").value))
-        self._wanted = {t for t in self.get_parameter("topics").value if t}
-        self._subscriptions_by_topic: dict = {}
-        self._warned: set[str] = set()
         self._pending: list[tuple[str, bytes, int]] = []
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
-        self._discover()
-        # Discovery and status run on wall time: with use_sim_time a ROS-time timer
-        # would not fire before the first /clock, and nothing would be subscribed.
+        self._follower = RawTopicFollower(
+            self, {t for t in self.get_parameter("topics").value if t},
+            float(self.get_parameter("discovery_period_s").value), self._new_topic, "recording")
+        # Status and chunk closing run on wall time too (also under use_sim_time).
         steady = Clock(clock_type=ClockType.STEADY_TIME)
-        self._discovery_timer = self.create_timer(
-            float(self.get_parameter("discovery_period_s").value), self._discover, clock=steady)
         self.create_timer(1.0, self._report, clock=steady)
         interval = float(self.get_parameter("chunk_interval_s").value)
         if interval > 0:
@@ -87,38 +82,14 @@ class Recorder(Node):
     def _validate(self, parameters):
         for parameter in parameters:
             if parameter.name == "discovery_period_s":
-                if not 0.05 <= float(parameter.value) <= 60.0:
-                    return refuse("discovery_period_s must be within [0.05, 60] s")
-                self._discovery_timer.timer_period_ns = int(float(parameter.value) * 1e9)
+                reason = self._follower.set_period(parameter.value)
+                if reason:
+                    return refuse(reason)
         return accept()
 
-    def _discover(self) -> None:
-        for name, types in self.get_topic_names_and_types():
-            if name in self._subscriptions_by_topic or (self._wanted and name not in self._wanted):
-                continue
-            if len(types) != 1:
-                self._warn_once(name, f"topic {name} has several types {types}; not recorded")
-                continue
-            type_name = types[0]
-            try:
-                cls = message_class(type_name)
-            except BagError:
-                self._warn_once(name, f"topic {name}: type {type_name} is not installed; "
-                                      "not recorded")
-                continue
-            matched = matching_subscription_qos(self, name)
-            if matched is None:
-                continue
-            qos, offered = matched
-            self.bag.add_topic(name, type_name, offered)
-            self._subscriptions_by_topic[name] = self.create_subscription(
-                cls, name, self._writer_for(name), qos, raw=True)
-            self.get_logger().info(f"recording {name} [{type_name}]")
-
-    def _warn_once(self, topic: str, text: str) -> None:
-        if topic not in self._warned:
-            self._warned.add(topic)
-            self.get_logger().warning(text)
+    def _new_topic(self, name: str, type_name: str, offered: list[dict]):
+        self.bag.add_topic(name, type_name, offered)
+        return self._writer_for(name)
 
     def _writer_for(self, topic: str):
         clock = self.get_clock()
@@ -140,7 +111,7 @@ class Recorder(Node):
 
     def _report(self) -> None:
         status = DiagnosticStatus(level=DiagnosticStatus.OK, name=f"{self.get_name()}: bag",
-                                  message=f"recording {len(self._subscriptions_by_topic)} topics",
+                                  message=f"recording {len(self._follower.subscriptions)} topics",
                                   hardware_id=str(self.bag.path))
         status.values = [KeyValue(key="messages", value=str(self.bag.message_count)),
                          KeyValue(key="files", value=",".join(self.bag.file_names))]
