@@ -58,7 +58,15 @@ JOINT_STATE_PUBLISHER = textwrap.dedent("""
     """)
 
 
-def bench_graph(seconds: float) -> dict:
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a process so far [s]."""
+    import os
+
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def bench_graph(seconds: float, batch_period_s: float = 0.05) -> dict:
     import rclpy
 
     from mt_accuracy_msgs.msg import VolumetricCompensation, YawBatch
@@ -85,10 +93,20 @@ def bench_graph(seconds: float) -> dict:
     while node.count_subscribers("/scales") < 2 or node.count_publishers("/compensation") < 1:
         rclpy.spin_once(node, timeout_sec=0.05)
     encoder = start_node("encoder_publisher", {"scenario": str(workdir / "s.yaml"),
-                                               "min_subscribers": 2}, quiet=True)
+                                               "min_subscribers": 2,
+                                               "batch_period_s": batch_period_s}, quiet=True)
+    processes = {"encoder_publisher": encoder, "yaw_estimator": estimator,
+                 "compensation_broadcaster": compensator}
+    cpu_before = {name: cpu_seconds(p.popen.pid) for name, p in processes.items()}
     started = time.monotonic()
+    cpu_after = dict(cpu_before)
     while encoder.popen.poll() is None and time.monotonic() - started < seconds + 60:
         rclpy.spin_once(node, timeout_sec=0.01)
+        for name, process in processes.items():
+            try:
+                cpu_after[name] = cpu_seconds(process.popen.pid)
+            except OSError:
+                pass  # the encoder has finished
     end = time.monotonic() + 2.0
     while time.monotonic() < end:
         rclpy.spin_once(node, timeout_sec=0.01)
@@ -96,11 +114,16 @@ def bench_graph(seconds: float) -> dict:
         process.stop()
     node.destroy_node()
     rclpy.try_shutdown()
-    batches = int(seconds * 20)
-    expected_indices = list(range(0, int(seconds * 20000), 1000))
+    per_batch = int(round(20000 * batch_period_s))
+    batches = int(seconds * 20000) // per_batch
+    expected_indices = list(range(0, int(seconds * 20000), per_batch))
+    elapsed = max(time.monotonic() - started, 1e-9)
     return {"samples_per_s": 20000, "channels": 6, "seconds": seconds,
+            "batch_period_s": batch_period_s,
+            "cpu_percent": {name: round(100 * (cpu_after[name] - cpu_before[name]) / elapsed, 1)
+                            for name in processes},
             "batches_expected": batches, "yaw_batches_received": len(yaw_indices),
-            "lost_samples": (len(expected_indices) - len(set(yaw_indices))) * 1000,
+            "lost_samples": (len(expected_indices) - len(set(yaw_indices))) * per_batch,
             "compensation_expected": int(seconds * 100),
             "compensation_received": counts["compensation"],
             "latency_ms_p50": float(np.percentile(latencies, 50)) if latencies else None,
@@ -136,8 +159,14 @@ def bench_joint_state(seconds: float) -> dict:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seconds", type=float, default=20.0)
+    parser.add_argument("--batch-periods", type=float, nargs="+", default=[0.05],
+                        help="sweep: batch periods [s], e.g. 0.05 0.02 0.01 0.005 0.002")
     args = parser.parse_args()
-    graph = bench_graph(args.seconds)
+    if len(args.batch_periods) > 1:
+        sweep = [bench_graph(args.seconds, period) for period in args.batch_periods]
+        print(json.dumps({"sweep": sweep}, indent=2))
+        return 0
+    graph = bench_graph(args.seconds, args.batch_periods[0])
     per_sample = bench_joint_state(min(args.seconds, 10.0))
     out = {"batched_graph": graph, "per_sample_joint_state": per_sample,
            "ratio_samples_per_s": 20000 / max(per_sample["received_per_s"], 1e-9)}
