@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--minutes", type=float, default=30.0)
     parser.add_argument("--sample-s", type=float, default=10.0)
-    parser.add_argument("--domain", type=int, default=77,
+    parser.add_argument("--domain", type=int, default=101,
                         help="ROS_DOMAIN_ID of the soak's graph (kept apart from other runs)")
     args = parser.parse_args(argv)
     # Set before rclpy starts; the node processes inherit it.

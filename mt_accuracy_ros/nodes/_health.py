@@ -59,7 +59,10 @@ class DeliveryHealth:
         sequence = int(sequence)
         expected = self._next_sequence.get(stream)
         lost = 0
-        if expected is not None:
+        if expected is None:
+            # Where this node joined the stream: earlier items are not "lost" to it.
+            self.counts[stream]["first_seen"] = sequence
+        else:
             if sequence > expected:
                 lost = sequence - expected
                 self.counts[stream]["lost"] += lost
@@ -81,7 +84,7 @@ class DeliveryHealth:
     # ------------------------------------------------------------------ reporting
     def _values(self, stream: str) -> list[KeyValue]:
         values = [KeyValue(key=f"{stream}.{name}", value=str(self.counts[stream][name]))
-                  for name in COUNTERS]
+                  for name in COUNTERS + ("first_seen",)]
         if stream in self.last_reason:
             values.append(KeyValue(key=f"{stream}.last_refusal", value=self.last_reason[stream]))
         return values

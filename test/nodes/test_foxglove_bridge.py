@@ -43,11 +43,16 @@ def test_bridge_relays_topics_a_foxglove_client_decodes(tmp_path):
                                      open_timeout=5, max_size=None)
             except (OSError, InvalidHandshake):
                 time.sleep(0.2)
-        assert connection is not None, "the bridge's server did not come up"
+        assert connection is not None, \
+            f"the bridge's server did not come up (bridge exit code {bridge.popen.poll()})"
+        deadline = time.monotonic() + 60  # a fresh minute for discovery and data
         with connection:
             channels, decoded = {}, None
             while decoded is None and time.monotonic() < deadline:
-                frame = connection.recv(timeout=max(0.1, deadline - time.monotonic()))
+                try:
+                    frame = connection.recv(timeout=max(0.1, deadline - time.monotonic()))
+                except TimeoutError:
+                    break
                 if isinstance(frame, str):
                     message = json.loads(frame)
                     if message["op"] == "advertise":
@@ -60,6 +65,8 @@ def test_bridge_relays_topics_a_foxglove_client_decodes(tmp_path):
                 opcode, subscription, _log_time = struct.unpack_from("<BIQ", frame)
                 if opcode == 1 and subscription == 7:
                     decoded = deserialize_message(frame[13:], TemperatureArray)
+        assert "/temperatures" in channels, f"advertised only {sorted(channels)}; bridge " \
+            f"exit code {bridge.popen.poll()}, publisher {publisher.popen.poll()}"
         temperatures = channels["/temperatures"]
         assert temperatures["encoding"] == "cdr"
         assert temperatures["schemaName"] == "mt_accuracy_msgs/msg/TemperatureArray"
