@@ -235,8 +235,9 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str]):
         ax.axvline(when, color="tab:orange", ls=":", label=f"deterioration alarm, {axis}")
     ax.set(xlabel="time since start [s]", ylabel="µm")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    figure = save_figure(fig, out, "report_run", "The model monitor's checks as the run went: "
-                         "the residual RMSE, the effect the user added, the alarm.")
+    figure = save_figure(fig, out, "report_run", "The model monitor's checks as the user saw "
+                         "them, at wall-clock time x rate (behind the data when the graph "
+                         "lags): the residual RMSE, the effect the user added, the alarm.")
     run = Section("The run", figures=[figure], paragraphs=[
         "The virtual machining centre ran the demo scenario (X and Y moving, a warm-up, the Y "
         "guideway deteriorating at 50 s, a column thermal drift the starting model lacks) "
