@@ -38,7 +38,9 @@ def test_graph_topics_types_and_refused_parameters(rclpy_context, tmp_path):
     import rclpy
 
     probe = rclpy.create_node("probe")
-    scenario = _scenario(tmp_path, duration=30.0)
+    # Long enough that the machine still streams however slowly a loaded host brings
+    # the five processes up; the processes are stopped at the end anyway.
+    scenario = _scenario(tmp_path, duration=600.0)
     machine = {"scenario": scenario, "rate_factor": 1.0}
     processes = [start_node("temperature_publisher", machine),
                  start_node("encoder_publisher", machine),
