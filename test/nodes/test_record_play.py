@@ -12,6 +12,7 @@ import pytest
 from mcap.writer import Writer
 
 from graph_helpers import spin_for, spin_until
+from mt_accuracy_ros.core.errors import BagError
 from mt_accuracy_ros.io.bag_reader import bag_info, decode, read_messages, recover
 from mt_accuracy_ros.io.bag_writer import BagWriter, qos_dict
 from mt_accuracy_ros.processes import start_node
@@ -255,6 +256,14 @@ def test_player_plays_rosbag2_written_bags(rclpy_context, data_dir, sample, topi
     assert received == expected
 
 
+def _recoverable(path: Path) -> int:
+    """Messages a reader could save from ``path`` right now (0 while there is nothing)."""
+    try:
+        return len(recover(path))
+    except BagError:
+        return 0
+
+
 @pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM])
 def test_recorder_stopped_by_signal_leaves_a_complete_bag(rclpy_context, tmp_path, stop_signal):
     import rclpy
@@ -264,10 +273,17 @@ def test_recorder_stopped_by_signal_leaves_a_complete_bag(rclpy_context, tmp_pat
     publisher = node.create_publisher(String, "/chatter", 10)
     recorder = start_node("recorder", {"output": str(tmp_path / "bag"), "discovery_period_s": 0.1})
     assert spin_until(node, lambda: publisher.get_subscription_count() >= 1)
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    counts: list[int] = []
+    node.create_subscription(DiagnosticArray, "/diagnostics", lambda m: counts.extend(
+        int(v.value) for s in m.status if s.name.endswith(": bag") for v in s.values
+        if v.key == "messages"), 10)
     for i in range(50):
         publisher.publish(String(data=f"m{i}"))
         spin_for(node, 0.01)
-    spin_for(node, 0.3)
+    # Stop once the recorder says it holds all 50 (its 1 Hz status), however loaded the host.
+    assert spin_until(node, lambda: counts and counts[-1] >= 50, timeout_s=60)
     recorder.popen.send_signal(stop_signal)
     assert recorder.popen.wait(timeout=20) == 0
     node.destroy_node()
@@ -291,7 +307,9 @@ def test_recorder_killed_keeps_closed_chunks(rclpy_context, tmp_path):
     for i in range(400):
         publisher.publish(String(data=f"message number {i:05d}"))
         spin_for(node, 0.002)
-    spin_for(node, 0.5)
+    # Kill once the closed chunks are on disk (a condition on the file, not a sleep).
+    bag_file = tmp_path / "bag" / "bag_0.mcap"
+    assert spin_until(node, lambda: _recoverable(bag_file) >= 300, timeout_s=60)
     recorder.popen.kill()
     recorder.popen.wait()
     node.destroy_node()
@@ -335,7 +353,10 @@ def test_recorder_killed_early_loses_at_most_the_last_second(rclpy_context, tmp_
     for i in range(100):
         publisher.publish(String(data=f"m{i:03d}"))
         spin_for(node, 0.01)
-    spin_for(node, 2.5)  # > chunk_interval_s (1 s): those chunks are closed and on disk
+    # With 1 MiB chunks only chunk_interval_s (1 s) closes them: all 100 reach the disk
+    # while the recorder runs (polled, with room for a loaded host), then the kill.
+    bag_file = tmp_path / "bag" / "bag_0.mcap"
+    assert spin_until(node, lambda: _recoverable(bag_file) >= 100, timeout_s=60)
     recorder.popen.kill()
     recorder.popen.wait()
     node.destroy_node()
