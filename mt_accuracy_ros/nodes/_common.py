@@ -118,6 +118,11 @@ def run_node(node_class, args: list[str] | None, *, until_finished: bool = False
             rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except RuntimeError:
+        # A timer or callback that ran into the shutdown half-way (its context was
+        # invalidated by SIGTERM): the node was stopping anyway; anything else is a bug.
+        if node.context.ok():
+            raise
     finally:
         if on_exit is not None:
             on_exit(node)

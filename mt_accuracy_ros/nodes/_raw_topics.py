@@ -46,7 +46,15 @@ class RawTopicFollower:
 
     def discover(self) -> None:
         node = self._node
-        for name, types in node.get_topic_names_and_types():
+        if not node.context.ok():
+            return  # shutting down (SIGINT/SIGTERM): nothing new to follow
+        try:
+            found = node.get_topic_names_and_types()
+        except RuntimeError:
+            if node.context.ok():
+                raise
+            return  # the context went down between the check and the call
+        for name, types in found:
             if name in self.subscriptions or (self._wanted and name not in self._wanted):
                 continue
             if len(types) != 1:
