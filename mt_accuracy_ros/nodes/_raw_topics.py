@@ -11,7 +11,7 @@ from rclpy.clock import Clock, ClockType
 
 from ..core.errors import BagError
 from ..io.bag_reader import message_class
-from ._common import matching_subscription_qos
+from ._common import accept, matching_subscription_qos, refuse
 
 #: Range of the discovery period [s] both nodes accept.
 DISCOVERY_PERIOD_RANGE_S = (0.05, 60.0)
@@ -43,6 +43,15 @@ class RawTopicFollower:
             return f"discovery_period_s must be within [{low}, {high}] s"
         self._timer.timer_period_ns = int(float(seconds) * 1e9)
         return None
+
+    def validate(self, parameters):
+        """The owning node's parameter callback: ``discovery_period_s`` changes the timer."""
+        for parameter in parameters:
+            if parameter.name == "discovery_period_s":
+                reason = self.set_period(parameter.value)
+                if reason:
+                    return refuse(reason)
+        return accept()
 
     def discover(self) -> None:
         node = self._node

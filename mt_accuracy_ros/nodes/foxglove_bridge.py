@@ -30,8 +30,7 @@ from mt_accuracy_msgs.msg import VolumetricCompensation
 
 from ..core.errors import BagError
 from ..io.msg_definitions import schema_text
-from ._common import (RESULT_QOS, accept, float_descriptor, int_descriptor, plain_descriptor,
-                      refuse, run_node)
+from ._common import RESULT_QOS, float_descriptor, int_descriptor, plain_descriptor, run_node
 from ._raw_topics import RawTopicFollower
 
 #: Topic of the 3-D error map (a Foxglove scene, not a ROS topic).
@@ -83,12 +82,7 @@ class FoxgloveBridge(Node):
                                f"ws://{self.get_parameter('host').value}:{self.server.port}")
 
     def _validate(self, parameters):
-        for parameter in parameters:
-            if parameter.name == "discovery_period_s":
-                reason = self._follower.set_period(parameter.value)
-                if reason:
-                    return refuse(reason)
-        return accept()
+        return self._follower.validate(parameters)
 
     def _new_topic(self, name: str, type_name: str, _offered: list[dict]):
         """A Foxglove channel for the topic (its ros2msg schema); the relay callback."""

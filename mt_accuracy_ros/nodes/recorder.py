@@ -24,7 +24,7 @@ from rclpy.node import Node
 
 from ..core.errors import BagError
 from ..io.bag_writer import BagWriter
-from ._common import accept, float_descriptor, int_descriptor, plain_descriptor, refuse, run_node
+from ._common import float_descriptor, int_descriptor, plain_descriptor, run_node
 from ._raw_topics import RawTopicFollower
 
 
@@ -80,12 +80,7 @@ class Recorder(Node):
         self.get_logger().info(f"recording to {self.bag.path}")
 
     def _validate(self, parameters):
-        for parameter in parameters:
-            if parameter.name == "discovery_period_s":
-                reason = self._follower.set_period(parameter.value)
-                if reason:
-                    return refuse(reason)
-        return accept()
+        return self._follower.validate(parameters)
 
     def _new_topic(self, name: str, type_name: str, offered: list[dict]):
         self.bag.add_topic(name, type_name, offered)
