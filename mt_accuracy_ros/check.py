@@ -38,7 +38,7 @@ def observations_from_bag(bag: Path, namespace: str = ""):
     """Readings, temperatures at their stamps, and the profile history of a bag."""
     from .core.workbench.diagnosis import Observations
     from .io.bag_reader import decode, read_messages, topics
-    from .io.fields import stamp_to_nanoseconds, unpack_float64
+    from .io.fields import machine_error, stamp_to_nanoseconds, unpack_float64
 
     prefix = namespace.rstrip("/")
     available = topics(bag)
@@ -65,8 +65,10 @@ def observations_from_bag(bag: Path, namespace: str = ""):
         elif message.topic.endswith("temperatures"):
             temps.append((stamp, list(data.sensor_names), unpack_float64(data.temperatures).copy()))
         else:
+            difference = unpack_float64(data.baseline_difference).copy()
             profiles.append((stamp, data.error_name, unpack_float64(data.positions).copy(),
-                             unpack_float64(data.systematic).copy()))
+                             unpack_float64(data.systematic).copy(),
+                             difference if difference.size else None))
     if len(readings) < 10:
         raise InputDataError(f"{bag}: only {len(readings)} reference readings")
     readings.sort(key=lambda r: r[0])
@@ -85,7 +87,7 @@ def observations_from_bag(bag: Path, namespace: str = ""):
     obs = Observations(
         positions={a: np.array([r[1].command_positions[i] for r in readings]) for i, a in
                    enumerate(axes)},
-        measured_m=np.array([[r[1].error.x, r[1].error.y, r[1].error.z] for r in readings]),
+        measured_m=np.array([machine_error(r[1]) for r in readings]),
         measured_mask=np.array([list(r[1].measured) for r in readings], dtype=bool),
         time_s=(stamps - stamps[0]) / 1e9,
         velocities={a: np.array([r[1].command_velocities[i] if len(r[1].command_velocities) ==
@@ -122,9 +124,9 @@ def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_0
                 position[rows], orientation[rows] = p, o
             group_start = i
             while i < obs.n and next_profile < len(profiles) and profiles[next_profile][0] <= limit:
-                _, name, x, y = profiles[next_profile]
+                _, name, x, y, difference = profiles[next_profile]
                 try:
-                    state.set_profile(name, x, y)
+                    state.apply_profile(name, x, y, difference)
                 except MtAccuracyError:
                     pass
                 next_profile += 1

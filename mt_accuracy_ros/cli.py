@@ -8,7 +8,8 @@ import sys
 def _demo(args: argparse.Namespace) -> int:
     from .demo import run_demo
 
-    return run_demo(out_dir=args.out, rate_factor=args.rate, scenario=args.scenario)
+    return run_demo(out_dir=args.out, rate_factor=args.rate, scenario=args.scenario,
+                    compensation_mode=args.compensation)
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -172,6 +173,10 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--rate", type=float, default=2.0,
                       help="sim seconds per wall second (the 90 s scenario takes 90/rate s)")
     demo.add_argument("--scenario", default="demo", help="bundled scenario or path")
+    demo.add_argument("--compensation", default="hybrid",
+                      choices=["hybrid", "realtime", "table", "off"],
+                      help="how the virtual CNC takes the compensation: tables + real-time "
+                           "offset (hybrid, default), real-time offset only, tables only, or off")
     demo.set_defaults(handler=_demo)
     info = commands.add_parser("info", help="counts, duration, topics and types of a bag")
     info.add_argument("bag", help="bag directory or .mcap file")
@@ -228,9 +233,11 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--wait-for-subscribers", type=float, default=0.0, metavar="S",
                       help="wait up to S seconds for subscribers before playing")
     play.set_defaults(handler=_play)
+    from .model_tools import add_parser as add_model_parser
     from .topic_tools import add_parser as add_topic_parser
 
     add_topic_parser(commands)
+    add_model_parser(commands)
     return parser
 
 

@@ -5,11 +5,18 @@
 2. Separate processes: encoder and temperature publishers (the scenario
    ``demo``: warm-up, a Y guideway deterioration at 50 s, a column thermal drift
    the model does not hold), the yaw/systematic estimator, the compensation
-   broadcaster, the model monitor and the recorder (MCAP).
+   broadcaster, the model monitor and the recorder (MCAP). The virtual machine
+   is a CNC that applies the broadcast compensation (``compensation_input``:
+   real-time offset by default, or tables), so its reference instrument
+   measures the compensated machine: the loop is closed.
 3. This process listens like any ROS tool and acts as the user: when the
    monitor names a missing effect, it asks the monitor to add it (the
-   ``add_effects`` parameter) and watches the error fall.
-4. At the end: a printed summary and ``report.html`` + ``summary.json``.
+   ``add_effects`` parameter) and watches the machine's error fall.
+4. At the end: a printed summary - the TCP error per component without
+   compensation, with the starting model's, after each model change, after the
+   deterioration, and at the end of the run, each with its k = 2 uncertainty -
+   ``report.html``, ``summary.json`` and the final model (``model.yaml``; the
+   starting one is ``model_start.yaml``).
 """
 from __future__ import annotations
 
@@ -29,7 +36,7 @@ def _prepare(out: Path, scenario_name: str) -> Path:
     scenario = resolve_scenario(scenario_name)
     calibration = calibrate_machine(simulate(scenario, start_index=0, stop_index=1))
     (out / "machine_calibrated.yaml").write_text(yaml.safe_dump(calibration, sort_keys=False))
-    model = out / "model.yaml"
+    model = out / "model_start.yaml"
     model.write_text(yaml.safe_dump({"machine": "machine_calibrated.yaml",
                                      "effects": {"geometric": {}}}, sort_keys=False))
     return model
@@ -37,34 +44,28 @@ def _prepare(out: Path, scenario_name: str) -> Path:
 
 def _set_parameter(node, target: str, name: str, value) -> tuple[bool, str]:
     """Set a parameter of another node through its set_parameters service."""
-    import rclpy
-    from rcl_interfaces.srv import SetParameters
-    from rclpy.parameter import Parameter
+    from .model_tools import set_remote_parameter
 
-    client = node.create_client(SetParameters, f"{target}/set_parameters")
-    if not client.wait_for_service(timeout_sec=10.0):
-        return False, f"{target}/set_parameters not available"
-    request = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
-    future = client.call_async(request)
-    deadline = time.monotonic() + 30.0
-    while not future.done() and time.monotonic() < deadline:
-        rclpy.spin_once(node, timeout_sec=0.05)
-    node.destroy_client(client)
-    if not future.done():
-        return False, "no answer"
-    result = future.result().results[0]
-    return bool(result.successful), str(result.reason)
+    return set_remote_parameter(node, target, name, value)
+
+
+#: The CNC's controller: interpolation cycle, fixed input delay, staleness limit [s]
+#: (data time). The delay covers the graph's stamp-to-arrival latency at the
+#: demo's batch period (docs/benchmarks.md).
+CONTROLLER = {"controller_cycle_s": 0.001, "compensation_delay_s": 0.05,
+              "max_compensation_age_s": 0.5}
+#: Scale batch period of the demo's machine [s].
+BATCH_PERIOD_S = 0.05
 
 
 def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
-             scenario: str = "demo") -> int:
+             scenario: str = "demo", compensation_mode: str = "hybrid") -> int:
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
-    from mt_accuracy_msgs.msg import (ModelCheck, ReferenceMeasurement, SystematicProfile,
-                                      VolumetricCompensation)
+    from mt_accuracy_msgs.msg import (ModelCheck, ModelVersion, ReferenceMeasurement,
+                                      SystematicProfile, VolumetricCompensation)
 
-    from .nodes._common import RESULT_QOS, stamp_to_nanoseconds
-    from .nodes.compensation_broadcaster import COMPENSATION_QOS
+    from .nodes._common import COMPENSATION_QOS, LATCHED_QOS, RESULT_QOS, stamp_to_nanoseconds
     from .processes import start_node
 
     out = Path(out_dir)
@@ -88,8 +89,9 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
              start_node("model_monitor", {"model": str(model)}, quiet=True),
              start_node("temperature_publisher",
                         {**machine, "min_subscribers": temperature_consumers}, quiet=True)]
-    encoder = start_node("encoder_publisher", {**machine, "min_subscribers": scales_consumers},
-                         quiet=True)
+    encoder = start_node("encoder_publisher", {
+        **machine, "min_subscribers": scales_consumers, "compensation_input": compensation_mode,
+        "batch_period_s": BATCH_PERIOD_S, **CONTROLLER}, quiet=True)
     rclpy.init()
     listener = rclpy.create_node("demo_user")
     checks: list[tuple[float, ModelCheck]] = []
@@ -119,11 +121,25 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
         for status in message.status:
             if status.name.endswith(": delivery"):
                 delivery[status.name.split(":")[0]] = {v.key: v.value for v in status.values}
+            elif status.name.endswith(": compensation"):
+                delivery[status.name.split(":")[0] + ":compensation"] = {
+                    v.key: v.value for v in status.values}
 
     listener.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 50)
-    references: list[np.ndarray] = []
-    listener.create_subscription(ReferenceMeasurement, "reference/tcp_error", lambda m: references.append(
-        np.array([m.error.x, m.error.y, m.error.z])), RESULT_QOS)
+    references: list[tuple] = []   # (data time [s], measured (3,), applied (3,), version)
+
+    def on_reference(m: ReferenceMeasurement) -> None:
+        references.append(((stamp_to_nanoseconds(m.header.stamp) - start_ns) / 1e9,
+                           np.array([m.error.x, m.error.y, m.error.z]),
+                           np.array([m.applied_correction.x, m.applied_correction.y,
+                                     m.applied_correction.z]),
+                           int(m.compensation_model_version), float(m.uncertainty)))
+
+    listener.create_subscription(ReferenceMeasurement, "reference/tcp_error", on_reference,
+                                 RESULT_QOS)
+    models: list[tuple[float, ModelVersion]] = []
+    listener.create_subscription(ModelVersion, "model", lambda m: models.append((now_s(), m)),
+                                 LATCHED_QOS)
     try:
         deadline = time.monotonic() + 90.0 / rate_factor + 60.0
         while time.monotonic() < deadline and encoder.popen.poll() is None:
@@ -146,18 +162,25 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
         listener.destroy_node()
         rclpy.try_shutdown()
     losses = delivery_losses(delivery)
+    if models:
+        # The saved model is the final one, every effect added with its parameters.
+        (out / "model.yaml").write_text(models[-1][1].model_yaml)
+    story = loop_story(references, models, alarms, compensation_mode=compensation_mode)
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
-                         references, losses)
-    print("mt_accuracy_ros demo - virtual HMC, scenario 'demo' (warm-up, Y guideway "
-          "deterioration at 50 s, column drift missing from the model)")
+                         references, losses, story, delivery)
+    print(f"mt_accuracy_ros demo - virtual HMC, scenario '{scenario}' (warm-up, Y guideway "
+          "deterioration at 50 s, column drift missing from the model); the CNC applies the "
+          f"compensation ({compensation_mode})")
     for key, value in summary.items():
         if not isinstance(value, (list, dict)):
             print(f"  {key:42s} {value:.4g}" if isinstance(value, float) else
                   f"  {key:42s} {value}")
+    for line in story["lines"]:
+        print(line)
     for line in losses:
         # Overload is loud: a graph that could not keep up says so.
         print(f"  WARNING {line}")
-    print(f"  report: {out / 'report.html'}   bag: {bag}")
+    print(f"  report: {out / 'report.html'}   bag: {bag}   final model: {out / 'model.yaml'}")
     return 0 if checks and summary["bag_messages"] > 0 else 1
 
 
@@ -169,6 +192,8 @@ def delivery_losses(delivery: dict[str, dict[str, str]]) -> list[str]:
     """
     lines = []
     for node, values in sorted(delivery.items()):
+        if node.endswith(":compensation"):
+            continue  # the controller's own status, not a stream
         streams = sorted({key.rsplit(".", 1)[0] for key in values if "." in key})
         for stream in streams:
             processed = int(values.get(f"{stream}.processed", "0"))
@@ -183,41 +208,122 @@ def delivery_losses(delivery: dict[str, dict[str, str]]) -> list[str]:
     return lines
 
 
+def loop_story(references, models, alarms, *, compensation_mode: str) -> dict:
+    """The closed loop told in numbers: the machine's TCP error per phase of the run.
+
+    ``references``: (data time [s], measured (3,), applied (3,), model version,
+    uncertainty k = 2 [m]) per reading; ``models``: (time, ModelVersion);
+    ``alarms``: (time [s], axis). A model version's phase starts at the first
+    reading the CNC took with its compensation applied.
+    """
+    from .core.workbench.closed_loop import COMPONENTS, loop_phases
+    from .core.workbench.statistics import format_with_uncertainty
+
+    if len(references) < 10:
+        return {"phases": [], "lines": ["  too few reference readings to tell the loop's story"],
+                "end_state_within_band": False}
+    time_s = np.array([r[0] for r in references])
+    order = np.argsort(time_s, kind="stable")
+    time_s = time_s[order]
+    measured = np.array([references[i][1] for i in order])
+    applied = np.array([references[i][2] for i in order])
+    versions = np.array([references[i][3] for i in order])
+    band = float(np.median([r[4] for r in references]))
+    reasons = {int(m.version): m.reason for _, m in models}
+    events = []
+    live = sorted({int(v) for v in versions if v > 0})
+    for k, version in enumerate(live):
+        first = float(time_s[np.argmax(versions == version)])
+        label = f"starting model's compensation (v{version})" if k == 0 else \
+            f"v{version}: {reasons.get(version, 'model change')}"
+        events.append((first, label))
+    if versions[0] == 0:
+        events.insert(0, (float(time_s[0]), "before the first compensation arrived"))
+    for when, axis in alarms:
+        events.append((float(when), f"after the {axis.upper()} deterioration alarm"))
+    phases = loop_phases(time_s, measured, applied, events, band)
+    header = f"  {'TCP error at the reference points, RMS [um]':58s}" + "".join(
+        f"{'e_' + c:>20s}" for c in COMPONENTS)
+    lines = [f"  closed loop: the CNC applies the compensation ({compensation_mode}); the "
+             f"reference instrument (U = {band * 1e6:.1f} um, k = 2) measures the machine", header]
+
+    def row(label: str, figures) -> str:
+        return f"  {label[:58]:58s}" + "".join(
+            f"{format_with_uncertainty(f.rms * 1e6, f.rms_u_k2 * 1e6, ''):>20s}"
+            .replace(" (k = 2)", "") for f in figures)
+
+    whole = phases[0]
+    lines.append(row(f"without compensation (whole run, {whole.count} readings)", whole.without))
+    for phase in phases[1:]:
+        span = f" [{phase.start_s:.0f}-{phase.end_s:.0f} s]"
+        lines.append(row(f"{phase.label}{span}", phase.with_compensation))
+    end = phases[-1]
+    within = end.within(band)
+    lines.append(f"  end of the run (last {end.end_s - end.start_s:.0f} s): compensated TCP error "
+                 + ", ".join(f"e_{c} {f.rms * 1e6:.2f} um" for c, f in
+                             zip(COMPONENTS, end.with_compensation))
+                 + (f" - within the instrument's band ({band * 1e6:.1f} um)" if within else
+                    f" - OUTSIDE the instrument's band ({band * 1e6:.1f} um): "
+                    "something the model lacks remains"))
+    for when, axis in alarms:
+        after = [p for p in phases if p.label.startswith(f"after the {axis.upper()}")]
+        if after:
+            lines.append(f"  the {axis.upper()} guideway deterioration was detected at {when:.1f} s; "
+                         "its measured yaw change enters the compensation through the live profile "
+                         "(p2 = p1 - delta e); "
+                         + ("absorbed: the end state is back within the band" if within else
+                            "not absorbed by the end of the run"))
+    return {"phases": [p.as_dict() for p in phases], "lines": lines,
+            "end_state_within_band": bool(within), "band_um": band * 1e6}
+
+
 def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
-               references, losses: list[str]) -> dict:
+               references, losses: list[str], story: dict, delivery: dict) -> dict:
     from .io.bag_reader import bag_info
 
     info = bag_info(out / "bag")
     before = [c.rmse for t, c in checks if not actions or t < actions[0]["time_s"]]
     # The checks right after the change (before anything else happens to the machine).
     after = [c.rmse for t, c in checks if actions and t > actions[0]["time_s"]][:2]
-    raw = np.array(references) if references else np.zeros((0, 3))
-    raw = raw - raw.mean(axis=0) if raw.size else raw
+    raw = np.array([r[1] - r[2] for r in references]) if references else np.zeros((0, 3))
+    measured = np.array([r[1] for r in references]) if references else np.zeros((0, 3))
+    end = story["phases"][-1] if story["phases"] else None
+    controller = delivery.get("/encoder_publisher:compensation", {})
     summary = {
         "tcp_error_uncompensated_rms_um": float(np.sqrt(np.mean(raw ** 2)) * 1e6) if raw.size
         else float("nan"),
+        "tcp_error_compensated_rms_um": float(np.sqrt(np.mean(measured ** 2)) * 1e6)
+        if measured.size else float("nan"),
+        "tcp_error_end_state_rms_um": float(np.sqrt(np.mean(
+            [end["with_compensation"][c]["rms_um"] ** 2 for c in "xyz"]))) if end else float("nan"),
+        "end_state_within_band": story["end_state_within_band"],
         "model_checks": len(checks),
         "residual_rmse_before_um": float(np.mean(before[-3:]) * 1e6) if before else float("nan"),
         "missing_effect_found": actions[0]["added"] if actions else "",
         "effect_added_accepted": bool(actions and actions[0]["accepted"]),
         "residual_rmse_after_um": float(np.mean(after) * 1e6) if after else float("nan"),
+        "residual_rmse_end_um": checks[-1][1].rmse * 1e6 if checks else float("nan"),
         "deterioration_alarm_axis": ",".join(a[1] for a in alarms),
         "deterioration_alarm_at_s": alarms[0][0] if alarms else float("nan"),
         "compensation_messages": len(compensation),
+        "compensation_applied": int(controller.get("applied", 0)),
+        "compensation_stale": int(controller.get("stale", 0)),
+        "compensation_latency_p99_ms": float(controller.get("latency_p99_ms", "nan")),
         "max_model_tcp_error_um": max((e for _, e in compensation), default=0.0) * 1e6,
         "bag_messages": int(info["message_count"]),
         "bag_topics": len(info["topics"]),
         "wall_time_s": wall_s,
         "final_diagnosis": checks[-1][1].diagnosis if checks else "",
         "stream_losses": "; ".join(losses) or "none: every node processed every sample",
+        "closed_loop": story["phases"],
     }
-    report = _write_report(out, checks, actions, alarms, losses)
+    report = _write_report(out, checks, actions, alarms, losses, story)
     summary["report"] = report.as_dict()
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
     return summary
 
 
-def _write_report(out: Path, checks, actions, alarms, losses: list[str]):
+def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: dict):
     """The bag's full report, with the run as the demo's user saw it live."""
     from .check import check_bag
     from .core.errors import MtAccuracyError
@@ -250,7 +356,7 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str]):
     run.paragraphs.append("Delivery: " + ("; ".join(losses) if losses else
                                           "every node processed every sample and message."))
     try:
-        result = check_bag(out / "bag", str(out / "model.yaml"), [a["added"] for a in actions
+        result = check_bag(out / "bag", str(out / "model_start.yaml"), [a["added"] for a in actions
                                                                     if a["accepted"]], 0, "", 0.1)
     except MtAccuracyError as exc:
         run.paragraphs.append(f"The workbench could not judge this bag: {exc}")

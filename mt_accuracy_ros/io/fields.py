@@ -44,3 +44,17 @@ def unpack_float64(field):
         return np.frombuffer(field, dtype=np.float64)
     except (TypeError, ValueError, BufferError):
         return np.asarray(field, dtype=np.float64)
+
+
+def machine_error(reading) -> tuple[float, float, float]:
+    """A ``ReferenceMeasurement``'s TCP error without the compensation the CNC applied [m].
+
+    ``error - applied_correction``: what the machine does on its own, the quantity a
+    model predicts. Readings of earlier bags have no ``applied_correction`` (nothing
+    was applied): their error as it is.
+    """
+    applied = getattr(reading, "applied_correction", None)
+    if applied is None:
+        return (reading.error.x, reading.error.y, reading.error.z)
+    return (reading.error.x - applied.x, reading.error.y - applied.y,
+            reading.error.z - applied.z)

@@ -32,7 +32,16 @@ LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL,
                          history=HistoryPolicy.KEEP_LAST)
 
+#: Compensation tables, one message per axis: a late joiner must get all of them.
+TABLE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL, history=HistoryPolicy.KEEP_LAST)
 
+#: Real-time compensation: reliable, keep last 2000 (20 s at the default 100 Hz): a
+#: subscriber that stalls for seconds still gets every correction; ``sequence`` shows
+#: any gap beyond that.
+COMPENSATION_QOS = QoSProfile(depth=2000, reliability=ReliabilityPolicy.RELIABLE,
+                              durability=DurabilityPolicy.VOLATILE,
+                              history=HistoryPolicy.KEEP_LAST)
 
 
 def float_descriptor(description: str, low: float, high: float,

@@ -3,18 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 import yaml
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from std_msgs.msg import String
 
-from mt_accuracy_msgs.msg import SystematicProfile, TemperatureArray
+from mt_accuracy_msgs.msg import ModelVersion, SystematicProfile, TemperatureArray
 
 from ..core.compensation.error_model import ErrorModel, model_to_dict, resolve_model
 from ..core.errors import InputDataError, MtAccuracyError
-from ._common import LATCHED_QOS, RESULT_QOS, SENSOR_QOS, stamp_to_nanoseconds, unpack_float64
+from ._common import (LATCHED_QOS, RESULT_QOS, SENSOR_QOS, TABLE_QOS,  # noqa: F401
+                      stamp_to_nanoseconds, unpack_float64)
 
-#: Compensation tables, one message per axis: a late joiner must get all of them.
-TABLE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
-                       durability=DurabilityPolicy.TRANSIENT_LOCAL, history=HistoryPolicy.KEEP_LAST)
 
 
 class ModelInputs:
@@ -25,7 +21,10 @@ class ModelInputs:
     t - ``delay_s``. Live and replayed runs then compute the same thing
     whatever the order in which messages of different topics arrived.
 
-    ``follow_topic``: also take whole models published (YAML) on ``model``.
+    ``follow_topic``: also take the model versions published on ``model``
+    (``ModelVersion``) by the model monitor, with their version numbers; a
+    version below the live one is refused (counted, on /diagnostics) and the
+    live model stays.
     """
 
     def __init__(self, node, model_text: str, *, follow_topic: bool, on_change, health,
@@ -48,10 +47,12 @@ class ModelInputs:
                                      health.guard(f"systematic/{axis}", self._on_profile),
                                      RESULT_QOS)
         if follow_topic:
-            node.create_subscription(String, "model", health.guard("model", self._on_model),
+            node.create_subscription(ModelVersion, "model", health.guard("model", self._on_model),
                                      LATCHED_QOS)
 
-    def set_model(self, model: ErrorModel) -> None:
+    def set_model(self, model: ErrorModel, *, keep_version: bool = False) -> None:
+        """Make ``model`` live. Its version becomes the live one + 1 unless ``keep_version``
+        (a version numbered by the monitor, already checked to be >= the live one)."""
         # Profiles and temperature references live on across model versions.
         model.profiles.update({k: v for k, v in self.model.profiles.items()
                                if k not in model.profiles})
@@ -59,21 +60,29 @@ class ModelInputs:
             model.reference_temperatures_c.setdefault(sensor, value)
         for name, value in self.model.profile_offsets.items():
             model.profile_offsets.setdefault(name, value)
-        model.version = max(model.version, self.model.version + 1)
+        if not keep_version:
+            model.version = max(model.version, self.model.version + 1)
         self.model = model
         self.on_change()
 
-    def _on_model(self, message: String) -> None:
+    def _on_model(self, message: ModelVersion) -> None:
+        self.health.sequence("model", message.sequence)
+        if message.version < self.model.version:
+            # Counted and on /diagnostics; the live model stays.
+            self.health.refused("model", f"model version {message.version} is older than the "
+                                f"live version {self.model.version}: refused, the live one stays")
+            return
         try:
-            model = resolve_model(message.data)
+            model = resolve_model(message.model_yaml)
         except MtAccuracyError as exc:
-            # Counted and on /diagnostics; the last good model stays live.
             self.health.refused("model", f"model refused, version {self.model.version} kept: {exc}")
             return
         self.health.processed("model")
-        if model_to_dict(model)["effects"] != model_to_dict(self.model)["effects"] or \
+        model.version = int(message.version)
+        if model.version > self.model.version or \
+                model_to_dict(model)["effects"] != model_to_dict(self.model)["effects"] or \
                 model.reference_temperatures_c != self.model.reference_temperatures_c:
-            self.set_model(model)
+            self.set_model(model, keep_version=True)
 
     def _on_temperatures(self, message: TemperatureArray) -> None:
         values = unpack_float64(message.temperatures)
@@ -103,10 +112,12 @@ class ModelInputs:
         self.health.processed(stream)
         if stamp_to_nanoseconds(message.header.stamp) <= self._applied_until:
             self.health.late(stream)
+        difference = unpack_float64(message.baseline_difference).copy()
         self._pending_profiles.append((stamp_to_nanoseconds(message.header.stamp),
                                        message.error_name,
                                        unpack_float64(message.positions).copy(),
-                                       unpack_float64(message.systematic).copy()))
+                                       unpack_float64(message.systematic).copy(),
+                                       difference if difference.size else None))
         self._pending_profiles.sort(key=lambda item: item[0])
 
     def advance(self, stamp_ns: int) -> None:
@@ -116,13 +127,18 @@ class ModelInputs:
         while self._pending_temperatures and self._pending_temperatures[0][0] <= limit:
             _, good, dead = self._pending_temperatures.pop(0)
             self.temperatures.update(good)  # a dead sensor keeps its last valid value
+            # Rises count from the first reading of each sensor in data time - the
+            # cold state the model and the work zero refer to - not from whenever the
+            # model happens to be evaluated first (a late reference is a constant
+            # error of beta x the rise missed; every node gets the same one).
+            for sensor, value in good.items():
+                self.model.reference_temperatures_c.setdefault(sensor, value)
             self.dead = dead
         changed = False
         while self._pending_profiles and self._pending_profiles[0][0] <= limit:
-            _, name, positions, values = self._pending_profiles.pop(0)
+            _, name, positions, values, difference = self._pending_profiles.pop(0)
             try:
-                self.model.set_profile(name, positions, values)
-                changed = True
+                changed = self.model.apply_profile(name, positions, values, difference) or changed
             except MtAccuracyError as exc:
                 self.health.refused(f"systematic/{name}", f"profile ignored: {exc}")
         if changed and self.on_profiles is not None:

@@ -21,27 +21,20 @@ import sys
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompensation
 
 from ..core.compensation.error_model import resolve_model
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.validation import sample_period
-from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
+from ._common import (COMPENSATION_QOS, TABLE_QOS, run_node, RESULT_QOS,  # noqa: F401
+                      SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse,
                       stamp_to_nanoseconds, unpack_float64)
 from ._health import DeliveryHealth
-from ._model_inputs import TABLE_QOS, ModelInputs
+from ._model_inputs import ModelInputs
 
 COMPONENTS = "XYZABC"
-
-
-#: Reliable, keep last 2000 (20 s at the default 100 Hz): a subscriber that stalls for
-#: seconds still gets every correction; ``sequence`` shows any gap beyond that.
-COMPENSATION_QOS = QoSProfile(depth=2000, reliability=ReliabilityPolicy.RELIABLE,
-                              durability=DurabilityPolicy.VOLATILE,
-                              history=HistoryPolicy.KEEP_LAST)
 
 
 class CompensationBroadcaster(Node):
@@ -70,7 +63,7 @@ class CompensationBroadcaster(Node):
                                                    COMPENSATION_QOS)
         self._tables = self.create_publisher(CompensationTable, "compensation_table", TABLE_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
-        self._published_version = -1
+        self._published_version = (-1, -1)
         self._last_direction: dict[str, float] = {}
         self._reported_dead: set[str] = set()
         self._last_stamp = -1
@@ -144,7 +137,7 @@ class CompensationBroadcaster(Node):
         except MtAccuracyError as exc:
             self._warn(f"no compensation for this batch: {exc}")
             return
-        if self._published_version != model.version:
+        if self._published_version != (model.version, model.profile_revision):
             self._publish_tables()
         for k, row in enumerate(rows):
             out = VolumetricCompensation()
@@ -203,11 +196,17 @@ class CompensationBroadcaster(Node):
             table.axis = axis.lower()
             table.columns = columns
             table.values = pack_float64(np.column_stack(values).ravel())
-            squareness = model.effects.get("squareness", {}).get("errors_rad", {})
+            # Location errors: the calibrated description's, then the model's squareness.
+            squareness = {}
+            if "geometric" in model.effects:
+                for name in model.machine.axis_order:
+                    for component, value in model.machine.axes[name].location_errors.items():
+                        squareness[f"E{component}0{name}"] = float(value)
+            squareness.update(model.effects.get("squareness", {}).get("errors_rad", {}))
             table.squareness_names = list(squareness)
             table.squareness = [float(v) for v in squareness.values()]
             self._tables.publish(table)
-        self._published_version = model.version
+        self._published_version = (model.version, model.profile_revision)
 
     def _warn(self, text: str) -> None:
         status = DiagnosticStatus(level=DiagnosticStatus.WARN,

@@ -12,6 +12,19 @@ windows and publishes, in real time x ``rate_factor``:
 Sample i is stamped ``start_stamp_ns + i / sample_rate``. Late timer ticks
 publish every batch that fell due - no sample is skipped. The node exits when
 the scenario ends.
+
+The virtual machine is a CNC with an external compensation input
+(``compensation_input``): ``table`` interpolates the latched
+``compensation_table`` per axis and combines it through the CNC's kinematic
+chain; ``realtime`` applies the latest ``compensation`` message at the
+controller cycle after a fixed delay (stale ones are counted, not applied);
+``hybrid`` takes the tables at the current command plus the real-time rest.
+The correction is added to the commanded position, so the axes move by it
+(the scale heads read it) and the reference instrument measures the
+compensated machine; each reading says what was applied
+(``applied_correction``, ``compensation_model_version``). To first order the
+machine's error at the shifted command equals its error at the command (the
+difference is |correction| x the error's slope, below 1e-10 m here).
 """
 from __future__ import annotations
 
@@ -23,8 +36,11 @@ from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import ReferenceMeasurement, ScaleBatch
 
+from ..core.compensation.error_model import ErrorModel
 from ..core.errors import MtAccuracyError
 from ..sim.machine_tool import SimulationResult, simulate
+from ._cnc_input import MODES, CompensationInput
+from ._health import DeliveryHealth
 from ._common import (MATCH_SETTLE_S, RESULT_QOS, SENSOR_QOS, accept, float_descriptor,
                       int_descriptor, nanoseconds_to_stamp, pack_float64, plain_descriptor,
                       refuse, run_node)
@@ -56,6 +72,18 @@ class EncoderPublisher(Node):
             "Sim time between two reference readings [s] (0: none)", 0.0, 3600.0))
         self.declare_parameter("frame_id", "", plain_descriptor(
             "frame_id of the messages (empty: the machine's name)"))
+        self.declare_parameter("compensation_input", "off", plain_descriptor(
+            "How the CNC takes the compensation: off, table (compensation_table), realtime "
+            "(compensation) or hybrid (tables + the real-time rest)", read_only=True))
+        self.declare_parameter("controller_cycle_s", 0.001, float_descriptor(
+            "CNC interpolation cycle: the real-time offset changes at its ticks [s]",
+            1e-5, 1.0, read_only=True))
+        self.declare_parameter("compensation_delay_s", 0.02, float_descriptor(
+            "Fixed delay from a correction's stamp to its application [s]", 0.0, 10.0,
+            read_only=True))
+        self.declare_parameter("max_compensation_age_s", 0.25, float_descriptor(
+            "A correction arriving later than this after its stamp is stale [s]", 1e-3, 60.0,
+            read_only=True))
         self.add_on_set_parameters_callback(self._validate)
 
         self.scenario = resolve_scenario(str(self.get_parameter("scenario").value))
@@ -73,6 +101,23 @@ class EncoderPublisher(Node):
         self._axes = list(self.scenario.machine.axis_order)
         self._last_direction: dict[str, int] = {}
         self._rng = np.random.default_rng(np.random.SeedSequence([self.scenario.seed, 0xEEF]))
+        mode = str(self.get_parameter("compensation_input").value)
+        if mode not in MODES:
+            raise MtAccuracyError(f"compensation_input {mode!r}: one of {', '.join(MODES)}")
+        self.health = DeliveryHealth(self)
+        self.compensation = CompensationInput(
+            self, mode, self.scenario.machine, self.health, now_stamp_ns=self._now_stamp_ns,
+            cycle_s=float(self.get_parameter("controller_cycle_s").value),
+            delay_s=float(self.get_parameter("compensation_delay_s").value),
+            max_age_s=float(self.get_parameter("max_compensation_age_s").value))
+        # Where a unit move of each linear axis takes the TCP (+-unit vectors): the
+        # axes realise a TCP correction c by moving c . direction each.
+        model = ErrorModel(self.scenario.machine)
+        middle = {a: np.array([0.5 * sum(self.scenario.machine.axes[a].stroke)])
+                  for a in self._axes}
+        self._axis_directions = {
+            a: model.axis_direction(a, middle)[0] for a in self._axes
+            if not self.scenario.machine.axes[a].is_rotary}
         self.create_timer(min(self._batch / self._rate, 0.05), self._tick)
 
     def _validate(self, parameters):
@@ -95,6 +140,13 @@ class EncoderPublisher(Node):
             self.get_clock().now().nanoseconds
         self._scenario_clock = ScenarioClock(start, float(self.get_parameter("rate_factor").value))
         return True
+
+    def _now_stamp_ns(self) -> int | None:
+        """The controller's time in the stamps' time base (sim time), None before start."""
+        if self._scenario_clock is None:
+            return None
+        clock = self._scenario_clock
+        return clock.stamp_ns(clock.sim_time_s(self.get_clock().now().nanoseconds))
 
     def _window_for(self, index: int) -> SimulationResult:
         window = self._window
@@ -130,13 +182,24 @@ class EncoderPublisher(Node):
             window, offset = self._window, 0
         rows = slice(offset, offset + self._batch)
         frame = str(self.get_parameter("frame_id").value) or self.scenario.machine.name
+        stamps = self._scenario_clock.start_ns + np.round(
+            (first + np.arange(self._batch)) / self._rate * 1e9).astype(np.int64)
+        applied, versions = self.compensation.corrections(
+            stamps, {a: window.command[a][rows] for a in self._axes})
+        readings = window.scale_readings[rows]
+        if np.any(applied):
+            readings = readings.copy()
+            for k, axis in enumerate(window.scale_axes):
+                shift = applied @ self._axis_directions[axis]
+                readings[:, 2 * k] += shift
+                readings[:, 2 * k + 1] += shift
         message = ScaleBatch()
-        message.header.stamp = nanoseconds_to_stamp(self._scenario_clock.stamp_ns(first / self._rate))
+        message.header.stamp = nanoseconds_to_stamp(int(stamps[0]))
         message.header.frame_id = frame
         message.first_sample_index = int(first)
         message.sample_period = 1.0 / self._rate
         message.channel_names = list(window.scale_channels)
-        message.positions = pack_float64(window.scale_readings[rows].ravel())
+        message.positions = pack_float64(readings.ravel())
         message.command_axes = [a.lower() for a in self._axes]
         message.command_positions = pack_float64(
             np.column_stack([window.command[a][rows] for a in self._axes]).ravel())
@@ -147,7 +210,8 @@ class EncoderPublisher(Node):
             while self._next_reference_s < end_s:
                 index = int(round(self._next_reference_s * self._rate)) - window.first_index
                 index = min(max(index, offset), offset + self._batch - 1)
-                self._publish_reference(window, index, frame)
+                self._publish_reference(window, index, frame, applied[index - offset],
+                                        int(versions[index - offset]))
                 self._next_reference_s += period
 
     def _direction(self, window: SimulationResult, axis: str, index: int) -> int:
@@ -157,9 +221,12 @@ class EncoderPublisher(Node):
             self._last_direction[axis] = int(np.sign(window.velocity[axis][moving[-1]]))
         return self._last_direction.get(axis, 0)
 
-    def _publish_reference(self, window: SimulationResult, index: int, frame: str) -> None:
+    def _publish_reference(self, window: SimulationResult, index: int, frame: str,
+                           applied: np.ndarray, version: int) -> None:
         uncertainty = 1e-6  # k = 2
-        error = window.tcp_error(np.array([index]))[0] + \
+        # The compensated machine: the TCP lands where its error puts it plus the
+        # correction the CNC added to the command.
+        error = window.tcp_error(np.array([index]))[0] + applied + \
             self._rng.normal(0.0, uncertainty / 2, 3)
         message = ReferenceMeasurement()
         message.header.stamp = nanoseconds_to_stamp(
@@ -173,6 +240,9 @@ class EncoderPublisher(Node):
         message.error.x, message.error.y, message.error.z = (float(v) for v in error)
         message.measured = [True, True, True]
         message.uncertainty = uncertainty
+        message.applied_correction.x, message.applied_correction.y, \
+            message.applied_correction.z = (float(v) for v in applied)
+        message.compensation_model_version = int(version)
         message.sequence = self._reference_sequence
         self._reference_sequence += 1
         self._reference.publish(message)

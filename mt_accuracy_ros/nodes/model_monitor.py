@@ -9,12 +9,18 @@ their own zero), the readings outside the instrument's 2u band, and the
 candidate effects ranked by time-blocked cross-validated error reduction.
 Publishes ``model_check`` (``ModelCheck``, reliable), ``/diagnostics`` (WARN
 while the residual is outside the band, naming the likely missing effect) and
-the current model as YAML on ``model`` (``std_msgs/String``, transient local)
-for the compensation broadcaster.
+every model version on ``model`` (``ModelVersion``: version, reason, effects,
+the model's YAML; reliable + transient local) for the compensation broadcaster,
+the recorder and any replay.
 
-Adding an effect at run time: set ``add_effects`` (e.g. ``["structural_thermal_drift"]``);
-the monitor fits it to the readings it holds, adds it and publishes the new
-model version. ``auto_add`` does that itself for the top significant candidate.
+Readings of a compensated machine carry the correction the CNC applied; the
+model is judged against the machine's own error, ``error - applied_correction``.
+
+Model changes at run time: set ``add_effects`` (e.g. ``["structural_thermal_drift"]``);
+the monitor fits them to the readings it holds, adds them and publishes the new
+model version. ``remove_effects`` takes effects out. ``auto_add`` adds the top
+significant candidate by itself. ``mt-accuracy model add|remove EFFECT`` does
+the same from a terminal.
 """
 from __future__ import annotations
 
@@ -24,9 +30,8 @@ from collections import deque
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
-from std_msgs.msg import String
 
-from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ReferenceMeasurement
+from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ModelVersion, ReferenceMeasurement
 
 from ..core.compensation.error_model import MODEL_EFFECTS, resolve_model
 from ..core.errors import InputDataError, MtAccuracyError
@@ -54,11 +59,16 @@ class ModelMonitor(Node):
             "Smallest cross-validated error reduction that counts as an effect", 0.0, 1.0))
         self.declare_parameter("add_effects", [""], plain_descriptor(
             "Effects to fit and add to the model now (run-time action)"))
+        self.declare_parameter("remove_effects", [""], plain_descriptor(
+            "Effects to take out of the model now (run-time action)"))
         self.declare_parameter("auto_add", False, plain_descriptor(
             "Add the top significant candidate by itself"))
         self.add_on_set_parameters_callback(self._validate)
         self.health = DeliveryHealth(self)
         self._check_sequence = 0
+        self._model_sequence = 0
+        self._reason = "start"
+        self.versions: list[dict] = []   # every version published: version, reason, effects
         self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
                                   follow_topic=False, on_change=self._publish_model,
                                   health=self.health)
@@ -67,7 +77,7 @@ class ModelMonitor(Node):
         self.last_diagnosis = None
         self.history: list[dict] = []
         self._check = self.create_publisher(ModelCheck, "model_check", RESULT_QOS)
-        self._model_topic = self.create_publisher(String, "model", LATCHED_QOS)
+        self._model_topic = self.create_publisher(ModelVersion, "model", LATCHED_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.create_subscription(ReferenceMeasurement, "reference/tcp_error",
                                  self.health.guard("reference/tcp_error", self._on_reading),
@@ -88,9 +98,11 @@ class ModelMonitor(Node):
         for parameter in parameters:
             if parameter.name == "model":
                 try:
-                    self.inputs.set_model(resolve_model(str(parameter.value)))
+                    model = resolve_model(str(parameter.value))
                 except MtAccuracyError as exc:
                     return refuse(f"model refused: {exc}")
+                self._reason = "model parameter set"
+                self.inputs.set_model(model)
             elif parameter.name == "window":
                 self._readings = deque(self._readings, maxlen=int(parameter.value))
             elif parameter.name == "add_effects":
@@ -100,12 +112,24 @@ class ModelMonitor(Node):
                     return refuse(f"unknown effect(s) {', '.join(unknown)}; known: "
                                   f"{', '.join(MODEL_EFFECTS)}")
                 for name in names:
-                    reason = self._add(name)
+                    reason = self._add(name, "user")
                     if reason:
                         return refuse(reason)
+            elif parameter.name == "remove_effects":
+                names = [n for n in parameter.value if n]
+                absent = [n for n in names if n not in self.inputs.model.effects]
+                if absent:
+                    return refuse(f"cannot remove {', '.join(absent)}: not in the model (it "
+                                  f"holds {', '.join(sorted(self.inputs.model.effects)) or 'nothing'})")
+                model = self.inputs.model
+                for name in names:
+                    model = model.without_effect(name)
+                self._reason = f"removed {', '.join(names)} (user)"
+                self.inputs.set_model(model)
+                self._since_check = int(self.get_parameter("check_every").value)
         return accept()
 
-    def _add(self, name: str) -> str | None:
+    def _add(self, name: str, who: str) -> str | None:
         if name in self.inputs.model.effects:
             return None
         obs = self._observations()
@@ -119,6 +143,7 @@ class ModelMonitor(Node):
         candidate = next((c for c in diagnosis.ranking if c.effect == name), None)
         if candidate is None:
             return f"cannot fit {name}: it has no regressors in these readings"
+        self._reason = f"added {name} ({who})"
         self.inputs.set_model(add_effect(self.inputs.model, candidate, obs))
         self.get_logger().info(f"added {name} {candidate.parameters}; model version "
                                f"{self.inputs.model.version}")
@@ -131,7 +156,10 @@ class ModelMonitor(Node):
         if len(axes) != len(message.command_positions) or not np.all(
                 np.isfinite(message.command_positions)):
             raise InputDataError("reference reading with bad command positions skipped")
-        error = np.array([message.error.x, message.error.y, message.error.z])
+        # The machine's own error: what the instrument saw minus what the CNC added.
+        error = np.array([message.error.x - message.applied_correction.x,
+                          message.error.y - message.applied_correction.y,
+                          message.error.z - message.applied_correction.z])
         measured = np.array(message.measured, dtype=bool)
         if not np.all(np.isfinite(error[measured])):
             raise InputDataError("reference reading with a NaN/inf error skipped")
@@ -257,10 +285,19 @@ class ModelMonitor(Node):
             KeyValue(key="model_version", value=str(model.version)),
             KeyValue(key="missing_effect", value=found.effect if found else "")])
         if found is not None and self.get_parameter("auto_add").value:
-            self._add(found.effect)
+            self._add(found.effect, "auto_add")
 
     def _publish_model(self) -> None:
-        self._model_topic.publish(String(data=self.inputs.model_yaml()))
+        model = self.inputs.model
+        message = ModelVersion(version=int(model.version), reason=self._reason,
+                               effects=sorted(model.effects), model_yaml=self.inputs.model_yaml(),
+                               sequence=self._model_sequence)
+        message.header.stamp = self.get_clock().now().to_msg()
+        self._model_sequence += 1
+        self.versions.append({"version": int(model.version), "reason": self._reason,
+                              "effects": sorted(model.effects)})
+        self.get_logger().info(f"model version {model.version}: {self._reason}")
+        self._model_topic.publish(message)
 
     def _status(self, level: int, text: str, values=None) -> None:
         status = DiagnosticStatus(level=level, name=f"{self.get_fully_qualified_name()}: model",

@@ -12,7 +12,12 @@ and for every axis whose heads ``<axis>1``/``<axis>2`` are in the batches:
   ``systematic/<axis>`` (``SystematicProfile``, reliable) every ``profile_period_s``;
 * once ``baseline_after_s`` of data has passed the profile becomes the
   baseline; later profiles carry ``baseline_difference`` and a deterioration
-  alarm (|dE| >= ``tolerance_rad``, eq. 2.1) that also goes to ``/diagnostics``.
+  alarm (|dE| >= ``tolerance_rad``, eq. 2.1) that also goes to ``/diagnostics``;
+* with ``absorb_deterioration``, the alarm's rising edge restarts the profile
+  from the samples that follow, so the profile - and the compensation built
+  on its change dE (p2 = p1 - delta e, eq. 3.16) - shows the deteriorated
+  guideway after one pass instead of mixing both states for several memory
+  horizons.
 
 Bad input (NaN readings, a gap in ``first_sample_index``, stamps going back,
 a dead thermocouple) is reported on ``/diagnostics`` and skipped; the node keeps
@@ -94,6 +99,8 @@ class YawEstimator(Node):
             0.0, 1e7))
         self.declare_parameter("tolerance_rad", 10e-6, float_descriptor(
             "Deterioration tolerance dE_TOL on the yaw [rad]", 1e-9, 1.0))
+        self.declare_parameter("absorb_deterioration", True, plain_descriptor(
+            "On a deterioration alarm restart the profile from the samples that follow"))
         self.declare_parameter("input_delay_s", 0.5, float_descriptor(
             "Use temperatures stamped this much before the batch (deterministic replay) [s]",
             0.0, 60.0, read_only=True))
@@ -327,6 +334,10 @@ class YawEstimator(Node):
                 self.get_logger().warning(
                     f"axis {state.axis}: yaw deteriorated by up to "
                     f"{report.max_abs_change * 1e6:.1f} urad over {ranges}")
+                if self.get_parameter("absorb_deterioration").value:
+                    state.streaming.forget()
+                    self.get_logger().info(f"axis {state.axis}: profile restarted at "
+                                           f"{self._data_time_s:.1f} s to absorb the change")
             state.alarm = bool(report.deteriorated)
         out.sequence = self._profile_sequence.get(state.axis, 0)
         self._profile_sequence[state.axis] = out.sequence + 1

@@ -36,7 +36,7 @@ class BagData:
     axes: dict[str, AxisData] = field(default_factory=dict)
     compensation: list = field(default_factory=list)      # (stamp, error xyz, version)
     tables: dict[str, object] = field(default_factory=dict)  # axis -> last CompensationTable
-    models: list = field(default_factory=list)            # (stamp, model YAML)
+    models: list = field(default_factory=list)            # (stamp, model YAML, version, reason)
 
     def seconds(self, stamps_ns) -> np.ndarray:
         """Time since the start of the data [s] - the one time base of every report plot."""
@@ -81,7 +81,10 @@ def read_bag(bag: str | Path, namespace: str = "") -> BagData:
         elif name == "/compensation_table":
             data.tables[value.axis] = value
         elif name == "/model":
-            data.models.append((stamp, value.data))
+            if hasattr(value, "model_yaml"):  # ModelVersion
+                data.models.append((stamp, value.model_yaml, int(value.version), value.reason))
+            else:  # bags of earlier versions: the model's YAML as std_msgs/String
+                data.models.append((stamp, value.data, None, ""))
         elif name.startswith("/yaw/"):
             axis = data.axes.setdefault(value.axis, AxisData(value.axis))
             # Keep about YAW_POINTS samples whatever the run's length.

@@ -31,6 +31,8 @@ def _legend(ax) -> None:
 def bag_report_sections(data: BagData, check: dict | None, directory: Path, stem: str
                         ) -> list[Section]:
     sections = [_source_section(data, check), _headline_section(data, check)]
+    if data.references:
+        sections.append(closed_loop_section(data, directory, stem))
     if check is not None:
         sections += [_where_section(data, check, directory, stem),
                      _evidence_section(check), _versions_section(check)]
@@ -121,6 +123,83 @@ def _headline_section(data: BagData, check: dict | None) -> Section:
         f"{band * UM:.2g} µm (k = 2). 'With compensation' is the error that remains when the "
         "model's correction is applied at the reference points (reference minus model).")
     section.paragraphs.append(f"End state: {check['final_diagnosis']}.")
+    return section
+
+
+def loop_events(data: BagData) -> list[tuple[float, str]]:
+    """Where each compensation model version went live at the machine [s], and its reason."""
+    reasons = {version: reason for _, _, version, reason in data.models if version is not None}
+    events, seen = [], set()
+    for stamp, reading in data.references:
+        version = int(getattr(reading, "compensation_model_version", 0))
+        if version and version not in seen:
+            seen.add(version)
+            label = f"starting model's compensation (v{version})" if len(seen) == 1 else \
+                f"v{version}: {reasons.get(version, 'model change')}"
+            events.append((float(data.seconds([stamp])[0]), label))
+    return events
+
+
+def closed_loop_section(data: BagData, directory: Path, stem: str) -> Section:
+    """The machine's error with and without the compensation the CNC applied."""
+    from ..core.workbench.closed_loop import loop_phases
+    from ..io.fields import machine_error
+
+    section = Section("Closed loop: the machine's error with the compensation applied")
+    times = data.seconds([s for s, _ in data.references])
+    measured = np.array([(r.error.x, r.error.y, r.error.z) for _, r in data.references])
+    raw = np.array([machine_error(r) for _, r in data.references])
+    applied = measured - raw
+    band = float(np.median([r.uncertainty for _, r in data.references])) or 1e-6
+    if not np.any(applied):
+        section.paragraphs.append(
+            "The machine applied no compensation during this recording (open loop): the "
+            "headline's 'with compensation' rows are the model's residual at the reference "
+            "points, not a measured compensated machine.")
+        return section
+    events = loop_events(data)
+    phases = loop_phases(times, measured, applied, events, band)
+    table = Table(["phase", "from-to [s]", "readings"] +
+                  [f"{kind} e_{c}" for kind in ("without", "with") for c in COMPONENTS],
+                  caption="RMS of the TCP error the reference instrument measured, per "
+                          "component, without the compensation (measured minus what the CNC "
+                          "applied) and with it, at the same readings; k = 2 uncertainties")
+    for phase in phases:
+        table.add(phase.label, f"{phase.start_s:.0f}-{phase.end_s:.0f}", phase.count,
+                  *[format_with_uncertainty(f.rms * UM, f.rms_u_k2 * UM, "µm")
+                    for f in phase.without + phase.with_compensation],
+                  css_class="best" if phase.label == "end state" and phase.within(band) else "")
+    section.tables.append(table)
+    end = phases[-1]
+    section.paragraphs.append(
+        f"The CNC added the broadcast correction to its command; the reference instrument "
+        f"(U = {band * UM:.2g} µm, k = 2) measured the compensated machine. End of the run "
+        f"(last {end.end_s - end.start_s:.0f} s): "
+        + ", ".join(f"e_{c} {f.rms * UM:.2f} µm" for c, f in zip(COMPONENTS,
+                                                               end.with_compensation))
+        + (" - within the instrument's band." if end.within(band) else
+           " - outside the instrument's band: an effect the model lacks remains."))
+    plt = pyplot()
+    fig, axes = plt.subplots(3, 1, figsize=(10, 6.4), sharex=True)
+    for c, ax in enumerate(axes):
+        ax.plot(times, raw[:, c] * UM, ".", color="0.6", ms=3, label="without compensation")
+        ax.plot(times, measured[:, c] * UM, ".", color="tab:blue", ms=3,
+                label="with compensation (measured)")
+        ax.axhspan(-band * UM, band * UM, color="tab:green", alpha=0.12,
+                   label="instrument band (k = 2)")
+        for when, label in events:
+            ax.axvline(when, color="tab:red", lw=0.8)
+        ax.set_ylabel(f"e_{COMPONENTS[c]} [µm]")
+    for when, label in events:
+        axes[0].annotate(label, (when, 1.0), xycoords=("data", "axes fraction"), fontsize=6,
+                         rotation=90, va="top", ha="right")
+    axes[-1].set_xlabel(TIME_LABEL)
+    _legend(axes[0])
+    section.figures.append(save_figure(
+        fig, directory, f"{stem}_closed_loop",
+        "TCP error per component at the reference points: grey without compensation, blue "
+        "as measured on the compensated machine; red lines where a model version went live at "
+        "the machine; the instrument's band in green."))
     return section
 
 

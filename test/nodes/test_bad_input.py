@@ -40,9 +40,8 @@ def _refusals(diagnostics, stream):
 def test_broadcaster_survives_bad_batches_and_models_and_says_why(rclpy_context):
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
-    from std_msgs.msg import String
 
-    from mt_accuracy_msgs.msg import ScaleBatch, VolumetricCompensation
+    from mt_accuracy_msgs.msg import ModelVersion, ScaleBatch, VolumetricCompensation
     from mt_accuracy_ros.nodes._common import LATCHED_QOS, SENSOR_QOS
     from mt_accuracy_ros.nodes.compensation_broadcaster import COMPENSATION_QOS
 
@@ -52,7 +51,7 @@ def test_broadcaster_survives_bad_batches_and_models_and_says_why(rclpy_context)
     node.create_subscription(VolumetricCompensation, "compensation", compensation.append,
                              COMPENSATION_QOS)
     scales = node.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
-    model = node.create_publisher(String, "model", LATCHED_QOS)
+    model = node.create_publisher(ModelVersion, "model", LATCHED_QOS)
     # input_delay_s 0: temperatures/profiles need not arrive first for this test.
     broadcaster = start_node("compensation_broadcaster", {"input_delay_s": 0.0}, quiet=True)
     try:
@@ -65,11 +64,16 @@ def test_broadcaster_survives_bad_batches_and_models_and_says_why(rclpy_context)
         assert spin_until(node, lambda: len(_refusals(diagnostics, "scales")) >= 4, 20)
         reasons = _refusals(diagnostics, "scales")
         assert all("sample_period" in r for r in reasons[:4]), reasons
-        for text in BAD_MODELS:
-            model.publish(String(data=text))
+        for sequence, text in enumerate(BAD_MODELS):
+            model.publish(ModelVersion(version=5, model_yaml=text, sequence=sequence))
             assert spin_until(node, lambda: sum("model refused" in r for r in
                                                 _refusals(diagnostics, "model"))
                               >= BAD_MODELS.index(text) + 1, 20), text
+        # A good model with a version below the live one (1) is refused as old.
+        model.publish(ModelVersion(version=0, model_yaml="machine: kidani_hmc\neffects: "
+                                   "{squareness: {}}\n", sequence=len(BAD_MODELS)))
+        assert spin_until(node, lambda: any("older than the live version 1" in r for r in
+                                            _refusals(diagnostics, "model")), 20)
         assert broadcaster.popen.poll() is None, "the broadcaster died"
         # Still working: a good batch gives compensation with the starting model.
         scales.publish(_batch(1000, 2_000_000_000, 0.001))
@@ -81,7 +85,7 @@ def test_broadcaster_survives_bad_batches_and_models_and_says_why(rclpy_context)
                 for status in array.status:
                     values = {v.key: v.value for v in status.values}
                     if values.get("scales.refused") == "4" and \
-                            values.get("model.refused") == str(len(BAD_MODELS)):
+                            values.get("model.refused") == str(len(BAD_MODELS) + 1):
                         return True
             return False
         assert spin_until(node, counted, 15)

@@ -54,7 +54,7 @@ def test_graph_topics_types_and_refused_parameters(rclpy_context, tmp_path):
         "/systematic/y": "mt_accuracy_msgs/msg/SystematicProfile",
         "/compensation": "mt_accuracy_msgs/msg/VolumetricCompensation",
         "/compensation_table": "mt_accuracy_msgs/msg/CompensationTable",
-        "/model_check": "mt_accuracy_msgs/msg/ModelCheck", "/model": "std_msgs/msg/String",
+        "/model_check": "mt_accuracy_msgs/msg/ModelCheck", "/model": "mt_accuracy_msgs/msg/ModelVersion",
         "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"}
     try:
         def discovered():
@@ -206,7 +206,7 @@ def test_late_joiner_receives_the_latched_tables(rclpy_context):
     import rclpy
 
     from mt_accuracy_msgs.msg import CompensationTable
-    from mt_accuracy_ros.nodes._model_inputs import TABLE_QOS
+    from mt_accuracy_ros.nodes._common import TABLE_QOS
 
     broadcaster = start_node("compensation_broadcaster")
     probe = rclpy.create_node("probe")

@@ -108,6 +108,9 @@ class ErrorModel:
     version: int = 1
     machine_source: str = ""     # bundled name or path the machine was loaded from
     profile_offsets: dict[str, float] = field(default_factory=dict)
+    #: Counts live profile updates. ``version`` counts model changes (effects and
+    #: their parameters) only: a version is a model a user chose, not a data update.
+    profile_revision: int = 0
 
     def __post_init__(self) -> None:
         for name in list(self.effects):
@@ -168,7 +171,49 @@ class ErrorModel:
                 if calibrated is not None else 0.0
         y = y + self.profile_offsets[error_name]
         self.profiles[error_name] = ErrorFunction(kind="profile", positions=x, values=y)
-        self.version += 1
+        self.profile_revision += 1
+
+    def calibrated(self, error_name: str):
+        """The machine description's calibrated function of ``error_name`` (None if zero)."""
+        axis, component = error_name[-1], error_name[1]
+        spec = self.machine.axes.get(axis)
+        if spec is None or component not in spec.motion_errors:
+            return None
+        function = spec.motion_errors[component]
+        return None if function.is_zero else function
+
+    def apply_profile(self, error_name: str, positions_m: ArrayLike, values: ArrayLike,
+                      baseline_difference: ArrayLike | None = None) -> bool:
+        """Take a live measured profile the way Kidani's command compensation does.
+
+        Where the machine carries a calibrated table of this error (the
+        installation calibration), the dual-scale profile says only how the
+        error has *changed*: its own zero and the two scales' graduation errors
+        (a false yaw (g2 - g1)/D, eq. 2.13) are static and cancel in the
+        difference against the estimator's baseline. The model then uses
+        E(x) = E_calibrated(x) + delta E(x), i.e. the command compensation
+        p2 = p1 - delta e (Kidani eqs. 3.14-3.16); before a baseline exists the
+        calibration stands and nothing changes (returns False). Without a
+        calibrated table the live profile itself is the error (:meth:`set_profile`).
+
+        Returns True when the model changed.
+        """
+        function = self.calibrated(error_name)
+        if function is None:
+            self.set_profile(error_name, positions_m, values)
+            return True
+        if baseline_difference is None or np.size(baseline_difference) == 0:
+            return False
+        x = np.asarray(positions_m, dtype=np.float64)
+        change = np.asarray(baseline_difference, dtype=np.float64)
+        if x.shape != change.shape or x.ndim != 1 or x.size < 2 or not np.all(np.diff(x) > 0) \
+                or not (np.all(np.isfinite(x)) and np.all(np.isfinite(change))):
+            raise InputDataError(f"profile {error_name}: need >= 2 ascending finite positions "
+                                 "with one finite baseline difference each")
+        self.profiles[error_name] = ErrorFunction(kind="profile", positions=x,
+                                                  values=function(x) + change)
+        self.profile_revision += 1
+        return True
 
     # ------------------------------------------------------------ evaluation
     def _rise(self, sensor: str, temperatures: dict, n: int) -> NDArray[np.float64]:

@@ -136,6 +136,20 @@ class StreamingSystematic:
             self.reselect_k()
         return dropped
 
+    def forget(self) -> None:
+        """Drop every sample so far: the profile restarts from the samples that follow.
+
+        After a detected deterioration the old guideway state is no longer the
+        machine's; a forgetting horizon would mix both for several horizons. The
+        chosen k and the shift are kept.
+        """
+        self.weight[:] = 0.0
+        self.sum[:] = 0.0
+        self.sum_sq[:] = 0.0
+        self._ring_fill = 0
+        self._ring_next = 0
+        self._since_selection = 0
+
     def _decay(self, n_new: int) -> None:
         factor = np.exp(-n_new / self.memory_samples)
         self.weight *= factor

@@ -1,0 +1,106 @@
+"""The machine's error with the loop closed, phase by phase, at the same reference points.
+
+A reference instrument measuring a compensated machine reads
+``measured = e_machine + c_applied`` (the CNC added ``c_applied`` to the
+command; Kidani's p2 = p1 - delta e, eq. 3.16, makes ``c_applied = -e_model``).
+The controller knows ``c_applied``, so at every reading both are known:
+
+* the machine's error **without** compensation, ``measured - c_applied``;
+* the error **with** the compensation live at that moment, ``measured``.
+
+:func:`loop_phases` cuts a run at its events (model versions, an alarm) and
+gives, for each phase and each TCP component, both RMS values with their
+k = 2 uncertainties (:mod:`.statistics`) at the same readings, then the run's
+end state. Pure numpy; nothing here knows ROS or the simulator.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import InputDataError
+from .statistics import Figure, rms_with_uncertainty
+
+COMPONENTS = ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class Phase:
+    """One stretch of the run. Figures per component x, y, z [m]."""
+
+    label: str
+    start_s: float
+    end_s: float
+    count: int
+    without: tuple[Figure, Figure, Figure]     # measured - applied: no compensation
+    with_compensation: tuple[Figure, Figure, Figure]
+
+    def as_dict(self) -> dict:
+        def um(figures):
+            return {c: {"rms_um": f.rms * 1e6, "u_k2_um": f.rms_u_k2 * 1e6,
+                        "max_abs_um": f.max_abs * 1e6} for c, f in zip(COMPONENTS, figures)}
+        return {"label": self.label, "start_s": self.start_s, "end_s": self.end_s,
+                "readings": self.count, "without_compensation": um(self.without),
+                "with_compensation": um(self.with_compensation)}
+
+    def within(self, band_m: float) -> bool:
+        """Every component's compensated RMS at or below ``band_m``."""
+        return all(f.rms <= band_m for f in self.with_compensation)
+
+
+def _figures(values: np.ndarray, instrument_u_k2: float, seed: int) -> tuple:
+    return tuple(rms_with_uncertainty(values[:, j], instrument_u_k2, seed=seed + j)
+                 for j in range(3))
+
+
+def loop_phases(time_s: ArrayLike, measured_m: ArrayLike, applied_m: ArrayLike,
+                events: list[tuple[float, str]], instrument_u_k2: float, *,
+                settle_s: float = 1.0, end_window_s: float = 10.0,
+                min_readings: int = 5) -> list[Phase]:
+    """Phases of a closed-loop run.
+
+    Parameters
+    ----------
+    time_s : (N,) reading times [s], ascending.
+    measured_m, applied_m : (N, 3) [m] what the instrument read and what the CNC had added.
+    events : [(time [s], label of the phase that starts there)], the first phase's
+        label at time -inf included or not (then "start").
+    instrument_u_k2 : the reference instrument's expanded uncertainty [m].
+    settle_s : readings this close after an event are left out (the change settling).
+    end_window_s : the end state is the last this many seconds of the run.
+
+    Returns
+    -------
+    The whole run without compensation, one phase per event with at least
+    ``min_readings`` readings, and the end state (label ``"end state"``).
+    """
+    t = np.asarray(time_s, dtype=np.float64).reshape(-1)
+    measured = np.asarray(measured_m, dtype=np.float64).reshape(-1, 3)
+    applied = np.asarray(applied_m, dtype=np.float64).reshape(-1, 3)
+    if not (t.size == measured.shape[0] == applied.shape[0]) or t.size == 0:
+        raise InputDataError("loop phases: times, measured and applied differ in length or "
+                             "are empty")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(measured))
+            and np.all(np.isfinite(applied))):
+        raise InputDataError("loop phases: NaN/inf in the readings")
+    raw = measured - applied
+    ordered = sorted(events)
+    if not ordered or ordered[0][0] > t[0]:
+        ordered.insert(0, (float(t[0]) - 1.0, "start"))
+    phases = [Phase("whole run", float(t[0]), float(t[-1]), t.size,
+                    _figures(raw, instrument_u_k2, 0), _figures(measured, instrument_u_k2, 10))]
+    for k, (start, label) in enumerate(ordered):
+        end = ordered[k + 1][0] if k + 1 < len(ordered) else np.inf
+        rows = (t >= start + (settle_s if k else 0.0)) & (t < end)
+        if rows.sum() < min_readings:
+            continue
+        phases.append(Phase(label, float(t[rows][0]), float(t[rows][-1]), int(rows.sum()),
+                            _figures(raw[rows], instrument_u_k2, 20 + 3 * k),
+                            _figures(measured[rows], instrument_u_k2, 40 + 3 * k)))
+    rows = t >= t[-1] - end_window_s
+    phases.append(Phase("end state", float(t[rows][0]), float(t[-1]), int(rows.sum()),
+                        _figures(raw[rows], instrument_u_k2, 90),
+                        _figures(measured[rows], instrument_u_k2, 95)))
+    return phases

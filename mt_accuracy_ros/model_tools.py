@@ -1,0 +1,106 @@
+"""``mt-accuracy model``: change the live model from a terminal (add, remove, show).
+
+``add`` and ``remove`` set the model monitor's ``add_effects`` / ``remove_effects``
+parameter through its ``set_parameters`` service, as ``ros2 param set`` would;
+the monitor fits what is added to the readings it holds and publishes the new
+version on ``model``, which the compensation broadcaster follows. A refusal
+(an unknown effect, one not in the model, too few readings) is the command's
+one-line error, exit status 2. ``show`` prints the live version from ``model``.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+from .core.errors import ParameterError
+
+
+def set_remote_parameter(node, target: str, name: str, value,
+                         timeout_s: float = 30.0) -> tuple[bool, str]:
+    """Set parameter ``name`` of node ``target`` through its set_parameters service.
+
+    Returns (accepted, reason); (False, why) when the service is missing or silent.
+    """
+    import rclpy
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.parameter import Parameter
+
+    client = node.create_client(SetParameters, f"{target}/set_parameters")
+    try:
+        if not client.wait_for_service(timeout_sec=min(10.0, timeout_s)):
+            return False, f"{target}/set_parameters not available (is the node running?)"
+        request = SetParameters.Request(
+            parameters=[Parameter(name, value=value).to_parameter_msg()])
+        future = client.call_async(request)
+        deadline = time.monotonic() + timeout_s
+        while not future.done() and time.monotonic() < deadline:
+            rclpy.spin_once(node, timeout_sec=0.05)
+        if not future.done():
+            return False, f"{target} did not answer within {timeout_s:.0f} s"
+        result = future.result().results[0]
+        return bool(result.successful), str(result.reason)
+    finally:
+        node.destroy_client(client)
+
+
+def _change(args: argparse.Namespace) -> int:
+    import rclpy
+
+    parameter = "add_effects" if args.verb == "add" else "remove_effects"
+    rclpy.init()
+    node = rclpy.create_node("mt_accuracy_model_tool")
+    try:
+        accepted, reason = set_remote_parameter(node, args.monitor, parameter, list(args.effects),
+                                                timeout_s=args.timeout)
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    if not accepted:
+        raise ParameterError(f"{args.verb} {' '.join(args.effects)} refused: {reason}")
+    print(f"{args.verb} {' '.join(args.effects)}: accepted by {args.monitor}")
+    return 0
+
+
+def _show(args: argparse.Namespace) -> int:
+    import rclpy
+
+    from mt_accuracy_msgs.msg import ModelVersion
+
+    from .nodes._common import LATCHED_QOS
+
+    rclpy.init()
+    node = rclpy.create_node("mt_accuracy_model_tool")
+    seen: list = []
+    try:
+        node.create_subscription(ModelVersion, "model", seen.append, LATCHED_QOS)
+        deadline = time.monotonic() + args.timeout
+        while not seen and time.monotonic() < deadline:
+            rclpy.spin_once(node, timeout_sec=0.05)
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    if not seen:
+        raise ParameterError(f"no model on 'model' within {args.timeout:.0f} s "
+                             "(is the model monitor running?)")
+    live = seen[-1]
+    print(f"version {live.version}: {live.reason}\neffects: {', '.join(live.effects)}\n")
+    print(live.model_yaml.rstrip())
+    return 0
+
+
+def add_parser(commands) -> None:
+    """The ``model`` sub-command and its verbs."""
+    model = commands.add_parser("model", help="change or show the live model (add / remove "
+                                "effects at run time)")
+    verbs = model.add_subparsers(dest="verb", required=True)
+    for verb, text in (("add", "fit effects to the monitor's readings and add them"),
+                       ("remove", "take effects out of the live model")):
+        parser = verbs.add_parser(verb, help=text)
+        parser.add_argument("effects", nargs="+", metavar="EFFECT")
+        parser.add_argument("--monitor", default="/model_monitor",
+                            help="the model monitor node (default /model_monitor)")
+        parser.add_argument("--timeout", type=float, default=30.0, metavar="S")
+        parser.set_defaults(handler=_change)
+    show = verbs.add_parser("show", help="print the live model version")
+    show.add_argument("--timeout", type=float, default=10.0, metavar="S")
+    show.set_defaults(handler=_show)

@@ -1,0 +1,138 @@
+"""The CNC's compensation inputs: fixed-delay real-time offset and tables."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.core.compensation.controller import RealtimeOffset, TableCompensation
+from mt_accuracy_ros.core.compensation.error_model import ErrorModel
+from mt_accuracy_ros.core.errors import ParameterError
+from mt_accuracy_ros.core.kinematics.machine import load_machine
+
+MS = 1_000_000
+
+
+def test_offset_applies_at_the_first_cycle_after_stamp_plus_delay():
+    offset = RealtimeOffset(cycle_s=0.001, delay_s=0.02, max_age_s=0.1)
+    assert offset.offer(100 * MS + 300_000, 105 * MS, [1e-6, 0, 0], 1) is None
+    assert offset.offer(110 * MS, 112 * MS, [2e-6, 0, 0], 1) is None
+    # 100.3 ms + 20 ms = 120.3 ms -> cycle tick 121 ms; 110 + 20 = 130 ms.
+    values, versions = offset.at(np.array([120, 120.9, 121, 129.99, 130, 500]) * MS)
+    np.testing.assert_array_equal(values[:, 0], [0, 0, 1e-6, 1e-6, 2e-6, 2e-6])
+    np.testing.assert_array_equal(versions, [0, 0, 1, 1, 1, 1])
+    p50, p99, worst = offset.statistics.latency_percentiles()
+    assert worst == pytest.approx(0.0207) and offset.statistics.applied == 2
+
+
+def test_a_late_correction_applies_at_arrival_and_a_stale_one_never():
+    offset = RealtimeOffset(cycle_s=0.001, delay_s=0.02, max_age_s=0.1)
+    assert offset.offer(0, 5 * MS, [1e-6, 0, 0], 1) is None
+    assert offset.offer(10 * MS, 50 * MS, [2e-6, 0, 0], 1) is None      # 40 ms late: at 50 ms
+    reason = offset.offer(20 * MS, 200 * MS, [9e-6, 0, 0], 1)            # 180 ms > 100 ms
+    assert reason.startswith("stale")
+    values, _ = offset.at(np.array([30, 49, 50, 300]) * MS)
+    # The last valid correction stays after the stale one.
+    np.testing.assert_array_equal(values[:, 0], [1e-6, 1e-6, 2e-6, 2e-6])
+    assert offset.statistics.stale == 1 and offset.statistics.refused == 0
+
+
+@pytest.mark.parametrize("stamp, correction, version, word", [
+    (5, [np.nan, 0, 0], 2, "not finite"), (5, [1e-2, 0, 0], 2, "too large"),
+    (1, [0, 0, 0], 2, "out of order"), (5, [0, 0, 0], 0, "old model")])
+def test_bad_corrections_are_refused_and_the_last_valid_one_stays(stamp, correction, version,
+                                                                  word):
+    offset = RealtimeOffset(cycle_s=0.001, delay_s=0.0, max_age_s=1.0)
+    assert offset.offer(2 * MS, 2 * MS, [3e-6, 0, 0], 1) is None
+    assert word in offset.offer(stamp * MS, stamp * MS, correction, version)
+    assert offset.at(np.array([10 * MS]))[0][0, 0] == 3e-6
+    assert offset.statistics.refused == 1
+
+
+def test_bad_controller_parameters_are_refused():
+    with pytest.raises(ParameterError):
+        RealtimeOffset(cycle_s=0.0, delay_s=0.0, max_age_s=1.0)
+    with pytest.raises(ParameterError):
+        RealtimeOffset(cycle_s=0.001, delay_s=0.5, max_age_s=0.1)
+
+
+def test_forgetting_keeps_the_live_correction():
+    offset = RealtimeOffset(cycle_s=0.001, delay_s=0.0, max_age_s=1.0)
+    for k in range(10):
+        offset.offer(k * MS, k * MS, [k * 1e-7, 0, 0], 1)
+    offset.forget_before(5 * MS)
+    assert offset.at(np.array([5 * MS, 9 * MS]))[0][:, 0].tolist() == [5e-7, 9e-7]
+
+
+def _tables_of(model: ErrorModel, points: int = 41):
+    """Per-axis tables of the model's geometric errors, as the broadcaster sends them."""
+    out = []
+    for axis in model.machine.axis_order:
+        grid = np.linspace(*model.machine.axes[axis].stroke, points)
+        columns, values = [f"{axis}_m"], [grid]
+        for component in "XYZABC":
+            unit = "m" if component in "XYZ" else "rad"
+            columns.append(f"E{component}{axis}_{unit}")
+            values.append(model.machine.axes[axis].motion_errors[component](grid))
+        out.append((axis, columns, np.column_stack(values).ravel()))
+    return out
+
+
+def test_tables_reproduce_the_models_geometric_error_through_the_chain():
+    """Second formulation: the error model's own evaluation of the same description."""
+    machine = load_machine("kidani_hmc")
+    rng = np.random.default_rng(3)
+    # A machine with smooth component errors: linear in position, so the table's
+    # linear interpolation is exact.
+    for axis in machine.axis_order:
+        spec = machine.axes[axis]
+        for component in "XYZABC":
+            slope = rng.normal(0, 2e-5)
+            spec.motion_errors[component] = _linear(slope, spec.stroke)
+    model = ErrorModel(machine, {"geometric": {}, "squareness": {"errors_rad": {"EC0Y": 8e-6}}})
+    tables = TableCompensation(machine)
+    for axis, columns, values in _tables_of(model):
+        assert tables.offer(axis, columns, values, ["EC0Y"], [8e-6], 1) is None
+    positions = {a: rng.uniform(*machine.axes[a].stroke, 50) for a in machine.axis_order}
+    expected = model.tcp_error(positions)[0]
+    np.testing.assert_allclose(tables.correction(positions), -expected, atol=1e-12)
+    assert np.max(np.abs(expected)) > 5e-6  # the test means something
+
+
+def _linear(slope: float, stroke):
+    from mt_accuracy_ros.core.kinematics.error_functions import ErrorFunction
+
+    x = np.array(stroke, dtype=float)
+    return ErrorFunction(kind="profile", positions=x, values=slope * (x - x.mean()))
+
+
+def test_a_constant_positioning_error_is_corrected_along_its_axis():
+    machine = load_machine("kidani_hmc")
+    tables = TableCompensation(machine)
+    low, high = machine.axes["X"].stroke
+    grid = np.linspace(low, high, 11)
+    values = np.column_stack([grid, np.full(11, 5e-6)]).ravel()
+    assert tables.offer("x", ["X_m", "EXX_m"], values, [], [], 2) is None
+    correction = tables.correction({a: np.zeros(1) + 0.5 * sum(machine.axes[a].stroke)
+                                    for a in machine.axis_order})
+    direction = ErrorModel(machine).axis_direction("X", {a: np.zeros(1) for a in
+                                                         machine.axis_order})[0]
+    np.testing.assert_allclose(correction[0], -5e-6 * direction, atol=1e-15)
+
+
+@pytest.mark.parametrize("change, word", [
+    (lambda t: ("W", t[1], t[2], 2), "unknown axis"),
+    (lambda t: ("X", t[1], np.where(np.arange(t[2].size) == 7, np.nan, t[2]), 2), "gap"),
+    (lambda t: ("X", t[1], np.delete(t[2].reshape(11, 2), 5, axis=0).ravel(), 2), "gap"),
+    (lambda t: ("X", t[1], t[2][:-4], 2), "gap"),
+    (lambda t: ("X", ["X_m", "EXQ_m"], t[2], 2), "bad columns"),
+    (lambda t: ("X", t[1], t[2], 0), "old model")])
+def test_bad_tables_are_refused_and_the_axis_keeps_its_table(change, word):
+    machine = load_machine("kidani_hmc")
+    tables = TableCompensation(machine)
+    grid = np.linspace(*machine.axes["X"].stroke, 11)
+    good = ("X", ["X_m", "EXX_m"], np.column_stack([grid, np.full(11, 5e-6)]).ravel())
+    assert tables.offer(*good, [], [], 1) is None
+    axis, columns, values, version = change(good)
+    reason = tables.offer(axis, columns, values, [], [], version)
+    assert reason is not None and word in reason, reason
+    assert tables.tables["X"].components["EXX"][0] == 5e-6 and tables.version == 1
