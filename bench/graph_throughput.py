@@ -1,11 +1,20 @@
-"""End-to-end throughput and latency of the live graph (issue 7).
+"""End-to-end throughput and latency of the live graph (issues 7 and 18).
 
-Sustained 20 kHz x 6 scale heads for ``--seconds``: encoder publisher ->
-yaw estimator -> compensation broadcaster, each its own process, this process
-listening. Reports batches published / received by the estimator (every
-first_sample_index accounted for), compensation messages (expected: 100 Hz of
-data time), and the latency from a sample's stamp to the arrival of its
-compensation here, p50 and p99.
+Sustained 20 kHz x 6 scale heads for ``--seconds``: encoder publisher (the
+virtual CNC) -> yaw estimator and compensation broadcaster -> back to the
+CNC, each its own process, this process listening. Reports batches published /
+received by the estimator (every first_sample_index accounted for),
+compensation messages (expected: 100 Hz of data time), CPU per node, and two
+latencies:
+
+* **stamp -> applied**, measured by the CNC itself (``compensation_input:
+  realtime`` with no fixed delay and a 1 ms controller cycle): from a
+  sample's stamp to the controller cycle at which the correction computed
+  for it is applied - the latency issue 18 bounds (p99 <= 20 ms);
+* stamp -> arrival of the compensation at this listener.
+
+``--batch-periods 0.05 0.02 0.01 0.005 0.002`` sweeps the scale batch period
+in one run.
 
 Baseline in the same run: the per-sample design - one ``sensor_msgs/JointState``
 (6 positions) per sample - publishing as fast as it can from one process to a
@@ -69,6 +78,7 @@ def cpu_seconds(pid: int) -> float:
 def bench_graph(seconds: float, batch_period_s: float = 0.05) -> dict:
     import rclpy
 
+    from diagnostic_msgs.msg import DiagnosticArray
     from mt_accuracy_msgs.msg import VolumetricCompensation, YawBatch
     from mt_accuracy_ros.nodes._common import RESULT_QOS, stamp_to_nanoseconds
     from mt_accuracy_ros.processes import start_node
@@ -88,13 +98,25 @@ def bench_graph(seconds: float, batch_period_s: float = 0.05) -> dict:
     node.create_subscription(YawBatch, "yaw/x", lambda m: yaw_indices.append(
         int(m.first_sample_index)), RESULT_QOS)
     node.create_subscription(VolumetricCompensation, "compensation", on_compensation, RESULT_QOS)
+    controller: dict[str, str] = {}
+
+    def on_diagnostics(message: DiagnosticArray) -> None:
+        for status in message.status:
+            if status.name.endswith("encoder_publisher: compensation"):
+                controller.update({v.key: v.value for v in status.values})
+
+    node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 50)
     estimator = start_node("yaw_estimator", {"thermal_correction": False}, quiet=True)
     compensator = start_node("compensation_broadcaster", {"model": "demo"}, quiet=True)
     while node.count_subscribers("/scales") < 2 or node.count_publishers("/compensation") < 1:
         rclpy.spin_once(node, timeout_sec=0.05)
     encoder = start_node("encoder_publisher", {"scenario": str(workdir / "s.yaml"),
                                                "min_subscribers": 2,
-                                               "batch_period_s": batch_period_s}, quiet=True)
+                                               "batch_period_s": batch_period_s,
+                                               "compensation_input": "realtime",
+                                               "compensation_delay_s": 0.0,
+                                               "controller_cycle_s": 0.001,
+                                               "max_compensation_age_s": 1.0}, quiet=True)
     processes = {"encoder_publisher": encoder, "yaw_estimator": estimator,
                  "compensation_broadcaster": compensator}
     cpu_before = {name: cpu_seconds(p.popen.pid) for name, p in processes.items()}
@@ -126,6 +148,11 @@ def bench_graph(seconds: float, batch_period_s: float = 0.05) -> dict:
             "lost_samples": (len(expected_indices) - len(set(yaw_indices))) * per_batch,
             "compensation_expected": int(seconds * 100),
             "compensation_received": counts["compensation"],
+            "applied_latency_ms_p50": float(controller.get("latency_p50_ms", "nan")),
+            "applied_latency_ms_p99": float(controller.get("latency_p99_ms", "nan")),
+            "applied_latency_ms_max": float(controller.get("latency_max_ms", "nan")),
+            "compensation_applied": int(controller.get("applied", 0)),
+            "compensation_stale": int(controller.get("stale", 0)),
             "latency_ms_p50": float(np.percentile(latencies, 50)) if latencies else None,
             "latency_ms_p99": float(np.percentile(latencies, 99)) if latencies else None,
             "latency_ms_max": float(np.max(latencies)) if latencies else None}

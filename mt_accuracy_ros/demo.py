@@ -262,9 +262,10 @@ def loop_story(references, models, alarms, *, compensation_mode: str) -> dict:
     lines.append(f"  end of the run (last {end.end_s - end.start_s:.0f} s): compensated TCP error "
                  + ", ".join(f"e_{c} {f.rms * 1e6:.2f} um" for c, f in
                              zip(COMPONENTS, end.with_compensation))
-                 + (f" - within the instrument's band ({band * 1e6:.1f} um)" if within else
-                    f" - OUTSIDE the instrument's band ({band * 1e6:.1f} um): "
-                    "something the model lacks remains"))
+                 + (f" - within the instrument's band ({band * 1e6:.1f} um) within their k = 2 "
+                    "uncertainty" if within else
+                    f" - OUTSIDE the instrument's band ({band * 1e6:.1f} um) by more than their "
+                    "uncertainty: something the model lacks remains"))
     for when, axis in alarms:
         after = [p for p in phases if p.label.startswith(f"after the {axis.upper()}")]
         if after:
@@ -297,6 +298,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "tcp_error_end_state_rms_um": float(np.sqrt(np.mean(
             [end["with_compensation"][c]["rms_um"] ** 2 for c in "xyz"]))) if end else float("nan"),
         "end_state_within_band": story["end_state_within_band"],
+        "instrument_band_um": story.get("band_um", float("nan")),
         "model_checks": len(checks),
         "residual_rmse_before_um": float(np.mean(before[-3:]) * 1e6) if before else float("nan"),
         "missing_effect_found": actions[0]["added"] if actions else "",

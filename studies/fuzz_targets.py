@@ -315,9 +315,10 @@ def message_targets(harness: NodeHarness) -> dict[str, tuple]:
         harness.broadcaster.inputs.advance(2**63 - 1)
 
     def model_string(text):
-        from std_msgs.msg import String
+        from mt_accuracy_msgs.msg import ModelVersion
 
-        harness.broadcaster.inputs._on_model(String(data="# fuzz\n" + text))
+        harness.broadcaster.inputs._on_model(ModelVersion(version=2**31, model_yaml="# fuzz\n"
+                                                          + text))
 
     def model_parameter(text):
         from rclpy.parameter import Parameter

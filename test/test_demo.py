@@ -60,7 +60,7 @@ def test_demo_records_from_the_first_sample_and_accounts_for_every_stream(demo_r
 
 
 REPORT_SECTIONS = ["Machine, data and instruments", "Headline: TCP error per component",
-                   "The run", "Where the model fails", "The effect found and its evidence",
+                   "The run", "Closed loop: the machine's error with the compensation applied", "Where the model fails", "The effect found and its evidence",
                    "Model versions", "Axes: dual-scale yaw, systematic profile, deterioration",
                    "Temperatures", "ISO 230-2 positioning", "Compensation table"]
 
@@ -105,3 +105,44 @@ def test_demo_bag_decodes_with_the_mcap_ros2_decoder_foxglove_uses(demo_run):
     assert set(seen) == {"/temperatures", "/compensation", "/systematic/y", "/model_check"}
     assert len(seen["/temperatures"].sensor_names) == len(seen["/temperatures"].temperatures)
     assert seen["/systematic/y"].unit == "rad" and seen["/compensation"].model_version >= 1
+
+
+def test_demo_closes_the_loop_and_tells_the_end_state(demo_run):
+    """The CNC applied the compensation; the summary tells each phase and the end state,
+    the saved model is the final one, every model version is in the bag."""
+    import yaml
+
+    from mt_accuracy_ros.io.bag_reader import decode, read_messages
+
+    code, out, printed = demo_run
+    summary = json.loads((out / "summary.json").read_text())
+    phases = summary["closed_loop"]
+    assert phases[0]["label"] == "whole run" and phases[-1]["label"] == "end state"
+    for phase in phases:
+        for kind in ("without_compensation", "with_compensation"):
+            assert set(phase[kind]) == {"x", "y", "z"}
+            assert all(v["u_k2_um"] > 0 for v in phase[kind].values())
+    assert "closed loop: the CNC applies the compensation (hybrid)" in printed
+    assert "end of the run" in printed
+    # The effect the user added is in the saved (final) model, with its fitted parameters;
+    # the starting model is kept beside it.
+    assert summary["effect_added_accepted"], summary["missing_effect_found"]
+    added = summary["missing_effect_found"]
+    final = yaml.safe_load((out / "model.yaml").read_text())
+    start = yaml.safe_load((out / "model_start.yaml").read_text())
+    assert added in final["effects"] and added not in start["effects"]
+    assert final["version"] >= 2 and final["effects"][added]
+    # Every model version is a message in the bag, in order, with its reason.
+    versions = [decode(m) for m in read_messages(out / "bag", ["/model"])]
+    assert [v.version for v in versions] == sorted({v.version for v in versions})
+    assert versions[0].reason == "start" and any(f"added {added}" in v.reason for v in versions)
+    # The whole story: the machine's error fell to the instrument's band by the end,
+    # the deterioration included (absorbed through the live profile).
+    whole, end = phases[0], phases[-1]
+    band = summary["instrument_band_um"]
+    assert summary["end_state_within_band"], end
+    assert all(end["with_compensation"][c]["rms_um"] - end["with_compensation"][c]["u_k2_um"]
+               <= band for c in "xyz")
+    # Without compensation the same run is far outside: the loop did the work.
+    assert all(whole["without_compensation"][c]["rms_um"] > 5 * band for c in "xyz")
+    assert summary["deterioration_alarm_axis"] == "y"

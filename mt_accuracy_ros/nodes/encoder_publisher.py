@@ -172,6 +172,8 @@ class EncoderPublisher(Node):
             self.finished = True
         if self._next_index + self._batch > total:
             self.finished = True
+            if self.compensation.mode != "off":
+                self.compensation.publish_status()  # the whole run's figures, once more
 
     def _publish_batch(self, first: int) -> None:
         window = self._window_for(first)

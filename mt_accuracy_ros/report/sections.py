@@ -177,8 +177,10 @@ def closed_loop_section(data: BagData, directory: Path, stem: str) -> Section:
         f"(last {end.end_s - end.start_s:.0f} s): "
         + ", ".join(f"e_{c} {f.rms * UM:.2f} µm" for c, f in zip(COMPONENTS,
                                                                end.with_compensation))
-        + (" - within the instrument's band." if end.within(band) else
-           " - outside the instrument's band: an effect the model lacks remains."))
+        + (" - within the instrument's band (no component's RMS exceeds it by more than its "
+           "k = 2 uncertainty)." if end.within(band) else
+           " - outside the instrument's band by more than the uncertainty: an effect the model "
+           "lacks remains."))
     plt = pyplot()
     fig, axes = plt.subplots(3, 1, figsize=(10, 6.4), sharex=True)
     for c, ax in enumerate(axes):

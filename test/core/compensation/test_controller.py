@@ -136,3 +136,21 @@ def test_bad_tables_are_refused_and_the_axis_keeps_its_table(change, word):
     reason = tables.offer(axis, columns, values, [], [], version)
     assert reason is not None and word in reason, reason
     assert tables.tables["X"].components["EXX"][0] == 5e-6 and tables.version == 1
+
+
+def test_loop_phases_split_a_run_and_judge_the_end_state():
+    """Closed form: a constant error 4 um removed by a constant correction from t = 10 s."""
+    from mt_accuracy_ros.core.workbench.closed_loop import loop_phases
+
+    rng = np.random.default_rng(0)
+    t = np.arange(0.0, 40.0, 0.5)
+    machine = np.tile([4e-6, -6e-6, 2e-6], (t.size, 1))
+    applied = np.where(t[:, None] >= 10.0, -machine, 0.0)
+    noise = rng.normal(0.0, 0.5e-6, machine.shape)
+    phases = loop_phases(t, machine + applied + noise, applied, [(10.0, "compensated")], 1e-6)
+    assert [p.label for p in phases] == ["whole run", "start", "compensated", "end state"]
+    # Without compensation is the machine's own error (the noise on top).
+    np.testing.assert_allclose([f.rms for f in phases[0].without], [4e-6, 6e-6, 2e-6], rtol=0.05)
+    assert not phases[1].within(1e-6) and phases[-1].within(1e-6)
+    np.testing.assert_allclose([f.rms for f in phases[2].with_compensation], 0.5e-6, rtol=0.25)
+    assert phases[2].count == int((t >= 11.0).sum())  # 1 s settling left out

@@ -1,0 +1,235 @@
+"""The loop closed on the virtual machine (issue 18): the CNC applies what the broadcaster
+sends, and the reference instrument measures the compensated machine.
+
+Real processes: encoder publisher (the virtual CNC), temperature publisher,
+compensation broadcaster; this process is the reference instrument's reader.
+The machine's truth comes from the simulator; the compensation from the error
+model - two independent codes - so a wrong sign or unit anywhere shows as an
+error that does not fall.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import yaml
+
+from graph_helpers import spin_until
+from mt_accuracy_ros.processes import start_node
+
+GEOMETRIC = """machine: kidani_hmc
+seed: 5
+duration_s: 600
+sample_rate_hz: 500
+temperature_rate_hz: 2
+program: {type: back_and_forth, axes: [X, Y], feed_m_per_min: 12}
+effects: {geometric: {linear_m: 6e-6, angular_rad: 8e-6}, squareness: {errors_rad: {EC0Y: 15e-6}}}
+"""
+
+THERMAL = """machine: kidani_hmc
+seed: 6
+duration_s: 600
+sample_rate_hz: 500
+temperature_rate_hz: 2
+program: {type: back_and_forth, axes: [X, Y], feed_m_per_min: 12}
+effects:
+  geometric: {enabled: false}
+  structural_thermal_drift: {time_constant_s: 8, rise_k: 4.0, beta_m_per_k: [2.0e-6, 5.0e-6, -3.0e-6]}
+"""
+
+
+def _readings(node, count: int, timeout_s: float = 120.0) -> list:
+    from mt_accuracy_msgs.msg import ReferenceMeasurement
+
+    from mt_accuracy_ros.nodes._common import RESULT_QOS
+
+    readings: list = []
+    node.create_subscription(ReferenceMeasurement, "reference/tcp_error", readings.append,
+                             RESULT_QOS)
+    assert spin_until(node, lambda: len(readings) >= count, timeout_s), len(readings)
+    return readings
+
+
+def _arrays(readings):
+    measured = np.array([(r.error.x, r.error.y, r.error.z) for r in readings])
+    applied = np.array([(r.applied_correction.x, r.applied_correction.y,
+                         r.applied_correction.z) for r in readings])
+    versions = np.array([r.compensation_model_version for r in readings])
+    return measured, applied, versions
+
+
+def _rms(values):
+    return np.sqrt(np.mean(values ** 2, axis=0))
+
+
+def test_tables_bring_the_geometric_error_within_the_band(rclpy_context, tmp_path):
+    """Tables of the calibrated machine, applied by the CNC: the error left is the
+    calibration's and the instrument's, within the instrument's 1 um band."""
+    import rclpy
+
+    from mt_accuracy_ros.nodes._scenario import resolve_scenario
+    from mt_accuracy_ros.sim.instruments import calibrate_machine
+    from mt_accuracy_ros.sim.machine_tool import simulate
+
+    scenario_path = tmp_path / "geometric.yaml"
+    scenario_path.write_text(GEOMETRIC)
+    calibrated = calibrate_machine(simulate(resolve_scenario(str(scenario_path)), stop_index=1))
+    (tmp_path / "machine.yaml").write_text(yaml.safe_dump(calibrated, sort_keys=False))
+    model = tmp_path / "model.yaml"
+    model.write_text(yaml.safe_dump({"machine": "machine.yaml", "effects": {"geometric": {}}}))
+    node = rclpy.create_node("instrument")
+    broadcaster = start_node("compensation_broadcaster", {"model": str(model),
+                                                          "follow_model_topic": False},
+                             quiet=True)
+    machine = start_node("encoder_publisher", {"scenario": str(scenario_path),
+                                               "compensation_input": "table",
+                                               "rate_factor": 4.0, "min_subscribers": 1},
+                         quiet=True)
+    try:
+        readings = _readings(node, 160)
+    finally:
+        machine.stop()
+        broadcaster.stop()
+        node.destroy_node()
+    measured, applied, versions = _arrays(readings)
+    live = versions >= 1
+    assert live.sum() >= 120, "the tables never reached the CNC"
+    without = _rms((measured - applied)[live])
+    with_tables = _rms(measured[live])
+    assert np.all(without[:2] > 3e-6), without          # there is an error to remove
+    assert np.all(with_tables <= 1e-6), with_tables     # and it is gone, to the band
+    # The CNC's correction is minus the error it removes (p2 = p1 - delta e).
+    assert np.corrcoef(applied[live, 1], (measured - applied)[live, 1])[0, 1] < -0.95
+
+
+def test_realtime_offset_removes_a_thermal_drift_and_reports_its_latency(rclpy_context,
+                                                                         tmp_path):
+    """The true drift model, streamed as real-time offsets: the growing drift is gone."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    scenario_path = tmp_path / "thermal.yaml"
+    scenario_path.write_text(THERMAL)
+    model = tmp_path / "model.yaml"
+    model.write_text(yaml.safe_dump({"machine": "kidani_hmc", "effects": {
+        "structural_thermal_drift": {"beta_m_per_k": [2.0e-6, 5.0e-6, -3.0e-6],
+                                     "sensor": "column"}}}))
+    node = rclpy.create_node("instrument")
+    statuses: list = []
+    node.create_subscription(DiagnosticArray, "/diagnostics", lambda m: statuses.extend(
+        s for s in m.status if s.name.endswith("encoder_publisher: compensation")), 50)
+    start_ns = time.time_ns() + 3_000_000_000
+    common = {"scenario": str(scenario_path), "rate_factor": 2.0, "start_stamp_ns": start_ns}
+    broadcaster = start_node("compensation_broadcaster", {"model": str(model),
+                                                          "follow_model_topic": False},
+                             quiet=True)
+    temperatures = start_node("temperature_publisher", {**common, "min_subscribers": 1},
+                              quiet=True)
+    machine = start_node("encoder_publisher", {**common, "compensation_input": "realtime",
+                                               "max_compensation_age_s": 2.0,
+                                               "compensation_delay_s": 0.02,
+                                               "min_subscribers": 1}, quiet=True)
+    try:
+        readings = _readings(node, 100)
+        assert spin_until(node, lambda: bool(statuses), 10)
+    finally:
+        machine.stop()
+        temperatures.stop()
+        broadcaster.stop()
+        node.destroy_node()
+    measured, applied, versions = _arrays(readings)
+    live = versions >= 1
+    assert live.sum() >= 60
+    without = (measured - applied)[live]
+    # The drift grew by several um while the compensation ran ...
+    assert np.all(np.ptp(without, axis=0) > 4e-6), np.ptp(without, axis=0)
+    # ... and the compensated machine stayed within the instrument's band.
+    assert np.all(_rms(measured[live]) <= 1e-6), _rms(measured[live])
+    values = {v.key: v.value for v in statuses[-1].values}
+    assert values["mode"] == "realtime" and int(values["applied"]) > 100
+    assert 0.0 < float(values["latency_p50_ms"]) <= float(values["latency_p99_ms"])
+
+
+def test_the_cnc_refuses_bad_compensation_and_keeps_the_last_valid(rclpy_context, tmp_path):
+    """Unknown axis, a table with a gap, an old model version, a stale and a rotary
+    correction for a 3-axis machine: counted with their reasons on /diagnostics; the
+    CNC keeps applying the last valid table and keeps running."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    from mt_accuracy_msgs.msg import CompensationTable, VolumetricCompensation
+    from mt_accuracy_ros.nodes._common import COMPENSATION_QOS, TABLE_QOS, pack_float64
+
+    scenario_path = tmp_path / "geometric.yaml"
+    scenario_path.write_text(GEOMETRIC)
+    node = rclpy.create_node("controller_fuzzer")
+    reasons: list[str] = []
+    counters: dict[str, str] = {}
+
+    def on_diagnostics(message: DiagnosticArray) -> None:
+        for status in message.status:
+            if status.name.startswith("/encoder_publisher"):
+                reasons.append(status.message)
+                counters.update({v.key: v.value for v in status.values})
+
+    node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 100)
+    tables = node.create_publisher(CompensationTable, "compensation_table", TABLE_QOS)
+    offsets = node.create_publisher(VolumetricCompensation, "compensation", COMPENSATION_QOS)
+    machine = start_node("encoder_publisher", {"scenario": str(scenario_path),
+                                               "compensation_input": "hybrid",
+                                               "rate_factor": 2.0},
+                         quiet=True)
+    readings: list = []
+    try:
+        from mt_accuracy_msgs.msg import ReferenceMeasurement
+
+        from mt_accuracy_ros.nodes._common import RESULT_QOS
+
+        node.create_subscription(ReferenceMeasurement, "reference/tcp_error", readings.append,
+                                 RESULT_QOS)
+        assert spin_until(node, lambda: tables.get_subscription_count() > 0 and
+                          offsets.get_subscription_count() > 0 and bool(readings), 60)
+
+        def table(axis, values, version, columns=("X_m", "EXX_m")):
+            message = CompensationTable(axis=axis, columns=list(columns), model_version=version)
+            message.values = pack_float64(values)
+            return message
+
+        from mt_accuracy_ros.core.kinematics.machine import load_machine
+
+        low, high = load_machine("kidani_hmc").axes["X"].stroke
+        grid = np.linspace(low, high, 11)
+        good = np.column_stack([grid, np.full(11, 4e-6)]).ravel()
+        tables.publish(table("x", good, 3))
+        gap = np.column_stack([np.delete(grid, 5), np.full(10, 9e-6)]).ravel()
+        for bad in (table("w", good, 3), table("x", gap, 3), table("x", good, 2)):
+            tables.publish(bad)
+        stale = VolumetricCompensation(model_version=3)
+        stale.header.stamp.sec = 1  # 1970: long past its age
+        rotary = VolumetricCompensation(model_version=3, rotary_positions=[0.1])
+        rotary.header.stamp.sec = 2
+        offsets.publish(stale)
+        offsets.publish(rotary)
+
+        def counted():
+            return (int(counters.get("compensation_table.refused", 0)) >= 3 and
+                    int(counters.get("compensation.refused", 0)) >= 1 and
+                    int(counters.get("stale", 0)) >= 1)
+
+        assert spin_until(node, counted, 30), counters
+        text = " ".join(reasons)
+        for word in ("unknown axis", "gap", "old model"):
+            assert word in text, (word, text)
+        first = len(readings)
+        assert spin_until(node, lambda: len(readings) >= first + 10, 30)
+        assert machine.popen.poll() is None, "the CNC died"
+    finally:
+        machine.stop()
+        node.destroy_node()
+    # The last valid table (4 um of EXX, version 3) is what the CNC applies.
+    recent = readings[-5:]
+    assert all(r.compensation_model_version == 0 or r.compensation_model_version == 3
+               for r in recent)
+    applied = np.array([(r.applied_correction.x, r.applied_correction.y, r.applied_correction.z)
+                        for r in recent])
+    assert np.allclose(np.abs(applied).max(axis=1), 4e-6, atol=1e-12), applied
