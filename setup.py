@@ -18,6 +18,7 @@ NODE_ENTRY_POINTS = {
     "recorder": "mt_accuracy_ros.nodes.recorder:main",
     "bag_player": "mt_accuracy_ros.nodes.player:main",
     "foxglove_bridge": "mt_accuracy_ros.nodes.foxglove_bridge:main",
+    "cnc_bridge": "mt_accuracy_ros.nodes.cnc_bridge:main",
 }
 
 setup(

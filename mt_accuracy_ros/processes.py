@@ -20,6 +20,7 @@ NODE_MODULES = {
     "recorder": "mt_accuracy_ros.nodes.recorder",
     "bag_player": "mt_accuracy_ros.nodes.player",
     "foxglove_bridge": "mt_accuracy_ros.nodes.foxglove_bridge",
+    "cnc_bridge": "mt_accuracy_ros.nodes.cnc_bridge",
 }
 
 

@@ -123,14 +123,14 @@ class CompensationInput:
         if self.mode == "realtime":
             values, versions = self.offset.at(stamps_ns)
             # Memory stays bounded on a long run: older corrections are superseded.
-            self.offset.forget_before(int(np.min(stamps_ns)) - 10 * self.offset.max_age_ns)
+            self.offset.forget_before(int(np.min(stamps_ns)) - 2 * self.offset.max_age_ns)
             return values, versions
         if self.mode == "table":
             return self.tables.correction(positions), np.full(n, self.tables.version,
                                                                 dtype=np.int64)
         if self.mode == "hybrid":
             rest, versions = self.offset.at(stamps_ns)
-            self.offset.forget_before(int(np.min(stamps_ns)) - 10 * self.offset.max_age_ns)
+            self.offset.forget_before(int(np.min(stamps_ns)) - 2 * self.offset.max_age_ns)
             return self.tables.correction(positions) + rest, versions
         return np.zeros((n, 3)), np.zeros(n, dtype=np.int64)
 

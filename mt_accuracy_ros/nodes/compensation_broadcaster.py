@@ -120,9 +120,13 @@ class CompensationBroadcaster(Node):
                 self._warn(f"no valid reading from {', '.join(sorted(self._reported_dead))}; "
                            "their last valid value is used")
         step = max(1, int(round(1.0 / (period * float(self.get_parameter("publish_rate_hz").value)))))
-        # Reduced first: a running index near 2**64 must not overflow int64.
+        # Every step-th sample of the run, on a grid fixed in data time (replays give the
+        # same rows whatever the batching): samples step-1, 2 step-1, ... - the last of
+        # each interval, so that a batch's newest sample, not its oldest, is corrected
+        # (a batch period less latency). Reduced first: an index near 2**64 must not
+        # overflow int64.
         first = int(message.first_sample_index) % step
-        rows = np.flatnonzero((first + np.arange(commands.shape[0])) % step == 0)
+        rows = np.flatnonzero((first + np.arange(commands.shape[0]) + 1) % step == 0)
         if rows.size == 0:
             return
         velocity = np.gradient(commands, period, axis=0) if commands.shape[0] > 1 \

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from rclpy.node import Node
@@ -92,6 +93,11 @@ class EncoderPublisher(Node):
         self._next_index = 0
         self._next_reference_s = 0.0
         self._window: SimulationResult | None = None
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="simulate")
+        # The window thread must not hold the GIL for the default 5 ms while a batch or a
+        # compensation is due: hand it over every 0.5 ms.
+        sys.setswitchinterval(0.0005)
+        self._ahead: tuple | None = None   # (first index, future) of the next window
         self._scenario_clock: ScenarioClock | None = None
         self._matched_at: float | None = None
         self.finished = False
@@ -118,7 +124,9 @@ class EncoderPublisher(Node):
         self._axis_directions = {
             a: model.axis_direction(a, middle)[0] for a in self._axes
             if not self.scenario.machine.axes[a].is_rotary}
-        self.create_timer(min(self._batch / self._rate, 0.05), self._tick)
+        # Ticks several times per batch: a batch goes out within a quarter of its period
+        # (at most 5 ms) after its last sample is due - its latency, not the tick's.
+        self.create_timer(min(self._batch / self._rate / 4, 0.005), self._tick)
 
     def _validate(self, parameters):
         for parameter in parameters:
@@ -141,6 +149,10 @@ class EncoderPublisher(Node):
         self._scenario_clock = ScenarioClock(start, float(self.get_parameter("rate_factor").value))
         return True
 
+    def destroy_node(self) -> None:
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        super().destroy_node()
+
     def _now_stamp_ns(self) -> int | None:
         """The controller's time in the stamps' time base (sim time), None before start."""
         if self._scenario_clock is None:
@@ -148,12 +160,31 @@ class EncoderPublisher(Node):
         clock = self._scenario_clock
         return clock.stamp_ns(clock.sim_time_s(self.get_clock().now().nanoseconds))
 
+    def _simulate(self, first: int) -> SimulationResult:
+        """The window starting at sample ``first``: computed ahead in a worker thread.
+
+        A window takes tens of ms at 20 kHz; computed in the timer callback it would
+        hold every batch (and every compensation downstream) back once per window.
+        The next window is started as soon as one is taken (numpy releases the GIL).
+        """
+        size = int(WINDOW_S * self._rate)
+        ahead = self._ahead
+        if ahead is not None and ahead[0] == first:
+            window = ahead[1].result()
+        else:
+            window = simulate(self.scenario, start_index=first, stop_index=first + size)
+        following = first + size
+        self._ahead = None
+        if following < self.scenario.n_samples:
+            self._ahead = (following, self._pool.submit(
+                simulate, self.scenario, start_index=following, stop_index=following + size))
+        return window
+
     def _window_for(self, index: int) -> SimulationResult:
         window = self._window
         if window is None or not (window.first_index <= index <
                                   window.first_index + window.time_s.size):
-            size = int(WINDOW_S * self._rate)
-            self._window = simulate(self.scenario, start_index=index, stop_index=index + size)
+            self._window = self._simulate(index)
         return self._window
 
     def _tick(self) -> None:
@@ -179,8 +210,7 @@ class EncoderPublisher(Node):
         window = self._window_for(first)
         offset = first - window.first_index
         if offset + self._batch > window.time_s.size:  # batch straddles two windows
-            self._window = simulate(self.scenario, start_index=first,
-                                    stop_index=first + int(WINDOW_S * self._rate))
+            self._window = self._simulate(first)
             window, offset = self._window, 0
         rows = slice(offset, offset + self._batch)
         frame = str(self.get_parameter("frame_id").value) or self.scenario.machine.name
