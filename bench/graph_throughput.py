@@ -42,6 +42,9 @@ program: {{type: back_and_forth, axes: [X, Y, Z], feed_m_per_min: 30}}
 effects: {{scale_thermal_expansion: true, timing_skew: true}}
 """
 
+#: Extra yaw-estimator parameters (``--reselect-every``).
+ESTIMATOR: dict = {}
+
 JOINT_STATE_PUBLISHER = textwrap.dedent("""
     import time, rclpy
     from sensor_msgs.msg import JointState
@@ -106,7 +109,7 @@ def bench_graph(seconds: float, batch_period_s: float = 0.05) -> dict:
                 controller.update({v.key: v.value for v in status.values})
 
     node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 50)
-    estimator = start_node("yaw_estimator", {"thermal_correction": False}, quiet=True)
+    estimator = start_node("yaw_estimator", {"thermal_correction": False, **ESTIMATOR}, quiet=True)
     compensator = start_node("compensation_broadcaster", {"model": "demo"}, quiet=True)
     while node.count_subscribers("/scales") < 2 or node.count_publishers("/compensation") < 1:
         rclpy.spin_once(node, timeout_sec=0.05)
@@ -188,7 +191,11 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=20.0)
     parser.add_argument("--batch-periods", type=float, nargs="+", default=[0.05],
                         help="sweep: batch periods [s], e.g. 0.05 0.02 0.01 0.005 0.002")
+    parser.add_argument("--reselect-every", type=int, default=0, metavar="N",
+                        help="the estimator's reselect_every [samples] (0: its default)")
     args = parser.parse_args()
+    if args.reselect_every:
+        ESTIMATOR["reselect_every"] = args.reselect_every
     if len(args.batch_periods) > 1:
         sweep = [bench_graph(args.seconds, period) for period in args.batch_periods]
         print(json.dumps({"sweep": sweep}, indent=2))

@@ -71,7 +71,8 @@ def main(argv: list[str] | None = None) -> int:
         "model_monitor": start_node("model_monitor", quiet=True),
         "temperature_publisher": start_node("temperature_publisher",
                                             {**machine, "min_subscribers": 4}, quiet=True),
-        "encoder_publisher": start_node("encoder_publisher", {**machine, "min_subscribers": 3},
+        "encoder_publisher": start_node("encoder_publisher", {**machine, "min_subscribers": 3,
+                                                             "batch_period_s": 0.05},
                                         quiet=True),
     }
     rclpy.init()

@@ -81,7 +81,7 @@ def test_tables_bring_the_geometric_error_within_the_band(rclpy_context, tmp_pat
     broadcaster = start_node("compensation_broadcaster", {"model": str(model),
                                                           "follow_model_topic": False},
                              quiet=True)
-    machine = start_node("encoder_publisher", {"scenario": str(scenario_path),
+    machine = start_node("encoder_publisher", {"batch_period_s": 0.05, "scenario": str(scenario_path),
                                                "compensation_input": "table",
                                                "rate_factor": 4.0, "min_subscribers": 1},
                          quiet=True)
@@ -125,7 +125,7 @@ def test_realtime_offset_removes_a_thermal_drift_and_reports_its_latency(rclpy_c
                              quiet=True)
     temperatures = start_node("temperature_publisher", {**common, "min_subscribers": 1},
                               quiet=True)
-    machine = start_node("encoder_publisher", {**common, "compensation_input": "realtime",
+    machine = start_node("encoder_publisher", {**common, "batch_period_s": 0.05, "compensation_input": "realtime",
                                                "max_compensation_age_s": 2.0,
                                                "compensation_delay_s": 0.02,
                                                "min_subscribers": 1}, quiet=True)
@@ -175,7 +175,7 @@ def test_the_cnc_refuses_bad_compensation_and_keeps_the_last_valid(rclpy_context
     node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 100)
     tables = node.create_publisher(CompensationTable, "compensation_table", TABLE_QOS)
     offsets = node.create_publisher(VolumetricCompensation, "compensation", COMPENSATION_QOS)
-    machine = start_node("encoder_publisher", {"scenario": str(scenario_path),
+    machine = start_node("encoder_publisher", {"batch_period_s": 0.05, "scenario": str(scenario_path),
                                                "compensation_input": "hybrid",
                                                "rate_factor": 2.0},
                          quiet=True)

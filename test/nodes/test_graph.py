@@ -43,7 +43,7 @@ def test_graph_topics_types_and_refused_parameters(rclpy_context, tmp_path):
     scenario = _scenario(tmp_path, duration=600.0)
     machine = {"scenario": scenario, "rate_factor": 1.0}
     processes = [start_node("temperature_publisher", machine),
-                 start_node("encoder_publisher", machine),
+                 start_node("encoder_publisher", {**machine, "batch_period_s": 0.05}),
                  start_node("yaw_estimator"), start_node("compensation_broadcaster"),
                  start_node("model_monitor")]
     expected = {
@@ -153,7 +153,7 @@ def test_broadcast_compensation_equals_the_core_model(rclpy_context, tmp_path):
     model = model_from_dict(model_data)
     commands = np.concatenate(sent)
     velocity = np.concatenate([np.gradient(c, 1e-3, axis=0) for c in sent])
-    rows = np.arange(0, commands.shape[0], 4)  # 250 Hz of 1 kHz data
+    rows = np.arange(3, commands.shape[0], 4)  # 250 Hz of 1 kHz data: each interval's newest
     error, _ = model.tcp_error({"X": commands[rows, 0], "Y": commands[rows, 1],
                                 "Z": commands[rows, 2]}, {"column": 22.5},
                                {"X": velocity[rows, 0], "Y": velocity[rows, 1],
@@ -182,7 +182,7 @@ def test_two_namespaced_machines_run_side_by_side(rclpy_context, tmp_path):
     try:
         assert spin_until(probe, lambda: probe.count_subscribers("/mt1/scales") >= 1 and
                           probe.count_subscribers("/mt2/scales") >= 1)
-        encoders = [start_node("encoder_publisher", {
+        encoders = [start_node("encoder_publisher", {"batch_period_s": 0.05,
             "scenario": _scenario(tmp_path, seed=seed, duration=3.0, name=f"{seed}.yaml"),
             "rate_factor": 2.0, "min_subscribers": 1}, namespace=ns)
             for ns, seed in (("/mt1", 1), ("/mt2", 2))]
@@ -250,7 +250,8 @@ def test_all_nodes_composed_in_one_executor(rclpy_context, tmp_path):
     nodes = [YawEstimator(), CompensationBroadcaster(), ModelMonitor(
                  parameter_overrides=[Parameter("min_readings", value=20)]),
              TemperaturePublisher(parameter_overrides=machine),
-             EncoderPublisher(parameter_overrides=machine)]
+             EncoderPublisher(parameter_overrides=machine + [
+                 Parameter("batch_period_s", value=0.05)])]
     listener = rclpy.create_node("listener")
     checks, compensation = [], []
     listener.create_subscription(ModelCheck, "model_check", checks.append, RESULT_QOS)
@@ -316,3 +317,26 @@ def test_parameters_load_from_the_config_yaml(rclpy_context):
     expected = yaml.safe_load((REPO_ROOT / "config" / "demo.yaml").read_text())
     parameters = expected["yaw_estimator"]["ros__parameters"]
     assert values == [parameters["tolerance_rad"], parameters["baseline_after_s"]]
+
+
+def test_the_high_rate_config_reaches_the_estimator(rclpy_context):
+    """config/high_rate.yaml (the 20 kHz settings of docs/benchmarks.md) loads as is."""
+    import rclpy
+    from rcl_interfaces.srv import GetParameters
+
+    from conftest import REPO_ROOT
+
+    path = REPO_ROOT / "config" / "high_rate.yaml"
+    estimator = start_node("yaw_estimator", params_file=str(path))
+    probe = rclpy.create_node("probe")
+    try:
+        client = probe.create_client(GetParameters, "/yaw_estimator/get_parameters")
+        assert client.wait_for_service(timeout_sec=20)
+        future = client.call_async(GetParameters.Request(names=["reselect_every"]))
+        assert spin_until(probe, future.done, timeout_s=10)
+        value = future.result().values[0].integer_value
+    finally:
+        estimator.stop()
+        probe.destroy_node()
+    assert value == yaml.safe_load(path.read_text())["yaw_estimator"]["ros__parameters"][
+        "reselect_every"] == 40000

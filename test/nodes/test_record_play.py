@@ -73,7 +73,8 @@ def test_live_recording_validates_independently_and_replays_identically(rclpy_co
         start = wall.time_ns() + 5_000_000_000
         machine = {"scenario": str(tmp_path / "s.yaml"), "start_stamp_ns": start}
         temperatures = start_node("temperature_publisher", {**machine, "min_subscribers": 3})
-        encoder = start_node("encoder_publisher", {**machine, "min_subscribers": 3})
+        encoder = start_node("encoder_publisher", {**machine, "min_subscribers": 3,
+                                                     "batch_period_s": 0.05})
         assert encoder.popen.wait(timeout=60) == 0
         temperatures.stop()
         spin_for(probe, 1.0)

@@ -34,7 +34,8 @@ def test_yaw_estimated_in_another_process_equals_the_offline_computation(rclpy_c
     try:
         assert spin_until(node, lambda: node.count_publishers("yaw/y") >= 0 and
                           node.count_subscribers("scales") >= 1)
-        publisher = start_node("encoder_publisher", {"scenario": str(tmp_path / "s.yaml"),
+        publisher = start_node("encoder_publisher", {"batch_period_s": 0.05,
+                                                     "scenario": str(tmp_path / "s.yaml"),
                                                      "rate_factor": 3.0, "min_subscribers": 1})
         assert spin_until(node, lambda: publisher.popen.poll() is not None, timeout_s=60)
         # The estimator may still be working through the last batches on a loaded host.
