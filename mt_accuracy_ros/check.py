@@ -110,6 +110,7 @@ def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_0
     position = np.zeros((obs.n, 3))
     orientation = np.zeros((obs.n, 3))
     state = copy.deepcopy(model)
+    state._lag_states = {}   # lagged effects start in steady state at the first reading
     next_profile = 0
     group_start = 0
     for i in range(obs.n + 1):
@@ -119,8 +120,7 @@ def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_0
             if i > group_start:
                 rows = np.arange(group_start, i)
                 sub = obs.subset(rows)
-                p, o = state.tcp_error(sub.positions, sub.temperatures, sub.velocities or None,
-                                       sub.directions or None)
+                p, o = state.tcp_error(sub.positions, **sub.model_inputs())
                 position[rows], orientation[rows] = p, o
             group_start = i
             while i < obs.n and next_profile < len(profiles) and profiles[next_profile][0] <= limit:
@@ -133,26 +133,30 @@ def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_0
     return position, orientation
 
 
-def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: str,
-              min_reduction: float) -> dict:
-    from .core.compensation.error_model import resolve_model
-    from .core.workbench.diagnosis import add_effect, diagnose, residuals
+def check_observations(model, obs, add: list[str], auto: int, min_reduction: float,
+                       predict=None) -> dict:
+    """The workbench loop on observations: diagnose, add what is asked or named, again.
 
-    model = resolve_model(model_text)  # a bad model is refused before a long bag is read
-    obs, stamps, profiles = observations_from_bag(bag, namespace)
+    ``predict(model)`` -> (position (N, 3), orientation (N, 3)) predictions made
+    elsewhere (a bag's profile history), or None for the model itself. ``--auto N``
+    adds up to N of the effects the forward selection names (jointly fitted),
+    ``add`` the named ones first.
+    """
+    from .core.workbench.diagnosis import (add_effect, add_effects, diagnose, pick_candidate,
+                                           residuals)
+
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c.setdefault(sensor, float(values[0]))
-    steps = []
 
     def evaluate(current):
-        obs.predicted_m, obs.predicted_orientation = predict_with_history(current, obs, stamps,
-                                                                          profiles)
+        if predict is not None:
+            obs.predicted_m, obs.predicted_orientation = predict(current)
         return diagnose(current, obs, min_reduction=min_reduction)
 
     diagnosis = evaluate(model)
     first = diagnosis
     residual_before = residuals(model, obs)
-    step_residuals = []
+    steps, step_residuals = [], []
     queue = list(add)
     while True:
         step_residuals.append(residuals(model, obs).copy())
@@ -160,40 +164,98 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
                       "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text()})
         if queue:
             name = queue.pop(0)
-        elif auto and diagnosis.found is not None and len(steps) <= auto:
-            name = diagnosis.found.effect
+            candidate = pick_candidate(diagnosis, name)
+            if candidate is None:
+                raise InputDataError(f"cannot add {name}: not a candidate here (in the model "
+                                     "already, unknown, or no regressors in this data)")
+            chosen = [candidate]
+        elif auto and diagnosis.selected and \
+                sum(len(s.get("added", [])) for s in steps) < auto:
+            chosen = diagnosis.selected[:auto - sum(len(s.get("added", [])) for s in steps)]
         else:
             break
-        candidate = next((c for c in diagnosis.ranking if c.effect == name), None)
-        if candidate is None:
-            raise InputDataError(f"cannot add {name}: not a candidate here (in the model "
-                                 f"already, or no regressors in this data)")
-        model = add_effect(model, candidate, obs)
-        steps[-1]["added"] = name
-        steps[-1]["parameters"] = candidate.parameters
-        steps[-1]["parameter_uncertainties"] = candidate.parameter_uncertainties
+        model = add_effects(model, chosen, obs) if len(chosen) > 1 else \
+            add_effect(model, chosen[0], obs)
+        steps[-1]["added"] = [c.name for c in chosen]
+        steps[-1]["parameters"] = {c.name: c.parameters for c in chosen}
+        steps[-1]["parameter_uncertainties"] = {c.name: c.parameter_uncertainties
+                                                for c in chosen}
         diagnosis = evaluate(model)
     residual = residuals(model, obs)  # obs holds the final model's predictions
-    return {"data": str(bag), "kind": "bag", "readings": obs.n, "namespace": namespace,
+    return {"readings": obs.n,
             "figures_before_m": error_figures(residual_before),
             "figures_after_m": error_figures(residual),
             "baseline_rmse": first.baseline_rmse,
             "baseline_cv_rmse": first.baseline_cv_rmse,
-            "ranking": [{"effect": c.effect, "variant": c.variant, "cv_rmse_after": c.cv_rmse_after,
-                         "error_reduction": c.error_reduction, "significant": c.significant,
-                         "explanation": c.explanation, "parameters": c.parameters,
-                         "parameter_uncertainties": c.parameter_uncertainties}
-                        for c in first.ranking],
-            "added": [s["added"] for s in steps if "added" in s],
+            "ranking": [c.as_dict() for c in first.ranking[:30]],
+            "named": [c.as_dict() for c in first.selected],
+            "verdict": first.verdict(),
+            "localisation": first.localisation.as_dict() if first.localisation else {},
+            "added": [name for s in steps for name in s.get("added", [])],
             "final_rmse": diagnosis.baseline_rmse, "steps": steps,
             "band": obs.uncertainty_m, "final_diagnosis": diagnosis.text(),
+            "final_verdict": diagnosis.verdict(),
+            "final_localisation": diagnosis.localisation.as_dict()
+            if diagnosis.localisation else {},
             "machine": model.machine.name,
+            "model_yaml": _model_yaml(model),
             "_plot": {"time": obs.time_s, "positions": obs.positions,
                       "residual_before": residual_before, "residual_after": residual,
                       "temperatures": obs.temperatures, "measured": obs.measured_m,
                       "mask": obs.measured_mask, "step_residuals": step_residuals,
                       "velocities": obs.velocities, "directions": obs.directions,
-                      "model": model}}
+                      "model": model, "localisation": first.localisation}}
+
+
+def _model_yaml(model) -> str:
+    import yaml
+
+    from .core.compensation.error_model import model_to_dict
+
+    return yaml.safe_dump(model_to_dict(model), sort_keys=False)
+
+
+def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: str,
+              min_reduction: float) -> dict:
+    from .core.compensation.error_model import resolve_model
+
+    model = resolve_model(model_text)  # a bad model is refused before a long bag is read
+    obs, stamps, profiles = observations_from_bag(bag, namespace)
+    result = check_observations(model, obs, add, auto, min_reduction,
+                                lambda current: predict_with_history(current, obs, stamps,
+                                                                     profiles))
+    return {"data": str(bag), "kind": "bag", "namespace": namespace, **result}
+
+
+def check_mapped_csv(path: Path, column_map, model_text: str, add: list[str], auto: int,
+                     min_reduction: float) -> dict:
+    """A data logger's CSV of reference readings (column map) against a model."""
+    from .core.compensation.error_model import resolve_model
+    from .core.workbench.diagnosis import Observations
+    from .io.column_map import read_mapped_csv
+
+    model = resolve_model(model_text)
+    survey = read_mapped_csv(path, column_map)
+    n = survey.time_s.size
+    missing = [a for a in model.machine.axis_order if a not in survey.positions]
+    if missing:
+        raise InputDataError(f"{path}: the model's machine {model.machine.name} has axis "
+                             f"{', '.join(missing)} with no position column (pos."
+                             f"{missing[0]}=COLUMN)")
+    measured = np.zeros((n, 3))
+    mask = np.zeros((n, 3), dtype=bool)
+    for c, component in enumerate("xyz"):
+        if component in survey.errors:
+            measured[:, c] = survey.errors[component]
+            mask[:, c] = True
+    obs = Observations(survey.positions, measured, mask, survey.time_s, survey.velocities,
+                       survey.temperatures, column_map.uncertainty_m,
+                       directions=survey.directions, accelerations=survey.accelerations,
+                       spindle_speed_rad_s=survey.spindle_speed_rad_s)
+    result = check_observations(model, obs, add, auto, min_reduction)
+    return {"data": str(path), "kind": "survey_csv", "rows_read": survey.rows_read,
+            "rows_dropped": survey.rows_dropped, "rows_note": survey.summary(Path(path).name),
+            "namespace": "", **result}
 
 
 # ------------------------------------------------------------------ CSV path
@@ -235,6 +297,9 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         steps.append({"terms": list(bench.included), "added": name,
                       "held_out_rmse": bench.judged_rmse(bench.included),
                       "cv_rmse": bench.cv_rmse(bench.included)})
+    # The plain baseline a user would try first: least squares on every input at once.
+    every = [f"sensor:{n}" for n in selected if f"sensor:{n}" in bench.candidates]
+    all_inputs_held_out = bench.judged_rmse(every) if every else float("nan")
     prediction_before = bench.fit_predict(model_terms)
     prediction_after = bench.fit_predict(bench.included)
     judge = ~bench.train
@@ -251,6 +316,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
             "added": [s["added"] for s in steps if "added" in s],
             "final_rmse": steps[-1]["held_out_rmse"], "steps": steps,
             "judged_on": "held-out rows after the training rows",
+            "all_inputs_least_squares_held_out_rmse": all_inputs_held_out,
             "_plot": {"time": np.asarray(columns[time_column])[:bench.target.size],
                       "target": bench.target, "before": prediction_before,
                       "after": prediction_after, "train": bench.train}}

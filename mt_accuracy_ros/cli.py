@@ -136,9 +136,35 @@ def _check(args: argparse.Namespace) -> int:
 
     data = Path(args.data)
     try:
-        if data.suffix.lower() == ".csv":
+        if data.suffix.lower() == ".csv" and (args.columns or args.col):
+            import yaml
+
+            from .check import check_mapped_csv
+            from .io.column_map import ColumnMap, column_map_from_dict, parse_col_flags
+
+            column_map = ColumnMap()
+            if args.columns:
+                try:
+                    text = Path(args.columns).read_text()
+                    column_map = column_map_from_dict(yaml.safe_load(text), args.columns)
+                except (OSError, yaml.YAMLError) as exc:
+                    print(f"mt-accuracy check: column map {args.columns}: {exc}", file=sys.stderr)
+                    return 2
+            column_map = parse_col_flags(args.col or [], column_map)
+            if args.uncertainty_um is not None:
+                if not args.uncertainty_um > 0:
+                    print("mt-accuracy check: --uncertainty-um must be > 0", file=sys.stderr)
+                    return 2
+                column_map.uncertainty_m = args.uncertainty_um * 1e-6
+            if args.row_period is not None:
+                column_map.row_period_s = args.row_period
+            result = check_mapped_csv(data, column_map, args.model, args.add or [], args.auto,
+                                      args.min_reduction)
+        elif data.suffix.lower() == ".csv":
             if not args.target:
-                print("mt-accuracy check: a CSV needs --target COLUMN", file=sys.stderr)
+                print("mt-accuracy check: a CSV needs --target COLUMN (a thermal log) or a "
+                      "column map (--columns FILE.yaml or --col ROLE=COLUMN[:UNIT]) for a "
+                      "reference survey", file=sys.stderr)
                 return 2
             result = check_csv(data, args.target, args.time_column, args.inputs or ["*"],
                                args.driver or [], args.add or [], args.auto, args.train_fraction,
@@ -156,8 +182,15 @@ def _check(args: argparse.Namespace) -> int:
     print(f"baseline RMSE {result['baseline_rmse']:.4g} {unit}")
     for entry in result["ranking"][:5]:
         flag = "*" if entry["significant"] else " "
-        print(f" {flag} {entry['effect']:40s} CV RMSE after {entry['cv_rmse_after']:.4g} "
-              f"({100 * entry['error_reduction']:.1f} %)")
+        print(f" {flag} {entry.get('name', entry['effect']):40s} CV RMSE after "
+              f"{entry['cv_rmse_after']:.4g} ({100 * entry['error_reduction']:.1f} %)")
+    for entry in result.get("named", []):
+        print(f"named: {entry['name']} (confidence {100 * entry['confidence']:.0f} %): "
+              f"{entry['explanation']}")
+    if result.get("localisation", {}).get("sentence"):
+        print(f"where: {result['localisation']['sentence']}")
+    if result.get("verdict"):
+        print(f"verdict: {result['verdict']}")
     print(f"added: {', '.join(result['added']) or 'nothing'}; final RMSE "
           f"{result['final_rmse']:.4g} {unit}")
     return 0
@@ -211,8 +244,18 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--report", help="HTML report path")
     check.add_argument("--json", help="JSON summary path")
     check.add_argument("--namespace", default="", help="machine namespace in the bag (/mt1)")
-    check.add_argument("--min-reduction", type=float, default=0.1,
+    check.add_argument("--min-reduction", type=float, default=0.05,
                        help="smallest CV error reduction that counts")
+    check.add_argument("--columns", metavar="FILE.yaml",
+                       help="CSV survey: column map (which column is which axis, error, "
+                            "temperature, and its unit)")
+    check.add_argument("--col", action="append", metavar="ROLE=COLUMN[:UNIT]",
+                       help="CSV survey: one column of the map, e.g. pos.X=x_mm:mm, err.x=dev:um, "
+                            "temp.column=T3:degC, time=t:min, vel.X=f:mm/min, spindle=S:rpm")
+    check.add_argument("--uncertainty-um", type=float, default=None,
+                       help="CSV survey: the instrument's k = 2 uncertainty [um]")
+    check.add_argument("--row-period", type=float, default=None,
+                       help="CSV survey without a time column: seconds between rows")
     check.add_argument("--time-column", default="time_s", help="CSV: time column [s]")
     check.add_argument("--target", help="CSV: the measured error column")
     check.add_argument("--inputs", nargs="+", help="CSV: temperature columns (names or patterns)")

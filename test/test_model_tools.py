@@ -35,7 +35,7 @@ def test_model_remove_show_and_refusals_on_a_running_monitor(tmp_path):
         early = _cli("add", "structural_thermal_drift")
         assert early.returncode == 2 and "reference readings" in early.stderr, early.stderr
         unknown = _cli("add", "flux_capacitor")
-        assert unknown.returncode == 2 and "unknown effect(s) flux_capacitor" in unknown.stderr
+        assert unknown.returncode == 2 and "unknown effect 'flux_capacitor'" in unknown.stderr
         assert monitor.popen.poll() is None
     finally:
         monitor.stop()

@@ -10,8 +10,11 @@ One subpackage per domain a metrologist knows:
                   thermal links, sensor placement (Zhu ch. 3-4, Krulewich).
 ``compensation``  the volumetric error model the nodes run and the CNC
                   compensation tables built from it.
-``workbench``     model versus measurement: where the model fails, which
-                  effect is missing (reference surveys and tabular logs).
+``effects``       the open effect catalogue (geometric, rotary, thermal,
+                  motion, cross-axis, user-defined), the variables effects
+                  read, safe expressions.
+``workbench``     model versus measurement: where the residual lives, which
+                  effects are missing (reference surveys and tabular logs).
 
 ``errors`` and ``validation`` are shared by all of them.
 """

@@ -48,7 +48,7 @@ class CompensationBroadcaster(Node):
             "Also take models published on 'model' (by the model monitor)", read_only=True))
         self.declare_parameter("publish_rate_hz", 100.0, float_descriptor(
             "Compensation messages per second of data time", 1.0, 20000.0))
-        self.declare_parameter("table_points", 40, int_descriptor(
+        self.declare_parameter("table_points", 401, int_descriptor(
             "Positions per axis in a compensation table", 2, 10000))
         self.declare_parameter("input_delay_s", 0.5, float_descriptor(
             "Use temperatures/profiles stamped this much before the data (deterministic "
@@ -136,8 +136,14 @@ class CompensationBroadcaster(Node):
         directions = {a: self._held_directions(a, velocity[:, j])[rows] for j, a in enumerate(axes)}
         model = self.inputs.model
         try:
+            # Sample times in data time: lagged catalogue effects continue their state.
+            times = (stamp + rows * period * 1e9) * 1e-9
+            accelerations = {a: np.gradient(velocity[:, j], period)[rows]
+                             if velocity.shape[0] > 2 else np.zeros(rows.size)
+                             for j, a in enumerate(axes)}
             error, orientation = model.tcp_error(positions, self.inputs.temperatures, velocities,
-                                                 directions)
+                                                 directions, time_s=times,
+                                                 accelerations=accelerations)
         except MtAccuracyError as exc:
             self._warn(f"no compensation for this batch: {exc}")
             return
@@ -184,13 +190,14 @@ class CompensationBroadcaster(Node):
             grid = np.linspace(*spec.stroke, points)
             columns = [f"{axis}_m"]
             values = [grid]
+            fitted = model.table_motion_errors(axis, grid)   # the catalogue's, added on top
             for component in COMPONENTS:
                 name = f"E{component}{axis}"
                 unit = "m" if component in "XYZ" else "rad"
                 columns.append(f"{name}_{unit}")
                 function = model.profiles.get(name) if "geometric" in model.effects else None
-                values.append(function(grid) if function is not None
-                              else spec.motion_errors[component](grid))
+                values.append((function(grid) if function is not None
+                               else spec.motion_errors[component](grid)) + fitted.get(name, 0.0))
             table = CompensationTable()
             table.header.stamp = self.get_clock().now().to_msg()
             table.header.frame_id = model.machine.name
@@ -207,6 +214,8 @@ class CompensationBroadcaster(Node):
                     for component, value in model.machine.axes[name].location_errors.items():
                         squareness[f"E{component}0{name}"] = float(value)
             squareness.update(model.effects.get("squareness", {}).get("errors_rad", {}))
+            for name, value in model.table_location_errors().items():
+                squareness[name] = squareness.get(name, 0.0) + value
             table.squareness_names = list(squareness)
             table.squareness = [float(v) for v in squareness.values()]
             self._tables.publish(table)

@@ -33,9 +33,10 @@ from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ModelVersion, ReferenceMeasurement
 
-from ..core.compensation.error_model import MODEL_EFFECTS, resolve_model
+from ..core.compensation.error_model import resolve_model
 from ..core.errors import InputDataError, MtAccuracyError
-from ..core.workbench.diagnosis import Observations, add_effect, diagnose
+from ..core.workbench.diagnosis import (Candidate, Observations, add_effect, diagnose,
+                                        effect_name_problem, pick_candidate)
 from ._common import (run_node, LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
                       plain_descriptor, refuse, stamp_to_nanoseconds)
 from ._health import DeliveryHealth
@@ -55,8 +56,10 @@ class ModelMonitor(Node):
             "Readings between two checks", 1, 100000))
         self.declare_parameter("min_readings", 30, int_descriptor(
             "Readings before the first check", 10, 100000))
-        self.declare_parameter("min_reduction", 0.1, float_descriptor(
+        self.declare_parameter("min_reduction", 0.05, float_descriptor(
             "Smallest cross-validated error reduction that counts as an effect", 0.0, 1.0))
+        self.declare_parameter("max_effects", 3, int_descriptor(
+            "Most missing effects named at one check (forward selection)", 1, 10))
         self.declare_parameter("add_effects", [""], plain_descriptor(
             "Effects to fit and add to the model now (run-time action)"))
         self.declare_parameter("remove_effects", [""], plain_descriptor(
@@ -107,12 +110,12 @@ class ModelMonitor(Node):
                 self._readings = deque(self._readings, maxlen=int(parameter.value))
             elif parameter.name == "add_effects":
                 names = [n for n in parameter.value if n]
-                unknown = [n for n in names if n not in MODEL_EFFECTS]
-                if unknown:
-                    return refuse(f"unknown effect(s) {', '.join(unknown)}; known: "
-                                  f"{', '.join(MODEL_EFFECTS)}")
-                for name in names:
-                    reason = self._add(name, "user")
+                problems = [p for p in (effect_name_problem(n, self.inputs.model) for n in names)
+                            if p]
+                if problems:
+                    return refuse("; ".join(problems))
+                if names:
+                    reason = self._add_many(names, "user")
                     if reason:
                         return refuse(reason)
             elif parameter.name == "remove_effects":
@@ -129,23 +132,57 @@ class ModelMonitor(Node):
                 self._since_check = int(self.get_parameter("check_every").value)
         return accept()
 
-    def _add(self, name: str, who: str) -> str | None:
-        if name in self.inputs.model.effects:
+    def _add_many(self, names: list[str], who: str) -> str | None:
+        """Fit and add several effects from one diagnosis (their joint fit where the
+        forward selection named them together)."""
+        wanted = [n for n in names if not (n in self.inputs.model.effects and
+                                           "expression" not in self.inputs.model.effects[n])]
+        if not wanted:
             return None
         obs = self._observations()
         if obs is None:
-            return f"cannot fit {name}: only {len(self._readings)} reference readings yet"
+            return f"cannot fit {', '.join(wanted)}: only {len(self._readings)} reference " \
+                "readings yet"
         try:
-            diagnosis = diagnose(self.inputs.model, obs,
-                                 min_reduction=float(self.get_parameter("min_reduction").value))
+            diagnosis = self._diagnose(self.inputs.model, obs)
         except MtAccuracyError as exc:
-            return f"cannot fit {name}: {exc}"
-        candidate = next((c for c in diagnosis.ranking if c.effect == name), None)
+            return f"cannot fit {', '.join(wanted)}: {exc}"
+        chosen = []
+        for name in wanted:
+            candidate = pick_candidate(diagnosis, name)
+            if candidate is None:
+                return f"cannot fit {name}: it has no regressors in these readings"
+            chosen.append(candidate)
+        model = self.inputs.model
+        for candidate in chosen:
+            model = add_effect(model, candidate, obs)
+            self.get_logger().info(f"added {candidate.name} {candidate.parameters}")
+        model.version = self.inputs.model.version + 1   # one decision, one version
+        self._reason = f"added {', '.join(c.name for c in chosen)} ({who})"
+        self.inputs.set_model(model)
+        self._since_check = int(self.get_parameter("check_every").value)  # check at once
+        return None
+
+    def _add(self, name: str, who: str, candidate: Candidate | None = None) -> str | None:
+        model = self.inputs.model
+        if name in model.effects and "expression" not in model.effects[name]:
+            return None
         if candidate is None:
-            return f"cannot fit {name}: it has no regressors in these readings"
-        self._reason = f"added {name} ({who})"
+            obs = self._observations()
+            if obs is None:
+                return f"cannot fit {name}: only {len(self._readings)} reference readings yet"
+            try:
+                diagnosis = self._diagnose(model, obs)
+            except MtAccuracyError as exc:
+                return f"cannot fit {name}: {exc}"
+            candidate = pick_candidate(diagnosis, name)
+            if candidate is None:
+                return f"cannot fit {name}: it has no regressors in these readings"
+        else:
+            obs = self._observations()
+        self._reason = f"added {candidate.name} ({who})"
         self.inputs.set_model(add_effect(self.inputs.model, candidate, obs))
-        self.get_logger().info(f"added {name} {candidate.parameters}; model version "
+        self.get_logger().info(f"added {candidate.name} {candidate.parameters}; model version "
                                f"{self.inputs.model.version}")
         self._since_check = int(self.get_parameter("check_every").value)  # check at once
         return None
@@ -211,12 +248,13 @@ class ModelMonitor(Node):
         for i, reading in enumerate(readings):
             key = tuple(sorted((name, id(f)) for name, f in reading["profiles"].items()))
             groups.setdefault(key, []).append(i)
+        state = copy.copy(model)
+        state._lag_states = {}   # lagged effects start at the window's first reading
         for rows in groups.values():
-            state = copy.copy(model)
             state.profiles = readings[rows[0]]["profiles"]
             sub = obs.subset(np.asarray(rows))
-            position[rows], orientation[rows] = state.tcp_error(
-                sub.positions, sub.temperatures, sub.velocities or None, sub.directions or None)
+            position[rows], orientation[rows] = state.tcp_error(sub.positions,
+                                                                **sub.model_inputs())
         obs.predicted_m, obs.predicted_orientation = position, orientation
 
     def _observations(self, model=None) -> Observations | None:
@@ -246,13 +284,14 @@ class ModelMonitor(Node):
         return obs
 
     def _run_check(self) -> None:
-        obs = self._observations()
-        if obs is None:
-            return
         model = self.inputs.model
         try:
-            diagnosis = diagnose(model, obs,
-                                 min_reduction=float(self.get_parameter("min_reduction").value))
+            # A user effect the readings cannot evaluate (a sensor it names is missing)
+            # stops this check, not the node: said on /diagnostics.
+            obs = self._observations()
+            if obs is None:
+                return
+            diagnosis = self._diagnose(model, obs)
         except MtAccuracyError as exc:
             self._status(DiagnosticStatus.WARN, f"no check: {exc}")
             return
@@ -270,11 +309,21 @@ class ModelMonitor(Node):
         check.max_abs_error = diagnosis.max_abs_error
         check.band = obs.uncertainty_m
         check.fraction_outside_band = diagnosis.fraction_outside_band
-        check.ranking = [EffectScore(effect=c.effect, cv_rmse_after=c.cv_rmse_after,
-                                     error_reduction=max(0.0, c.error_reduction),
-                                     explanation=c.explanation)
-                         for c in diagnosis.ranking]
+        check.ranking = [_score(c) for c in diagnosis.ranking[:20]]
+        check.named = [_score(c) for c in diagnosis.selected]
         check.diagnosis = diagnosis.text()
+        check.verdict = diagnosis.verdict()
+        where = diagnosis.localisation
+        if where is not None:
+            top = where.shares[:12]
+            check.localisation_variables = [s.variable for s in top]
+            check.localisation_components = [s.component for s in top]
+            check.localisation_shares = [float(s.share) for s in top]
+            check.localisation = where.sentence()
+            if where.peaks:
+                peak = where.peaks[0]
+                check.peak_axis, check.peak_component = peak.axis, peak.component
+                check.peak_period, check.peak_amplitude = peak.period_m, peak.amplitude
         self._check.publish(check)
         self.history.append({"version": model.version, "rmse": diagnosis.baseline_rmse})
         found = diagnosis.found
@@ -285,7 +334,12 @@ class ModelMonitor(Node):
             KeyValue(key="model_version", value=str(model.version)),
             KeyValue(key="missing_effect", value=found.effect if found else "")])
         if found is not None and self.get_parameter("auto_add").value:
-            self._add(found.effect, "auto_add")
+            self._add(found.name, "auto_add", found)
+
+    def _diagnose(self, model, obs):
+        return diagnose(model, obs,
+                        min_reduction=float(self.get_parameter("min_reduction").value),
+                        max_effects=int(self.get_parameter("max_effects").value))
 
     def _publish_model(self) -> None:
         model = self.inputs.model
@@ -306,6 +360,26 @@ class ModelMonitor(Node):
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()
         self._diagnostics.publish(array)
+
+
+def _score(candidate: Candidate) -> EffectScore:
+    from ..core.effects import family_named
+
+    try:
+        setting = family_named(candidate.effect).describe_setting(candidate.setting) \
+            if candidate.setting else ""
+    except MtAccuracyError:
+        setting = ""
+    names = list(candidate.parameters)
+    return EffectScore(effect=candidate.effect, cv_rmse_after=candidate.cv_rmse_after,
+                       error_reduction=max(0.0, candidate.error_reduction),
+                       explanation=candidate.explanation, name=candidate.name,
+                       group=candidate.group, setting=setting,
+                       significant=bool(candidate.significant),
+                       confidence=float(candidate.confidence), parameter_names=names,
+                       parameters=[float(candidate.parameters[n]) for n in names],
+                       parameter_uncertainties=[float(candidate.parameter_uncertainties.get(
+                           n, float("nan"))) for n in names])
 
 
 def main(args: list[str] | None = None) -> int:

@@ -156,6 +156,14 @@ def write_check_report(result: dict, plot: dict, path: Path) -> Report:
                                 namespace=result.get("namespace", ""))
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    if result["kind"] == "survey_csv":
+        from .sections import survey_report_sections
+
+        report = Report("mt-accuracy check", f"The model against the reference survey "
+                        f"{result['data']}", survey_report_sections(
+                            result, plot, path.parent, path.with_suffix("").name))
+        render(report, path)
+        return report
     report = Report("mt-accuracy check", f"Thermal model of {result['target']} from "
                     f"{result['data']}", csv_report_sections(result, plot, path.parent,
                                                              path.with_suffix("").name))

@@ -35,6 +35,7 @@ def bag_report_sections(data: BagData, check: dict | None, directory: Path, stem
         sections.append(closed_loop_section(data, directory, stem))
     if check is not None:
         sections += [_where_section(data, check, directory, stem),
+                     localisation_section(check, directory, stem),
                      _evidence_section(check), _versions_section(check)]
     else:
         sections.append(Section("Where the model fails", paragraphs=[
@@ -99,7 +100,7 @@ def _component_figures(values: np.ndarray, mask: np.ndarray, u_k2: float) -> lis
     return out
 
 
-def _headline_section(data: BagData, check: dict | None) -> Section:
+def _headline_section(data: BagData | None, check: dict | None) -> Section:
     section = Section("Headline: TCP error per component")
     if check is None:
         section.paragraphs.append("No reference measurements: no TCP error to report.")
@@ -115,7 +116,7 @@ def _headline_section(data: BagData, check: dict | None) -> Section:
     steps = check["steps"]
     for k, (step, residual) in enumerate(zip(steps, plot["step_residuals"])):
         label = "with the starting model's compensation" if k == 0 else \
-            f"after adding {steps[k - 1]['added']}"
+            f"after adding {', '.join(steps[k - 1]['added'])}"
         table.add(label, step["model_version"], *_component_figures(residual, mask, band))
     section.tables.append(table)
     section.paragraphs.append(
@@ -205,12 +206,13 @@ def closed_loop_section(data: BagData, directory: Path, stem: str) -> Section:
     return section
 
 
-def _where_section(data: BagData, check: dict, directory: Path, stem: str) -> Section:
+def _where_section(data: BagData | None, check: dict, directory: Path, stem: str) -> Section:
     plt = pyplot()
     plot = check["_plot"]
     residual, mask = plot["residual_after"], plot["mask"]
     band = check["band"] * UM
-    offset = (data.references[0][0] - data.start_ns) / 1e9 if data.references else 0.0
+    offset = (data.references[0][0] - data.start_ns) / 1e9 if data is not None and \
+        data.references else 0.0
     time = plot["time"] + offset
     variables = [(f"{axis} position [mm]", values * 1e3) for axis, values in plot["positions"].items()
                  if np.ptp(values) > 0]
@@ -248,35 +250,104 @@ def _where_section(data: BagData, check: dict, directory: Path, stem: str) -> Se
     return section
 
 
+def localisation_section(check: dict, directory: Path, stem: str) -> Section:
+    """Where the residual lives: variance shares per variable, the periodic peak, the verdict."""
+    plt = pyplot()
+    where = check.get("localisation") or {}
+    section = Section("Where the residual lives")
+    shares = [s for s in where.get("shares", []) if s["share"] > 0][:12]
+    if shares:
+        fig, ax = plt.subplots(figsize=(7.5, 0.32 * len(shares) + 1.2))
+        labels = [f"{s['variable']}  (e_{s['component']})" for s in shares][::-1]
+        values = [100 * s["share"] for s in shares][::-1]
+        ax.barh(labels, values, color="tab:blue")
+        ax.set_xlabel("share of the component's residual variance explained, cross-validated [%]")
+        ax.set_xlim(0, 100)
+        ax.tick_params(labelsize=7)
+        section.figures.append(save_figure(
+            fig, directory, f"{stem}_localisation",
+            "Each variable alone, smoothed by k-nearest neighbours with k chosen by 5-fold "
+            "cross-validation: how much of each component's residual it explains (a variable "
+            "that only fits noise scores about 0)."))
+    peaks = Table(["along", "component", "period [mm]", "amplitude [µm]", "share"],
+                  caption="Strongest periodic residual along each axis (2-50 mm periods)")
+    for peak in where.get("peaks", [])[:6]:
+        peaks.add(peak["axis"], f"e_{peak['component']}", peak["period_m"] * 1e3,
+                  peak["amplitude_m"] * UM, f"{100 * peak['share']:.0f} %")
+    if where.get("peaks"):
+        section.tables.append(peaks)
+    section.paragraphs.append(
+        f"Where it lives: {where.get('sentence') or 'nowhere in particular (no variable explains a tenth of it)'}.")
+    named = check.get("named", [])
+    if named:
+        table = Table(["effect named", "setting", "confidence", "share of the excess removed",
+                       "parameters (± U, k = 2)", "physical reading"])
+        for entry in named:
+            table.add(entry["name"], ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else
+                                               f"{k} {v}" for k, v in entry["setting"].items()),
+                      f"{100 * entry['confidence']:.0f} %",
+                      f"{100 * entry['share_of_excess']:.0f} %",
+                      "; ".join(f"{n} = {v:.4g} ± {2 * entry['parameter_uncertainties'][n]:.2g}"
+                                for n, v in entry["parameters"].items()),
+                      entry["explanation"], css_class="accepted")
+        section.tables.append(table)
+    verdict = check.get("verdict")
+    section.paragraphs.append(f"Verdict: {verdict}." if verdict else
+                              "Verdict: what the named effects leave is within the "
+                              "instrument's noise." if named else
+                              "Verdict: the residual is within the instrument's noise.")
+    return section
+
+
+def survey_report_sections(result: dict, plot: dict, directory: Path, stem: str
+                           ) -> list[Section]:
+    """A reference survey read from a data logger's CSV (no bag): the same workbench story."""
+    check = {**result, "_plot": plot}
+    source = Section("Machine, data and instruments", paragraphs=[
+        f"Data: {result['data']} ({result.get('rows_note', '')}); machine "
+        f"{result['machine']}; instrument band ± {result['band'] * UM:.2g} µm (k = 2)."])
+    headline = _headline_section(None, check)
+    return [source, headline, _where_section(None, check, directory, stem),
+            localisation_section(check, directory, stem), _evidence_section(check),
+            _versions_section(check)]
+
+
 def _evidence_section(check: dict) -> Section:
     section = Section("The effect found and its evidence")
     baseline = check.get("baseline_cv_rmse", check["baseline_rmse"])
     section.paragraphs.append(
-        f"Each candidate effect is fitted to the residual of the starting model and judged by "
-        f"time-blocked 5-fold cross-validation; without any candidate the cross-validated "
-        f"error is {baseline * UM:.3g} µm. A candidate is accepted when it cuts that error by "
-        "the minimum reduction, its parameters stand above 3 standard errors, and the residual "
-        "is clearly above the instrument's noise; all others are rejected.")
-    table = Table(["candidate", "status", "CV error after [µm]", "reduction", "parameters (± u, k = 1)",
-                   "physical reading"])
+        f"Every effect of the catalogue (geometric, rotary, thermal, motion, cross-axis and the "
+        f"user's own) is fitted to the residual of the starting model and judged by "
+        f"time-blocked 5-fold cross-validation, its period, order or time constant chosen "
+        f"inside each fold; without any candidate the cross-validated error is "
+        f"{baseline * UM:.3g} µm. The best is accepted when, on readings its fit did not see, "
+        "it removes error in block after block (a t-test, its p-value multiplied by the number "
+        "of candidates tried), cuts the error by the minimum reduction, removes at least a "
+        "quarter of what stands above the instrument's noise, and carries a parameter above 3 "
+        "standard errors; then the search repeats with it in the model. "
+        "Confidence = 1 - that adjusted p-value.")
+    table = Table(["candidate", "status", "CV error after [µm]", "reduction", "confidence",
+                   "parameters (± u, k = 1)", "physical reading"])
     for entry in check["ranking"][:12]:
         accepted = entry["significant"]
         parameters = "; ".join(
             f"{name} = {value:.3g} ± {entry.get('parameter_uncertainties', {}).get(name, np.nan):.2g}"
             for name, value in entry.get("parameters", {}).items())
-        table.add(entry["effect"] + (f" ({entry['variant']})" if entry.get("variant") else ""),
+        table.add(entry.get("name", entry["effect"]),
                   "accepted" if accepted else "rejected", entry["cv_rmse_after"] * UM,
-                  f"{100 * entry['error_reduction']:.1f} %", parameters,
+                  f"{100 * entry['error_reduction']:.1f} %",
+                  f"{100 * entry.get('confidence', 0.0):.0f} %", parameters,
                   entry["explanation"] if accepted else f"(rejected) {entry['explanation']}",
                   css_class="accepted" if accepted else "rejected")
     section.tables.append(table)
     added = [s for s in check["steps"] if "added" in s]
     for step in added:
-        uncertainties = step.get("parameter_uncertainties", {})
-        section.paragraphs.append(
-            f"Added {step['added']}: " + ", ".join(
-                f"{name} = {value:.4g} ± {2 * uncertainties.get(name, np.nan):.2g} (k = 2)"
-                for name, value in step["parameters"].items()) + ".")
+        for effect in step["added"]:
+            uncertainties = step.get("parameter_uncertainties", {}).get(effect, {})
+            section.paragraphs.append(
+                f"Added {effect}: " + ", ".join(
+                    f"{name} = {value:.4g} ± {2 * uncertainties.get(name, np.nan):.2g} (k = 2)"
+                    for name, value in step["parameters"][effect].items()) + ".")
     if not added:
         section.paragraphs.append("No effect was added.")
     return section

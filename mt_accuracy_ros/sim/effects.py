@@ -88,6 +88,18 @@ EFFECTS: dict[str, EffectSpec] = {spec.name: spec for spec in [
         {"growth_m": (15e-6, "m, steady growth at full speed"),
          "time_constant_s": (0.5 * 3600, "s"), "direction": ([0.0, 0.0, 1.0], "unit vector")}),
     EffectSpec(
+        "ballscrew_pitch", "A periodic positioning error of one axis with the ball screw's "
+        "pitch (lead error, wobble of the nut), its amplitude growing as the column warms "
+        "(the screw and its bearings heat up). Not one of the effects the workbench was "
+        "first built for: it is named by the open catalogue's periodic positioning family.",
+        "E_aa(q) = A (1 + g dT_column) sin(2 pi q / p + phi)",
+        "ISO 230-2 periodic error; ISO 230-1 positioning error E_XX", "tcp",
+        {"axis": ("X", "axis"), "pitch_m": (0.01, "m, screw lead"),
+         "amplitude_m": (3e-6, "m"), "phase_rad": (0.0, "rad"),
+         "growth_per_k": (0.0, "1/K, relative growth of the amplitude per K of the column "
+                                "(the column's warm-up: structural_thermal_drift's rise_k, "
+                                "time_constant_s)")}),
+    EffectSpec(
         "reversal", "Backlash in the drive: the axis lags by b/2 against the direction of "
         "motion (semi-closed loop; the scales see it).", "q = c - sign(v) b / 2",
         "ISO 230-2 reversal value B", "both", {"backlash_m": (6e-6, "m"), "axes": (["X", "Y", "Z"], "axes")}),

@@ -130,6 +130,17 @@ class SimulationResult:
                       * self.thermal_at("bed", indices)
                       * self.mask("position_dependent_thermal", indices))
             overrides.motion[name] = overrides.motion.get(name, 0.0) + growth
+        if scenario.ever_enabled("ballscrew_pitch"):
+            params = scenario.parameters("ballscrew_pitch")
+            axis = params["axis"]
+            name = motion_error_name(axis, axis)
+            q = self.actual[axis][indices]
+            amplitude = float(params["amplitude_m"]) * (
+                1.0 + float(params["growth_per_k"]) * self.thermal_at("column", indices))
+            pitch = amplitude * np.sin(2.0 * np.pi * q / float(params["pitch_m"]) +
+                                       float(params["phase_rad"]))
+            overrides.motion[name] = overrides.motion.get(name, 0.0) + \
+                pitch * self.mask("ballscrew_pitch", indices)
         if scenario.ever_enabled("squareness"):
             on = self.mask("squareness", indices)
             for name, value in scenario.parameters("squareness")["errors_rad"].items():

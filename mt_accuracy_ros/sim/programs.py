@@ -93,6 +93,38 @@ def _build(axes, points: list[list[float]], feeds: list[float], dwells: list[flo
                    dwell_windows_s=np.array(dwell_windows).reshape(-1, 2))
 
 
+def _independent_back_and_forth(machine: MachineDescription, axes, feed_m_per_min: float,
+                                axis_feeds: dict) -> Program:
+    from fractions import Fraction
+    from math import gcd, lcm
+
+    unknown = set(axis_feeds) - set(axes)
+    if unknown:
+        raise ScenarioError(f"axis_feeds_m_per_min names {sorted(unknown)[0]!r}, not one of "
+                            f"the program's axes {list(axes)}")
+    strokes = {a: _stroke(machine, a) for a in axes}
+    periods = {a: 2.0 * (strokes[a][1] - strokes[a][0]) /
+               _feed(float(axis_feeds.get(a, feed_m_per_min))) for a in axes}
+    base = periods[axes[0]]
+    ratios = {a: Fraction(periods[a] / base).limit_denominator(16) for a in axes}
+    # The program period: the shortest time holding a whole number of every axis'
+    # (slightly adjusted) cycles - base x lcm(numerators) / gcd(denominators).
+    period = float(base * lcm(*(r.numerator for r in ratios.values())) /
+                   gcd(*(r.denominator for r in ratios.values())))
+    cycles = {a: max(1, int(round(period / periods[a]))) for a in axes}
+    knots = sorted({round(k * period / (2 * cycles[a]), 12) for a in axes
+                    for k in range(2 * cycles[a] + 1)})
+    knots = np.array(knots)
+    waypoints = np.empty((knots.size, len(axes)))
+    for j, axis in enumerate(axes):
+        low, high = strokes[axis]
+        phase = np.mod(knots * cycles[axis] / period, 1.0)
+        phase[-1] = 0.0 if knots[-1] >= period - 1e-12 else phase[-1]
+        waypoints[:, j] = low + (high - low) * (1.0 - np.abs(2.0 * phase - 1.0))
+    return Program(axes, knots, waypoints, repeat=True,
+                   dwell_points=np.zeros((0, len(axes))), dwell_windows_s=np.zeros((0, 2)))
+
+
 def _stroke(machine: MachineDescription, axis: str) -> tuple[float, float]:
     if axis not in machine.axes:
         raise ScenarioError(f"axis {axis!r} is not an axis of machine {machine.name} "
@@ -110,9 +142,18 @@ def _check_inside(machine: MachineDescription, axis: str, value: float, what: st
 
 def back_and_forth(machine: MachineDescription, axes=("X",), feed_m_per_min: float = 30.0,
                    start_m: float | None = None, end_m: float | None = None,
-                   dwell_s: float = 0.0) -> Program:
-    """Full-stroke (or ``start_m``..``end_m``) back-and-forth runs of ``axes`` together."""
+                   dwell_s: float = 0.0, axis_feeds_m_per_min: dict | None = None) -> Program:
+    """Full-stroke (or ``start_m``..``end_m``) back-and-forth runs of ``axes`` together.
+
+    With ``axis_feeds_m_per_min`` ({axis: feed}) each axis runs its own full-stroke
+    back-and-forth at its own feed, so that the axes' positions do not move in lock
+    step (a reference survey on the fly then sees every axis' errors apart). Each
+    feed is adjusted by at most 1/16 of a cycle so that every axis closes a whole
+    number of cycles within the program period.
+    """
     axes = tuple(axes)
+    if axis_feeds_m_per_min:
+        return _independent_back_and_forth(machine, axes, feed_m_per_min, axis_feeds_m_per_min)
     lows, highs = [], []
     for axis in axes:
         low, high = _stroke(machine, axis)

@@ -254,7 +254,7 @@ def scenario_from_dict(data: dict, source: str = "<dict>") -> Scenario:
 
 def _check_effect_axes(scenario: Scenario) -> None:
     machine = scenario.machine
-    for name in ("guideway_deterioration", "position_dependent_thermal"):
+    for name in ("guideway_deterioration", "position_dependent_thermal", "ballscrew_pitch"):
         if scenario.ever_enabled(name):
             params = scenario.parameters(name)
             axis = params["axis"]

@@ -22,3 +22,21 @@ def spin_for(node, seconds: float) -> None:
     end = time.monotonic() + seconds
     while time.monotonic() < end:
         rclpy.spin_once(node, timeout_sec=0.02)
+
+
+def call_service(node, client, request, timeout_s: float = 60.0, attempt_s: float = 5.0):
+    """Call a service until it answers; the response.
+
+    A request sent before the server has matched the client's response reader is
+    dropped by the RMW ("failed to send response (timeout)"), which a loaded host
+    makes likely: asking again is the client's job, as ``ros2 param get`` does on
+    a slow graph. Only idempotent requests may be sent this way.
+    """
+    deadline = time.monotonic() + timeout_s
+    assert client.wait_for_service(timeout_sec=timeout_s), f"no service {client.srv_name}"
+    while time.monotonic() < deadline:
+        future = client.call_async(request)
+        if spin_until(node, future.done, timeout_s=attempt_s):
+            return future.result()
+        client.remove_pending_request(future)
+    raise AssertionError(f"{client.srv_name} did not answer in {timeout_s} s")

@@ -14,6 +14,10 @@ BAD_MODELS = [
     "machine: kidani_hmc\nversion: two\n",                 # version not a number
     "machine: /bin/ls\n",                                  # a binary machine file
     "{machine: kidani_hmc, effects: {squareness: 3}}\n",  # effect parameters not a mapping
+    # User effects: a syntax error, a forbidden construct, an unknown variable.
+    "{machine: kidani_hmc, effects: {mine: {expression: 'k * (x +', parameters: [k]}}}\n",
+    "{machine: kidani_hmc, effects: {mine: {expression: 'k * x.real', parameters: [k]}}}\n",
+    "{machine: kidani_hmc, effects: {mine: {expression: 'k * q', parameters: [k]}}}\n",
 ]
 
 
@@ -95,7 +99,8 @@ def test_broadcaster_survives_bad_batches_and_models_and_says_why(rclpy_context)
 
 
 @pytest.mark.parametrize("value", ["machine: kidani_hmc\neffects: [squareness]\n",
-                                   "machine: kidani_hmc\nversion: two\n"])
+                                   "machine: kidani_hmc\nversion: two\n",
+                                   BAD_MODELS[-3], BAD_MODELS[-1]])
 def test_a_bad_model_parameter_is_refused_and_the_monitor_lives(rclpy_context, value):
     import rclpy
 
@@ -106,6 +111,11 @@ def test_a_bad_model_parameter_is_refused_and_the_monitor_lives(rclpy_context, v
     try:
         successful, reason = _set_parameter(node, "model_monitor", "model", value)
         assert not successful and "model refused" in reason, reason
+        if "mine" in value:
+            assert "user effect 'mine'" in reason, reason   # the effect is named
+        # An effect name nobody knows is refused, named, and the monitor lives on.
+        successful, reason = _set_parameter(node, "model_monitor", "add_effects", ["warp"])
+        assert not successful and "unknown effect 'warp'" in reason, reason
         assert monitor.popen.poll() is None
         successful, reason = _set_parameter(node, "model_monitor", "min_reduction", 0.2)
         assert successful, reason

@@ -99,8 +99,11 @@ def test_bridge_reads_the_cnc_and_writes_the_compensation_back(rclpy_context, tm
     assert states[-1][1] - states[0][1] > 1.0  # the machine warmed: a drift to compensate
 
     model = tmp_path / "model.yaml"
+    # The reference temperature is given: otherwise it is the first reading the
+    # broadcaster happens to get, which on a loaded host may already be a later state.
     model.write_text(yaml.safe_dump({"machine": "kidani_hmc", "effects": {
-        "structural_thermal_drift": {"beta_m_per_k": BETA.tolist(), "sensor": "column"}}}))
+        "structural_thermal_drift": {"beta_m_per_k": BETA.tolist(), "sensor": "column"}},
+        "reference_temperatures_c": {"column": states[0][1]}}))
     node = rclpy.create_node("cnc_operator")
     batches: list = []
     node.create_subscription(ScaleBatch, "scales", batches.append, SENSOR_QOS)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import yaml
 
-from graph_helpers import spin_for, spin_until
+from graph_helpers import call_service, spin_for, spin_until
 from mt_accuracy_ros.processes import start_node
 
 SCENARIO = """machine: kidani_hmc
@@ -293,6 +293,15 @@ def test_all_nodes_composed_in_one_executor(rclpy_context, tmp_path):
     assert [m.sequence for m in compensation] == list(range(nodes[1]._compensation_sequence))
     assert scales["processed"] > 0
     assert checks and "structural_thermal_drift" in {s.effect for s in checks[-1].ranking}
+    # Where the residual lives travels with every check: variable, component, share.
+    last = checks[-1]
+    assert len(last.localisation_variables) == len(last.localisation_components) == \
+        len(last.localisation_shares) > 0
+    assert all(share <= 1.0 for share in last.localisation_shares)
+    assert set(last.localisation_components) <= {"x", "y", "z"}
+    for score in list(last.named) + list(last.ranking):
+        assert len(score.parameter_names) == len(score.parameters) == \
+            len(score.parameter_uncertainties)
 
 
 def test_parameters_load_from_the_config_yaml(rclpy_context):
@@ -306,11 +315,9 @@ def test_parameters_load_from_the_config_yaml(rclpy_context):
     probe = rclpy.create_node("probe")
     try:
         client = probe.create_client(GetParameters, "/yaw_estimator/get_parameters")
-        assert client.wait_for_service(timeout_sec=20)
-        future = client.call_async(GetParameters.Request(names=["tolerance_rad",
-                                                                "baseline_after_s"]))
-        assert spin_until(probe, future.done, timeout_s=10)
-        values = [v.double_value for v in future.result().values]
+        response = call_service(probe, client, GetParameters.Request(
+            names=["tolerance_rad", "baseline_after_s"]))
+        values = [v.double_value for v in response.values]
     finally:
         estimator.stop()
         probe.destroy_node()
@@ -331,10 +338,8 @@ def test_the_high_rate_config_reaches_the_estimator(rclpy_context):
     probe = rclpy.create_node("probe")
     try:
         client = probe.create_client(GetParameters, "/yaw_estimator/get_parameters")
-        assert client.wait_for_service(timeout_sec=20)
-        future = client.call_async(GetParameters.Request(names=["reselect_every"]))
-        assert spin_until(probe, future.done, timeout_s=10)
-        value = future.result().values[0].integer_value
+        response = call_service(probe, client, GetParameters.Request(names=["reselect_every"]))
+        value = response.values[0].integer_value
     finally:
         estimator.stop()
         probe.destroy_node()

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from mcap.writer import Writer
 
-from graph_helpers import spin_for, spin_until
+from graph_helpers import call_service, spin_for, spin_until
 from mt_accuracy_ros.core.errors import BagError
 from mt_accuracy_ros.io.bag_reader import bag_info, decode, read_messages, recover
 from mt_accuracy_ros.io.bag_writer import BagWriter, qos_dict
@@ -216,8 +216,7 @@ def test_player_pause_resume_and_loop(rclpy_context, tmp_path):
         assert resume.wait_for_service(timeout_sec=30)
         spin_for(node, 1.0)
         assert received == []  # paused: nothing plays
-        future = resume.call_async(Trigger.Request())
-        assert spin_until(node, future.done, timeout_s=10) and future.result().success
+        assert call_service(node, resume, Trigger.Request()).success
         assert spin_until(node, lambda: len(received) >= 25, timeout_s=30)
     finally:
         process.send_signal(signal.SIGINT)

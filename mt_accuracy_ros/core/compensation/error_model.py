@@ -20,8 +20,17 @@ effect                          parameters (model form)                        e
 ``servo_lag``                   ``lag_s``, ``axes``                            -v tau per axis
 ==============================  =============================================  ===========================
 
+Beyond these, a model holds any effect of the open catalogue
+(:mod:`mt_accuracy_ros.core.effects`) the workbench fitted - an entry
+``{family, variant, setting, coefficients}`` under a name such as
+``positioning_periodic:EXX`` - and user effects declared as an expression
+(``{expression, parameters, acts_on, values}``); both are evaluated through
+the catalogue, so they act in every node exactly as in the workbench.
+
 Temperatures enter as rises over ``reference_temperatures_c`` (the first
 reading, unless given). Everything is vectorised over N command positions.
+Lagged terms keep their state between calls (a stream continues them);
+``fresh=True`` starts them again in steady state at the first reading.
 """
 from __future__ import annotations
 
@@ -33,6 +42,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..effects import Context, catalogue_error, family_named, is_catalogue_entry
+from ..effects.user import user_declaration
+from ..effects.variables import Variables
 from ..kinematics.error_functions import ErrorFunction
 from ..errors import InputDataError, MachineDescriptionError, ParameterError, reraise_as
 from ..kinematics.chain import ErrorOverrides, KinematicModel
@@ -116,12 +128,17 @@ class ErrorModel:
         for name in list(self.effects):
             self.effects[name] = self._validated(name, self.effects[name])
         self._kinematics = KinematicModel(self.machine)
+        self._lag_states: dict = {}
 
     def _validated(self, name: str, parameters: dict | None) -> dict:
         """Defaults merged with ``parameters``, each checked against its default's kind, so
         that a model that loads also evaluates (a bad value is refused here, not mid-run)."""
+        if is_catalogue_entry(parameters):
+            return _checked_catalogue_entry(name, parameters, self.machine)
         if name not in _DEFAULTS:
-            raise ParameterError(f"unknown model effect {name!r}; known: {', '.join(MODEL_EFFECTS)}")
+            raise ParameterError(f"unknown model effect {name!r}; known: {', '.join(MODEL_EFFECTS)}"
+                                 ", an effect of the catalogue (with 'family'), or a user "
+                                 "effect (with 'expression')")
         if parameters is not None and not isinstance(parameters, dict):
             raise ParameterError(f"effect {name}: parameters must be a mapping")
         merged = copy.deepcopy(_DEFAULTS[name])
@@ -269,13 +286,17 @@ class ErrorModel:
 
     def tcp_error(self, positions: dict[str, ArrayLike], temperatures: dict | None = None,
                   velocities: dict[str, ArrayLike] | None = None,
-                  directions: dict[str, ArrayLike] | None = None
+                  directions: dict[str, ArrayLike] | None = None, *,
+                  time_s: ArrayLike | None = None,
+                  accelerations: dict[str, ArrayLike] | None = None,
+                  spindle_speed_rad_s: ArrayLike | None = None, fresh: bool = False
                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position error (N, 3) [m], orientation error (N, 3) [rad]) at command positions.
 
         ``directions`` (axis -> +-1, the direction of the last motion) serves the
         reversal effect where the axis stands still; without it sign(v) is used
-        (0 at a standstill).
+        (0 at a standstill). ``time_s`` (N,) [s], ``accelerations`` [m/s^2] and
+        ``spindle_speed_rad_s`` (N,) serve catalogue effects that need them.
         """
         q = {a: np.atleast_1d(np.asarray(positions[a], dtype=np.float64))
              for a in self.machine.axis_order if a in positions}
@@ -304,7 +325,57 @@ class ErrorModel:
                 shift = -direction * 0.5 * float(p["backlash_m"]) if sign_of \
                     else -v * float(p["lag_s"])
                 drive += shift[:, None] * self.axis_direction(axis, q)
+        catalogue = {k: v for k, v in self.effects.items() if is_catalogue_entry(v)}
+        if catalogue:
+            if fresh:
+                self._lag_states = {}
+            n = next(iter(q.values())).size
+            temps = {k: np.broadcast_to(np.asarray(v, dtype=np.float64), (n,))
+                     for k, v in (temperatures or {}).items()}
+            for sensor, values in temps.items():
+                self.reference_temperatures_c.setdefault(sensor, float(values[0]))
+            variables = Variables(q, None if time_s is None else np.asarray(time_s, float),
+                                  dict(velocities or {}), dict(accelerations or {}),
+                                  dict(directions or {}), temps,
+                                  self.reference_temperatures_c, spindle_speed_rad_s,
+                                  lag_states=self._lag_states)
+            context = Context(self.machine, variables, self._kinematics, orientation)
+            for name, entry in catalogue.items():
+                position = position + catalogue_error(name, entry, context)
         return position + drive, orientation
+
+    def table_motion_errors(self, axis: str, grid: ArrayLike) -> dict[str, NDArray[np.float64]]:
+        """Per-axis error motions of the fitted catalogue effects on ``grid`` (ISO name ->
+        values [m or rad]), for a CNC's compensation table: a position-dependent error
+        belongs in the table the CNC interpolates at its own command, not in a stream
+        that arrives a few milliseconds (and, at feed, millimetres) late."""
+        out: dict[str, NDArray[np.float64]] = {}
+        for entry in self.effects.values():
+            if not (is_catalogue_entry(entry) and "family" in entry):
+                continue
+            family = family_named(entry["family"])
+            variant = entry.get("variant", "")
+            if not hasattr(family, "motion_error") or variant[-1:] != axis:
+                continue
+            setting = entry.get("setting") or {}
+            names = family.parameter_names(variant, setting)
+            values = family.motion_error(self.machine, variant, setting,
+                                         [entry["coefficients"][n] for n in names], grid)
+            out[variant] = out.get(variant, 0.0) + values
+        return out
+
+    def table_location_errors(self) -> dict[str, float]:
+        """Location errors (squareness) of the fitted catalogue effects [rad]."""
+        out: dict[str, float] = {}
+        for entry in self.effects.values():
+            if is_catalogue_entry(entry) and "family" in entry:
+                family = family_named(entry["family"])
+                if hasattr(family, "location_error"):
+                    names = family.parameter_names(entry.get("variant", ""), {})
+                    for name, value in family.location_error(
+                            entry["variant"], [entry["coefficients"][n] for n in names]).items():
+                        out[name] = out.get(name, 0.0) + value
+        return out
 
     def axis_direction(self, axis: str, positions: dict[str, NDArray]) -> NDArray[np.float64]:
         """d(tool - workpiece)/d q_axis (N, 3): where a unit move of the axis takes the TCP.
@@ -321,6 +392,54 @@ class ErrorModel:
     def correction(self, positions, temperatures=None, velocities=None) -> NDArray[np.float64]:
         """Value to add to the command [m]: minus the position error (first order)."""
         return -self.tcp_error(positions, temperatures, velocities)[0]
+
+
+def _check_user_variables(name: str, declaration: dict, machine: MachineDescription) -> None:
+    """Every name in a user expression is a parameter or a variable this machine can have
+    (temperatures are checked against the data when it arrives)."""
+    from ..effects.expression import parse
+
+    axes = [a.lower() for a in machine.axis_order]
+    known = set(axes) | {"t", "spindle_speed", "spindle_rpm"} | \
+        {f"{p}_{a}" for p in ("v", "acc", "dir") for a in axes}
+    expression = parse(declaration["expression"], f"user effect {name!r}")
+    unknown = sorted(n for n in expression.names - set(declaration["parameters"])
+                     if n not in known and not (n.startswith("T_") and len(n) > 2))
+    if unknown:
+        raise ParameterError(f"user effect {name!r}: unknown variable {unknown[0]!r}; "
+                             f"variables: {', '.join(sorted(known))}, T_<sensor>")
+
+
+def _checked_catalogue_entry(name: str, entry: dict, machine: MachineDescription) -> dict:
+    """A fitted catalogue effect or a user effect, checked so that it will evaluate."""
+    if "expression" in entry:
+        declaration = user_declaration(name, entry)
+        _check_user_variables(name, declaration, machine)
+        return declaration
+    allowed = {"family", "variant", "setting", "coefficients", "uncertainties"}
+    unknown = set(entry) - allowed
+    if unknown:
+        raise ParameterError(f"effect {name}: unknown key(s) {', '.join(sorted(unknown))}; "
+                             f"a catalogue effect has {', '.join(sorted(allowed))}")
+    family = family_named(str(entry["family"]))
+    variant = str(entry.get("variant", ""))
+    setting = entry.get("setting") or {}
+    if not isinstance(setting, dict):
+        raise ParameterError(f"effect {name}: 'setting' must be a mapping")
+    try:
+        names = family.parameter_names(variant, setting)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ParameterError(f"effect {name}: setting {setting!r} does not fit family "
+                             f"{family.name} ({exc})") from exc
+    coefficients = entry.get("coefficients")
+    if not isinstance(coefficients, dict) or set(coefficients) != set(names):
+        raise ParameterError(f"effect {name}: 'coefficients' must give {', '.join(names)}")
+    return {"family": family.name, "variant": variant, "setting": dict(setting),
+            "coefficients": {k: _finite(f"{name}.coefficients.{k}", v)
+                             for k, v in coefficients.items()},
+            **({"uncertainties": {str(k): float(v) for k, v in
+                                  entry["uncertainties"].items()}}
+               if isinstance(entry.get("uncertainties"), dict) else {})}
 
 
 def model_to_dict(model: ErrorModel) -> dict:

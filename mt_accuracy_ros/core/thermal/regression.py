@@ -138,13 +138,18 @@ def position_dependent_design(temperatures: ArrayLike, position: ArrayLike, degr
     return np.column_stack(columns), labels
 
 
-def lag_features(time_s: ArrayLike, heat_input: ArrayLike, time_constants_s: ArrayLike
-                 ) -> NDArray[np.float64]:
+def lag_features(time_s: ArrayLike, heat_input: ArrayLike, time_constants_s: ArrayLike,
+                 *, initial: str = "rest") -> NDArray[np.float64]:
     """First-order responses h_tau of ``heat_input`` (Zhu eq. 3.9), one column per tau.
 
-    tau h' = u - h with h(0) = 0, exact for u piecewise constant between
-    samples; needs uniformly spaced ``time_s``.
+    tau h' = u - h, exact for u piecewise constant between samples; needs
+    uniformly spaced ``time_s``. ``initial``: ``"rest"`` starts at h(0) = 0 (a heat
+    input switched on at t = 0); ``"steady"`` at h(0) = u(0), the state the
+    record started in - the right start for a temperature, whose lag from 0
+    would carry a start-up ramp of the whole temperature.
     """
+    if initial not in ("rest", "steady"):
+        raise ParameterError(f"initial must be 'rest' or 'steady', got {initial!r}")
     t = np.asarray(time_s, dtype=np.float64)
     u = np.asarray(heat_input, dtype=np.float64)
     if t.shape != u.shape or t.ndim != 1 or t.size < 2:
@@ -159,8 +164,9 @@ def lag_features(time_s: ArrayLike, heat_input: ArrayLike, time_constants_s: Arr
         if not np.isfinite(tau) or tau <= 0:
             raise ParameterError(f"time constants must be finite and > 0, got {tau}")
         a = np.exp(-steps[0] / tau)
-        shifted = np.concatenate([[0.0], u[:-1]])
-        out.append(lfilter([1.0 - a], [1.0, -a], shifted))
+        start = u[0] if initial == "steady" else 0.0
+        shifted = np.concatenate([[0.0], u[:-1] - start])
+        out.append(lfilter([1.0 - a], [1.0, -a], shifted) + start)
     return np.column_stack(out)
 
 

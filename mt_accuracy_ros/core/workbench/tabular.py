@@ -83,17 +83,59 @@ class TableWorkbench:
         judge = ~self.train
         return float(np.sqrt(np.mean((prediction[judge] - self.target[judge]) ** 2)))
 
+    def validation_rmse(self, names: list[str]) -> float:
+        """Fitted on the first 70 % of the training rows, judged on their last 30 %: the
+        stop rule's data (the held-out rows stay the final judge, never used to choose)."""
+        rows = np.flatnonzero(self.train)
+        cut = int(0.7 * rows.size)
+        fit, check = rows[:cut], rows[cut:]
+        x = self.design(names)
+        if x.shape[1]:
+            model = fit_linear(x[fit], self.target[fit], ridge=1e-9)
+            prediction = model.predict(x[check])
+        else:
+            prediction = np.full(check.size, self.target[fit].mean())
+        return float(np.sqrt(np.mean((prediction - self.target[check]) ** 2)))
+
+    def parameters_significant(self, names: list[str]) -> bool:
+        """Every coefficient of the newest term above 3 standard errors (training rows)."""
+        rows = np.flatnonzero(self.train)
+        x = np.column_stack([np.ones(rows.size), self.design(names)[rows]])
+        y = self.target[rows]
+        coefficients, *_ = np.linalg.lstsq(x, y, rcond=None)
+        dof = max(1, rows.size - x.shape[1])
+        sigma2 = float(np.sum((x @ coefficients - y) ** 2)) / dof
+        standard = np.sqrt(np.clip(np.diag(sigma2 * np.linalg.pinv(x.T @ x)), 0.0, None))
+        return bool(abs(coefficients[-1]) > 3.0 * standard[-1])
+
     def rank(self, min_reduction: float = 0.05) -> list[TermScore]:
+        """Candidates by CV error. Significant: the CV error falls by ``min_reduction``
+        after a Bonferroni-style penalty for the number tried, the validation rows (fit on
+        the earlier training rows) fall too, and the new coefficient stands above 3
+        standard errors."""
         base = self.cv_rmse(self.included)
+        base_validation = self.validation_rmse(self.included)
         scores = []
+        tried = max(1, len(self.candidates) - len(self.included))
+        # The best of many noise regressors cuts the CV error by chance ~ sqrt(2 ln M / n).
+        chance = float(np.sqrt(2.0 * np.log(tried) / max(1, int(self.train.sum()))))
         for name, term in self.candidates.items():
             if name in self.included:
                 continue
             after = self.cv_rmse(self.included + [name])
             reduction = 1.0 - after / base if base > 0 else 0.0
-            scores.append(TermScore(name, after, reduction, reduction >= min_reduction,
+            scores.append(TermScore(name, after, reduction, reduction >= min_reduction + chance,
                                     term.explanation))
-        return sorted(scores, key=lambda s: s.cv_rmse_after)
+        scores.sort(key=lambda s: s.cv_rmse_after)
+        for score in scores[:3]:
+            if score.significant:
+                names = self.included + [score.name]
+                score.significant = bool(
+                    self.validation_rmse(names) < 0.95 * base_validation and
+                    self.parameters_significant(names))
+        for score in scores[3:]:
+            score.significant = False
+        return scores
 
 
 def table_workbench(columns: dict[str, NDArray], time_s: NDArray, target: str,
@@ -140,7 +182,7 @@ def table_workbench(columns: dict[str, NDArray], time_s: NDArray, target: str,
         uniform_t = np.linspace(t[0], t[-1], t.size)
         if not np.allclose(np.diff(t), np.diff(t)[0], rtol=1e-3):
             raise InputDataError("lag terms need uniformly sampled rows")
-        lags = lag_features(uniform_t, u / scale, time_constants_s)
+        lags = lag_features(uniform_t, u / scale, time_constants_s, initial="steady")
         for j, tau in enumerate(time_constants_s):
             candidates[f"lag:{driver}:{tau:g}s"] = Term(
                 f"lag:{driver}:{tau:g}s", lags[:, j],

@@ -84,6 +84,18 @@ def test_lag_features_are_first_order_step_responses():
         lag_features(np.array([0, 1, 3.0]), np.ones(3), [10.0])
 
 
+def test_lag_of_a_temperature_starts_in_steady_state():
+    """A constant 22 degC has a constant lag: no start-up ramp from zero."""
+    t = np.arange(0, 3600, 15.0)
+    features = lag_features(t, np.full(t.size, 22.0), [600.0, 1800.0], initial="steady")
+    np.testing.assert_allclose(features, 22.0, atol=1e-12)
+    # A step of 1 K on top of 22 degC at t = 0+ behaves as the step response from rest.
+    u = np.where(t > 0, 23.0, 22.0)
+    steady = lag_features(t, u, [600.0], initial="steady")[:, 0]
+    rest = lag_features(t, u - 22.0, [600.0])[:, 0]
+    np.testing.assert_allclose(steady, 22.0 + rest, atol=1e-12)
+
+
 def test_thermal_link_twist_is_the_first_order_link_htm():
     temps = _temperatures(sensors=2)
     named = {"col_top": temps[:, 0], "col_base": temps[:, 1]}

@@ -1,0 +1,90 @@
+"""The effect catalogue: every physical effect the workbench can name, as a registry.
+
+Families by group (each a small class with its physics in the docstring):
+
+* geometric (:mod:`.geometric`): positioning / straightness / angular errors of
+  every linear axis, smooth and periodic; squareness of each axis pair;
+  cross-axis twist; Abbe offset;
+* rotary (:mod:`.geometric`): position-dependent errors and location errors of
+  rotary axes (Khan & Chen);
+* thermal (:mod:`.thermal`): drift, lag, gradient, heat sources,
+  position-dependent expansion, thermal squareness (Zhu ch. 3-4);
+* motion (:mod:`.motion`): reversal, servo lag, acceleration per axis;
+* user (:mod:`.user`): expressions declared in the model, and families other
+  packages install under the entry-point group ``mt_accuracy_ros.effects``.
+
+A fitted candidate is stored in an error model as an effect entry
+``{family, variant, setting, coefficients}`` and applied by
+:func:`catalogue_error`, so an added effect acts in the model monitor, the
+compensation broadcaster and the reports exactly as in the workbench.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ParameterError
+from . import geometric, motion, thermal
+from .base import Context, EffectFamily, along, per_component
+from .user import ENTRY_POINT_GROUP, UserExpression, load_plugins, user_declaration
+
+__all__ = ["Context", "EffectFamily", "ENTRY_POINT_GROUP", "UserExpression", "along",
+           "builtin_families", "catalogue_error", "families", "family_named",
+           "is_catalogue_entry", "load_plugins", "per_component", "user_declaration"]
+
+
+def builtin_families() -> list[EffectFamily]:
+    return geometric.families() + thermal.families() + motion.families()
+
+
+_PLUGINS: list[EffectFamily] | None = None
+
+
+def families(user_effects: dict[str, dict] | None = None, *, plugins: bool = True
+             ) -> list[EffectFamily]:
+    """Built-in families, installed plugins, and one family per declared user effect."""
+    global _PLUGINS
+    out = builtin_families()
+    if plugins:
+        if _PLUGINS is None:
+            _PLUGINS = load_plugins()
+        names = {f.name for f in out}
+        for family in _PLUGINS:
+            if family.name in names:
+                raise ParameterError(f"effect plugin family {family.name!r} clashes with a "
+                                     "built-in family of that name")
+            out.append(family)
+    for name, declaration in (user_effects or {}).items():
+        out.append(UserExpression(name, declaration))
+    return out
+
+
+def family_named(name: str, *, user: tuple[str, dict] | None = None) -> EffectFamily:
+    if user is not None:
+        return UserExpression(*user)
+    for family in families():
+        if family.name == name:
+            return family
+    raise ParameterError(f"unknown effect family {name!r}; known: "
+                         f"{', '.join(sorted({f.name for f in families()}))}")
+
+
+def is_catalogue_entry(parameters) -> bool:
+    """A model effect entry that the catalogue evaluates (fitted family, or user expression)."""
+    return isinstance(parameters, dict) and ("family" in parameters or "expression" in parameters)
+
+
+def catalogue_error(name: str, entry: dict, ctx: Context) -> NDArray[np.float64]:
+    """(N, 3) TCP error [m] of one fitted catalogue or user effect in a model."""
+    if "expression" in entry:
+        if "values" not in entry:
+            return np.zeros((ctx.n, 3))  # declared, not fitted yet
+        family = UserExpression(name, entry)
+        coefficients = np.array([entry["values"][p] for p in
+                                 family.parameter_names(name, {})])
+        return family.design(ctx, name, {}) @ coefficients
+    family = family_named(entry["family"])
+    setting = entry.get("setting") or {}
+    names = family.parameter_names(entry.get("variant", ""), setting)
+    coefficients = np.array([entry["coefficients"][p] for p in names])
+    return family.design(ctx, entry.get("variant", ""), setting) @ coefficients

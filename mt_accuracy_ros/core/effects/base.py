@@ -1,0 +1,162 @@
+"""What every effect family is made of: a context to compute designs in, and the family API.
+
+An **effect family** is one kind of physical cause (a ball-screw pitch error,
+a squareness that changes with temperature, servo lag, ...). It offers
+**variants** (which axis, which sensor) and, per variant, a grid of
+**settings** (hyperparameters that enter non-linearly: a polynomial order,
+a screw pitch, a thermal time constant). For a fixed variant and setting the
+effect is linear in its parameters p (to first order), so its TCP error at N
+readings is ``design (N, 3, P) @ p`` - the design is all the workbench needs
+to fit, cross-validate and rank it, and all the error model needs to apply
+it once fitted.
+
+Kinematic sensitivities (how a unit motion or location error of an axis
+moves the TCP, with its Abbe arms, Khan & Chen eqs. 8-17, Kidani eq. 2.10)
+come from the machine's kinematic chain, by differentiating the full HTM
+product: :meth:`Context.jacobian`.
+"""
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InputDataError
+from ..kinematics.chain import ErrorOverrides, KinematicModel
+from ..kinematics.machine import MachineDescription
+from .variables import Variables
+
+#: The scales' own thermocouples (x1_s0 ...) serve the scale compensation, not the structure.
+_SCALE_SENSOR = re.compile(r"^[xyzabc][12]_s\d+$", re.IGNORECASE)
+_STEP = 1e-6
+
+
+class Context:
+    """Machine + variables at N readings; caches kinematic sensitivities.
+
+    ``orientation`` (N, 3) [rad]: the model's tool-orientation error at the readings,
+    for the Abbe family (optional).
+    """
+
+    def __init__(self, machine: MachineDescription, variables: Variables,
+                 kinematics: KinematicModel | None = None,
+                 orientation: NDArray[np.float64] | None = None) -> None:
+        self.machine = machine
+        self.variables = variables
+        self.kinematics = kinematics or KinematicModel(machine)
+        self.orientation = orientation
+        self.n = variables.n
+        self._jacobians: dict[str, NDArray[np.float64]] = {}
+        self.cache: dict = {}   # families' precomputed bases (e.g. periodic) for these readings
+        missing = [a for a in machine.axis_order if a not in variables.positions]
+        if missing:
+            raise InputDataError(f"positions missing for axis {', '.join(missing)}")
+
+    def jacobian(self, error_name: str) -> NDArray[np.float64]:
+        """d e_TCP / d (error ``error_name``) at the readings, shape (N, 3) [m per m or rad].
+
+        ``error_name`` is an ISO 230-1 motion error (``EXX``, ``EBX``, ``ECA``) or
+        location error (``EC0Y``, ``EX0B``). Exact HTM products at a 1e-6 step:
+        the chain is linear in its errors to well below 1e-12 m at that size.
+        """
+        if error_name not in self._jacobians:
+            positions = {a: self.variables.positions[a] for a in self.machine.axis_order}
+            overrides = ErrorOverrides(use_description=False)
+            if len(error_name) == 4:
+                overrides.location[error_name] = _STEP
+            else:
+                overrides.motion[error_name] = np.full(self.n, _STEP)
+            moved = self.kinematics.tcp_error(positions, overrides=overrides,
+                                              check_stroke=False)["position"]
+            self._jacobians[error_name] = moved / _STEP
+        return self._jacobians[error_name]
+
+    def normalised_position(self, axis: str) -> NDArray[np.float64]:
+        """Position mapped to [-1, 1] over the stroke (Legendre's domain)."""
+        low, high = self.machine.axes[axis].stroke
+        return (2.0 * self.variables.positions[axis] - (low + high)) / (high - low)
+
+    def moves(self, axis: str) -> bool:
+        """Did ``axis`` move over these readings? (an axis that stood still cannot show an
+        error that depends on its position)"""
+        return bool(np.ptp(self.variables.positions[axis]) > 0)
+
+    def linear_axes(self, moving: bool = False) -> list[str]:
+        return [a for a in self.machine.axis_order if not self.machine.axes[a].is_rotary
+                and (not moving or self.moves(a))]
+
+    def rotary_axes(self, moving: bool = False) -> list[str]:
+        return [a for a in self.machine.axis_order if self.machine.axes[a].is_rotary
+                and (not moving or self.moves(a))]
+
+    def structure_sensors(self) -> list[str]:
+        """Temperature sensors of the structure that change (dead or constant ones are left out)."""
+        out = []
+        for name, values in self.variables.temperatures.items():
+            if _SCALE_SENSOR.match(name):
+                continue
+            finite = values[np.isfinite(values)]
+            if finite.size == values.size and np.ptp(finite) > 1e-3:
+                out.append(name)
+        return sorted(out)
+
+
+def per_component(column: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(N,) -> (N, 3, 3): the same regressor on x, y and z, one parameter each."""
+    design = np.zeros((column.size, 3, 3))
+    for c in range(3):
+        design[:, c, c] = column
+    return design
+
+
+def along(jacobian: NDArray[np.float64], columns: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(N, 3) sensitivity x (N, P) basis -> (N, 3, P) design."""
+    return jacobian[:, :, None] * columns[:, None, :]
+
+
+class EffectFamily:
+    """Base class of an effect family (override the methods; see the module docstring).
+
+    Class attributes: ``name`` (unique, used in candidate names ``name:variant``),
+    ``group`` (geometric / thermal / motion / cross-axis / rotary / user),
+    ``summary`` (one line of physics), ``reference`` (the seed equations) and
+    ``complexity`` (Occam's tie-break).
+    """
+
+    name = "effect"
+    group = "other"
+    summary = ""
+    reference = ""
+    #: How much an explanation assumes (inputs, searched hyperparameters): 1 a single
+    #: constant or input, 2 a function or a lag, 3 a searched period or a product. When
+    #: the data cannot tell two candidates apart, the simpler is named (Occam).
+    complexity = 2
+
+    def variants(self, ctx: Context) -> list[str]:
+        raise NotImplementedError
+
+    def settings(self, ctx: Context, variant: str) -> list[dict[str, Any]]:
+        return [{}]
+
+    def parameter_names(self, variant: str, setting: dict) -> list[str]:
+        raise NotImplementedError
+
+    def design(self, ctx: Context, variant: str, setting: dict) -> NDArray[np.float64]:
+        """(N, 3, P) TCP error per unit parameter [m per parameter unit]."""
+        raise NotImplementedError
+
+    def explanation(self, variant: str, setting: dict) -> str:
+        return self.summary
+
+    def preselect(self, ctx: Context, variant: str, settings: list[dict],
+                  residual: NDArray[np.float64], mask: NDArray[np.bool_],
+                  train: NDArray[np.bool_]) -> dict | None:
+        """Optionally choose a setting from the training readings' residual (fast path for
+        long grids); None = let the workbench choose by BIC over every setting."""
+        return None
+
+    def describe_setting(self, setting: dict) -> str:
+        return ", ".join(f"{k} {v:g}" if isinstance(v, (int, float)) else f"{k} {v}"
+                         for k, v in setting.items())

@@ -1,0 +1,342 @@
+"""Geometric effect families: the ISO 230-1 errors of every axis, squareness, rotary axes.
+
+* **Component errors of a linear axis** (ISO 230-1; Kidani eqs. 2.6-2.12):
+  positioning E_XX, straightness E_YX/E_ZX, angular E_AX/E_BX/E_CX of axis X
+  (likewise Y, Z) as functions of that axis' position q. Each reaches the TCP
+  through the kinematic chain, d e = J(q_all) E(q), with J the sensitivity of
+  the HTM product - for an angular error the cross product with its Abbe arm
+  (Kidani eq. 2.10, Khan & Chen eq. 17), which depends on the *other* axes'
+  positions. Two bases:
+
+  - smooth: Legendre polynomials P_k(u), u = q mapped to [-1, 1] over the
+    stroke; k from 1 (positioning, angular: the constant is an offset or a
+    location error) or 2 (straightness: its linear part is a squareness,
+    ISO 230-1 3.4.8), up to an order chosen in-fold by BIC;
+  - periodic: cos/sin of 2 pi q / lambda and its second harmonic, the period
+    lambda searched from 2 to 50 mm (ball-screw pitch, rack, guideway waviness)
+    by a weighted least-squares periodogram of the training readings.
+
+* **Squareness** of the three axis pairs: location errors E_C0Y, E_B0Z, E_A0Z
+  (Khan & Chen's eps_xy, eps_zx, eps_zy), one candidate each.
+* **Rotary axes** (Khan & Chen section 3, eqs. 9-16): position-dependent errors
+  E_XA ... E_CA of a rotary axis as Fourier series in its angle (harmonics 2-4;
+  the first is the location errors'),
+  and the axis' location errors (offsets of its centre line perpendicular to it,
+  tilts, zero of its angle) as one candidate per rotary axis.
+* **Cross-axis twist**: an error in the product of two axis positions (a twist
+  of the travel plane that a rigid-body model with per-axis errors cannot
+  express), on each TCP component.
+* **Abbe offset**: the model's own orientation error times an unknown lever
+  (tool or workpiece offset from the scales' line), e = eps x l.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numpy.polynomial import legendre
+
+from .base import Context, EffectFamily, along
+
+#: ISO 230-1 component letters of a linear axis' errors, by kind.
+_KIND_COMPONENTS = {"positioning": "self", "straightness": "XYZ", "angular": "ABC"}
+_PERIOD_RANGE_M = (0.002, 0.05)
+
+
+def _legendre_columns(u, first: int, last: int):
+    return np.column_stack([legendre.legval(u, np.eye(last + 1)[k])
+                            for k in range(first, last + 1)])
+
+
+def component_names(ctx: Context, kind: str) -> list[str]:
+    """ISO names of every component error of this kind over the machine's linear axes."""
+    names = []
+    for axis in ctx.linear_axes(moving=True):
+        if kind == "positioning":
+            names.append(f"E{axis}{axis}")
+        elif kind == "straightness":
+            names += [f"E{c}{axis}" for c in "XYZ" if c != axis]
+        else:
+            names += [f"E{c}{axis}" for c in "ABC"]
+    return names
+
+
+class ComponentError(EffectFamily):
+    """Positioning / straightness / angular error of a linear axis, smooth or periodic."""
+
+    group = "geometric"
+    reference = "ISO 230-1; Kidani eqs. 2.6-2.12; Khan & Chen eqs. 8, 17"
+
+    def __init__(self, kind: str, periodic: bool) -> None:
+        self.kind = kind
+        self.periodic = periodic
+        # A rotation acting through a lever is a more elaborate hypothesis than a
+        # translation: when the data cannot tell them apart (a constant arm), the
+        # translation is named.
+        self.complexity = (3 if periodic else 2) + (kind == "angular")
+        self.name = f"{kind}_periodic" if periodic else kind
+        what = {"positioning": "positioning error", "straightness": "straightness error",
+                "angular": "angular error (pitch, yaw or roll)"}[kind]
+        self.summary = (f"a periodic {what} of an axis (ball-screw pitch, rack or guideway "
+                        "waviness)" if periodic else f"a {what} of an axis that changes "
+                        "smoothly along its travel")
+
+    def variants(self, ctx: Context) -> list[str]:
+        return component_names(ctx, self.kind)
+
+    def settings(self, ctx: Context, variant: str) -> list[dict]:
+        if self.periodic:
+            low, high = ctx.machine.axes[variant[2]].stroke
+            # Frequencies a quarter cycle apart over the stroke: no peak falls between.
+            step = 1.0 / (4.0 * (high - low))
+            frequencies = np.arange(1.0 / _PERIOD_RANGE_M[1], 1.0 / _PERIOD_RANGE_M[0], step)
+            return [{"period_m": float(1.0 / f)} for f in frequencies]
+        first = 2 if self.kind == "straightness" else 1
+        return [{"order": k} for k in range(first, first + 6)]
+
+    def parameter_names(self, variant: str, setting: dict) -> list[str]:
+        if self.periodic:
+            return ["cos1", "sin1", "cos2", "sin2"]
+        first = 2 if self.kind == "straightness" else 1
+        return [f"P{k}" for k in range(first, setting["order"] + 1)]
+
+    def _basis(self, q, u, setting):
+        if self.periodic:
+            phase = 2.0 * np.pi * q / setting["period_m"]
+            return np.column_stack([np.cos(phase), np.sin(phase), np.cos(2 * phase),
+                                    np.sin(2 * phase)])
+        first = 2 if self.kind == "straightness" else 1
+        return _legendre_columns(u, first, setting["order"])
+
+    def design(self, ctx: Context, variant: str, setting: dict):
+        axis = variant[2]
+        basis = self._basis(ctx.variables.positions[axis], ctx.normalised_position(axis), setting)
+        return along(ctx.jacobian(variant), basis)
+
+    def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
+        """The error motion itself, E(q) [m or rad] at axis positions q: what a CNC's
+        per-axis compensation table holds (not its effect at the TCP)."""
+        low, high = machine.axes[variant[2]].stroke
+        q = np.asarray(q, dtype=np.float64)
+        return self._basis(q, (2.0 * q - (low + high)) / (high - low), setting) @ \
+            np.asarray(coefficients, dtype=np.float64)
+
+    def preselect(self, ctx, variant, settings, residual, mask, train):
+        if not self.periodic:
+            return None
+        jac = ctx.jacobian(variant)
+        # Readings outside the training folds get zero weight (no copy of the basis).
+        weight = np.where(train, np.sum(np.where(mask, jac ** 2, 0.0), axis=1), 0.0)
+        target = np.where(train, np.sum(np.where(mask, jac * residual, 0.0), axis=1), 0.0)
+        q = ctx.variables.positions[variant[2]]
+        periods = np.array([s["period_m"] for s in settings])
+        # Coarse pass on every second period of the grid, then the grid around the best.
+        key = ("periodic_basis", variant[2], len(settings))
+        if key not in ctx.cache:
+            ctx.cache[key] = periodic_basis(q, periods[::2])
+        # The period is chosen by the fundamental alone: with its harmonic too, readings
+        # taken on the fly (positions on a near-lattice) let aliases fit as well.
+        coarse, _ = periodogram(None, target, weight, None, basis=ctx.cache[key][:, :, :3])
+        centre = 2 * int(np.argmax(coarse))
+        near = np.arange(max(0, centre - 2), min(periods.size, centre + 3))
+        fine, _ = periodogram(q, target, weight, periods[near], harmonics=1)
+        return settings[int(near[np.argmax(fine)])]
+
+    def explanation(self, variant: str, setting: dict) -> str:
+        axis = variant[2]
+        if self.periodic:
+            return (f"{variant} repeats every {setting['period_m'] * 1e3:.2f} mm of {axis} "
+                    "travel - typical of a ball-screw pitch error, a rack or a wavy guideway "
+                    "(ISO 230-1 periodic error)")
+        kind = {"positioning": "positioning", "straightness": "straightness",
+                "angular": "angular"}[self.kind]
+        reach = " reaching the TCP through its Abbe arms" if self.kind == "angular" else ""
+        return (f"the {kind} error {variant} of the {axis} axis, smooth along its travel "
+                f"(Legendre order {setting.get('order')}){reach} (ISO 230-1, Kidani eq. 2.6)")
+
+    def describe_setting(self, setting: dict) -> str:
+        if self.periodic:
+            return f"period {setting['period_m'] * 1e3:.3f} mm"
+        return f"order {setting['order']}"
+
+
+def periodic_basis(q, periods):
+    """(P, N, 5): 1, cos, sin of 2 pi q / lambda and of twice that, for each period."""
+    phase = 2.0 * np.pi * np.asarray(q, float)[None, :] / np.asarray(periods, float)[:, None]
+    cos, sin = np.cos(phase), np.sin(phase)
+    return np.stack([np.ones_like(phase), cos, sin, 2.0 * cos * cos - 1.0, 2.0 * sin * cos],
+                    axis=2)
+
+
+def periodogram(q, target, weight, periods, *, basis=None, harmonics: int = 2):
+    """Weighted least-squares periodogram (Lomb-Scargle with an offset, 1 or 2 harmonics).
+
+    For each period lambda fits target ~ w (c0 + sum_h a_h cos + b_h sin)(2 pi h q / lambda)
+    in the weighted sense (target = J . r, weight = |J|^2 per reading) and returns
+    (explained sum of squares beyond the offset (P,), amplitude of the fundamental (P,)).
+    ``basis`` = :func:`periodic_basis` (q, periods), or its first 1 + 2 h columns, may be
+    passed precomputed.
+    """
+    if basis is None:
+        basis = periodic_basis(q, periods)[:, :, :1 + 2 * harmonics]
+    columns = basis.shape[2]
+    weighted = np.swapaxes(basis * np.asarray(weight, float)[None, :, None], 1, 2)  # (P, C, N)
+    normal = weighted @ basis
+    # A degenerate period (the axis barely moved) must not be singular: a ridge far below
+    # any real signal's normal-equation scale.
+    normal += (1e-12 * np.trace(normal, axis1=1, axis2=2)[:, None, None] + 1e-300) * \
+        np.eye(columns)
+    rhs = np.swapaxes(basis, 1, 2) @ np.asarray(target, float)                      # (P, 5)
+    coefficients = np.linalg.solve(normal, rhs[:, :, None])[:, :, 0]
+    explained = np.einsum("pi,pi->p", coefficients, rhs)
+    explained -= (rhs[:, 0] ** 2) / max(float(np.sum(weight)), 1e-300)  # offset alone
+    return explained, np.hypot(coefficients[:, 1], coefficients[:, 2])
+
+
+class Squareness(EffectFamily):
+    name = "squareness"
+    group = "geometric"
+    complexity = 1
+    summary = "two axes out of square: the error grows linearly with another axis' position"
+    reference = "ISO 230-1 location errors; Khan & Chen eps_xy, eps_zx, eps_zy"
+
+    def variants(self, ctx: Context) -> list[str]:
+        axes = ctx.linear_axes()
+        # The error grows with the last letter's axis: it must have moved.
+        return [name for name in ("EC0Y", "EB0Z", "EA0Z") if name[-1] in
+                ctx.linear_axes(moving=True) and {"C": "X", "B": "X", "A": "Y"}[name[1]] in axes]
+
+    def parameter_names(self, variant, setting):
+        return ["angle_rad"]
+
+    def design(self, ctx, variant, setting):
+        return ctx.jacobian(variant)[:, :, None]
+
+    def location_error(self, variant: str, coefficients) -> dict[str, float]:
+        """The location error it stands for (a CNC table's squareness entry) [rad]."""
+        return {variant: float(coefficients[0])}
+
+    def explanation(self, variant, setting):
+        pair = {"EC0Y": "X and Y", "EB0Z": "X and Z", "EA0Z": "Y and Z"}[variant]
+        return (f"the residual grows linearly with the other axes' positions - {pair} are out "
+                f"of square (location error {variant})")
+
+
+class RotaryError(EffectFamily):
+    """Position-dependent errors of a rotary axis as a Fourier series in its angle."""
+
+    name = "rotary_error"
+    group = "rotary"
+    complexity = 2
+    summary = "a position-dependent error of a rotary axis (runout, wobble, angular positioning)"
+    reference = "Khan & Chen eqs. 9-16 (E_XA ... E_CA); Zhu ch. 5"
+
+    def variants(self, ctx):
+        return [f"E{c}{a}" for a in ctx.rotary_axes(moving=True) for c in "XYZABC"]
+
+    def settings(self, ctx, variant):
+        return [{"harmonics": h} for h in (1, 2, 3)]
+
+    # The first harmonic of an error seen from the rotating frame is an offset or tilt of
+    # the axis (its location errors, :class:`RotaryLocation`); the position-dependent
+    # part starts at the second, as ISO 230-7 separates them.
+    def parameter_names(self, variant, setting):
+        return [f"{f}{h}" for h in range(2, setting["harmonics"] + 2) for f in ("cos", "sin")]
+
+    def design(self, ctx, variant, setting):
+        angle = ctx.variables.positions[variant[2]]
+        columns = np.column_stack([f(h * angle) for h in range(2, setting["harmonics"] + 2)
+                                   for f in (np.cos, np.sin)])
+        return along(ctx.jacobian(variant), columns)
+
+    def explanation(self, variant, setting):
+        what = {"X": "radial/axial runout", "Y": "radial/axial runout", "Z": "radial/axial runout",
+                "A": "wobble or angular positioning", "B": "wobble or angular positioning",
+                "C": "wobble or angular positioning"}[variant[1]]
+        return (f"{variant}: the {variant[2]} axis' {what} repeating with its angle "
+                f"({setting['harmonics']} harmonics; Khan & Chen eqs. 9-16)")
+
+
+class RotaryLocation(EffectFamily):
+    """Where a rotary axis really is: offsets and tilts of its centre line, zero of its angle."""
+
+    name = "rotary_location"
+    group = "rotary"
+    complexity = 1
+    summary = "a rotary axis' centre line offset or tilted, or its zero shifted"
+    reference = "Khan & Chen position-independent errors (section 5); Zhu ch. 5"
+
+    def variants(self, ctx):
+        return ctx.rotary_axes()
+
+    def _names(self, axis):
+        along_axis = "XYZ"["ABC".index(axis)]
+        offsets = [f"E{c}0{axis}" for c in "XYZ" if c != along_axis]
+        tilts = [f"E{c}0{axis}" for c in "ABC" if c != axis]
+        return offsets + tilts + [f"E{axis}0{axis}"]
+
+    def parameter_names(self, variant, setting):
+        return self._names(variant)
+
+    def design(self, ctx, variant, setting):
+        return np.stack([ctx.jacobian(name) for name in self._names(variant)], axis=2)
+
+    def explanation(self, variant, setting):
+        return (f"the {variant} axis is not where the model puts it: its centre line is "
+                f"offset or tilted, or its zero is shifted ({', '.join(self._names(variant))}; "
+                "Khan & Chen position-independent errors)")
+
+
+class CrossAxis(EffectFamily):
+    name = "cross_axis"
+    group = "geometric"
+    complexity = 2
+    summary = "an error in the product of two axis positions: a twist of the travel plane"
+    reference = "beyond the rigid-body model (Kidani eq. 2.12 holds one axis' errors per axis)"
+
+    def variants(self, ctx):
+        axes = sorted(ctx.linear_axes(moving=True))
+        return [a + b for i, a in enumerate(axes) for b in axes[i + 1:]]
+
+    def parameter_names(self, variant, setting):
+        return ["on_x", "on_y", "on_z"]
+
+    def design(self, ctx, variant, setting):
+        product = ctx.normalised_position(variant[0]) * ctx.normalised_position(variant[1])
+        design = np.zeros((ctx.n, 3, 3))
+        for c in range(3):
+            design[:, c, c] = product
+        return design
+
+    def explanation(self, variant, setting):
+        return (f"the residual follows {variant[0]} x {variant[1]}: the {variant[0]}{variant[1]} "
+                "travel plane is twisted (a cross-axis error no single axis' error motion "
+                "can express)")
+
+
+class AbbeOffset(EffectFamily):
+    name = "abbe_offset"
+    group = "geometric"
+    complexity = 2
+    summary = "the measured angular errors acting through an unknown extra lever"
+    reference = "Kidani eq. 2.10; ISO 230-1 (Abbe principle)"
+
+    def variants(self, ctx):
+        if ctx.orientation is None or not np.any(ctx.orientation):
+            return []
+        return ["tool"]
+
+    def parameter_names(self, variant, setting):
+        return ["ox", "oy", "oz"]
+
+    def design(self, ctx, variant, setting):
+        return np.stack([np.cross(ctx.orientation, unit) for unit in np.eye(3)], axis=2)
+
+    def explanation(self, variant, setting):
+        return ("the residual follows the measured angular errors times a lever - the tool or "
+                "workpiece is offset from the scales' line (Abbe)")
+
+
+def families() -> list[EffectFamily]:
+    out: list[EffectFamily] = []
+    for kind in ("positioning", "straightness", "angular"):
+        out += [ComponentError(kind, False), ComponentError(kind, True)]
+    return out + [Squareness(), RotaryError(), RotaryLocation(), CrossAxis(), AbbeOffset()]

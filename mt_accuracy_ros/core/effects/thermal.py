@@ -1,0 +1,214 @@
+"""Thermal effect families: structures that grow, lag, bend and heat up.
+
+Temperatures enter as rises dT over each sensor's reference (its first
+reading unless the model says otherwise).
+
+* ``structural_thermal_drift`` - a TCP offset proportional to one sensor's
+  rise, e = beta dT, per direction (Zhu eq. 3.12, the "sensor term").
+* ``thermal_lag`` - the same through a first-order lag of time constant tau:
+  the structure follows its sensor late (Zhu's modal time constants,
+  eqs. 3.9-3.10 and the fit of eq. 3.17); tau searched 5 min - 2.7 h.
+* ``thermal_gradient`` - the difference of two sensors: a gradient bends a
+  link (deflection and slope, Zhu Table 4.2).
+* ``heat_source`` - growth driven by an operating input through a lag: spindle
+  power ~ speed, an axis' drive and guideway heat ~ |feed| (Zhu eqs. 3.9-3.10
+  with the heat input as the driver); starts from a cold machine.
+* ``position_dependent_thermal`` - expansion along an axis relative to its
+  scale, alpha q dT on the axis' positioning (Zhu eq. 3.13 with P(x) = x).
+* ``thermal_squareness`` - a squareness that changes with a temperature or a
+  temperature difference (a column tilting as its front and back warm apart).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .base import Context, EffectFamily, per_component
+
+#: Searched time constants: 5 min to 5.3 h, half an octave apart.
+TIME_CONSTANTS_S = tuple(float(300.0 * 2.0 ** (k / 2)) for k in range(13))
+
+
+class _SearchedTimeConstant:
+    """Families whose time constant is searched (in-fold) over TIME_CONSTANTS_S."""
+
+    def settings(self, ctx, variant):
+        return [{"tau_s": tau} for tau in TIME_CONSTANTS_S]
+
+    def describe_setting(self, setting):
+        return f"tau {setting['tau_s'] / 60:.0f} min"
+
+
+def _gradient_names(ctx: Context) -> list[str]:
+    sensors = ctx.structure_sensors()
+    return [f"{a}-{b}" for i, a in enumerate(sensors) for b in sensors[i + 1:]]
+
+
+def temperature_variable(ctx: Context, name: str):
+    """A sensor's rise, or for ``a-b`` the difference of two rises [K]."""
+    if "-" in name and name not in ctx.variables.temperatures:
+        a, b = name.split("-", 1)
+        return ctx.variables.rise(a) - ctx.variables.rise(b)
+    return ctx.variables.rise(name)
+
+
+class StructuralDrift(EffectFamily):
+    name = "structural_thermal_drift"
+    group = "thermal"
+    complexity = 1
+    summary = "a structure grows with one sensor's temperature, at every position alike"
+    reference = "Zhu eq. 3.12"
+
+    def variants(self, ctx):
+        return ctx.structure_sensors()
+
+    def parameter_names(self, variant, setting):
+        return ["bx", "by", "bz"]
+
+    def design(self, ctx, variant, setting):
+        return per_component(ctx.variables.rise(variant))
+
+    def explanation(self, variant, setting):
+        return (f"the residual follows the temperature of the {variant} sensor in every "
+                "direction at once, independent of position - the structure grows as it warms "
+                "(Zhu eq. 3.12)")
+
+
+class ThermalLag(_SearchedTimeConstant, EffectFamily):
+    name = "thermal_lag"
+    group = "thermal"
+    complexity = 2
+    summary = "a structure grows with a sensor's temperature, but late (a thermal time constant)"
+    reference = "Zhu eqs. 3.9-3.10, 3.17 (modal time constants)"
+
+    def variants(self, ctx):
+        return ctx.structure_sensors() if ctx.variables.time_s is not None else []
+
+    def parameter_names(self, variant, setting):
+        return ["bx", "by", "bz"]
+
+    def design(self, ctx, variant, setting):
+        lagged = ctx.variables.lag(f"T_{variant}", ctx.variables.rise(variant), setting["tau_s"])
+        return per_component(lagged)
+
+    def explanation(self, variant, setting):
+        return (f"the residual follows the {variant} temperature {setting['tau_s'] / 60:.0f} min "
+                "late - the structure's thermal time constant (Zhu eqs. 3.9-3.10)")
+
+
+class ThermalGradient(EffectFamily):
+    name = "thermal_gradient"
+    group = "thermal"
+    complexity = 2
+    summary = "a temperature difference across a structure bends it"
+    reference = "Zhu Table 4.2 (deflection and slope of a link)"
+
+    def variants(self, ctx):
+        return _gradient_names(ctx)
+
+    def parameter_names(self, variant, setting):
+        return ["bx", "by", "bz"]
+
+    def design(self, ctx, variant, setting):
+        return per_component(temperature_variable(ctx, variant))
+
+    def explanation(self, variant, setting):
+        a, b = variant.split("-", 1)
+        return (f"the residual follows the difference {a} - {b}: a temperature gradient that "
+                "bends a link (deflection and slope, Zhu Table 4.2)")
+
+
+class HeatSource(_SearchedTimeConstant, EffectFamily):
+    name = "heat_source"
+    group = "thermal"
+    complexity = 2
+    summary = "growth driven by an operating input (spindle speed, an axis' feed) through a lag"
+    reference = "Zhu eqs. 3.9-3.10 (heat input -> thermal mode)"
+
+    def variants(self, ctx):
+        if ctx.variables.time_s is None:
+            return []
+        out = []
+        if ctx.variables.spindle_speed_rad_s is not None and \
+                np.ptp(ctx.variables.spindle_speed_rad_s) > 0:
+            out.append("spindle_speed")
+        out += [f"feed_{a}" for a in ctx.linear_axes() if a in ctx.variables.velocities and
+                np.ptp(np.abs(ctx.variables.velocities[a])) > 0]
+        return out
+
+    def parameter_names(self, variant, setting):
+        return ["gx", "gy", "gz"]
+
+    def driver(self, ctx, variant):
+        if variant == "spindle_speed":
+            return ctx.variables.spindle_speed() * 60.0 / (2.0 * np.pi) / 1000.0  # krpm
+        return np.abs(ctx.variables.velocity(variant[-1])) * 60.0                  # m/min
+
+    def design(self, ctx, variant, setting):
+        lagged = ctx.variables.lag(f"heat_{variant}", self.driver(ctx, variant),
+                                   setting["tau_s"], from_rest=True)
+        return per_component(lagged)
+
+    def explanation(self, variant, setting):
+        what = "the spindle speed (spindle power heats the head)" if variant == "spindle_speed" \
+            else f"the {variant[-1]} feed (drive and guideway heat)"
+        return (f"the residual follows {what} through a {setting['tau_s'] / 60:.0f} min lag - "
+                "a heat source warming the structure (Zhu eqs. 3.9-3.10)")
+
+
+class PositionDependentThermal(EffectFamily):
+    name = "position_dependent_thermal"
+    group = "thermal"
+    complexity = 2
+    summary = "an axis' structure expands relative to its scale: error ~ position x temperature"
+    reference = "Zhu eq. 3.13 (P(x) = x)"
+
+    def variants(self, ctx):
+        return [f"{a}:{s}" for a in ctx.linear_axes(moving=True) for s in ctx.structure_sensors()]
+
+    def parameter_names(self, variant, setting):
+        return ["alpha_per_k"]
+
+    def design(self, ctx, variant, setting):
+        axis, sensor = variant.split(":", 1)
+        column = ctx.variables.positions[axis] * ctx.variables.rise(sensor)
+        return (ctx.jacobian(f"E{axis}{axis}") * column[:, None])[:, :, None]
+
+    def explanation(self, variant, setting):
+        axis, sensor = variant.split(":", 1)
+        return (f"the {axis} error grows with the {axis} position times the {sensor} "
+                "temperature - a structure expanding along the axis relative to its scale "
+                "(Zhu eq. 3.13)")
+
+
+class ThermalSquareness(EffectFamily):
+    name = "thermal_squareness"
+    group = "thermal"
+    complexity = 3
+    summary = "a squareness that changes with a temperature or a temperature difference"
+    reference = "Zhu ch. 4 (thermal link HTMs, eq. 4.2): a link's slope as a location error"
+
+    def variants(self, ctx):
+        from .geometric import Squareness
+
+        temperatures = ctx.structure_sensors() + _gradient_names(ctx)
+        return [f"{s}:{t}" for s in Squareness().variants(ctx) for t in temperatures]
+
+    def parameter_names(self, variant, setting):
+        return ["rad_per_k"]
+
+    def design(self, ctx, variant, setting):
+        square, temperature = variant.split(":", 1)
+        column = temperature_variable(ctx, temperature)
+        return (ctx.jacobian(square) * column[:, None])[:, :, None]
+
+    def explanation(self, variant, setting):
+        square, temperature = variant.split(":", 1)
+        what = f"the difference {temperature.replace('-', ' - ')}" if "-" in temperature else \
+            f"the {temperature} temperature"
+        return (f"the squareness {square} changes with {what} - a structure tilting as it "
+                "warms unevenly (a thermal link's slope, Zhu eq. 4.2)")
+
+
+def families() -> list[EffectFamily]:
+    return [StructuralDrift(), ThermalLag(), ThermalGradient(), HeatSource(),
+            PositionDependentThermal(), ThermalSquareness()]

@@ -1,0 +1,190 @@
+"""User-defined effects: an expression in the model YAML, or Python through an entry point.
+
+**Declared in the model** (no code, no package edit)::
+
+    effects:
+      screw_heat:
+        expression: "k * x * lag(T_spindle, 1200)"   # see .expression for the grammar
+        parameters: [k]                               # enter linearly; the workbench fits them
+        acts_on: x            # x, y, z, a list of them, or an axis (X): along its motion
+        values: {k: 0.0}      # optional: fitted values (the model applies it once given)
+
+With several components in ``acts_on`` each gets its own parameters
+(``k_x``, ``k_z``). Linearity in the parameters is checked numerically on
+the data (f(p + q) = f(p) + f(q) and no term without a parameter); a design
+collinear with an effect already in the model is refused by the workbench.
+
+**Written in Python**: a package exposes an :class:`~.base.EffectFamily`
+subclass (or instance) in the entry-point group ``mt_accuracy_ros.effects``
+(see ``docs/user_effects.md`` for a worked example); it is then a candidate
+everywhere a built-in family is.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputDataError, ParameterError
+from .expression import Expression, ExpressionError, parse
+from .base import Context, EffectFamily
+
+ENTRY_POINT_GROUP = "mt_accuracy_ros.effects"
+_COMPONENTS = "xyz"
+
+
+def user_declaration(name: str, spec: dict) -> dict:
+    """Checked, normalised declaration of a user effect (raises ParameterError naming it)."""
+    where = f"user effect {name!r}"
+    if not isinstance(spec, dict):
+        raise ParameterError(f"{where}: expected a mapping with expression, parameters, acts_on")
+    unknown = set(spec) - {"expression", "parameters", "acts_on", "values", "explanation",
+                           "family", "variant"}
+    if unknown:
+        raise ParameterError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}")
+    expression = parse(spec.get("expression", ""), where)
+    parameters = spec.get("parameters")
+    if not isinstance(parameters, list) or not parameters or \
+            not all(isinstance(p, str) and p.isidentifier() for p in parameters):
+        raise ParameterError(f"{where}: 'parameters' must list the names of its linear "
+                             "parameters, e.g. [k]")
+    missing = [p for p in parameters if p not in expression.names]
+    if missing:
+        raise ParameterError(f"{where}: parameter(s) {', '.join(missing)} do not appear in "
+                             f"{expression.text!r}")
+    acts_on = spec.get("acts_on", "x")
+    targets = acts_on if isinstance(acts_on, list) else [acts_on]
+    for target in targets:
+        if not (isinstance(target, str) and (target in _COMPONENTS or
+                                             (len(target) == 1 and target in "XYZABC"))):
+            raise ParameterError(f"{where}: acts_on {target!r}: expected x, y, z (TCP "
+                                 "components) or an axis letter (along its motion)")
+    if len(set(targets)) != len(targets):
+        raise ParameterError(f"{where}: acts_on names a component twice")
+    names = [p if len(targets) == 1 else f"{p}_{t}" for t in targets for p in parameters]
+    values = spec.get("values")
+    if values is not None:
+        if not isinstance(values, dict) or set(values) != set(names):
+            raise ParameterError(f"{where}: 'values' must give every parameter "
+                                 f"({', '.join(names)})")
+        for key, value in values.items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                    not np.isfinite(value):
+                raise ParameterError(f"{where}: value of {key} must be a finite number")
+        values = {k: float(v) for k, v in values.items()}
+    return {"expression": expression.text, "parameters": list(parameters),
+            "acts_on": targets if isinstance(acts_on, list) else targets[0],
+            **({"values": values} if values is not None else {}),
+            **({"explanation": str(spec["explanation"])} if "explanation" in spec else {})}
+
+
+class UserExpression(EffectFamily):
+    """One user effect declared as an expression; its variant is the effect's name."""
+
+    name = "user"
+    group = "user"
+    complexity = 1   # the user's own hypothesis comes first on a tie
+    reference = "declared by the user in the model"
+
+    def __init__(self, effect_name: str, declaration: dict) -> None:
+        self.effect_name = effect_name
+        self.declaration = user_declaration(effect_name, declaration)
+        self.expression: Expression = parse(self.declaration["expression"],
+                                            f"user effect {effect_name!r}")
+        acts_on = self.declaration["acts_on"]
+        self.targets = acts_on if isinstance(acts_on, list) else [acts_on]
+        self.summary = self.declaration.get("explanation", f"user effect {self.expression.text}")
+
+    def variants(self, ctx: Context) -> list[str]:
+        return [self.effect_name]
+
+    def parameter_names(self, variant, setting):
+        base = self.declaration["parameters"]
+        return [p if len(self.targets) == 1 else f"{p}_{t}" for t in self.targets for p in base]
+
+    def _values(self, ctx: Context) -> dict:
+        variables = {}
+        for name in self.expression.names:
+            if name in self.declaration["parameters"]:
+                continue
+            try:
+                variables[name] = ctx.variables.get(name)
+            except InputDataError as exc:
+                raise ParameterError(f"user effect {self.effect_name!r}: {exc}") from exc
+        return variables
+
+    def columns(self, ctx: Context) -> np.ndarray:
+        """(N, P) value of the expression per unit parameter; checks linearity."""
+        values = self._values(ctx)
+
+        def lag(variable, tau):
+            return ctx.variables.lag(f"user_{variable}", values[variable], tau)
+
+        def at(parameters):
+            return np.broadcast_to(self.expression.evaluate({**values, **parameters}, lag),
+                                   (ctx.n,)).astype(float)
+
+        names = self.declaration["parameters"]
+        zero = at({p: 0.0 for p in names})
+        where = f"user effect {self.effect_name!r}"
+        if not np.all(np.isfinite(zero)) or np.any(np.abs(zero) > 1e-12 * (1 + np.abs(zero)
+                                                                          ).max()):
+            raise ExpressionError(f"{where}: not linear in its parameters - a term without a "
+                                  "parameter, or NaN/inf on these data")
+        columns = np.column_stack([at({p: float(p == q) for p in names}) for q in names])
+        if not np.all(np.isfinite(columns)):
+            raise ExpressionError(f"{where}: NaN/inf on these data (e.g. log of a negative "
+                                  "value or a division by zero)")
+        scale = np.abs(columns).max() or 1.0
+        for i, p in enumerate(names):
+            doubled = at({q: 2.0 * float(q == p) for q in names})
+            if not np.allclose(doubled, 2.0 * columns[:, i], atol=1e-9 * scale, rtol=1e-9):
+                raise ExpressionError(f"{where}: not linear in parameter {p!r}")
+        if len(names) > 1:
+            together = at({p: 1.0 for p in names})
+            if not np.allclose(together, columns.sum(axis=1), atol=1e-9 * scale, rtol=1e-9):
+                raise ExpressionError(f"{where}: parameters multiply each other - not linear")
+        return columns
+
+    def design(self, ctx: Context, variant, setting):
+        columns = self.columns(ctx)
+        n_base = columns.shape[1]
+        design = np.zeros((ctx.n, 3, n_base * len(self.targets)))
+        for j, target in enumerate(self.targets):
+            if target in _COMPONENTS:
+                direction = np.zeros((ctx.n, 3))
+                direction[:, _COMPONENTS.index(target)] = 1.0
+            else:
+                if target not in ctx.machine.axes:
+                    raise ParameterError(f"user effect {self.effect_name!r}: acts_on {target}: "
+                                         f"no such axis on {ctx.machine.name}")
+                direction = ctx.jacobian(f"E{target}{target}")
+            design[:, :, j * n_base:(j + 1) * n_base] = direction[:, :, None] * columns[:, None, :]
+        return design
+
+    def explanation(self, variant, setting):
+        return self.declaration.get("explanation") or \
+            f"the user's effect {self.effect_name}: {self.expression.text} on " \
+            f"{', '.join(self.targets)}"
+
+
+def load_plugins() -> list[EffectFamily]:
+    """Effect families installed by other packages (entry-point group ``mt_accuracy_ros.effects``).
+
+    Raises ParameterError naming the entry point when one cannot be loaded or is
+    not an :class:`EffectFamily`.
+    """
+    from importlib.metadata import entry_points
+
+    out = []
+    for point in entry_points(group=ENTRY_POINT_GROUP):
+        try:
+            loaded = point.load()
+        except Exception as exc:  # noqa: BLE001 - any failure of foreign code, named
+            raise ParameterError(f"effect plugin {point.name!r} ({point.value}): cannot be "
+                                 f"loaded: {type(exc).__name__}: {exc}") from exc
+        family = loaded() if isinstance(loaded, type) else loaded
+        if not isinstance(family, EffectFamily):
+            raise ParameterError(f"effect plugin {point.name!r} ({point.value}): not an "
+                                 "EffectFamily (subclass mt_accuracy_ros.core.workbench."
+                                 "catalogue.EffectFamily)")
+        out.append(family)
+    return out

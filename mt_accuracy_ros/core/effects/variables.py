@@ -1,0 +1,237 @@
+"""The named variables an error can depend on, at N readings in time order.
+
+Every effect family of the catalogue, every user expression and the
+residual localisation read the machine's state through one
+:class:`Variables` object, so that a variable means the same thing
+everywhere. Names (the ones a user writes in an expression):
+
+==================  ==================================================  =========
+name                meaning                                             unit
+==================  ==================================================  =========
+``x y z a b c``     command position of that axis                       m, rad
+``v_x`` ...         command velocity                                    m/s, rad/s
+``acc_x`` ...       command acceleration (given, or d v / d t)          m/s^2
+``dir_x`` ...       direction of the last motion (+1 / -1, 0 unknown)   1
+``t``               time since the first reading                        s
+``T_<sensor>``      rise of that temperature over its reference         K
+``spindle_speed``   spindle speed                                       rad/s
+``spindle_rpm``     the same in rpm (the unit machine tools speak)      1/min
+==================  ==================================================  =========
+
+First-order lags (a structure's temperature or growth following its heat
+source with a time constant tau, Zhu eqs. 3.9-3.10 and the modal time
+constants of eq. 3.17) are computed by :func:`first_order_lag`, exactly for
+an input that is piecewise linear between readings. A lag of a temperature
+starts in steady state (equal to its input at the first reading) - not from
+zero, which would add a start-up ramp of the whole temperature; a lag of an
+operating input (spindle speed, axis feed) starts from rest, a cold machine.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import InputDataError
+
+AXIS_LETTERS = "XYZABC"
+
+
+def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
+                    initial: float | None = None) -> NDArray[np.float64]:
+    """y with tau dy/dt = u - y at the samples of u (shape (N,)), u piecewise linear.
+
+    Between samples k and k+1, with u = u_k + s (t - t_k), s = (u_{k+1} - u_k) / dt:
+
+        y_{k+1} = u_{k+1} - s tau + (y_k - u_k + s tau) exp(-dt / tau)
+
+    which is exact for that input (no step-size error). ``initial`` is y_0
+    (default u_0: steady state). ``tau_s`` = 0 returns u itself.
+
+    Raises
+    ------
+    InputDataError
+        Times that are not increasing, or non-finite values.
+    """
+    t = np.asarray(time_s, dtype=np.float64)
+    u = np.asarray(signal, dtype=np.float64)
+    if t.shape != u.shape or t.ndim != 1:
+        raise InputDataError(f"lag: time {t.shape} and signal {u.shape} must be equal 1-D")
+    if t.size == 0:
+        return u.copy()
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(u))):
+        raise InputDataError("lag: NaN/inf in the time or the signal")
+    if tau_s < 0 or not np.isfinite(tau_s):
+        raise InputDataError(f"lag: time constant {tau_s!r} s must be finite and >= 0")
+    if tau_s == 0:
+        return u.copy()
+    dt = np.diff(t)
+    if np.any(dt < 0):
+        raise InputDataError("lag: the readings' times must not decrease")
+    decay = np.exp(-dt / tau_s)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope_tau = np.where(dt > 0, np.diff(u) / np.where(dt > 0, dt, 1.0), 0.0) * tau_s
+    y = np.empty_like(u)
+    y[0] = u[0] if initial is None else float(initial)
+    for k in range(u.size - 1):
+        y[k + 1] = u[k + 1] - slope_tau[k] + (y[k] - u[k] + slope_tau[k]) * decay[k]
+    return y
+
+
+@dataclass
+class LagState:
+    """Where a lag stood at its last sample, so that a stream continues it."""
+
+    time_s: float
+    signal: float
+    value: float
+
+
+@dataclass
+class Variables:
+    """The machine's state at N readings (time order), by name.
+
+    positions / velocities / accelerations / directions : axis letter -> (N,)
+    temperatures : sensor -> (N,) [degC]; ``reference_temperatures_c`` the
+    values the rises are taken from (default: each sensor's first reading).
+    time_s : (N,) absolute or relative [s]. spindle_speed_rad_s : (N,) or None.
+    lag_states : optional store that continues lags across calls (live nodes).
+    """
+
+    positions: dict[str, NDArray[np.float64]]
+    time_s: NDArray[np.float64] | None = None
+    velocities: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    accelerations: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    directions: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    temperatures: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    reference_temperatures_c: dict[str, float] = field(default_factory=dict)
+    spindle_speed_rad_s: NDArray[np.float64] | None = None
+    lag_states: dict | None = None
+
+    def __post_init__(self) -> None:
+        if not self.positions:
+            raise InputDataError("variables: no axis positions")
+        self.n = int(np.size(next(iter(self.positions.values()))))
+        cast = lambda d: {k: np.broadcast_to(np.asarray(v, dtype=np.float64).ravel()  # noqa: E731
+                                             if np.size(v) != 1 else np.asarray(v, float),
+                                             (self.n,)) for k, v in d.items()}
+        self.positions = cast(self.positions)
+        self.velocities = cast(self.velocities)
+        self.accelerations = cast(self.accelerations)
+        self.directions = cast(self.directions)
+        self.temperatures = cast(self.temperatures)
+        if self.time_s is not None:
+            self.time_s = np.broadcast_to(np.asarray(self.time_s, dtype=np.float64).ravel(),
+                                          (self.n,))
+        if self.spindle_speed_rad_s is not None:
+            self.spindle_speed_rad_s = np.broadcast_to(
+                np.asarray(self.spindle_speed_rad_s, dtype=np.float64).ravel(), (self.n,))
+
+    # ------------------------------------------------------------ primitives
+    def rise(self, sensor: str) -> NDArray[np.float64]:
+        """Temperature rise of ``sensor`` over its reference [K], shape (N,)."""
+        if sensor not in self.temperatures:
+            raise InputDataError(f"no temperature {sensor!r}; have "
+                                 f"{', '.join(sorted(self.temperatures)) or 'none'}")
+        values = self.temperatures[sensor]
+        reference = self.reference_temperatures_c.get(sensor)
+        if reference is None:
+            reference = float(values[0])
+        return values - reference
+
+    def relative_time(self) -> NDArray[np.float64]:
+        if self.time_s is None:
+            raise InputDataError("this effect needs the readings' times")
+        return self.time_s - self.time_s[0]
+
+    def velocity(self, axis: str) -> NDArray[np.float64]:
+        if axis not in self.velocities:
+            raise InputDataError(f"this effect needs the {axis} velocity")
+        return self.velocities[axis]
+
+    def acceleration(self, axis: str) -> NDArray[np.float64]:
+        """Given accelerations, else the time derivative of the velocity [m/s^2]."""
+        if axis in self.accelerations:
+            return self.accelerations[axis]
+        v = self.velocity(axis)
+        if self.time_s is None or self.n < 2:
+            raise InputDataError(f"the {axis} acceleration needs accelerations or times")
+        return np.gradient(v, self.time_s) if np.all(np.diff(self.time_s) > 0) else \
+            np.zeros(self.n)
+
+    def direction(self, axis: str) -> NDArray[np.float64]:
+        """The last direction of motion where known, else sign(v)."""
+        if axis in self.directions:
+            held = self.directions[axis]
+            return np.where(held != 0, np.sign(held), np.sign(self.velocities.get(
+                axis, np.zeros(self.n))))
+        return np.sign(self.velocity(axis))
+
+    def spindle_speed(self) -> NDArray[np.float64]:
+        if self.spindle_speed_rad_s is None:
+            raise InputDataError("this effect needs the spindle speed")
+        return self.spindle_speed_rad_s
+
+    def lag(self, key: str, signal: NDArray[np.float64], tau_s: float, *,
+            from_rest: bool = False) -> NDArray[np.float64]:
+        """First-order lag of ``signal`` (see :func:`first_order_lag`), continued from
+        ``lag_states[key, tau]`` when that state lies before these readings."""
+        t = self.relative_time() if self.lag_states is None else self.time_s
+        state_key = (key, float(tau_s))
+        state = self.lag_states.get(state_key) if self.lag_states is not None else None
+        if state is not None and self.time_s is not None and t[0] >= state.time_s:
+            y = first_order_lag(np.concatenate([[state.time_s], t]),
+                                np.concatenate([[state.signal], signal]), tau_s,
+                                initial=state.value)[1:]
+        else:
+            y = first_order_lag(t, signal, tau_s, initial=0.0 if from_rest else None)
+        if self.lag_states is not None and self.n:
+            self.lag_states[state_key] = LagState(float(t[-1]), float(signal[-1]), float(y[-1]))
+        return y
+
+    # ------------------------------------------------------------ by name
+    def names(self) -> list[str]:
+        """Every scalar variable available here (see the module table)."""
+        out = [a.lower() for a in self.positions]
+        out += [f"v_{a.lower()}" for a in self.velocities]
+        out += [f"dir_{a.lower()}" for a in self.velocities if a in self.positions]
+        if self.time_s is not None:
+            out.append("t")
+            out += [f"acc_{a.lower()}" for a in self.velocities]
+        else:
+            out += [f"acc_{a.lower()}" for a in self.accelerations]
+        out += [f"T_{s}" for s in self.temperatures]
+        if self.spindle_speed_rad_s is not None:
+            out += ["spindle_speed", "spindle_rpm"]
+        return list(dict.fromkeys(out))
+
+    def get(self, name: str) -> NDArray[np.float64]:
+        """The variable ``name`` (N,); raises InputDataError naming what exists."""
+        try:
+            if name == "t":
+                return self.relative_time()
+            if name == "spindle_speed":
+                return self.spindle_speed()
+            if name == "spindle_rpm":
+                return self.spindle_speed() * 60.0 / (2.0 * np.pi)
+            if name.startswith("T_"):
+                return self.rise(name[2:])
+            for prefix, getter in (("v_", self.velocity), ("acc_", self.acceleration),
+                                   ("dir_", self.direction)):
+                if name.startswith(prefix) and name[len(prefix):].upper() in AXIS_LETTERS:
+                    return getter(name[len(prefix):].upper())
+            if len(name) == 1 and name.upper() in self.positions:
+                return self.positions[name.upper()]
+        except InputDataError:
+            pass
+        raise InputDataError(f"unknown variable {name!r}; available: {', '.join(self.names())}")
+
+    def subset(self, rows) -> "Variables":
+        pick = lambda d: {k: np.asarray(v)[rows] for k, v in d.items()}  # noqa: E731
+        return Variables(pick(self.positions),
+                         None if self.time_s is None else self.time_s[rows],
+                         pick(self.velocities), pick(self.accelerations), pick(self.directions),
+                         pick(self.temperatures), dict(self.reference_temperatures_c),
+                         None if self.spindle_speed_rad_s is None else
+                         self.spindle_speed_rad_s[rows])

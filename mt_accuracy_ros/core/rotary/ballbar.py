@@ -1,0 +1,512 @@
+"""Rotary-axis calibration with a telescopic magnetic ball bar (Zhu 2008, ch. 5).
+
+Setup (Zhu Fig. 5.2): one ball (A) sits in a socket on the rotary table (a C
+axis about z) at radius ``R_x`` and height ``R_z`` above the table centre O
+(eq. 5.3); the other (B) is held by the spindle above O at height ``H``
+(eq. 5.6), so that the bar stands at its nominal length L. The table indexes
+through angles c; the bar reads its length change Delta_1 = |L^E| - |L|
+(eq. 5.10).
+
+Forward model
+-------------
+The table's actual motion is the ideal rotation (eq. 5.1) preceded by its six
+error components D_x, D_y, D_z, E_x, E_y, E_z (eq. 5.2, Fig. 5.1). Two
+formulations are given and cross-checked in the tests:
+
+* :func:`length_change` - exact: the HTM product with exact rotations, the bar
+  vector (eqs. 5.4-5.9) and its norm;
+* :func:`squared_length_change` - Zhu's first-order closed form of
+  Delta_2' = |L^E'|^2 - |L|^2 with the setup's eccentricity H_x, H_y (eq. 5.13).
+
+A reading converts exactly to the squared change:
+Delta_2' = (L + Delta_1)^2 - L^2 = 2 L Delta_1 + Delta_1^2.
+
+Two setups cancel the eccentricity
+----------------------------------
+With a short (L1) and a long (L2) bar sharing the table socket (Zhu Fig. 5.3),
+subtracting eq. 5.15 from eq. 5.14 leaves (eq. 5.16)
+
+    Delta_2'(L1) - Delta_2'(L2) = 2 R_x (H2 - H1) sin(c) E_x
+                                  - 2 R_x (H2 - H1) cos(c) E_y + 2 (H2 - H1) D_z
+
+linear in (E_x, E_y, D_z) with the design J of eq. 5.19 (condition number
+eq. 5.20). The radial errors D_x, D_y cancel with the eccentricity they are
+coupled to (a reversal would be needed to separate them); E_z is not seen by
+a ball bar at all. :func:`calibrate` estimates the three by the l2 norm (least
+squares, eq. 5.17) and by the l-infinity norm (minimax, eq. 5.18, solved as a
+linear programme) and compares them as Zhu's Table 5.3 does.
+
+Units: metres, radians; angles in the data may be given in degrees where the
+argument name says so.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import linprog
+
+from ..errors import CalibrationError, InputDataError, ParameterError
+from ..kinematics.htm import rotation_matrix_xyz
+from ..validation import finite_array
+
+#: Readings are length *changes*; anything larger is a length or a unit mistake.
+MAX_PLAUSIBLE_CHANGE_M = 1e-3
+ARCSEC = np.pi / (180.0 * 3600.0)
+
+
+@dataclass(frozen=True)
+class BallBarSetup:
+    """Geometry of one ball-bar setup on a rotary table (Zhu eqs. 5.3, 5.6).
+
+    Attributes
+    ----------
+    bar_length_m : float
+        L, the bar's calibrated nominal length [m].
+    radius_m : float
+        R_x, radial distance of the table ball A from the table centre O [m].
+    socket_height_m : float
+        R_z, height of A above O [m].
+    """
+
+    bar_length_m: float
+    radius_m: float
+    socket_height_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("bar_length_m", "radius_m", "socket_height_m"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float, np.floating)) or not np.isfinite(value):
+                raise ParameterError(f"ball bar setup: {name} must be a finite number "
+                                     f"(got {value!r})")
+        if self.radius_m <= 0.0:
+            raise ParameterError(f"ball bar setup: radius_m (R_x) must be > 0 "
+                                 f"(got {self.radius_m})")
+        if self.bar_length_m <= self.radius_m:
+            raise ParameterError(
+                f"ball bar setup: a bar of {self.bar_length_m * 1e3:.3f} mm cannot reach a "
+                f"ball {self.radius_m * 1e3:.3f} mm off the table centre (L must exceed R_x); "
+                "wrong bar length or units?")
+
+    @property
+    def spindle_height_m(self) -> float:
+        """H, height of the spindle ball B above O that makes |L| = L (eqs. 5.6, 5.8)."""
+        return self.socket_height_m + float(np.sqrt(self.bar_length_m ** 2 - self.radius_m ** 2))
+
+    @property
+    def bar_angle_rad(self) -> float:
+        """eta, the bar's angle to the table axis (Zhu: 52.26 deg for L1, 19.25 deg for L2)."""
+        return float(np.arcsin(self.radius_m / self.bar_length_m))
+
+
+@dataclass(frozen=True)
+class RotaryAxisErrors:
+    """The six error components of a C axis, constant over the turn (Zhu Fig. 5.1).
+
+    ``radial_x_m``/``radial_y_m`` D_x, D_y; ``axial_m`` D_z [m];
+    ``tilt_x_rad``/``tilt_y_rad`` E_x, E_y (wobble); ``positioning_rad`` E_z [rad].
+    """
+
+    radial_x_m: float = 0.0
+    radial_y_m: float = 0.0
+    axial_m: float = 0.0
+    tilt_x_rad: float = 0.0
+    tilt_y_rad: float = 0.0
+    positioning_rad: float = 0.0
+
+
+def _angles(angles_rad: ArrayLike) -> NDArray[np.float64]:
+    return finite_array(angles_rad, "angles", ndim=1)
+
+
+def length_change(angles_rad: ArrayLike, setup: BallBarSetup, errors: RotaryAxisErrors,
+                  eccentricity_m: tuple[float, float] = (0.0, 0.0)) -> NDArray[np.float64]:
+    """Delta_1 = |L^E'| - L at each angle, exactly (eqs. 5.2-5.10, 5.12).
+
+    The actual table HTM is Trans(D) Rot(E_x, E_y, E_z) Rot_z(c) with exact
+    rotations; B sits at (H_x, H_y, H) (eq. 5.12).
+
+    Returns
+    -------
+    ndarray, shape (n,) [m]
+    """
+    c = _angles(angles_rad)
+    ideal = np.stack([np.cos(c), np.sin(c), np.zeros_like(c)], axis=1) * setup.radius_m
+    ideal[:, 2] = setup.socket_height_m
+    error_rotation = rotation_matrix_xyz(errors.tilt_x_rad, errors.tilt_y_rad,
+                                         errors.positioning_rad)
+    actual = ideal @ error_rotation.T + np.array([errors.radial_x_m, errors.radial_y_m,
+                                                   errors.axial_m])
+    spindle = np.array([eccentricity_m[0], eccentricity_m[1], setup.spindle_height_m])
+    return np.linalg.norm(actual - spindle, axis=1) - setup.bar_length_m
+
+
+def squared_length_change(angles_rad: ArrayLike, setup: BallBarSetup, errors: RotaryAxisErrors,
+                          eccentricity_m: tuple[float, float] = (0.0, 0.0)
+                          ) -> NDArray[np.float64]:
+    """Delta_2' = |L^E'|^2 - |L|^2, Zhu's first-order closed form (eq. 5.13) [m^2]."""
+    c = _angles(angles_rad)
+    r_x, r_z, h = setup.radius_m, setup.socket_height_m, setup.spindle_height_m
+    h_x, h_y = eccentricity_m
+    return (-2 * r_x * h * np.sin(c) * errors.tilt_x_rad
+            + 2 * r_x * h * np.cos(c) * errors.tilt_y_rad
+            + 2 * r_x * np.cos(c) * errors.radial_x_m + 2 * r_x * np.sin(c) * errors.radial_y_m
+            + 2 * (r_z - h) * errors.axial_m
+            - 2 * r_x * np.cos(c) * h_x - 2 * r_x * np.sin(c) * h_y + h_x ** 2 + h_y ** 2)
+
+
+def squared_change_from_reading(length_change_m: ArrayLike, bar_length_m: float
+                                ) -> NDArray[np.float64]:
+    """Delta_2' = (L + Delta_1)^2 - L^2 = 2 L Delta_1 + Delta_1^2, exact [m^2]."""
+    delta = np.asarray(length_change_m, dtype=np.float64)
+    return 2.0 * bar_length_m * delta + delta ** 2
+
+
+def difference_design(angles_rad: ArrayLike, short: BallBarSetup, long: BallBarSetup
+                      ) -> NDArray[np.float64]:
+    """J of eq. 5.19: columns for (E_x, E_y, D_z), shape (n, 3) [m^2/rad, m^2/rad, m]."""
+    c = _angles(angles_rad)
+    _check_pair(short, long)
+    dh = long.spindle_height_m - short.spindle_height_m
+    r_x = short.radius_m
+    return np.column_stack([2 * r_x * dh * np.sin(c), -2 * r_x * dh * np.cos(c),
+                            np.full_like(c, 2 * dh)])
+
+
+def _check_pair(short: BallBarSetup, long: BallBarSetup) -> None:
+    if not np.isclose(short.radius_m, long.radius_m, rtol=0, atol=1e-9) or \
+            not np.isclose(short.socket_height_m, long.socket_height_m, rtol=0, atol=1e-9):
+        raise ParameterError("ball bar: both setups must share the table ball A (same R_x and "
+                             "R_z, Zhu Fig. 5.3); got R_x "
+                             f"{short.radius_m * 1e3:.3f}/{long.radius_m * 1e3:.3f} mm, R_z "
+                             f"{short.socket_height_m * 1e3:.3f}/"
+                             f"{long.socket_height_m * 1e3:.3f} mm")
+    if abs(long.bar_length_m - short.bar_length_m) < 1e-3:
+        raise ParameterError("ball bar: the two bars must differ in length (eq. 5.16 divides "
+                             "by H2 - H1); got "
+                             f"{short.bar_length_m * 1e3:.3f} and {long.bar_length_m * 1e3:.3f} mm")
+
+
+# ---------------------------------------------------------------------- estimation
+@dataclass(frozen=True)
+class NormFit:
+    """One estimate of (E_x, E_y, D_z) and its residuals e_i = y_i - J_i p (Table 5.3)."""
+
+    method: str                                 # "l2" or "linf"
+    parameters: NDArray[np.float64]             # (3,) E_x [rad], E_y [rad], D_z [m]
+    residuals: NDArray[np.float64]              # (n,) [m^2]
+    #: (3,) standard (k = 1) uncertainties; l2 only (from sigma^2 (J^T J)^-1).
+    uncertainties: NDArray[np.float64] | None = None
+
+    @property
+    def max_abs(self) -> float:
+        return float(np.max(np.abs(self.residuals)))
+
+    @property
+    def range(self) -> float:
+        return float(np.ptp(self.residuals))
+
+    @property
+    def rms(self) -> float:
+        return float(np.sqrt(np.mean(self.residuals ** 2)))
+
+    def as_dict(self) -> dict:
+        out = {"method": self.method,
+               "tilt_x_rad": float(self.parameters[0]), "tilt_y_rad": float(self.parameters[1]),
+               "axial_m": float(self.parameters[2]),
+               "tilt_x_arcsec": float(self.parameters[0] / ARCSEC),
+               "tilt_y_arcsec": float(self.parameters[1] / ARCSEC),
+               "axial_um": float(self.parameters[2] * 1e6),
+               "max_abs_residual_m2": self.max_abs, "range_residual_m2": self.range,
+               "rms_residual_m2": self.rms}
+        if self.uncertainties is not None:
+            out["uncertainty_k1"] = {"tilt_x_rad": float(self.uncertainties[0]),
+                                     "tilt_y_rad": float(self.uncertainties[1]),
+                                     "axial_m": float(self.uncertainties[2])}
+        return out
+
+
+def _column_scale(design: NDArray) -> NDArray:
+    scale = np.linalg.norm(design, axis=0)
+    if np.any(scale == 0):
+        raise CalibrationError("ball bar: a column of the design is zero")
+    return scale
+
+
+def fit_l2(design: NDArray, observed: NDArray) -> NormFit:
+    """Least squares (l2 norm, eq. 5.17) with the parameters' covariance."""
+    n, p = design.shape
+    if n <= p:
+        raise CalibrationError(f"ball bar: {n} readings cannot fix {p} parameters")
+    scale = _column_scale(design)
+    solution, *_ = np.linalg.lstsq(design / scale, observed, rcond=None)
+    parameters = solution / scale
+    residuals = observed - design @ parameters
+    sigma2 = float(residuals @ residuals) / (n - p)
+    normal = (design / scale).T @ (design / scale)
+    covariance = sigma2 * np.linalg.inv(normal) / np.outer(scale, scale)
+    return NormFit("l2", parameters, residuals, np.sqrt(np.diag(covariance)))
+
+
+def fit_linf(design: NDArray, observed: NDArray) -> NormFit:
+    """Minimax (l-infinity norm, eq. 5.18) as a linear programme.
+
+    minimise t  subject to  -t <= y_i - J_i p <= t; solved by HiGHS on columns
+    and observations scaled to order one.
+    """
+    n, p = design.shape
+    if n <= p:
+        raise CalibrationError(f"ball bar: {n} readings cannot fix {p} parameters")
+    scale = _column_scale(design)
+    y_scale = float(np.max(np.abs(observed))) or 1.0
+    a = design / scale
+    y = observed / y_scale
+    ones = np.ones((n, 1))
+    a_ub = np.vstack([np.hstack([a, -ones]), np.hstack([-a, -ones])])
+    b_ub = np.concatenate([y, -y])
+    cost = np.zeros(p + 1)
+    cost[-1] = 1.0
+    bounds = [(None, None)] * p + [(0.0, None)]
+    result = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
+    if not result.success:
+        raise CalibrationError(f"ball bar: the l-infinity programme failed ({result.message})")
+    parameters = result.x[:p] * y_scale / scale
+    return NormFit("linf", parameters, observed - design @ parameters)
+
+
+# ------------------------------------------------------------------- data checks
+@dataclass(frozen=True)
+class BallBarRun:
+    """The readings of one setup: ``repetitions`` x ``angles`` (Zhu: 3 x 37).
+
+    ``angles_rad`` (n,) in the order the table indexed them; ``readings_m``
+    (r, n) the bar's length change Delta_1 [m] at each angle of each repetition.
+    """
+
+    setup: BallBarSetup
+    angles_rad: NDArray[np.float64]
+    readings_m: NDArray[np.float64]
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        name = self.label or f"{self.setup.bar_length_m * 1e3:.3f} mm bar"
+        angles = np.asarray(self.angles_rad, dtype=np.float64)
+        readings = np.atleast_2d(np.asarray(self.readings_m, dtype=np.float64))
+        if angles.ndim != 1 or angles.size < 5:
+            raise InputDataError(f"{name}: at least 5 angular positions are needed "
+                                 f"(got {angles.size})")
+        if not np.all(np.isfinite(angles)):
+            raise InputDataError(f"{name}: angle {int(np.flatnonzero(~np.isfinite(angles))[0])} "
+                                 "is not a number")
+        steps = np.diff(angles)
+        if not (np.all(steps > 0) or np.all(steps < 0)):
+            where = int(np.flatnonzero(np.sign(steps) != np.sign(steps[0]))[0]) + 1
+            raise InputDataError(
+                f"{name}: the angle sequence is not monotonic at position {where} "
+                f"({np.degrees(angles[where - 1]):.3f} -> {np.degrees(angles[where]):.3f} deg); "
+                "one run must index the table one way")
+        if readings.shape[1] != angles.size:
+            raise InputDataError(f"{name}: {readings.shape[1]} readings per repetition for "
+                                 f"{angles.size} angles")
+        bad = ~np.isfinite(readings)
+        if bad.any():
+            rep, pos = (int(i) for i in np.argwhere(bad)[0])
+            raise InputDataError(f"{name}: reading of repetition {rep + 1} at "
+                                 f"{np.degrees(angles[pos]):.3f} deg is not a number")
+        largest = float(np.max(np.abs(readings)))
+        if largest > MAX_PLAUSIBLE_CHANGE_M:
+            raise InputDataError(
+                f"{name}: a length change of {largest * 1e3:.3f} mm is not a ball-bar reading "
+                "(readings are changes from the nominal length, in metres; wrong units or "
+                "absolute lengths?)")
+        object.__setattr__(self, "angles_rad", angles)
+        object.__setattr__(self, "readings_m", readings)
+
+    @property
+    def name(self) -> str:
+        return self.label or f"{self.setup.bar_length_m * 1e3:.3f} mm bar"
+
+    @property
+    def mean_reading_m(self) -> NDArray[np.float64]:
+        return self.readings_m.mean(axis=0)
+
+    @property
+    def repeatability_m(self) -> float:
+        """Pooled standard deviation of the repetitions at each angle [m] (0 with one)."""
+        r = self.readings_m.shape[0]
+        if r < 2:
+            return 0.0
+        return float(np.sqrt(np.mean(self.readings_m.var(axis=0, ddof=1))))
+
+
+def _match_angles(short: BallBarRun, long: BallBarRun) -> None:
+    a = np.degrees(short.angles_rad)
+    b = np.degrees(long.angles_rad)
+    tolerance = 1e-3
+    missing_long = [x for x in a if not np.any(np.abs(b - x) < tolerance)]
+    missing_short = [x for x in b if not np.any(np.abs(a - x) < tolerance)]
+    if missing_long or missing_short:
+        which, run, other = ((missing_long, long, short) if missing_long
+                             else (missing_short, short, long))
+        listed = ", ".join(f"{x:.1f}" for x in which[:5]) + (" ..." if len(which) > 5 else "")
+        raise InputDataError(f"ball bar: {run.name} has no reading at {listed} deg where "
+                             f"{other.name} has; both setups must index the same positions")
+    if a.size != b.size or np.any(np.abs(a - b) > tolerance):
+        raise InputDataError(f"ball bar: {short.name} and {long.name} index the same positions "
+                             "in a different order")
+
+
+# ------------------------------------------------------------------ calibration
+@dataclass(frozen=True)
+class SingleSetupFit:
+    """Eq. 5.13 fitted to one setup: Delta_2' = a sin c + b cos c + k.
+
+    The coupled sums cannot be separated with one setup: a = -2 R_x H E_x +
+    2 R_x (D_y - H_y), b = 2 R_x H E_y + 2 R_x (D_x - H_x). With the tilts known
+    from the two-setup fit they give the radial error less the eccentricity.
+    """
+
+    run: str
+    coefficients: NDArray[np.float64]       # (a, b, k) [m^2]
+    residuals: NDArray[np.float64]          # (n,) [m^2]
+    radial_less_eccentricity_m: NDArray[np.float64]   # (D_x - H_x, D_y - H_y) [m]
+
+
+@dataclass(frozen=True)
+class ReversalJump:
+    """The jump between two readings at the same table angle (0 and 360 deg).
+
+    A rotary axis's lost motion shows here (Zhu Fig. 5.13): the first reading
+    was approached from the other direction. ``jump`` in the residual's unit,
+    ``noise`` the residuals' robust standard deviation without the two ends.
+    """
+
+    run: str
+    jump: float
+    noise: float
+
+    @property
+    def significant(self) -> bool:
+        return abs(self.jump) > 4.0 * np.sqrt(2.0) * self.noise
+
+
+@dataclass
+class BallBarCalibration:
+    """Result of :func:`calibrate` (Zhu section 5.4, Tables 5.2 and 5.3)."""
+
+    short: BallBarRun
+    long: BallBarRun
+    observed: NDArray[np.float64]           # (n,) Delta_2'(L1) - Delta_2'(L2) [m^2]
+    design: NDArray[np.float64]             # (n, 3), eq. 5.19
+    l2: NormFit
+    linf: NormFit
+    condition_number: float                 # eq. 5.20
+    single_setups: list[SingleSetupFit] = field(default_factory=list)
+    reversal: list[ReversalJump] = field(default_factory=list)
+
+    @property
+    def angles_rad(self) -> NDArray[np.float64]:
+        return self.short.angles_rad
+
+    def as_dict(self) -> dict:
+        return {
+            "short_bar_m": self.short.setup.bar_length_m, "long_bar_m": self.long.setup.bar_length_m,
+            "radius_m": self.short.setup.radius_m, "socket_height_m": self.short.setup.socket_height_m,
+            "bar_angles_deg": [float(np.degrees(self.short.setup.bar_angle_rad)),
+                               float(np.degrees(self.long.setup.bar_angle_rad))],
+            "positions": int(self.angles_rad.size),
+            "repetitions": [int(self.short.readings_m.shape[0]), int(self.long.readings_m.shape[0])],
+            "repeatability_m": [self.short.repeatability_m, self.long.repeatability_m],
+            "condition_number": self.condition_number,
+            "l2": self.l2.as_dict(), "linf": self.linf.as_dict(),
+            "radial_less_eccentricity_m": {f.run: f.radial_less_eccentricity_m.tolist()
+                                           for f in self.single_setups},
+            "reversal_jumps": [{"run": j.run, "jump_m2": j.jump, "noise_m2": j.noise,
+                                "significant": bool(j.significant)} for j in self.reversal],
+        }
+
+    def text(self) -> str:
+        lines = [f"ball bar: {self.angles_rad.size} positions, bars "
+                 f"{self.short.setup.bar_length_m * 1e3:.3f} / "
+                 f"{self.long.setup.bar_length_m * 1e3:.3f} mm, R_x "
+                 f"{self.short.setup.radius_m * 1e3:.3f} mm, cond(J) {self.condition_number:.1f}"]
+        u = self.l2.uncertainties
+        for fit in (self.l2, self.linf):
+            p = fit.parameters
+            spread = (f" (U, k=2: {2 * u[0] / ARCSEC:.2f}\", {2 * u[1] / ARCSEC:.2f}\", "
+                      f"{2 * u[2] * 1e6:.2f} um)" if fit.uncertainties is not None else "")
+            lines.append(f"  {fit.method:>4}: E_x {p[0] / ARCSEC:7.2f}\"  E_y {p[1] / ARCSEC:7.2f}\""
+                         f"  D_z {p[2] * 1e6:6.2f} um{spread}; residual max "
+                         f"{fit.max_abs * 1e6:.3f} mm^2, range {fit.range * 1e6:.3f} mm^2, "
+                         f"RMS {fit.rms * 1e6:.3f} mm^2")
+        for jump in self.reversal:
+            if jump.significant:
+                lines.append(f"  {jump.run}: a jump of {jump.jump * 1e6:.4f} mm^2 between 0 and "
+                             "360 deg - lost motion (backlash) of the rotary axis")
+        return "\n".join(lines)
+
+
+def _robust_sigma(values: NDArray) -> float:
+    return float(1.4826 * np.median(np.abs(values - np.median(values))))
+
+
+def _same_angle_ends(angles: NDArray) -> bool:
+    turn = abs(angles[-1] - angles[0])
+    return abs(turn - 2 * np.pi) < 1e-6
+
+
+def _single_setup(run: BallBarRun, tilts: NDArray) -> SingleSetupFit:
+    c = run.angles_rad
+    y = squared_change_from_reading(run.mean_reading_m, run.setup.bar_length_m)
+    design = np.column_stack([np.sin(c), np.cos(c), np.ones_like(c)])
+    coefficients, *_ = np.linalg.lstsq(design, y, rcond=None)
+    r_x, h = run.setup.radius_m, run.setup.spindle_height_m
+    a, b, _ = coefficients
+    radial_y = (a + 2 * r_x * h * tilts[0]) / (2 * r_x)
+    radial_x = (b - 2 * r_x * h * tilts[1]) / (2 * r_x)
+    return SingleSetupFit(run.name, coefficients, y - design @ coefficients,
+                          np.array([radial_x, radial_y]))
+
+
+def reversal_jump(run_name: str, angles_rad: NDArray, residuals: NDArray) -> ReversalJump | None:
+    """The 0/360 deg jump of a residual, or None when the run is not a full turn."""
+    if not _same_angle_ends(angles_rad) or residuals.size < 5:
+        return None
+    return ReversalJump(run_name, float(residuals[0] - residuals[-1]),
+                        _robust_sigma(residuals[1:-1]))
+
+
+def calibrate(short: BallBarRun, long: BallBarRun) -> BallBarCalibration:
+    """E_x, E_y, D_z from a short- and a long-bar run (eqs. 5.14-5.19), l2 and l-infinity.
+
+    Raises
+    ------
+    ParameterError
+        Setups that do not share the table ball, or bars of equal length.
+    InputDataError
+        Runs that index different positions.
+    CalibrationError
+        A singular design (eq. 5.20).
+    """
+    _check_pair(short.setup, long.setup)
+    _match_angles(short, long)
+    if long.setup.bar_length_m < short.setup.bar_length_m:
+        short, long = long, short
+    angles = short.angles_rad
+    observed = (squared_change_from_reading(short.mean_reading_m, short.setup.bar_length_m)
+                - squared_change_from_reading(long.mean_reading_m, long.setup.bar_length_m))
+    design = difference_design(angles, short.setup, long.setup)
+    singular = np.linalg.svd(design, compute_uv=False)
+    if singular[-1] <= singular[0] * 1e-12:
+        raise CalibrationError("ball bar: the positions do not separate E_x, E_y and D_z "
+                               "(singular design, eq. 5.20); index the table over a wider arc")
+    l2 = fit_l2(design, observed)
+    linf = fit_linf(design, observed)
+    singles = [_single_setup(run, l2.parameters[:2]) for run in (short, long)]
+    jumps = [j for j in (reversal_jump(f.run, angles, f.residuals) for f in singles) if j]
+    difference_jump = reversal_jump("two-setup difference", angles, l2.residuals)
+    if difference_jump:
+        jumps.append(difference_jump)
+    return BallBarCalibration(short, long, observed, design, l2, linf,
+                              float(singular[0] / singular[-1]), singles, jumps)

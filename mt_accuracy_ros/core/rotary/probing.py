@@ -1,0 +1,378 @@
+"""Rotary-axis location errors from a probed calibration sphere (the KinematicsOpt job).
+
+A sphere is fixed on the machine's workpiece side and probed with a touch
+probe in the spindle at several positions of the rotary axes. Each probing
+cycle gives touch points on the sphere; :func:`fit_sphere` turns them into
+the sphere's centre. Where the CNC expected the centre (its nominal
+kinematics) and where the probe found it differ by minus the TCP error of
+that configuration (Khan & Chen eq. 17: e = (P_t - P_w)_actual - nominal):
+the probe tip is off by e relative to the workpiece, so the sphere appears
+off by -e.
+
+:func:`identify_location_errors` fits, by Gauss-Newton least squares through
+the kinematic chain (:class:`..kinematics.chain.KinematicModel`), the
+position-independent location errors of the rotary axes - for an axis about
+x (A) the offsets EY0A, EZ0A of its line and the tilts EB0A, EC0A; likewise
+for B and C (Khan & Chen's notation, section 5) - together with the sphere's
+unknown setup position (3 nuisance parameters), and reports:
+
+* each error with its standard uncertainty (sigma^2 (J^T J)^-1);
+* the dispersion: the RMS and largest distance between measured and modelled
+  centres before and after (what KinematicsOpt calls the dispersion);
+* the repeatability of repeated cycles at the same configuration.
+
+Not identifiable from one sphere (refused by name when asked for): an axis's
+offset along its own line and its zero-angle error (both look like the
+sphere sitting elsewhere), and - for a rotary axis on the tool side - an
+offset that a probe-length error would mimic (the probe is taken as
+calibrated).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import CalibrationError, InputDataError, MachineDescriptionError
+from ..kinematics.chain import ErrorOverrides, KinematicModel
+from ..kinematics.machine import MachineDescription, location_error_name
+from ..validation import finite_array
+
+LETTERS = "XYZ"
+
+
+# ------------------------------------------------------------------- spheres
+@dataclass(frozen=True)
+class SphereFit:
+    """Centre (3,) [m], radius [m], and each point's distance from the surface (m,) [m]."""
+
+    centre_m: NDArray[np.float64]
+    radius_m: float
+    residuals_m: NDArray[np.float64]
+
+
+def fit_sphere(points_m: ArrayLike, radius_m: float | None = None, *,
+               tolerance_m: float = 50e-6, label: str = "sphere") -> SphereFit:
+    """Least-squares sphere through touch points.
+
+    The algebraic fit |p|^2 = 2 p.c + (r^2 - |c|^2) starts a geometric
+    Gauss-Newton on the distances |p - c| - r (with r fixed when the sphere's
+    calibrated radius is given).
+
+    Raises
+    ------
+    InputDataError
+        Fewer than 4 points (5 without a radius), NaN, points in a plane, or a
+        point farther than ``tolerance_m`` from the fitted surface (named by
+        index: a touch on something else, or a wrong radius).
+    """
+    points = finite_array(points_m, f"{label}: touch points", ndim=2)
+    if points.shape[1] != 3:
+        raise InputDataError(f"{label}: touch points must be (m, 3), got {points.shape}")
+    needed = 4 if radius_m is not None else 5
+    if points.shape[0] < needed:
+        raise InputDataError(f"{label}: {points.shape[0]} touch points; at least {needed} "
+                             "are needed")
+    spread = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+    if spread[-1] < 1e-9 * max(spread[0], 1e-12):
+        raise InputDataError(f"{label}: the touch points lie in a plane; probe the sphere "
+                             "from more than one side")
+    design = np.column_stack([2 * points, np.ones(points.shape[0])])
+    solution, *_ = np.linalg.lstsq(design, (points ** 2).sum(axis=1), rcond=None)
+    centre = solution[:3]
+    radius = float(np.sqrt(max(solution[3] + centre @ centre, 0.0)))
+    if radius_m is not None:
+        radius = float(radius_m)
+    for _ in range(20):
+        offset = points - centre
+        distance = np.linalg.norm(offset, axis=1)
+        residual = distance - radius
+        unit = offset / distance[:, None]
+        jacobian = -unit if radius_m is not None else np.column_stack([-unit,
+                                                                       -np.ones(len(unit))])
+        step, *_ = np.linalg.lstsq(jacobian, -residual, rcond=None)
+        centre = centre + step[:3]
+        if radius_m is None:
+            radius += float(step[3])
+        if np.max(np.abs(step)) < 1e-13:
+            break
+    residuals = np.linalg.norm(points - centre, axis=1) - radius
+    worst = int(np.argmax(np.abs(residuals)))
+    if abs(residuals[worst]) > tolerance_m:
+        raise InputDataError(
+            f"{label}: touch point {worst} is {residuals[worst] * 1e3:+.3f} mm from the sphere "
+            f"(tolerance {tolerance_m * 1e3:.3f} mm) - a touch on something else, or a wrong "
+            "sphere radius")
+    return SphereFit(centre, radius, residuals)
+
+
+# --------------------------------------------------------- location errors
+def default_rotary_parameters(machine: MachineDescription) -> list[str]:
+    """For each rotary axis: the two offsets of its line and its two tilts.
+
+    A (about x): EY0A, EZ0A, EB0A, EC0A; B (about y): EX0B, EZ0B, EA0B, EC0B;
+    C (about z): EX0C, EY0C, EA0C, EB0C.
+    """
+    names = []
+    for axis in machine.axis_order:
+        spec = machine.axes[axis]
+        if not spec.is_rotary:
+            continue
+        own = "ABC".index(axis)
+        others = [i for i in range(3) if i != own]
+        names += [location_error_name(LETTERS[i], axis) for i in others]
+        names += [location_error_name("ABC"[i], axis) for i in others]
+    return names
+
+
+@dataclass
+class LocationIdentification:
+    """Result of :func:`identify_location_errors`."""
+
+    parameters: dict[str, float]                  # name -> value [m or rad]
+    uncertainties: dict[str, float]               # name -> standard (k = 1) uncertainty
+    sphere_offset_m: NDArray[np.float64]          # (3,) sphere position error, workpiece frame
+    residuals_m: NDArray[np.float64]              # (N, 3) measured - modelled deviation
+    measured_m: NDArray[np.float64]               # (N, 3) the deviations as measured
+    condition_number: float
+    repeatability_m: float | None = None          # pooled std of repeated cycles
+    correlations: dict[str, float] = field(default_factory=dict)
+    #: Default parameters one sphere could not separate (left at zero).
+    not_observable: list[str] = field(default_factory=list)
+
+    @property
+    def dispersion_before_m(self) -> float:
+        """Largest distance of a measured centre from the mean of all (sphere misplacement
+        removed): how much the centre wandered as the axes turned."""
+        centred = self.measured_m - self.measured_m.mean(axis=0)
+        return float(np.max(np.linalg.norm(centred, axis=1)))
+
+    @property
+    def dispersion_after_m(self) -> float:
+        """Largest distance between a measured and a modelled centre."""
+        return float(np.max(np.linalg.norm(self.residuals_m, axis=1)))
+
+    @property
+    def rms_after_m(self) -> float:
+        return float(np.sqrt(np.mean(np.sum(self.residuals_m ** 2, axis=1))))
+
+    def as_dict(self) -> dict:
+        return {"parameters": dict(self.parameters), "uncertainties_k1": dict(self.uncertainties),
+                "sphere_offset_m": self.sphere_offset_m.tolist(),
+                "dispersion_before_m": self.dispersion_before_m,
+                "dispersion_after_m": self.dispersion_after_m, "rms_after_m": self.rms_after_m,
+                "condition_number": self.condition_number,
+                "repeatability_m": self.repeatability_m, "cycles": int(self.measured_m.shape[0]),
+                "not_observable": list(self.not_observable)}
+
+    def text(self) -> str:
+        lines = [f"probing: {self.measured_m.shape[0]} cycles; dispersion "
+                 f"{self.dispersion_before_m * 1e6:.1f} um before, "
+                 f"{self.dispersion_after_m * 1e6:.1f} um after (RMS {self.rms_after_m * 1e6:.2f} um)"]
+        for name, value in self.parameters.items():
+            u = self.uncertainties[name]
+            if name[1] in LETTERS:
+                lines.append(f"  {name} {value * 1e6:+9.2f} um  (U, k=2: {2 * u * 1e6:.2f} um)")
+            else:
+                lines.append(f"  {name} {value * 1e6:+9.2f} urad (U, k=2: {2 * u * 1e6:.2f} urad)")
+        s = self.sphere_offset_m * 1e6
+        lines.append(f"  sphere set up {s[0]:+.1f}, {s[1]:+.1f}, {s[2]:+.1f} um from its "
+                     "nominal place")
+        if self.not_observable:
+            lines.append(f"  not observable with one sphere (left at zero): "
+                         f"{', '.join(self.not_observable)}")
+        return "\n".join(lines)
+
+
+def _check_inputs(machine: MachineDescription, positions: dict, deviations: NDArray,
+                  names: list[str]) -> dict[str, NDArray]:
+    n = deviations.shape[0]
+    q = {}
+    for axis in machine.axis_order:
+        if axis not in positions:
+            raise InputDataError(f"probing: no positions for axis {axis}")
+        values = finite_array(positions[axis], f"probing: axis {axis} positions", ndim=1)
+        if values.size != n:
+            raise InputDataError(f"probing: axis {axis} has {values.size} positions for "
+                                 f"{n} measured centres")
+        q[axis] = values
+    unknown = set(positions) - set(machine.axis_order)
+    if unknown:
+        raise InputDataError(f"probing: unknown axis {', '.join(sorted(unknown))}; this "
+                             f"machine has {', '.join(machine.axis_order)}")
+    for name in names:
+        axis = name[-1]
+        if axis not in machine.axes or len(name) != 4 or name[0] != "E" or name[2] != "0":
+            raise MachineDescriptionError(f"probing: {name!r} is not a location error of "
+                                          f"this machine's axes ({', '.join(machine.axis_order)})")
+        if machine.axes[axis].is_rotary and np.unique(np.round(q[axis], 9)).size < 3:
+            raise InputDataError(f"probing: {name} needs the {axis} axis probed at 3 or more "
+                                 f"positions (got {np.unique(np.round(q[axis], 9)).size})")
+    return q
+
+
+def identify_location_errors(machine: MachineDescription, positions: dict[str, ArrayLike],
+                             centre_deviation_m: ArrayLike, parameters: list[str] | None = None,
+                             *, sphere_nominal_m: ArrayLike | None = None,
+                             iterations: int = 6) -> LocationIdentification:
+    """Location errors and the sphere's setup position from probed sphere centres.
+
+    Parameters
+    ----------
+    machine
+        The machine description; its own errors are *not* used (the fit finds
+        the location errors alone).
+    positions
+        axis -> (N,) commanded positions of every axis at each cycle [m, rad].
+    centre_deviation_m
+        (N, 3) found minus expected sphere centre, machine (bed) frame [m].
+    parameters
+        Location-error names to identify (default :func:`default_rotary_parameters`).
+    sphere_nominal_m
+        (3,) the sphere centre in the workpiece-end frame, as the cycle assumed
+        it (default: the machine's workpiece point).
+
+    Raises
+    ------
+    InputDataError, MachineDescriptionError
+        Mismatched, non-finite or unknown inputs (named).
+    CalibrationError
+        Parameters the probed positions cannot separate, named.
+    """
+    deviations = finite_array(centre_deviation_m, "probing: centre deviations", ndim=2)
+    if deviations.shape[1] != 3:
+        raise InputDataError(f"probing: centre deviations must be (N, 3), got {deviations.shape}")
+    names = list(parameters) if parameters is not None else default_rotary_parameters(machine)
+    if not names:
+        raise MachineDescriptionError(f"probing: {machine.name} has no rotary axis to calibrate")
+    q = _check_inputs(machine, positions, deviations, names)
+    not_observable: list[str] = []
+    if parameters is None:
+        names, not_observable = observable_parameters(machine, q, sphere_nominal_m=sphere_nominal_m)
+    n, p = deviations.shape[0], len(names)
+    if 3 * n <= p + 3:
+        raise InputDataError(f"probing: {n} cycles cannot fix {p} errors and the sphere's "
+                             "position; probe more positions")
+    nominal_point = np.asarray(machine.workpiece if sphere_nominal_m is None else
+                               finite_array(sphere_nominal_m, "probing: sphere position",
+                                            ndim=1), float)
+    labels = [*names, "sphere x", "sphere y", "sphere z"]
+    predicted = _predictor(machine, q, names, nominal_point)
+    theta = np.zeros(p + 3)
+    for _ in range(iterations):
+        base = predicted(theta)
+        scaled, scale = _scaled_jacobian(predicted, theta, labels)
+        _, singular, vt = np.linalg.svd(scaled, full_matrices=False)
+        if singular[-1] < RANK_TOLERANCE * singular[0]:
+            null = np.abs(vt[-1])
+            involved = [labels[j] for j in np.flatnonzero(null > 0.3 * null.max())]
+            raise CalibrationError(f"probing: {' and '.join(involved)} cannot be told apart "
+                                   "with this sphere and these positions; leave one out or "
+                                   "probe more positions")
+        step, *_ = np.linalg.lstsq(scaled, (deviations - base).ravel(), rcond=None)
+        theta = theta + step / scale
+        if np.max(np.abs(step / scale)) < 1e-12:
+            break
+    residuals = deviations - predicted(theta)
+    dof = 3 * n - (p + 3)
+    sigma2 = float(np.sum(residuals ** 2)) / dof
+    covariance = sigma2 * np.linalg.inv(scaled.T @ scaled) / np.outer(scale, scale)
+    std = np.sqrt(np.diag(covariance))
+    correlation = covariance / np.outer(std, std)
+    correlations = {f"{names[i]}~{names[j]}": float(correlation[i, j])
+                    for i in range(p) for j in range(i + 1, p) if abs(correlation[i, j]) > 0.9}
+    return LocationIdentification(
+        dict(zip(names, (float(v) for v in theta[:p]))),
+        dict(zip(names, (float(v) for v in std[:p]))), theta[p:].copy(), residuals, deviations,
+        float(singular[0] / singular[-1]), _repeatability(q, deviations), correlations,
+        not_observable)
+
+
+RANK_TOLERANCE = 1e-7
+
+
+def _predictor(machine: MachineDescription, q: dict[str, NDArray], names: list[str],
+               nominal_point: NDArray):
+    """theta = (errors..., sphere offset (3)) -> (N, 3) predicted centre deviations."""
+    p = len(names)
+    nominal = KinematicModel(replace(machine, workpiece=nominal_point)).nominal_relative(q)
+
+    def predicted(theta: NDArray) -> NDArray:
+        model = KinematicModel(replace(machine, workpiece=nominal_point + theta[p:]))
+        overrides = ErrorOverrides(location=dict(zip(names, theta[:p])), use_description=False)
+        error = model.tcp_error(q, overrides=overrides, check_stroke=False)["position"]
+        return -(error + model.nominal_relative(q) - nominal)
+    return predicted
+
+
+def _scaled_jacobian(predicted, theta: NDArray, labels: list[str], step: float = 1e-6
+                     ) -> tuple[NDArray, NDArray]:
+    """Central-difference Jacobian with unit-norm columns, and the column norms."""
+    columns = []
+    for j in range(theta.size):
+        delta = np.zeros(theta.size)
+        delta[j] = step
+        columns.append(((predicted(theta + delta) - predicted(theta - delta)) / (2 * step)).ravel())
+    jacobian = np.column_stack(columns)
+    scale = np.linalg.norm(jacobian, axis=0)
+    zero = scale < 1e-12
+    if zero.any():
+        bad = [labels[j] for j in np.flatnonzero(zero)]
+        raise CalibrationError(f"probing: {', '.join(bad)} do(es) not change the probed "
+                               "centres at these positions")
+    return jacobian / scale, scale
+
+
+def observable_parameters(machine: MachineDescription, positions: dict[str, ArrayLike],
+                          candidates: list[str] | None = None, *,
+                          sphere_nominal_m: ArrayLike | None = None
+                          ) -> tuple[list[str], list[str]]:
+    """Split ``candidates`` into those one sphere at these positions can identify and the rest.
+
+    Candidates are taken in order (tilts before offsets by default) and kept
+    while each adds a direction the sphere's position and the kept ones do
+    not already span. A translation of a rotary axis's frame that stays fixed
+    in the machine as the axes turn looks like the sphere's setup position or
+    like another axis's offset, and lands in the second list.
+    """
+    names = candidates if candidates is not None else default_rotary_parameters(machine)
+    names = sorted(names, key=lambda n: n[1] in LETTERS) if candidates is None else list(names)
+    q = {a: np.asarray(v, float) for a, v in positions.items()}
+    point = np.asarray(machine.workpiece if sphere_nominal_m is None else sphere_nominal_m, float)
+    kept: list[str] = []
+    dropped: list[str] = []
+    for name in names:
+        trial = kept + [name]
+        predicted = _predictor(machine, q, trial, point)
+        labels = [*trial, "sphere x", "sphere y", "sphere z"]
+        try:
+            scaled, _ = _scaled_jacobian(predicted, np.zeros(len(trial) + 3), labels)
+        except CalibrationError:
+            dropped.append(name)
+            continue
+        singular = np.linalg.svd(scaled, compute_uv=False)
+        (kept if singular[-1] >= RANK_TOLERANCE * singular[0] else dropped).append(name)
+    return kept, dropped
+
+
+def _repeatability(q: dict[str, NDArray], deviations: NDArray) -> float | None:
+    keys = np.round(np.column_stack(list(q.values())), 9)
+    _, groups = np.unique(keys, axis=0, return_inverse=True)
+    groups = groups.ravel()
+    squares, dof = 0.0, 0
+    for g in np.unique(groups):
+        rows = deviations[groups == g]
+        if rows.shape[0] > 1:
+            squares += float(np.sum((rows - rows.mean(axis=0)) ** 2))
+            dof += 3 * (rows.shape[0] - 1)
+    return float(np.sqrt(squares / dof)) if dof else None
+
+
+def volumetric_error(machine: MachineDescription, location_errors: dict[str, float],
+                     positions: dict[str, ArrayLike]) -> NDArray[np.float64]:
+    """(N, 3) TCP error that ``location_errors`` alone cause at ``positions`` [m]."""
+    model = KinematicModel(machine)
+    q = {a: np.asarray(v, float) for a, v in positions.items()}
+    overrides = ErrorOverrides(location=dict(location_errors), use_description=False)
+    return model.tcp_error(q, overrides=overrides, check_stroke=False)["position"]

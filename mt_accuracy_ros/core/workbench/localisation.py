@@ -1,0 +1,259 @@
+"""Where the residual lives, in numbers, even when no catalogue effect fits.
+
+For each TCP component c and each variable v (every axis position, velocity,
+direction, acceleration, temperature rise, temperature difference, time,
+spindle speed, the product of two linear axes' positions, where a twist
+lives, each structure sensor lagged by 10, 20 and 40 min, where a
+structure following its sensor late lives, and the spindle speed and each
+axis' |feed| lagged likewise from rest, where a heat source's growth lives), the residual r_c is regressed on v alone with the
+k-nearest-neighbour smoother whose k is chosen by K-fold cross-validation
+(Kidani eqs. 4.10-4.12, the same estimator the yaw pipeline uses). The
+**share** of r_c's variance that v explains is 1 - CV MSE / var(r_c), so a
+variable that only fits noise scores about zero. For every linear axis a
+**periodogram** of r_c in that axis' position (2-50 mm) gives the period and
+amplitude of the strongest peak, for pitch and waviness that a smoother of
+the whole stroke would blur.
+
+:func:`localise` returns the numbers and :func:`Localisation.sentence` the
+plain sentence a user reads first, e.g. "the residual along x repeats every
+10.0 mm of X travel with 4.0 um amplitude: typical of a ball-screw pitch
+error".
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..scales.knn import cross_validate_k
+from ..effects.geometric import periodogram
+from ..effects.variables import Variables
+
+COMPONENTS = "xyz"
+#: Time constants of the lagged temperatures the residual is localised on [s].
+LOCALISATION_LAGS_S = (600.0, 1200.0, 2400.0)
+
+
+@dataclass
+class Share:
+    variable: str
+    component: str
+    share: float          # of the component's residual variance, cross-validated [0..1]
+    explained_rms: float  # RMS of the part it explains [m]
+
+
+@dataclass
+class Peak:
+    axis: str
+    component: str
+    period_m: float
+    amplitude: float      # of the fundamental [m]
+    share: float          # of the component's variance the sinusoid explains (in-sample)
+
+
+@dataclass
+class Localisation:
+    shares: list[Share]                       # best first
+    peaks: list[Peak]                         # strongest first
+    component_rms: dict[str, float] = field(default_factory=dict)
+    noise_sigma: float = 0.0
+
+    def top(self) -> Share | None:
+        return self.shares[0] if self.shares else None
+
+    def top_group(self, within: float = 0.005) -> list[Share]:
+        """The top share and every other variable the data cannot rank below it (within
+        ``within`` of its share, the resolution of the cross-validation): slow
+        temperatures and their lags often explain a warm-up's drift equally well."""
+        best = self.top()
+        if best is None:
+            return []
+        group, names = [best], {best.variable}
+        for share in self.shares[1:]:
+            if share.share < best.share - within:
+                break
+            if share.variable not in names:
+                group.append(share)
+                names.add(share.variable)
+        return group
+
+    def sentence(self) -> str:
+        """One plain sentence on where the residual lives (empty if it lives nowhere)."""
+        best = self.top()
+        peak = self.peaks[0] if self.peaks else None
+        if peak is not None and peak.share >= 0.3 and peak.amplitude > self.noise_sigma and \
+                (best is None or peak.share >= 0.6 * best.share):
+            return (f"the residual along {peak.component} repeats every "
+                    f"{peak.period_m * 1e3:.1f} mm of {peak.axis} travel with "
+                    f"{peak.amplitude * 1e6:.1f} um amplitude: typical of a ball-screw pitch "
+                    "error (or a rack, or a wavy guideway)")
+        if best is None or best.share < 0.1:
+            return ""
+        v = best.variable
+        hint = _HINTS.get(v[:2] if v.startswith(("v_", "T_")) else v.split("_")[0], "")
+        if "@" in v and not v.startswith("T_"):
+            hint = "heat from that source reaching the structure with a thermal lag"
+        if "*" in v:
+            hint = "a twist of that travel plane (a cross-axis error)"
+        if v.startswith("T_") and "-" in v:
+            hint = "a temperature gradient bending the structure"
+        what = _describe(v)
+        also = [_describe(s.variable) for s in self.top_group()[1:]]
+        more = f" and {len(also) - 3} more" if len(also) > 3 else ""
+        equally = f"; as well by {', '.join(also[:3])}{more}" if also else ""
+        return (f"the residual in {best.component} follows {what} ({best.share:.0%} of its "
+                f"variance, {best.explained_rms * 1e6:.1f} um RMS{equally})"
+                f"{': ' + hint if hint else ''}")
+
+    def as_dict(self, top: int = 12) -> dict:
+        return {"shares": [{"variable": s.variable, "component": s.component,
+                            "share": s.share, "explained_rms_m": s.explained_rms}
+                           for s in self.shares[:top]],
+                "peaks": [{"axis": p.axis, "component": p.component, "period_m": p.period_m,
+                           "amplitude_m": p.amplitude, "share": p.share} for p in self.peaks[:6]],
+                "top_group": [s.variable for s in self.top_group()],
+                "sentence": self.sentence()}
+
+
+_HINTS = {"v_": "a following (servo) error or a speed-dependent effect",
+          "T_": "a thermal effect of the structure that sensor sits on",
+          "dir": "backlash or friction at the reversal",
+          "acc": "a structure deflecting under inertial load",
+          "t": "a slow drift no sensor follows (thermal, or a settling structure)",
+          "spindle": "spindle heat", "x": "a geometric error depending on that axis",
+          "y": "a geometric error depending on that axis",
+          "z": "a geometric error depending on that axis",
+          "a": "an error of the rotary axis", "b": "an error of the rotary axis",
+          "c": "an error of the rotary axis"}
+
+
+def _describe(variable: str) -> str:
+    if variable == "t":
+        return "time"
+    if variable.startswith("T_") and "@" in variable:
+        name, late = variable[2:].split("@")
+        return f"the {name} temperature {late} late"
+    if "@" in variable:
+        name, late = variable.split("@")
+        what = "the spindle speed" if name == "spindle_speed" else \
+            f"the {name.strip('|')[2:].upper()} feed"
+        return f"{what} {late} late (a heat source)"
+    if variable.startswith("T_"):
+        name = variable[2:]
+        return f"the difference {name.replace('-', ' - ')}" if "-" in name else \
+            f"the {name} temperature"
+    for prefix, word in (("v_", "feed"), ("acc_", "acceleration"), ("dir_", "direction of "
+                                                                           "motion")):
+        if variable.startswith(prefix):
+            return f"the {variable[len(prefix):].upper()} {word}"
+    if variable.startswith("spindle"):
+        return "the spindle speed"
+    if "*" in variable:
+        a, b = variable.split("*")
+        return f"the product of the {a.upper()} and {b.upper()} positions"
+    return f"the {variable.upper()} position"
+
+
+def candidate_variables(variables: Variables, structure_sensors: list[str]) -> dict[str, NDArray]:
+    """Every scalar variable to localise on (temperatures: structure sensors and their
+    differences; constant variables are left out)."""
+    out = {}
+    for name in variables.names():
+        if name.startswith("T_") and name[2:] not in structure_sensors:
+            continue
+        if name == "spindle_rpm":
+            continue
+        values = variables.get(name)
+        if np.all(np.isfinite(values)) and np.ptp(values) > 0:
+            out[name] = values
+    if variables.time_s is not None and variables.n > 2:
+        # A structure following its sensor late lives in the sensor's lag, not in the
+        # sensor: the lags of every structure sensor at a few time constants.
+        for sensor in structure_sensors:
+            for tau in LOCALISATION_LAGS_S:
+                values = variables.lag(f"where_{sensor}", variables.rise(sensor), tau)
+                if np.ptp(values) > 0:
+                    out[f"T_{sensor}@{tau / 60:.0f}min"] = values
+        # Heat sources warm the structure late: the operating inputs' lags from rest.
+        drivers = {}
+        if variables.spindle_speed_rad_s is not None:
+            drivers["spindle_speed"] = variables.spindle_speed_rad_s
+        drivers.update({f"|v_{a.lower()}|": np.abs(v) for a, v in variables.velocities.items()
+                        if a in "XYZ"})
+        for name, signal in drivers.items():
+            if np.ptp(signal) <= 0:
+                continue
+            for tau in LOCALISATION_LAGS_S:
+                out[f"{name}@{tau / 60:.0f}min"] = variables.lag(f"where_{name}", signal, tau,
+                                                                 from_rest=True)
+    linear = sorted(a for a in variables.positions if a in "XYZ")
+    for i, a in enumerate(linear):
+        for b in linear[i + 1:]:
+            # A twist lives in neither position alone (its mean over one is zero).
+            pa = variables.positions[a] - np.mean(variables.positions[a])
+            pb = variables.positions[b] - np.mean(variables.positions[b])
+            if np.ptp(pa) > 0 and np.ptp(pb) > 0:
+                out[f"{a.lower()}*{b.lower()}"] = pa * pb
+    for i, a in enumerate(structure_sensors):
+        for b in structure_sensors[i + 1:]:
+            values = variables.rise(a) - variables.rise(b)
+            if np.ptp(values) > 0:
+                out[f"T_{a}-{b}"] = values
+    return out
+
+
+def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: Variables,
+             structure_sensors: list[str], noise_sigma: float,
+             strokes: dict[str, tuple[float, float]] | None = None, folds: int = 5
+             ) -> Localisation:
+    """Shares of the residual (N, 3) explained by each variable, and periodogram peaks."""
+    shares, peaks = [], []
+    candidates = candidate_variables(variables, structure_sensors)
+    rms = {}
+    for c, component in enumerate(COMPONENTS):
+        rows = mask[:, c]
+        r = residual[rows, c]
+        if r.size < 4 * folds:
+            continue
+        r = r - r.mean()
+        variance = float(np.mean(r ** 2))
+        rms[component] = float(np.sqrt(variance))
+        if variance <= 0:
+            continue
+        k_lim = max(1, min(60, int(r.size * (folds - 1) / folds) - 1))
+        for name, values in candidates.items():
+            v = values[rows]
+            # Ties (a stepped temperature, a direction) share their neighbours fairly: a
+            # seeded jitter far below the variable's resolution breaks them.
+            jitter = np.random.default_rng(0).uniform(-1e-9, 1e-9, v.size) * (np.ptp(v) or 1.0)
+            result = cross_validate_k(v + jitter, r, k_lim=k_lim, n_folds=folds, seed=0)
+            share = 1.0 - result.cv_rmse ** 2 / variance
+            shares.append(Share(name, component, float(share),
+                                float(np.sqrt(max(share, 0.0) * variance))))
+        for axis, values in variables.positions.items():
+            if strokes is None or axis not in strokes or axis in "ABC":
+                continue
+            q = values[rows]
+            span = float(np.ptp(q))
+            if span <= 0:
+                continue
+            step = 1.0 / (4.0 * span)
+            periods = 1.0 / np.arange(20.0, 500.0, step)
+            explained, amplitude = periodogram(q, r, np.ones(r.size), periods, harmonics=1)
+            best = int(np.argmax(explained))
+            peaks.append(Peak(axis, component, float(periods[best]), float(amplitude[best]),
+                              float(explained[best] / (variance * r.size))))
+    shares.sort(key=lambda s: -s.share)
+    # Time is a proxy, never a cause: a physical variable explaining nearly as much
+    # (within 5 %) is named before it.
+    for i, share in enumerate(shares):
+        if share.variable != "t":
+            continue
+        rival = next((j for j in range(i + 1, len(shares)) if shares[j].variable != "t" and
+                      shares[j].share >= 0.95 * share.share), None)
+        if rival is not None:
+            shares.insert(i, shares.pop(rival))
+        break
+    peaks.sort(key=lambda p: -p.share)
+    return Localisation(shares, peaks, rms, noise_sigma)

@@ -1,0 +1,360 @@
+"""Forward selection of missing effects, judged only on readings the fit did not see.
+
+Given the residual r = measured - model at N readings (time order) and the
+catalogue's candidate terms, each step
+
+1. scores every candidate by **time-blocked K-fold cross-validation**: the
+   readings are cut into K contiguous blocks; each block is predicted by the
+   terms already selected plus the candidate, fitted on the other blocks, with
+   the candidate's setting (order, period, time constant) chosen **inside the
+   fold** from the training blocks only - so a searched period or time
+   constant cannot fit the held-out noise;
+2. takes the candidate with the smallest out-of-fold error and **tests** it:
+   the fraction of the out-of-fold squared error it removes is taken in each
+   of ``n_blocks`` contiguous blocks (blocks against the residual's
+   autocorrelation; fractions so that a trend whose error sits in the end
+   blocks weighs like a uniform one) and tested one-sided (t-test), the p-value multiplied by the number of
+   candidates tried (Bonferroni: the best of M is not a chance winner), and it
+   must also cut the out-of-fold RMSE by ``min_reduction``, remove at least
+   ``min_share`` of what lies above the instrument's noise (a wrong family
+   that trims a little is not an explanation), and carry a parameter above
+   3 standard errors;
+   Candidates whose held-out error is within ``tie`` (2 % in mean square) of the
+   best cannot be told apart by these data: the simplest of them (fewest
+   assumptions, :attr:`EffectFamily.complexity`) is taken - Occam's razor;
+3. if it passes, adds it (setting chosen on all readings), refits every
+   selected term jointly, and looks again; otherwise stops.
+
+The false-alarm rate of this rule on data with nothing missing is measured
+in ``bench/workbench_catalogue.py`` (docs/results.md).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import stats
+
+from ..errors import InsufficientDataError
+from ..effects.base import Context, EffectFamily
+
+
+@dataclass
+class Term:
+    """One candidate: a family's variant with its grid of settings."""
+
+    family: EffectFamily
+    variant: str
+    settings: list[dict]
+
+    @property
+    def name(self) -> str:
+        return f"{self.family.name}:{self.variant}" if self.variant else self.family.name
+
+
+@dataclass
+class Scored:
+    """A candidate's cross-validated score at one selection step."""
+
+    term: Term
+    cv_rmse: float
+    reduction: float
+    p_value: float
+    adjusted_p: float
+    share_of_excess: float
+    setting: dict
+    per_sample_sq: NDArray[np.float64] = field(repr=False)
+    significant: bool = False
+    coefficients: NDArray[np.float64] | None = None
+    standard_errors: NDArray[np.float64] | None = None
+    parameter_names: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Step:
+    """One selection step: the ranking and, if one passed, the term added."""
+
+    base_cv_rmse: float
+    ranking: list[Scored]
+    added: Scored | None
+
+
+def time_blocks(n: int, count: int) -> NDArray[np.intp]:
+    """Block number 0..count-1 of each of n readings in time order (contiguous, near equal)."""
+    sizes = np.full(count, n // count)
+    sizes[: n % count] += 1
+    return np.repeat(np.arange(count), sizes)
+
+
+class Selector:
+    """Forward selection over ``terms`` for the residual (N, 3) at ``ctx``'s readings."""
+
+    def __init__(self, ctx: Context, residual: NDArray[np.float64], mask: NDArray[np.bool_],
+                 noise_sigma: float, *, folds: int = 5, n_blocks: int = 20,
+                 alpha: float = 0.05, min_reduction: float = 0.05, min_share: float = 0.25,
+                 tie: float = 0.02) -> None:
+        n = residual.shape[0]
+        if n < 4 * folds:
+            raise InsufficientDataError(f"{n} reference readings; need >= {4 * folds}")
+        self.ctx = ctx
+        self.mask = mask
+        self.rows = np.flatnonzero(mask.ravel())
+        self.sample_of_row = self.rows // 3
+        self.y = residual.ravel()[self.rows]
+        self.n = n
+        offsets = np.zeros((mask.size, 3))
+        offsets[np.arange(mask.size), np.tile(np.arange(3), n)] = 1.0
+        self.offsets = offsets[self.rows]
+        self.residual = residual
+        self.fold_of_sample = time_blocks(n, folds)
+        self.fold_of_row = self.fold_of_sample[self.sample_of_row]
+        self.folds = folds
+        self.block_of_sample = time_blocks(n, max(4, min(n_blocks, n // 6)))
+        self.noise_sigma = float(noise_sigma)
+        self.alpha, self.min_reduction, self.min_share = alpha, min_reduction, min_share
+        self.tie = tie
+        self._designs: dict[tuple, NDArray[np.float64]] = {}
+        self.selected: list[tuple[Term, dict]] = []
+
+    # ------------------------------------------------------------ designs
+    def design_rows(self, term: Term, setting: dict) -> NDArray[np.float64]:
+        key = (term.name, tuple(sorted(setting.items())))
+        if key not in self._designs:
+            design = term.family.design(self.ctx, term.variant, setting)
+            self._designs[key] = design.reshape(-1, design.shape[2])[self.rows]
+        return self._designs[key]
+
+    def full_design(self, term: Term, setting: dict) -> NDArray[np.float64]:
+        return term.family.design(self.ctx, term.variant, setting)
+
+    def base_columns(self) -> NDArray[np.float64]:
+        columns = [self.offsets] + [self.design_rows(t, s) for t, s in self.selected]
+        return np.column_stack(columns)
+
+    # ------------------------------------------------------------ scoring
+    def _per_sample(self, squared_rows: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.bincount(self.sample_of_row, weights=squared_rows, minlength=self.n)
+
+    def out_of_fold(self, base: NDArray[np.float64], term: Term | None
+                    ) -> tuple[NDArray[np.float64], dict]:
+        """Per-sample out-of-fold squared errors of base (+ term, setting chosen in-fold)."""
+        squared = np.zeros(self.y.size)
+        chosen = {}
+        for fold in range(self.folds):
+            test = self.fold_of_row == fold
+            train = ~test
+            setting = {}
+            if term is not None:
+                setting = self.choose_setting(term, base, train)
+                x = np.column_stack([base, self.design_rows(term, setting)])
+            else:
+                x = base
+            coefficients, *_ = np.linalg.lstsq(x[train], self.y[train], rcond=None)
+            error = x[test] @ coefficients - self.y[test]
+            squared[test] = error ** 2
+            chosen[fold] = setting
+        return self._per_sample(squared), chosen
+
+    def choose_setting(self, term: Term, base: NDArray[np.float64], train: NDArray[np.bool_]
+                       ) -> dict:
+        if len(term.settings) == 1:
+            return term.settings[0]
+        train_samples = np.zeros(self.n, dtype=bool)
+        train_samples[self.sample_of_row[train]] = True
+        coefficients, *_ = np.linalg.lstsq(base[train], self.y[train], rcond=None)
+        after_base = np.zeros(self.mask.size)
+        after_base[self.rows] = self.y - base @ coefficients
+        picked = term.family.preselect(self.ctx, term.variant, term.settings,
+                                       after_base.reshape(-1, 3), self.mask, train_samples)
+        if picked is not None:
+            return picked
+        n = int(train.sum())
+        best, best_bic = term.settings[0], np.inf
+        for setting in term.settings:
+            x = np.column_stack([base, self.design_rows(term, setting)])[train]
+            coefficients, *_ = np.linalg.lstsq(x, self.y[train], rcond=None)
+            rss = float(np.sum((x @ coefficients - self.y[train]) ** 2))
+            bic = n * np.log(max(rss, 1e-300) / n) + x.shape[1] * np.log(n)
+            if bic < best_bic:
+                best, best_bic = setting, bic
+        return best
+
+    def fit_full(self, terms: list[tuple[Term, dict]]):
+        """Joint least-squares fit of the offsets and ``terms`` on every reading.
+
+        Returns (coefficients per term, standard errors per term, residual rows)."""
+        blocks = [self.design_rows(t, s) for t, s in terms]
+        x = np.column_stack([self.offsets] + blocks)
+        coefficients, *_ = np.linalg.lstsq(x, self.y, rcond=None)
+        residual = self.y - x @ coefficients
+        dof = max(1, self.y.size - x.shape[1])
+        sigma2 = float(residual @ residual) / dof
+        covariance = sigma2 * np.linalg.pinv(x.T @ x)
+        standard = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+        out_c, out_s, start = [], [], 3
+        for block in blocks:
+            out_c.append(coefficients[start:start + block.shape[1]])
+            out_s.append(standard[start:start + block.shape[1]])
+            start += block.shape[1]
+        return out_c, out_s, residual
+
+    def _baseline(self):
+        """The current model's columns, out-of-fold squared errors per sample, the number
+        of measured components, their mean square, and what of it stands above noise."""
+        base = self.base_columns()
+        base_sq, _ = self.out_of_fold(base, None)
+        count = int(np.sum(self.mask))
+        base_mse = float(base_sq.sum() / count)
+        return base, base_sq, count, base_mse, base_mse - self.noise_sigma ** 2
+
+    def step(self, terms: list[Term]) -> Step:
+        base, base_sq, count, base_mse, excess = self._baseline()
+        scored = []
+        for term in terms:
+            per_sample, chosen = self.out_of_fold(base, term)
+            mse = float(per_sample.sum() / count)
+            p_value = self._block_test(base_sq, per_sample)
+            share = (base_mse - mse) / excess if excess > 0 else (1.0 if mse < base_mse else 0.0)
+            # The setting reported is the most frequent in-fold choice.
+            settings = [tuple(sorted(s.items())) for s in chosen.values()]
+            setting = dict(max(set(settings), key=settings.count))
+            scored.append(Scored(term, float(np.sqrt(mse)),
+                                 1.0 - np.sqrt(mse / base_mse) if base_mse > 0 else 0.0,
+                                 p_value, 1.0, float(share), setting, per_sample))
+        tried = max(1, len(scored))
+        for s in scored:
+            s.adjusted_p = min(1.0, s.p_value * tried)
+            # Every candidate carries its full-data fit, so that a user may add any of them.
+            coefficients, standard, _ = self.fit_full(self.selected + [(s.term, s.setting)])
+            s.coefficients, s.standard_errors = coefficients[-1], standard[-1]
+            s.parameter_names = s.term.family.parameter_names(s.term.variant, s.setting)
+        scored.sort(key=lambda s: s.cv_rmse)
+        # Occam: among candidates the held-out data cannot tell apart from the best
+        # (out-of-fold MSE within ``tie``), the simplest explanation is named first.
+        if scored:
+            limit = scored[0].cv_rmse ** 2 * (1.0 + self.tie)
+            tied = [s for s in scored if s.cv_rmse ** 2 <= limit]
+            simplest = min(tied, key=lambda s: (s.term.family.complexity, s.cv_rmse))
+            scored.remove(simplest)
+            scored.insert(0, simplest)
+        added = None
+        if scored:
+            best = scored[0]
+            setting = best.setting
+            if len(best.term.settings) > 1:
+                setting = self.choose_setting(best.term, base, np.ones(self.y.size, dtype=bool))
+            coefficients, standard, _ = self.fit_full(self.selected + [(best.term, setting)])
+            best.setting = setting
+            best.coefficients, best.standard_errors = coefficients[-1], standard[-1]
+            best.parameter_names = best.term.family.parameter_names(best.term.variant, setting)
+            strong = bool(np.any(np.abs(coefficients[-1]) > 3.0 * standard[-1]))
+            best.significant = bool(best.adjusted_p < self.alpha and
+                                    best.reduction >= self.min_reduction and
+                                    best.share_of_excess >= self.min_share and strong)
+            if best.significant:
+                added = best
+        return Step(float(np.sqrt(base_mse)), scored, added)
+
+    def _block_test(self, base_sq: NDArray[np.float64], per_sample: NDArray[np.float64]
+                    ) -> float:
+        """One-sided p-value that ``per_sample`` errors are below ``base_sq``: per block, the
+        fraction of its held-out error removed - scale-free, so a trend whose error sits in
+        the end blocks counts as much as a uniform one."""
+        base_blocks = np.bincount(self.block_of_sample, weights=base_sq)
+        gain = 1.0 - np.bincount(self.block_of_sample, weights=per_sample) / \
+            np.maximum(base_blocks, 1e-300)
+        spread = float(np.std(gain, ddof=1))
+        if spread == 0:
+            return 0.0 if np.mean(gain) > 0 else 1.0
+        return float(stats.t.sf(float(np.mean(gain)) / (spread / np.sqrt(gain.size)),
+                                gain.size - 1))
+
+    def above_noise(self) -> bool:
+        """Could what the selected terms leave be the instrument's noise alone? (chi-square
+        at 0.1 %, and a systematic part above half the noise)"""
+        if self.noise_sigma <= 0:
+            return True
+        _, _, rest = self.fit_full(self.selected)
+        mean_square = float(rest @ rest) / rest.size
+        return bool(mean_square * rest.size / self.noise_sigma ** 2 >
+                    stats.chi2.ppf(0.999, rest.size - 1) and
+                    mean_square - self.noise_sigma ** 2 > (0.5 * self.noise_sigma) ** 2)
+
+    def pair_lookahead(self, step: Step, remaining: list[Term], beam: int
+                       ) -> tuple[Scored, Scored] | None:
+        """Two effects at once: when no single candidate passes (each leaves the other's
+        error in its held-out blocks), try each of the ``beam`` best as a first term and
+        the best second term after it; the pair must pass the block test against the
+        current model (Bonferroni over every pair tried) and the second its own test."""
+        base, base_sq, count, base_mse, excess = self._baseline()
+        options = []
+        for first in step.ranking[:beam]:
+            setting = self.choose_setting(first.term, base, np.ones(self.y.size, dtype=bool))
+            self.selected.append((first.term, setting))
+            try:
+                inner = self.step([t for t in remaining if t.name != first.term.name])
+            finally:
+                self.selected.pop()
+            second = inner.added
+            if second is None:
+                continue
+            mse = float(second.per_sample_sq.sum() / count)
+            adjusted = min(1.0, self._block_test(base_sq, second.per_sample_sq) *
+                           beam * max(1, len(remaining)))
+            share = (base_mse - mse) / excess if excess > 0 else 1.0
+            coefficients, standard, _ = self.fit_full(self.selected + [(first.term, setting),
+                                                                       (second.term,
+                                                                        second.setting)])
+            strong = bool(np.any(np.abs(coefficients[-2]) > 3.0 * standard[-2]))
+            if adjusted < self.alpha and share >= 2 * self.min_share and strong and \
+                    1.0 - np.sqrt(mse / base_mse) >= self.min_reduction:
+                first.setting, first.adjusted_p = setting, adjusted
+                first.parameter_names = first.term.family.parameter_names(first.term.variant,
+                                                                          setting)
+                first.significant = True
+                options.append((mse, first, second))
+        if not options:
+            return None
+        _, first, second = min(options, key=lambda o: o[0])
+        return first, second
+
+    def run(self, terms: list[Term], max_terms: int = 4, beam: int = 3) -> list[Step]:
+        """Steps until nothing passes or ``max_terms`` were added; every added term refit
+        jointly at the end (``Scored.coefficients`` of the added ones are the joint fit).
+        A step where no single term passes tries pairs (:meth:`pair_lookahead`)."""
+        steps = []
+        remaining = list(terms)
+        while len(self.selected) < max_terms and remaining:
+            step = self.step(remaining)
+            steps.append(step)
+            # Two effects hiding each other show at the start; later, what the named
+            # effects leave is judged one effect at a time.
+            if step.added is None and beam and not steps[:-1] and \
+                    len(self.selected) + 2 <= max_terms and self.above_noise():
+                pair = self.pair_lookahead(step, remaining, beam)
+                if pair is not None:
+                    step.added = pair[0]
+                    self.selected.append((pair[0].term, pair[0].setting))
+                    remaining = [t for t in remaining if t.name != pair[0].term.name]
+                    step = Step(float(np.sqrt(pair[0].per_sample_sq.sum() / np.sum(self.mask))),
+                                [pair[1]],
+                                pair[1])
+                    steps.append(step)
+            if step.added is None:
+                break
+            self.selected.append((step.added.term, step.added.setting))
+            remaining = [t for t in remaining if t.name != step.added.term.name]
+        added = [s.added for s in steps if s.added is not None]
+        if added:
+            coefficients, standard, _ = self.fit_full(self.selected)
+            for scored, c, s in zip(added, coefficients, standard):
+                scored.coefficients, scored.standard_errors = c, s
+        return steps
+
+    def remaining_residual(self) -> NDArray[np.float64]:
+        """(N, 3) residual after the offsets and the selected terms (in-sample)."""
+        _, _, residual_rows = self.fit_full(self.selected)
+        out = np.zeros(self.mask.size)
+        out[self.rows] = residual_rows
+        return out.reshape(-1, 3)

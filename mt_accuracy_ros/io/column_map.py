@@ -1,0 +1,274 @@
+"""Reference surveys from any data logger's CSV: which column is what, in which unit.
+
+A **column map** (YAML, or ``--col ROLE=COLUMN[:UNIT]`` flags) says::
+
+    time: {column: t, unit: min}            # optional: without it, row order is time,
+    row_period_s: 15                        #   one row every row_period_s (default 1 s)
+    positions: {X: {column: x_mm, unit: mm}, Y: {column: y_mm, unit: mm}, ...}
+    errors: {x: {column: dev_x, unit: um}, z: {column: dev_z, unit: um}}   # TCP error
+    temperatures: {column: {column: T3, unit: degC}, bed: {column: T7, unit: K}}
+    velocities: {X: {column: feed_x, unit: mm/min}}        # optional
+    accelerations: {X: {column: acc_x, unit: m/s^2}}       # optional
+    directions: {X: {column: dir_x}}                       # optional, +-1
+    spindle_speed: {column: S, unit: rpm}                  # optional
+    uncertainty: {value: 1.4, unit: um}                    # the instrument's k = 2 figure
+
+Flags: ``time``, ``pos.X``, ``err.x``, ``temp.<sensor>``, ``vel.X``, ``acc.X``,
+``dir.X``, ``spindle`` as ROLE, e.g. ``--col pos.X=x_mm:mm --col err.x=dev_x:um``.
+
+Everything is converted to SI (REP-103; temperatures stay in degC). A
+missing column, an unknown unit, a column that is not numeric, too few
+rows, or times that go backwards give one :class:`InputDataError` that
+names the column or row; a row with a bad cell in a mapped column is
+dropped and counted (:class:`~.csv_table.CsvTable` style).
+"""
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import InputDataError, ParameterError
+
+_LENGTH = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "micron": 1e-6, "nm": 1e-9,
+           "in": 0.0254, "inch": 0.0254}
+_ANGLE = {"rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6, "deg": math.pi / 180.0,
+          "arcsec": math.pi / 648000.0}
+UNITS = {
+    "length": _LENGTH, "angle": _ANGLE,
+    "time": {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0},
+    "velocity": {"m/s": 1.0, "mm/s": 1e-3, "mm/min": 1e-3 / 60.0, "m/min": 1.0 / 60.0,
+                 "rad/s": 1.0, "deg/s": math.pi / 180.0},
+    "acceleration": {"m/s^2": 1.0, "mm/s^2": 1e-3, "rad/s^2": 1.0},
+    "speed": {"rad/s": 1.0, "rpm": 2.0 * math.pi / 60.0, "1/min": 2.0 * math.pi / 60.0,
+              "Hz": 2.0 * math.pi},
+    "unitless": {"1": 1.0, "": 1.0},
+}
+#: Temperatures in degC (as sensor_msgs/Temperature): (scale, offset) to degC.
+TEMPERATURE = {"degC": (1.0, 0.0), "C": (1.0, 0.0), "K": (1.0, -273.15),
+               "degF": (5.0 / 9.0, -32.0 * 5.0 / 9.0)}
+DEFAULT_UNITS = {"time": "s", "length": "m", "angle": "rad", "velocity": "m/s",
+                 "acceleration": "m/s^2", "speed": "rad/s", "unitless": "1"}
+
+
+@dataclass
+class ColumnMap:
+    """Role -> (column, unit). Roles as in the module docstring."""
+
+    roles: dict[str, tuple[str, str]] = field(default_factory=dict)
+    row_period_s: float = 1.0
+    uncertainty_m: float = 1e-6
+
+    def quantity(self, role: str) -> str:
+        kind, _, axis = role.partition(".")
+        if kind == "time":
+            return "time"
+        if kind == "spindle":
+            return "speed"
+        if kind == "temp":
+            return "temperature"
+        if kind == "dir":
+            return "unitless"
+        rotary = axis.upper() in "ABC" and kind != "err"
+        return {"pos": "angle" if rotary else "length", "err": "length",
+                "vel": "velocity", "acc": "acceleration"}.get(kind, "")
+
+
+def _role_from_yaml(section: str, key: str) -> str:
+    return {"positions": f"pos.{key}", "errors": f"err.{key}", "temperatures": f"temp.{key}",
+            "velocities": f"vel.{key}", "accelerations": f"acc.{key}",
+            "directions": f"dir.{key}"}[section]
+
+
+def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
+    if not isinstance(data, dict):
+        raise ParameterError(f"{source}: expected a mapping (time, positions, errors, ...)")
+    known = {"time", "row_period_s", "positions", "errors", "temperatures", "velocities",
+             "accelerations", "directions", "spindle_speed", "uncertainty", "machine"}
+    unknown = set(data) - known
+    if unknown:
+        raise ParameterError(f"{source}: unknown key(s) {', '.join(sorted(unknown))}; known: "
+                             f"{', '.join(sorted(known))}")
+    out = ColumnMap()
+
+    def entry(value, where):
+        if isinstance(value, str):
+            return value, ""
+        if not isinstance(value, dict) or "column" not in value:
+            raise ParameterError(f"{source}: {where} needs {{column: NAME, unit: UNIT}}")
+        return str(value["column"]), str(value.get("unit", ""))
+
+    for section in ("positions", "errors", "temperatures", "velocities", "accelerations",
+                    "directions"):
+        block = data.get(section) or {}
+        if not isinstance(block, dict):
+            raise ParameterError(f"{source}: {section} must map names to columns")
+        for key, value in block.items():
+            out.roles[_role_from_yaml(section, str(key))] = entry(value, f"{section}.{key}")
+    if "time" in data:
+        out.roles["time"] = entry(data["time"], "time")
+    if "spindle_speed" in data:
+        out.roles["spindle"] = entry(data["spindle_speed"], "spindle_speed")
+    if "row_period_s" in data:
+        out.row_period_s = float(data["row_period_s"])
+        if not (out.row_period_s > 0 and math.isfinite(out.row_period_s)):
+            raise ParameterError(f"{source}: row_period_s must be a positive number of seconds")
+    if "uncertainty" in data:
+        u = data["uncertainty"]
+        value, unit = (u.get("value"), u.get("unit", "m")) if isinstance(u, dict) else (u, "m")
+        out.uncertainty_m = _convert_scalar(value, unit, "length", f"{source}: uncertainty")
+    return out
+
+
+def _convert_scalar(value, unit: str, quantity: str, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+            not math.isfinite(value) or value <= 0:
+        raise ParameterError(f"{where}: expected a positive number, got {value!r}")
+    table = UNITS[quantity]
+    if unit not in table:
+        raise ParameterError(f"{where}: unknown unit {unit!r}; known: {', '.join(table)}")
+    return float(value) * table[unit]
+
+
+def parse_col_flags(flags: list[str], base: ColumnMap | None = None) -> ColumnMap:
+    """``ROLE=COLUMN[:UNIT]`` flags on top of ``base``."""
+    out = base or ColumnMap()
+    for flag in flags:
+        role, sep, rest = flag.partition("=")
+        if not sep or not rest:
+            raise ParameterError(f"--col {flag!r}: expected ROLE=COLUMN[:UNIT], e.g. "
+                                 "pos.X=x_mm:mm")
+        column, _, unit = rest.rpartition(":") if ":" in rest else (rest, "", "")
+        out.roles[role.strip()] = (column.strip(), unit.strip())
+    return out
+
+
+def _scale(column_map: ColumnMap, role: str, unit: str):
+    """(scale, offset) that take the column to SI; raises naming the role's unit."""
+    quantity = column_map.quantity(role)
+    if not quantity:
+        raise ParameterError(f"column role {role!r} unknown; roles: time, pos.X, err.x, "
+                             "temp.<sensor>, vel.X, acc.X, dir.X, spindle")
+    if quantity == "temperature":
+        unit = unit or "degC"
+        if unit not in TEMPERATURE:
+            raise ParameterError(f"{role}: unknown temperature unit {unit!r}; known: "
+                                 f"{', '.join(TEMPERATURE)}")
+        return TEMPERATURE[unit]
+    unit = unit or DEFAULT_UNITS[quantity]
+    table = UNITS[quantity]
+    if unit not in table:
+        raise ParameterError(f"{role}: unknown {quantity} unit {unit!r}; known: "
+                             f"{', '.join(u for u in table if u)}")
+    return table[unit], 0.0
+
+
+@dataclass
+class MappedSurvey:
+    time_s: np.ndarray
+    positions: dict[str, np.ndarray]
+    errors: dict[str, np.ndarray]
+    temperatures: dict[str, np.ndarray]
+    velocities: dict[str, np.ndarray]
+    accelerations: dict[str, np.ndarray]
+    directions: dict[str, np.ndarray]
+    spindle_speed_rad_s: np.ndarray | None
+    rows_read: int
+    rows_dropped: int
+    drop_reasons: list[str]
+
+    def summary(self, name: str) -> str:
+        kept = self.rows_read - self.rows_dropped
+        text = f"{name}: {kept} of {self.rows_read} rows used"
+        if self.rows_dropped:
+            text += f"; {self.rows_dropped} dropped ({'; '.join(self.drop_reasons[:3])})"
+        return text
+
+
+def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 20
+                    ) -> MappedSurvey:
+    """The mapped columns of ``path`` in SI units, rows with a bad mapped cell dropped."""
+    path = Path(path)
+    if not any(r.startswith("pos.") for r in column_map.roles):
+        raise ParameterError("column map: no axis position column (pos.X=COLUMN)")
+    if not any(r.startswith("err.") for r in column_map.roles):
+        raise ParameterError("column map: no error column (err.x=COLUMN)")
+    for role in column_map.roles:
+        kind, _, key = role.partition(".")
+        if kind == "err" and key not in ("x", "y", "z"):
+            raise ParameterError(f"{role}: the TCP error components are err.x, err.y, err.z")
+        if kind in ("pos", "vel", "acc", "dir") and (len(key) != 1 or key not in "XYZABC"):
+            raise ParameterError(f"{role}: name the axis with its letter (X Y Z A B C)")
+    scales = {role: _scale(column_map, role, unit) for role, (_, unit) in
+              column_map.roles.items()}
+    try:
+        with open(path, newline="", encoding="utf-8") as stream:
+            rows = [r for r in csv.reader(stream) if any(c.strip() for c in r)]
+    except OSError as exc:
+        raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputDataError(f"{path}: not a text CSV file ({exc})") from exc
+    if not rows:
+        raise InputDataError(f"{path}: empty file")
+    header = [h.strip() for h in rows[0]]
+    index = {}
+    for role, (column, _) in column_map.roles.items():
+        if column not in header:
+            raise InputDataError(f"{path}: no column {column!r} (for {role}); columns: "
+                                 f"{', '.join(header)}")
+        index[role] = header.index(column)
+    values = {role: [] for role in column_map.roles}
+    bad_in_column = {role: 0 for role in column_map.roles}
+    first_bad = {}
+    dropped, reasons = 0, []
+    for number, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
+                                 f"{len(header)}")
+        parsed, problem = {}, ""
+        for role, j in index.items():
+            cell = row[j].strip()
+            try:
+                value = float(cell)
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                bad_in_column[role] += 1
+                first_bad.setdefault(role, (number, cell))
+                problem = problem or f"row {number} column {header[j]}: {cell[:20]!r}"
+            parsed[role] = value
+        if problem:
+            dropped += 1
+            if len(reasons) < 5:
+                reasons.append(problem)
+            continue
+        for role, value in parsed.items():
+            values[role].append(value)
+    total = len(rows) - 1
+    for role, bad in bad_in_column.items():
+        if total and bad > total / 2:
+            number, cell = first_bad[role]
+            raise InputDataError(f"{path}: column {column_map.roles[role][0]!r} ({role}) is not "
+                                 f"numeric ({bad} of {total} rows; row {number}: {cell[:20]!r})")
+    kept = total - dropped
+    if kept < min_rows:
+        raise InputDataError(f"{path}: {kept} usable rows; at least {min_rows} needed"
+                             + (f" ({reasons[0]})" if reasons else ""))
+    si = {role: np.asarray(v) * scales[role][0] + scales[role][1] for role, v in values.items()}
+    if "time" in si:
+        time_s = si["time"]
+        backwards = np.flatnonzero(np.diff(time_s) <= 0)
+        if backwards.size:
+            raise InputDataError(f"{path}: the time column {column_map.roles['time'][0]!r} does "
+                                 f"not increase at data row {int(backwards[0]) + 2} (sort the "
+                                 "file or fix the stamps)")
+    else:
+        time_s = np.arange(kept) * column_map.row_period_s
+    pick = lambda kind: {r.split(".", 1)[1].upper() if kind != "temp" else r.split(".", 1)[1]:  # noqa: E731
+                         v for r, v in si.items() if r.startswith(kind + ".")}
+    errors = {r.split(".", 1)[1]: v for r, v in si.items() if r.startswith("err.")}
+    return MappedSurvey(time_s, pick("pos"), errors, pick("temp"), pick("vel"), pick("acc"),
+                        pick("dir"), si.get("spindle"), total, dropped, reasons)

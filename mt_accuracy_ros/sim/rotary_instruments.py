@@ -1,0 +1,114 @@
+"""Instruments on a rotary axis of the virtual machine: a ball bar and a touch probe.
+
+Both are written from the geometry up, sharing no code with the estimators
+they feed (:mod:`..core.rotary`), so an error in an estimator's model cannot
+cancel out in its own test data:
+
+* the table's error motion is an exact rotation about the tilt vector
+  (Rodrigues' formula) followed by the radial/axial shift - not the estimator's
+  X-Y-Z Euler product or Zhu's first-order matrix;
+* a rotary axis's location error is the axis line itself, moved and tilted:
+  points rotate about that line (Rodrigues again), not through an HTM chain.
+
+Ball bar (Zhu ch. 5 procedure): the table indexes 0-360 deg in 10 deg steps
+(37 positions) for each of two bars, three repetitions each; the first
+position of every repetition is reached after the table came back from the
+previous run, i.e. from the other direction: the drive's lost motion and the
+tilt the worm's reversed contact force gives the table (``reversal_*``) act
+there only. Noise is the bar's transducer noise (white, per reading).
+
+Touch probe (the KinematicsOpt job): a calibration sphere on the table,
+probed at several rotary positions with touch points on its surface.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+def _rodrigues(vector: NDArray) -> NDArray:
+    """Rotation matrix of the rotation vector ``vector`` (axis * angle), exact."""
+    angle = float(np.linalg.norm(vector))
+    if angle == 0.0:
+        return np.eye(3)
+    k = np.asarray(vector, float) / angle
+    skew = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * skew + (1 - np.cos(angle)) * skew @ skew
+
+
+def _about_z(angle: float) -> NDArray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+@dataclass
+class RotaryTableTruth:
+    """The table's true errors (constant over the turn, as Zhu assumes) [m, rad]."""
+
+    radial_m: tuple[float, float] = (0.0, 0.0)       # D_x, D_y
+    axial_m: float = 0.0                             # D_z
+    tilt_rad: tuple[float, float] = (0.0, 0.0)       # E_x, E_y
+    positioning_rad: float = 0.0                     # E_z
+    reversal_lost_motion_rad: float = 0.0
+    reversal_tilt_rad: tuple[float, float] = (0.0, 0.0)
+
+
+@dataclass
+class BallBarPlan:
+    """Zhu's experiment (section 5.4) by default."""
+
+    short_bar_m: float = 0.090850
+    long_bar_m: float = 0.217952
+    radius_m: float = 0.071842
+    socket_height_m: float = 0.0
+    angles_deg: NDArray = field(default_factory=lambda: np.arange(0.0, 361.0, 10.0))
+    repetitions: int = 3
+    eccentricity_m: tuple[float, float] = (40e-6, -65e-6)     # H_x, H_y of the short setup
+    #: How much the spindle ball's eccentricity changes when it moves up for the long bar.
+    eccentricity_change_m: tuple[float, float] = (0.0, 0.0)
+    noise_m: float = 0.1e-6
+
+
+@dataclass
+class BallBarData:
+    """Readings [m] per bar: (repetitions, positions); angles [deg] as indexed."""
+
+    angles_deg: NDArray
+    short: NDArray
+    long: NDArray
+    plan: BallBarPlan
+
+
+def _bar_reading(angle: float, plan: BallBarPlan, truth: RotaryTableTruth, bar_m: float,
+                 eccentricity: tuple[float, float], reversed_approach: bool) -> float:
+    lost = truth.reversal_lost_motion_rad if reversed_approach else 0.0
+    tilt = np.array([truth.tilt_rad[0], truth.tilt_rad[1], truth.positioning_rad])
+    if reversed_approach:
+        tilt[:2] += truth.reversal_tilt_rad
+    ball_on_table = np.array([plan.radius_m, 0.0, plan.socket_height_m])
+    table_ball = (_rodrigues(tilt) @ (_about_z(angle - lost) @ ball_on_table)
+                  + np.array([truth.radial_m[0], truth.radial_m[1], truth.axial_m]))
+    height = plan.socket_height_m + np.sqrt(bar_m ** 2 - plan.radius_m ** 2)
+    spindle_ball = np.array([eccentricity[0], eccentricity[1], height])
+    return float(np.linalg.norm(table_ball - spindle_ball) - bar_m)
+
+
+def ballbar_test(truth: RotaryTableTruth, plan: BallBarPlan | None = None, *,
+                 seed: int = 0) -> BallBarData:
+    """Both setups of Zhu's two-bar test on the virtual rotary table."""
+    plan = plan or BallBarPlan()
+    rng = np.random.default_rng(seed)
+    angles = np.radians(np.asarray(plan.angles_deg, float))
+    out = {}
+    for which, bar, ecc in (("short", plan.short_bar_m, plan.eccentricity_m),
+                            ("long", plan.long_bar_m,
+                             (plan.eccentricity_m[0] + plan.eccentricity_change_m[0],
+                              plan.eccentricity_m[1] + plan.eccentricity_change_m[1]))):
+        readings = np.empty((plan.repetitions, angles.size))
+        for r in range(plan.repetitions):
+            for i, angle in enumerate(angles):
+                readings[r, i] = _bar_reading(angle, plan, truth, bar, ecc, reversed_approach=i == 0)
+        out[which] = readings + rng.normal(0.0, plan.noise_m, readings.shape)
+    return BallBarData(np.asarray(plan.angles_deg, float), out["short"], out["long"], plan)
