@@ -1,0 +1,121 @@
+"""Rotary-axis location errors from a probed sphere, on data from the foreign chain.
+
+The centres come from ``studies/foreign_machine.py`` - its own 4x4 chain with exact
+rotation vectors, sharing no code with the kinematic model the identification uses.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.core.errors import CalibrationError, InputDataError
+from mt_accuracy_ros.core.kinematics.machine import load_machine
+from mt_accuracy_ros.core.rotary.probing import (default_rotary_parameters, fit_sphere,
+                                                 identify_location_errors,
+                                                 observable_parameters, volumetric_error)
+from studies.foreign_machine import ErrorSet, read_geometry, tcp_point
+
+MACHINE = load_machine("khan_chen_rpppr")
+SPHERE = np.array([0.05, 0.08, 0.06])          # nominal sphere centre in the A table frame
+SPHERE_OFFSET = np.array([3e-4, -2e-4, 1e-4])  # where it really sits, relative to nominal
+TRUTH = {"A": np.array([0, 20e-6, -15e-6, 0, 30e-6, -25e-6]),
+         "B": np.array([0, 0, 0, 15e-6, 0, -20e-6])}
+
+
+def _cycles():
+    a = np.radians(np.r_[np.arange(-90, 91, 30), np.zeros(7), [45, -45, 45, -45]])
+    b = np.radians(np.r_[np.zeros(7), np.arange(-60, 61, 20), [30, 30, -30, -30]])
+    n = a.size
+    return {"X": np.full(n, 0.3), "Y": np.full(n, 0.2), "Z": np.full(n, 0.2), "A": a, "B": b}
+
+
+def _measured(q, truth, seed=0, noise_m=0.5e-6):
+    geometry = read_geometry("khan_chen_rpppr")
+    errors = ErrorSet(location_fns={axis: [lambda state, t=t: t] for axis, t in truth.items()})
+    actual = tcp_point(replace(geometry, workpiece=SPHERE + SPHERE_OFFSET), q, errors)
+    nominal = tcp_point(replace(geometry, workpiece=SPHERE), q, None)
+    rng = np.random.default_rng(seed)
+    return -(actual - nominal) + rng.normal(0.0, noise_m, actual.shape)
+
+
+def test_location_errors_and_the_sphere_are_found_within_their_uncertainty():
+    q = _cycles()
+    result = identify_location_errors(MACHINE, q, _measured(q, TRUTH), sphere_nominal_m=SPHERE)
+    expected = {"EY0A": 20e-6, "EZ0A": -15e-6, "EB0A": 30e-6, "EC0A": -25e-6,
+                "EA0B": 15e-6, "EC0B": -20e-6}
+    for name, value in expected.items():
+        assert abs(result.parameters[name] - value) <= 3 * result.uncertainties[name], name
+    np.testing.assert_allclose(result.sphere_offset_m, SPHERE_OFFSET, atol=3e-6)
+    # The centre wandered by hundreds of um as the axes turned; what is left is the noise.
+    assert result.dispersion_before_m > 100e-6
+    assert result.rms_after_m < 1.5e-6 and result.dispersion_after_m < 3e-6
+    # B's frame offsets are constant in the machine: one sphere cannot tell them from the
+    # sphere's own setup position or from A's offsets - said, not guessed.
+    assert set(result.not_observable) == {"EX0B", "EZ0B"}
+    assert "not observable" in result.text()
+
+
+def test_volumetric_error_falls_once_the_identified_errors_are_compensated():
+    q = _cycles()
+    result = identify_location_errors(MACHINE, q, _measured(q, TRUTH), sphere_nominal_m=SPHERE)
+    rng = np.random.default_rng(1)
+    grid = {axis: rng.uniform(*MACHINE.axes[axis].stroke, 500) for axis in MACHINE.axis_order}
+    truth_named = {"EY0A": 20e-6, "EZ0A": -15e-6, "EB0A": 30e-6, "EC0A": -25e-6,
+                   "EA0B": 15e-6, "EC0B": -20e-6}
+    before = volumetric_error(MACHINE, truth_named, grid)
+    residual = {k: truth_named[k] - result.parameters[k] for k in truth_named}
+    after = volumetric_error(MACHINE, residual, grid)
+    rms = lambda e: np.sqrt(np.mean(np.sum(e ** 2, axis=1)))  # noqa: E731
+    assert rms(after) < 0.15 * rms(before)
+
+
+def test_repeated_cycles_give_a_repeatability():
+    q = _cycles()
+    twice = {axis: np.r_[v, v] for axis, v in q.items()}
+    measured = np.vstack([_measured(q, TRUTH, seed=0), _measured(q, TRUTH, seed=1)])
+    result = identify_location_errors(MACHINE, twice, measured, sphere_nominal_m=SPHERE)
+    assert result.repeatability_m == pytest.approx(0.5e-6, rel=0.3)
+
+
+def test_the_default_parameters_and_what_one_sphere_can_see():
+    assert default_rotary_parameters(MACHINE) == ["EY0A", "EZ0A", "EB0A", "EC0A",
+                                                  "EX0B", "EZ0B", "EA0B", "EC0B"]
+    kept, dropped = observable_parameters(MACHINE, _cycles(), sphere_nominal_m=SPHERE)
+    assert dropped == ["EX0B", "EZ0B"] and "EY0A" in kept
+
+
+def test_sphere_fit_recovers_the_centre_and_refuses_a_stray_touch():
+    rng = np.random.default_rng(4)
+    directions = rng.normal(size=(9, 3))
+    directions[:, 2] = np.abs(directions[:, 2])           # upper half: the probe's reach
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    centre = np.array([0.1, -0.02, 0.3])
+    points = centre + 0.0125 * directions + rng.normal(0, 0.2e-6, (9, 3))
+    fit = fit_sphere(points, 0.0125)
+    np.testing.assert_allclose(fit.centre_m, centre, atol=1e-6)
+    free = fit_sphere(points)
+    assert free.radius_m == pytest.approx(0.0125, abs=1e-6)
+    stray = points.copy()
+    stray[3] += [0.0, 0.0, 2e-3]                           # touched the fixture
+    with pytest.raises(InputDataError, match="touch point 3 is"):
+        fit_sphere(stray, 0.0125)
+    with pytest.raises(InputDataError, match="in a plane"):
+        fit_sphere(np.c_[points[:, :2], np.zeros(9)], 0.0125)
+
+
+def test_bad_probing_input_is_named():
+    q = _cycles()
+    measured = _measured(q, TRUTH)
+    with pytest.raises(InputDataError, match="axis B has 17 positions for 18"):
+        identify_location_errors(MACHINE, {**q, "B": q["B"][:-1]}, measured)
+    bad = measured.copy()
+    bad[2, 1] = np.nan
+    with pytest.raises(InputDataError, match="non-finite"):
+        identify_location_errors(MACHINE, q, bad)
+    with pytest.raises(CalibrationError, match="EX0B"):
+        identify_location_errors(MACHINE, q, measured, ["EX0B", "EB0A"], sphere_nominal_m=SPHERE)
+    still = {**q, "A": np.zeros_like(q["A"])}
+    with pytest.raises(InputDataError, match="needs the A axis probed at 3 or more"):
+        identify_location_errors(MACHINE, still, measured, ["EB0A"])
