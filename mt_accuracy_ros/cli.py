@@ -277,10 +277,12 @@ def build_parser() -> argparse.ArgumentParser:
                       help="wait up to S seconds for subscribers before playing")
     play.set_defaults(handler=_play)
     from .model_tools import add_parser as add_model_parser
+    from .rotary_tools import add_parser as add_rotary_parser
     from .topic_tools import add_parser as add_topic_parser
 
     add_topic_parser(commands)
     add_model_parser(commands)
+    add_rotary_parser(commands)
     return parser
 
 

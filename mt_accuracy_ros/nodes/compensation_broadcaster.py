@@ -190,14 +190,9 @@ class CompensationBroadcaster(Node):
             grid = np.linspace(*spec.stroke, points)
             columns = [f"{axis}_m"]
             values = [grid]
-            fitted = model.table_motion_errors(axis, grid)   # the catalogue's, added on top
-            for component in COMPONENTS:
-                name = f"E{component}{axis}"
-                unit = "m" if component in "XYZ" else "rad"
-                columns.append(f"{name}_{unit}")
-                function = model.profiles.get(name) if "geometric" in model.effects else None
-                values.append((function(grid) if function is not None
-                               else spec.motion_errors[component](grid)) + fitted.get(name, 0.0))
+            for name, column in model.component_errors(axis, grid).items():
+                columns.append(f"{name}_{'m' if name[1] in 'XYZ' else 'rad'}")
+                values.append(column)
             table = CompensationTable()
             table.header.stamp = self.get_clock().now().to_msg()
             table.header.frame_id = model.machine.name
@@ -207,15 +202,7 @@ class CompensationBroadcaster(Node):
             table.axis = axis.lower()
             table.columns = columns
             table.values = pack_float64(np.column_stack(values).ravel())
-            # Location errors: the calibrated description's, then the model's squareness.
-            squareness = {}
-            if "geometric" in model.effects:
-                for name in model.machine.axis_order:
-                    for component, value in model.machine.axes[name].location_errors.items():
-                        squareness[f"E{component}0{name}"] = float(value)
-            squareness.update(model.effects.get("squareness", {}).get("errors_rad", {}))
-            for name, value in model.table_location_errors().items():
-                squareness[name] = squareness.get(name, 0.0) + value
+            squareness = model.location_table()
             table.squareness_names = list(squareness)
             table.squareness = [float(v) for v in squareness.values()]
             self._tables.publish(table)

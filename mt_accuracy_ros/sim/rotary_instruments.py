@@ -112,3 +112,60 @@ def ballbar_test(truth: RotaryTableTruth, plan: BallBarPlan | None = None, *,
                 readings[r, i] = _bar_reading(angle, plan, truth, bar, ecc, reversed_approach=i == 0)
         out[which] = readings + rng.normal(0.0, plan.noise_m, readings.shape)
     return BallBarData(np.asarray(plan.angles_deg, float), out["short"], out["long"], plan)
+
+
+# ----------------------------------------------------------------- touch probe
+@dataclass
+class ProbingPlan:
+    """A KinematicsOpt-style cycle plan for a machine with rotary axes.
+
+    ``rotary_positions_deg``: axis -> the positions each rotary axis is probed at
+    (the others at 0); ``linear_m``: where the linear axes stand; the sphere sits at
+    ``sphere_m`` in the workpiece-end frame, really at ``sphere_m + sphere_offset_m``.
+    """
+
+    rotary_positions_deg: dict[str, list[float]]
+    linear_m: dict[str, float]
+    sphere_m: tuple[float, float, float] = (0.05, 0.08, 0.06)
+    sphere_offset_m: tuple[float, float, float] = (3e-4, -2e-4, 1e-4)
+    sphere_radius_m: float = 0.0125
+    touches: int = 9
+    noise_m: float = 0.3e-6
+    repeats: int = 1
+
+
+def probe_sphere(machine, plan: ProbingPlan, location_errors: dict[str, float], *,
+                 seed: int = 0) -> dict:
+    """Touch points of each cycle relative to where the CNC expects the sphere's centre.
+
+    The machine's true geometry is ``machine`` with ``location_errors`` (the virtual
+    machine's own kinematic chain); returns ``positions`` (axis -> (N,)),
+    ``touch_points_m`` (N, touches, 3) and the truth.
+    """
+    from dataclasses import replace
+
+    from ..core.kinematics.chain import ErrorOverrides, KinematicModel
+
+    rng = np.random.default_rng(seed)
+    rows = []
+    for axis, angles in plan.rotary_positions_deg.items():
+        for angle in angles:
+            q = {a: plan.linear_m.get(a, 0.0) for a in machine.axis_order}
+            q[axis] = np.radians(angle)
+            rows.append(q)
+    rows = rows * plan.repeats
+    positions = {a: np.array([r[a] for r in rows], float) for a in machine.axis_order}
+    sphere = np.asarray(plan.sphere_m, float)
+    nominal = KinematicModel(replace(machine, workpiece=sphere)).nominal_relative(positions)
+    actual_machine = KinematicModel(replace(machine, workpiece=sphere + plan.sphere_offset_m))
+    error = actual_machine.tcp_error(positions, overrides=ErrorOverrides(
+        location=dict(location_errors), use_description=False), check_stroke=False)["position"]
+    error = error + actual_machine.nominal_relative(positions) - nominal
+    centres = -error                                   # where the probe finds the centre
+    n = centres.shape[0]
+    directions = rng.normal(size=(n, plan.touches, 3))
+    directions[..., 2] = np.abs(directions[..., 2])    # the upper half the probe can reach
+    directions /= np.linalg.norm(directions, axis=2, keepdims=True)
+    points = centres[:, None, :] + plan.sphere_radius_m * directions \
+        + rng.normal(0.0, plan.noise_m, (n, plan.touches, 3))
+    return {"positions": positions, "touch_points_m": points, "centres_m": centres}

@@ -364,6 +364,51 @@ class ErrorModel:
             out[variant] = out.get(variant, 0.0) + values
         return out
 
+    def component_errors(self, axis: str, grid: ArrayLike) -> dict[str, NDArray[np.float64]]:
+        """The six ISO 230-1 component errors of a linear ``axis`` on ``grid`` [m or rad].
+
+        The live profile where the model uses measured geometry (``geometric``),
+        else the machine description's function, plus every fitted catalogue
+        effect that is a function of this axis' position: what a CNC's per-axis
+        compensation table holds.
+        """
+        spec = self.machine.axes[axis]
+        grid = np.asarray(grid, dtype=np.float64)
+        fitted = self.table_motion_errors(axis, grid)
+        out = {}
+        for component in "XYZABC":
+            name = f"E{component}{axis}"
+            function = self.profiles.get(name) if "geometric" in self.effects else None
+            base = function(grid) if function is not None else spec.motion_errors[component](grid)
+            out[name] = np.asarray(base, dtype=np.float64) + fitted.get(name, 0.0)
+        return out
+
+    def location_table(self) -> dict[str, float]:
+        """Every location error the model holds (squareness, offsets) by ISO name [m or rad]:
+        the calibrated description's, the ``squareness`` effect's and the catalogue's."""
+        out: dict[str, float] = {}
+        if "geometric" in self.effects:
+            for name in self.machine.axis_order:
+                for component, value in self.machine.axes[name].location_errors.items():
+                    out[f"E{component}0{name}"] = float(value)
+        out.update({k: float(v) for k, v in
+                    self.effects.get("squareness", {}).get("errors_rad", {}).items()})
+        for name, value in self.table_location_errors().items():
+            out[name] = out.get(name, 0.0) + value
+        return out
+
+    def backlash_m(self, axis: str) -> float:
+        """Reversal value of a linear axis [m]: the built-in and catalogue ``reversal``."""
+        total = 0.0
+        builtin = self.effects.get("reversal")
+        if isinstance(builtin, dict) and axis in builtin.get("axes", []):
+            total += float(builtin.get("backlash_m", 0.0))
+        for entry in self.effects.values():
+            if is_catalogue_entry(entry) and entry.get("family") == "reversal" and \
+                    entry.get("variant") == axis:
+                total += float(entry["coefficients"]["backlash_m"])
+        return total
+
     def table_location_errors(self) -> dict[str, float]:
         """Location errors (squareness) of the fitted catalogue effects [rad]."""
         out: dict[str, float] = {}

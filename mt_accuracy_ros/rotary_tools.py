@@ -1,0 +1,187 @@
+"""``mt-accuracy ballbar|probe|export``: rotary-axis calibration and CNC tables (issue 20).
+
+* ``ballbar FILE --radius-mm R`` - Zhu ch. 5 two-setup calibration of a rotary
+  table; ``--simulate`` first writes FILE from the virtual table (Table 5.2-size
+  errors; ``--backlash`` adds a lost motion).
+* ``probe FILE --machine M --sphere-radius-mm r`` - the rotary axes' location
+  errors from a probed sphere; ``--simulate`` writes FILE from the virtual
+  machine with known location errors (and prints them).
+* ``export MODEL --spacing-mm h --out DIR`` - per-axis bilateral tables and the
+  volumetric parameter file, read back, applied and compared with the model.
+
+Each can write ``--report`` (HTML with plots) and ``--json``; outputs are
+written whole or not at all.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+
+def _finish(sections, title: str, subtitle: str, report: str | None, summary: dict,
+            json_path: str | None) -> None:
+    from .io.rotary_csv import atomic_write_text
+    from .report import Report, render
+
+    if report:
+        render(Report(title, subtitle, sections), Path(report))
+        print(f"  report: {report}")
+    if json_path:
+        atomic_write_text(json_path, json.dumps(summary, indent=1, default=float) + "\n")
+        print(f"  json: {json_path}")
+
+
+def _report_dir(report: str | None) -> tuple[Path, str]:
+    if report:
+        path = Path(report)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        return path.parent, path.with_suffix("").name
+    import tempfile
+
+    return Path(tempfile.mkdtemp()), "rotary"
+
+
+def _ballbar(args: argparse.Namespace) -> int:
+    from .core.rotary.ballbar import ARCSEC, calibrate
+    from .io.rotary_csv import atomic_write_text, ballbar_csv_text, read_ballbar_csv
+    from .sim.rotary_instruments import BallBarPlan, RotaryTableTruth, ballbar_test
+
+    if args.simulate is not None:
+        truth = RotaryTableTruth(radial_m=(15e-6, -15e-6), axial_m=2.68e-6,
+                                 tilt_rad=(7.93 * ARCSEC, 7.38 * ARCSEC), positioning_rad=0.15e-3,
+                                 reversal_lost_motion_rad=1e-4 if args.backlash else 0.0,
+                                 reversal_tilt_rad=(0.0, 12e-6) if args.backlash else (0.0, 0.0))
+        plan = BallBarPlan(radius_m=args.radius_mm * 1e-3)
+        data = ballbar_test(truth, plan, seed=args.simulate)
+        atomic_write_text(args.file, ballbar_csv_text(data.angles_deg, data.short, data.long,
+                                                      plan.short_bar_m, plan.long_bar_m))
+        print(f"simulated ball-bar runs written to {args.file} (true E_x 7.93\", E_y 7.38\", "
+              f"D_z 2.68 um{', with a rotary backlash' if args.backlash else ''})")
+    short, long = read_ballbar_csv(args.file, args.radius_mm * 1e-3, args.socket_height_mm * 1e-3)
+    result = calibrate(short, long)
+    print(result.text())
+    if args.report or args.json:
+        from .report.rotary import ballbar_sections
+
+        directory, stem = _report_dir(args.report)
+        sections = ballbar_sections(result, directory, stem) if args.report else []
+        _finish(sections, "mt-accuracy ballbar", f"Rotary-table calibration from {args.file} "
+                "(Zhu 2008, ch. 5)", args.report, result.as_dict(), args.json)
+    return 0
+
+
+def _probe(args: argparse.Namespace) -> int:
+    from .core.kinematics.machine import load_machine
+    from .core.rotary.probing import fit_sphere, identify_location_errors
+    from .io.rotary_csv import atomic_write_text, probing_csv_text, read_probing_csv
+    from .sim.rotary_instruments import ProbingPlan, probe_sphere
+
+    machine = load_machine(args.machine)
+    rotary = {a for a in machine.axis_order if machine.axes[a].is_rotary}
+    if not rotary:
+        raise ValueError(f"machine {machine.name} has no rotary axis to probe")
+    sphere = np.array(args.sphere_mm, float) * 1e-3
+    if args.simulate is not None:
+        truth = {"EY0A": 20e-6, "EZ0A": -15e-6, "EB0A": 30e-6, "EC0A": -25e-6,
+                 "EA0B": 15e-6, "EC0B": -20e-6}
+        truth = {k: v for k, v in truth.items() if k[-1] in rotary}
+        linear = {a: float(np.mean(machine.axes[a].stroke)) for a in machine.axis_order
+                  if a not in rotary}
+        plan = ProbingPlan({a: list(np.arange(-60.0, 61.0, 20.0)) for a in sorted(rotary)},
+                           linear, sphere_m=tuple(sphere),
+                           sphere_radius_m=args.sphere_radius_mm * 1e-3, repeats=2)
+        data = probe_sphere(machine, plan, truth, seed=args.simulate)
+        atomic_write_text(args.file, probing_csv_text(data["positions"], data["touch_points_m"],
+                                                      rotary))
+        print(f"simulated probing written to {args.file}; the virtual machine's location "
+              "errors: " + ", ".join(f"{k} {v * 1e6:+.1f}" for k, v in truth.items()))
+    positions, touches = read_probing_csv(args.file, machine.axis_order, rotary)
+    centres = np.array([fit_sphere(points, args.sphere_radius_mm * 1e-3,
+                                   tolerance_m=args.tolerance_um * 1e-6,
+                                   label=f"cycle {i + 1}").centre_m
+                        for i, points in enumerate(touches)])
+    result = identify_location_errors(machine, positions, centres,
+                                      args.parameters.split(",") if args.parameters else None,
+                                      sphere_nominal_m=sphere)
+    print(result.text())
+    if args.report or args.json:
+        from .report.rotary import probing_section
+
+        _finish([probing_section(result)], "mt-accuracy probe",
+                f"Rotary-axis location errors of {machine.name} from {args.file}", args.report,
+                result.as_dict(), args.json)
+    return 0
+
+
+def _export(args: argparse.Namespace) -> int:
+    from .core.compensation.cnc_export import (bilateral_tables, round_trip, write_bilateral_csv,
+                                               write_isg_csv)
+    from .core.compensation.error_model import resolve_model
+    from .io.rotary_csv import atomic_write_text
+
+    model = resolve_model(args.model)
+    spacing = args.spacing_mm * 1e-3
+    # Everything is computed before anything is written: a bad spacing writes nothing.
+    texts = {f"{axis}_bilateral.csv": write_bilateral_csv(table, model.machine.name)
+             for axis, table in bilateral_tables(model, spacing).items()}
+    texts["volumetric_isg.csv"] = write_isg_csv(model, spacing)
+    check = round_trip(model, spacing)
+    out = Path(args.out)
+    for name, text in texts.items():
+        atomic_write_text(out / name, text)
+    print(f"wrote {', '.join(texts)} to {out} (spacing {args.spacing_mm:g} mm)")
+    print(f"  round trip: tables read back and applied differ from the model by at most "
+          f"{check.tcp_max_error_m * 1e6:.3f} um at the TCP (RMS {check.tcp_rms_error_m * 1e6:.3f}"
+          f" um); interpolation bound {check.tcp_bound_m * 1e6:.3f} um")
+    if args.report or args.json:
+        from .report.rotary import export_section
+
+        _finish([export_section(check, list(texts))], "mt-accuracy export",
+                f"CNC compensation tables of {args.model}", args.report,
+                {"files": list(texts), **check.as_dict()}, args.json)
+    return 0
+
+
+def add_parser(commands) -> None:
+    ballbar = commands.add_parser("ballbar", help="rotary-table calibration with a ball bar "
+                                  "(two bars, Zhu ch. 5; l2 and l-infinity)")
+    ballbar.add_argument("file", help="ball-bar CSV: bar_mm,repetition,angle_deg,change_um")
+    ballbar.add_argument("--radius-mm", type=float, default=71.842,
+                         help="R_x: the table ball's distance from the table centre [mm]")
+    ballbar.add_argument("--socket-height-mm", type=float, default=0.0,
+                         help="R_z: the table ball's height above the table centre [mm]")
+    ballbar.add_argument("--simulate", type=int, metavar="SEED",
+                         help="first write FILE from the virtual rotary table")
+    ballbar.add_argument("--backlash", action="store_true",
+                         help="with --simulate: the table has a lost motion")
+    ballbar.add_argument("--report", help="HTML report with polar plots")
+    ballbar.add_argument("--json", help="JSON summary")
+    ballbar.set_defaults(handler=_ballbar)
+    probe = commands.add_parser("probe", help="rotary-axis location errors from a probed sphere")
+    probe.add_argument("file", help="probing CSV: cycle, <axis>_mm|_deg, px_mm, py_mm, pz_mm")
+    probe.add_argument("--machine", default="khan_chen_rpppr",
+                       help="machine description (bundled name or YAML)")
+    probe.add_argument("--sphere-radius-mm", type=float, default=12.5)
+    probe.add_argument("--sphere-mm", type=float, nargs=3, default=[50.0, 80.0, 60.0],
+                       metavar=("X", "Y", "Z"),
+                       help="nominal sphere centre in the workpiece-end frame [mm]")
+    probe.add_argument("--parameters", help="comma-separated location errors to identify "
+                       "(default: every observable offset and tilt of the rotary axes)")
+    probe.add_argument("--tolerance-um", type=float, default=50.0,
+                       help="largest distance of a touch point from the fitted sphere")
+    probe.add_argument("--simulate", type=int, metavar="SEED",
+                       help="first write FILE from the virtual machine")
+    probe.add_argument("--report", help="HTML report")
+    probe.add_argument("--json", help="JSON summary")
+    probe.set_defaults(handler=_probe)
+    export = commands.add_parser("export", help="CNC compensation tables of a model "
+                                 "(per-axis bilateral CSV, volumetric ISG-CSV style)")
+    export.add_argument("model", help="error model: bundled name, YAML path")
+    export.add_argument("--spacing-mm", type=float, default=5.0)
+    export.add_argument("--out", required=True, help="directory for the tables")
+    export.add_argument("--report", help="HTML report")
+    export.add_argument("--json", help="JSON summary")
+    export.set_defaults(handler=_export)

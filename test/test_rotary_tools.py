@@ -1,0 +1,124 @@
+"""``mt-accuracy ballbar|probe|export`` end to end: files in, numbers, report and JSON out;
+every bad input a one-line error with exit 2 and nothing written half (issue 20)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.cli import main
+from mt_accuracy_ros.core.rotary.ballbar import ARCSEC
+
+
+def _one_line_error(capsys, argv) -> str:
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in captured.err, captured.err
+    return lines[0]
+
+
+def test_ballbar_from_the_virtual_table_to_report_and_json(tmp_path, capsys):
+    data = tmp_path / "bb.csv"
+    assert main(["ballbar", str(data), "--simulate", "3", "--backlash", "--report",
+                 str(tmp_path / "r" / "bb.html"), "--json", str(tmp_path / "bb.json")]) == 0
+    out = capsys.readouterr().out
+    assert "lost motion (backlash)" in out
+    summary = json.loads((tmp_path / "bb.json").read_text())
+    assert summary["positions"] == 37 and summary["repetitions"] == [3, 3]
+    assert summary["l2"]["tilt_x_arcsec"] == pytest.approx(7.93, abs=0.6)
+    assert summary["l2"]["axial_um"] == pytest.approx(2.68, abs=0.2)
+    assert summary["linf"]["max_abs_residual_m2"] <= summary["l2"]["max_abs_residual_m2"]
+    assert summary["l2"]["rms_residual_m2"] <= summary["linf"]["rms_residual_m2"]
+    assert any(j["significant"] for j in summary["reversal_jumps"])
+    html = (tmp_path / "r" / "bb.html").read_text()
+    assert "Zhu Fig. 5.12" in html and "bb_ballbar_residuals.png" in html
+    assert (tmp_path / "r" / "bb_ballbar_data.png").stat().st_size > 10_000
+
+
+def test_ballbar_file_errors_are_one_line(tmp_path, capsys):
+    assert main(["ballbar", str(tmp_path / "ok.csv"), "--simulate", "0"]) == 0
+    capsys.readouterr()
+    lines = (tmp_path / "ok.csv").read_text().splitlines()
+    # a long-bar reading lost
+    (tmp_path / "gap.csv").write_text("\n".join(lines[:-1]) + "\n")
+    assert "no reading at 360 deg" in _one_line_error(capsys, ["ballbar",
+                                                               str(tmp_path / "gap.csv")])
+    (tmp_path / "nan.csv").write_text("\n".join(lines[:4] + [lines[4].rsplit(",", 1)[0] + ",nan"]
+                                                + lines[5:]) + "\n")
+    assert "line 5: change_um is nan" in _one_line_error(capsys, ["ballbar",
+                                                                  str(tmp_path / "nan.csv")])
+    assert "cannot reach" in _one_line_error(capsys, ["ballbar", str(tmp_path / "ok.csv"),
+                                                      "--radius-mm", "95"])
+    (tmp_path / "one.csv").write_text("\n".join(l for l in lines if not l.startswith("217"))
+                                      + "\n")
+    assert "needs a short and a long bar" in _one_line_error(
+        capsys, ["ballbar", str(tmp_path / "one.csv")])
+    assert "missing column(s) change_um" in _one_line_error(
+        capsys, ["ballbar", str(_write(tmp_path / "cols.csv", "bar_mm,repetition,angle_deg\n"))])
+
+
+def _write(path, text):
+    path.write_text(text)
+    return path
+
+
+def test_probe_from_the_virtual_machine(tmp_path, capsys):
+    data = tmp_path / "probe.csv"
+    assert main(["probe", str(data), "--simulate", "4", "--json", str(tmp_path / "p.json"),
+                 "--report", str(tmp_path / "p.html")]) == 0
+    summary = json.loads((tmp_path / "p.json").read_text())
+    truth = {"EY0A": 20e-6, "EZ0A": -15e-6, "EB0A": 30e-6, "EC0A": -25e-6, "EA0B": 15e-6,
+             "EC0B": -20e-6}
+    for name, value in truth.items():
+        assert abs(summary["parameters"][name] - value) <= \
+            3 * summary["uncertainties_k1"][name] + 1e-9, name
+    assert summary["repeatability_m"] < 1e-6 and summary["dispersion_after_m"] < 3e-6
+    assert summary["not_observable"] == ["EX0B", "EZ0B"]
+    assert "where the rotary axes really are" in (tmp_path / "p.html").read_text()
+
+
+def test_probe_refuses_a_stray_touch_by_cycle(tmp_path, capsys):
+    data = tmp_path / "probe.csv"
+    assert main(["probe", str(data), "--simulate", "4"]) == 0
+    capsys.readouterr()
+    lines = data.read_text().splitlines()
+    fields = lines[30].split(",")
+    fields[-1] = f"{float(fields[-1]) + 3.0:.6f}"          # 3 mm off: touched the clamp
+    lines[30] = ",".join(fields)
+    data.write_text("\n".join(lines) + "\n")
+    error = _one_line_error(capsys, ["probe", str(data)])
+    assert f"cycle {fields[0]}: touch point" in error and "from the sphere" in error
+
+
+def test_export_writes_reads_back_and_refuses_a_bad_spacing(tmp_path, capsys):
+    machine = tmp_path / "machine.yaml"
+    import yaml
+
+    from conftest import REPO_ROOT
+
+    data = yaml.safe_load((REPO_ROOT / "mt_accuracy_ros" / "machines" / "kidani_hmc.yaml")
+                          .read_text())
+    data["axes"]["X"]["errors"] = {"EXX": {"polynomial": [0.0, 2e-5, -4e-5]}}
+    machine.write_text(yaml.safe_dump(data))
+    model = tmp_path / "model.yaml"
+    model.write_text(yaml.safe_dump({"machine": str(machine), "effects": {
+        "reversal": {"backlash_m": 4e-6, "axes": ["X"]}}}))
+    out = tmp_path / "tables"
+    assert main(["export", str(model), "--spacing-mm", "10", "--out", str(out), "--json",
+                 str(tmp_path / "e.json")]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["X_bilateral.csv", "Y_bilateral.csv",
+                                                     "Z_bilateral.csv", "volumetric_isg.csv"]
+    summary = json.loads((tmp_path / "e.json").read_text())
+    assert summary["tcp_max_error_m"] <= summary["tcp_bound_m"]
+    x = np.loadtxt(out / "X_bilateral.csv", delimiter=",", comments="#", skiprows=6)
+    np.testing.assert_allclose(x[:, 2] - x[:, 1], 4e-3, atol=1e-9)   # mm: the backlash
+    empty = tmp_path / "nothing"
+    assert "exceeds the Z stroke" in _one_line_error(
+        capsys, ["export", str(model), "--spacing-mm", "900", "--out", str(empty)])
+    assert not empty.exists()
+
+
+def test_arcsec_is_the_unit_zhu_uses():
+    assert 1 / ARCSEC == pytest.approx(206264.806247, rel=1e-9)
