@@ -191,7 +191,15 @@ class ErrorModel:
         self.profile_revision += 1
 
     def calibrated(self, error_name: str):
-        """The machine description's calibrated function of ``error_name`` (None if zero)."""
+        """The machine description's calibrated function of ``error_name`` (None if zero).
+
+        Raises :class:`InputDataError` for a name that is not an ISO 230-1 motion error
+        (``E`` + component + axis, e.g. ``ECX``).
+        """
+        if not isinstance(error_name, str) or len(error_name) != 3 or error_name[0] != "E" or \
+                error_name[1] not in "XYZABC" or error_name[2] not in "XYZABC":
+            raise InputDataError(f"profile of {error_name!r}: not an ISO 230-1 motion error "
+                                 "name (E, component, axis: e.g. ECX)")
         axis, component = error_name[-1], error_name[1]
         spec = self.machine.axes.get(axis)
         if spec is None or component not in spec.motion_errors:
