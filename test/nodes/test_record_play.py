@@ -43,7 +43,11 @@ def _graph(probe, out: Path, topics: list[str], sim_time: bool):
                                          "discovery_period_s": 0.1, "chunk_size": 65536, **extra}),
                  start_node("yaw_estimator", {"baseline_after_s": 0.0, "profile_period_s": 0.5,
                                               **extra}),
-                 start_node("compensation_broadcaster", {"model": "demo", **extra})]
+                 # Profiles are applied 5 s of data behind the data they serve: a loaded
+                 # host that delays one by less still computes what the replay computes
+                 # (a later one would be a documented "late" input, used on arrival).
+                 start_node("compensation_broadcaster", {"model": "demo", "input_delay_s": 5.0,
+                                                         **extra})]
     ready = spin_until(probe, lambda: probe.count_subscribers("/yaw/y") >= 1 and
                        probe.count_subscribers("/compensation") >= 1 and
                        probe.count_subscribers("/scales") >= 2, timeout_s=60)
