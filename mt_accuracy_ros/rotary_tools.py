@@ -34,14 +34,10 @@ def _finish(sections, title: str, subtitle: str, report: str | None, summary: di
         print(f"  json: {json_path}")
 
 
-def _report_dir(report: str | None) -> tuple[Path, str]:
-    if report:
-        path = Path(report)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        return path.parent, path.with_suffix("").name
-    import tempfile
-
-    return Path(tempfile.mkdtemp()), "rotary"
+def _report_dir(report: str) -> tuple[Path, str]:
+    path = Path(report)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return path.parent, path.with_suffix("").name
 
 
 def _ballbar(args: argparse.Namespace) -> int:
@@ -66,8 +62,7 @@ def _ballbar(args: argparse.Namespace) -> int:
     if args.report or args.json:
         from .report.rotary import ballbar_sections
 
-        directory, stem = _report_dir(args.report)
-        sections = ballbar_sections(result, directory, stem) if args.report else []
+        sections = ballbar_sections(result, *_report_dir(args.report)) if args.report else []
         _finish(sections, "mt-accuracy ballbar", f"Rotary-table calibration from {args.file} "
                 "(Zhu 2008, ch. 5)", args.report, result.as_dict(), args.json)
     return 0

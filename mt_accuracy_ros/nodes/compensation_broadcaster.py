@@ -34,9 +34,6 @@ from ._common import (COMPENSATION_QOS, TABLE_QOS, run_node, RESULT_QOS,  # noqa
 from ._health import DeliveryHealth
 from ._model_inputs import ModelInputs
 
-COMPONENTS = "XYZABC"
-
-
 class CompensationBroadcaster(Node):
     """ScaleBatch command positions -> VolumetricCompensation; tables on model change."""
 

@@ -32,16 +32,16 @@ remainder). :func:`interpolation_bound` evaluates it on the model.
 from __future__ import annotations
 
 import io
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MachineDescriptionError, ParameterError
 from ..kinematics.chain import KinematicModel
-from ..kinematics.error_functions import ErrorFunction
-from ..kinematics.machine import COMPONENTS, Axis, MachineDescription
+from ..kinematics.machine import MachineDescription
 from .error_model import ErrorModel
+from .tables import CompensationTable, machine_with_table
 
 MM_PER_M = 1e3
 URAD_PER_RAD = 1e6
@@ -183,7 +183,8 @@ def read_bilateral_csv(text: str) -> BilateralTable:
 def write_isg_csv(model: ErrorModel, spacing_m: float) -> str:
     """The model's geometric parameters as an ISG-CSV-style volumetric parameter file."""
     machine = model.machine
-    tables = bilateral_tables(model, spacing_m)   # validates the spacing for every axis
+    linear = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
+    grids = {a: table_grid(machine.axes[a].stroke, spacing_m, a) for a in linear}
     text = io.StringIO()
     text.write(f"// mt_accuracy_ros volumetric compensation parameters v1\n"
                f"// machine: {machine.name}  chain: {machine.chain}\n"
@@ -194,53 +195,31 @@ def write_isg_csv(model: ErrorModel, spacing_m: float) -> str:
         text.write("// location errors (constant)\n")
         text.write(" ".join(location) + "\n")
         text.write(" ".join(f"{float(_to_file(n, v)):.12g}" for n, v in location.items()) + "\n")
-    for axis, table in tables.items():
-        names = list(table.forward)
+    for axis, grid in grids.items():
+        errors = model.component_errors(axis, grid)
         text.write("#\n")
-        text.write(f"// component errors of the {axis} axis (the mean of both directions)\n")
-        text.write(" ".join([axis] + names) + "\n")
-        for i, position in enumerate(table.positions_m):
-            mean = [0.5 * (table.forward[n][i] + table.reverse[n][i]) for n in names]
+        text.write(f"// component errors of the {axis} axis (direction-independent part)\n")
+        text.write(" ".join([axis, *errors]) + "\n")
+        for i, position in enumerate(grid):
             text.write(" ".join(f"{float(v):.12g}" for v in
-                                [position * MM_PER_M] + [float(_to_file(n, m))
-                                                         for n, m in zip(names, mean)]) + "\n")
+                                [position * MM_PER_M] + [float(_to_file(n, values[i]))
+                                                         for n, values in errors.items()]) + "\n")
     return text.getvalue()
 
 
-@dataclass
-class VolumetricParameters:
-    """What :func:`read_isg_csv` found: per-axis grids and component errors, location errors."""
-
-    grids: dict[str, NDArray[np.float64]]
-    components: dict[str, dict[str, NDArray[np.float64]]]
-    location: dict[str, float]
-
-    def machine(self, machine: MachineDescription) -> MachineDescription:
-        """``machine`` with these tables (piecewise linear, as a CNC interpolates) and
-        location errors in place of its own errors."""
-        axes = {}
-        for name, axis in machine.axes.items():
-            motion = dict(axis.motion_errors)
-            if name in self.grids:
-                motion = {c: ErrorFunction(kind="table", positions=self.grids[name],
-                                           values=self.components[name][f"E{c}{name}"])
-                          for c in COMPONENTS}
-            else:
-                motion = {c: ErrorFunction() for c in COMPONENTS}
-            location = {c: self.location[f"E{c}0{name}"] for c in COMPONENTS
-                        if f"E{c}0{name}" in self.location}
-            axes[name] = Axis(name=axis.name, stroke=axis.stroke, offset=axis.offset,
-                              sign=axis.sign, motion_errors=motion, location_errors=location)
-        return replace(machine, axes=axes)
-
-
-def read_isg_csv(text: str) -> VolumetricParameters:
-    """Parse :func:`write_isg_csv`'s text (``//`` comments, ``#`` block breaks)."""
+def read_isg_csv(text: str) -> CompensationTable:
+    """Parse :func:`write_isg_csv`'s text (``//`` comments, ``#`` block breaks) into the
+    per-axis grids, component errors and location errors of a :class:`~.tables.CompensationTable`
+    (apply it with :func:`~.tables.machine_with_table`)."""
+    machine = ""
     grids: dict[str, NDArray] = {}
     components: dict[str, dict[str, NDArray]] = {}
     location: dict[str, float] = {}
     blocks: list[list[tuple[int, list[str]]]] = [[]]
     for number, raw in enumerate(text.splitlines(), start=1):
+        if raw.startswith("// machine:"):
+            named = raw.split(":", 1)[1].split()
+            machine = named[0] if named else ""
         line = raw.split("//", 1)[0].strip()
         if not line:
             continue
@@ -278,7 +257,7 @@ def read_isg_csv(text: str) -> VolumetricParameters:
                              for j, name in enumerate(header)})
     if not grids:
         raise MachineDescriptionError("volumetric file: no axis block")
-    return VolumetricParameters(grids, components, location)
+    return CompensationTable(machine=machine, grids=grids, errors=components, location=location)
 
 
 # ------------------------------------------------------------------- round trip
@@ -313,19 +292,11 @@ class RoundTrip:
 def _reference_machine(model: ErrorModel, dense: int = 4001) -> MachineDescription:
     """The model's geometric part as a machine with very fine tables (the reference)."""
     machine = model.machine
-    axes = {}
-    location = model.location_table()
-    for name, axis in machine.axes.items():
-        if axis.is_rotary:
-            motion = dict(axis.motion_errors)
-        else:
-            grid = np.linspace(*axis.stroke, dense)
-            motion = {n[1]: ErrorFunction(kind="table", positions=grid, values=v)
-                      for n, v in model.component_errors(name, grid).items()}
-        own = {c: location[f"E{c}0{name}"] for c in COMPONENTS if f"E{c}0{name}" in location}
-        axes[name] = Axis(name=axis.name, stroke=axis.stroke, offset=axis.offset, sign=axis.sign,
-                          motion_errors=motion, location_errors=own)
-    return replace(machine, axes=axes)
+    grids = {a: np.linspace(*machine.axes[a].stroke, dense) for a in machine.axis_order
+             if not machine.axes[a].is_rotary}
+    return machine_with_table(machine, CompensationTable(
+        machine.name, grids, {a: model.component_errors(a, g) for a, g in grids.items()},
+        model.location_table()))
 
 
 def round_trip(model: ErrorModel, spacing_m: float, *, points: int = 2000,
@@ -358,11 +329,11 @@ def round_trip(model: ErrorModel, spacing_m: float, *, points: int = 2000,
                                          float(np.max(np.abs(values - expected))))
         for name, values in truth_dense.items():
             column_bound[name] = interpolation_bound(values, dense, spacing_m)
-    parameters = read_isg_csv(write_isg_csv(model, spacing_m))
+    parameters = machine_with_table(machine, read_isg_csv(write_isg_csv(model, spacing_m)))
     q = {a: rng.uniform(*machine.axes[a].stroke, points) for a in machine.axis_order}
     reference = KinematicModel(_reference_machine(model)).tcp_error(
         q, check_stroke=False)["position"]
-    applied = KinematicModel(parameters.machine(machine)).tcp_error(
+    applied = KinematicModel(parameters).tcp_error(
         q, check_stroke=False)["position"]
     gap = np.linalg.norm(applied - reference, axis=1)
     reach = max(np.linalg.norm(machine.tool) + sum(np.linalg.norm(machine.axes[a].offset)

@@ -124,11 +124,18 @@ def read_csv(text: str) -> CompensationTable:
 
 
 def machine_with_table(machine: MachineDescription, table: CompensationTable) -> MachineDescription:
-    """The machine with its error functions replaced by the table's (piecewise linear)."""
+    """The machine with its error functions replaced by the table's (piecewise linear).
+
+    An axis without a grid in the table (a rotary axis of a linear-axis table)
+    keeps its own error motions; the table's location errors of that axis, if
+    it lists any, replace the machine's.
+    """
     axes = {}
     for name, axis in machine.axes.items():
         if name not in table.grids:
-            axes[name] = axis
+            listed = {c: table.location[location_error_name(c, name)] for c in COMPONENTS
+                      if location_error_name(c, name) in table.location}
+            axes[name] = replace(axis, location_errors=listed) if listed else axis
             continue
         grid = table.grids[name]
         motion = {c: ErrorFunction(kind="table", positions=grid,

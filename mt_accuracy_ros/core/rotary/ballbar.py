@@ -290,7 +290,7 @@ class BallBarRun:
     label: str = ""
 
     def __post_init__(self) -> None:
-        name = self.label or f"{self.setup.bar_length_m * 1e3:.3f} mm bar"
+        name = self.name
         angles = np.asarray(self.angles_rad, dtype=np.float64)
         readings = np.atleast_2d(np.asarray(self.readings_m, dtype=np.float64))
         if angles.ndim != 1 or angles.size < 5:

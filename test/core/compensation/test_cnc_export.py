@@ -93,3 +93,19 @@ def test_the_round_trip_error_falls_with_the_square_of_the_spacing():
     fine = round_trip(_model(), 0.001, points=1500)
     assert fine.column_max_error["EXX"] == pytest.approx(coarse.column_max_error["EXX"] / 4,
                                                          rel=0.35)
+
+
+def test_a_rotary_axis_location_error_reaches_the_cnc_through_the_volumetric_file():
+    """A five-axis machine: the rotary axis has no table, its location error (an A tilt)
+    is in the file's location block and applied by the CNC's chain."""
+    from mt_accuracy_ros.core.compensation.tables import machine_with_table
+    from mt_accuracy_ros.core.kinematics.machine import load_machine
+
+    model = ErrorModel(load_machine("khan_chen_rpppr"),
+                       {"squareness": {"errors_rad": {"EB0A": 20e-6, "EC0Y": 5e-6}}})
+    read = read_isg_csv(write_isg_csv(model, 0.05))
+    assert read.machine == "khan_chen_rpppr" and set(read.grids) == {"X", "Y", "Z"}
+    applied = machine_with_table(model.machine, read)
+    assert applied.axes["A"].location_errors == pytest.approx({"B": 20e-6})
+    result = round_trip(model, 0.05, points=500)
+    assert result.tcp_model_rms_m > 1e-6 and result.tcp_max_error_m < 1e-12
