@@ -38,14 +38,22 @@ effects:
 """
 
 
-def _readings(node, count: int, timeout_s: float = 120.0) -> list:
-    from mt_accuracy_msgs.msg import ReferenceMeasurement
+def _subscribe(node) -> list:
+    """The reference readings ``node`` receives, and a scales subscription the machine
+    can wait for (``min_subscribers``), so the instrument listens from the first reading."""
+    from mt_accuracy_msgs.msg import ReferenceMeasurement, ScaleBatch
 
-    from mt_accuracy_ros.nodes._common import RESULT_QOS
+    from mt_accuracy_ros.nodes._common import RESULT_QOS, SENSOR_QOS
 
     readings: list = []
     node.create_subscription(ReferenceMeasurement, "reference/tcp_error", readings.append,
                              RESULT_QOS)
+    node.create_subscription(ScaleBatch, "scales", lambda _: None, SENSOR_QOS)
+    return readings
+
+
+def _readings(node, count: int, timeout_s: float = 120.0, readings: list | None = None) -> list:
+    readings = _subscribe(node) if readings is None else readings
     assert spin_until(node, lambda: len(readings) >= count, timeout_s), len(readings)
     return readings
 
@@ -118,6 +126,9 @@ def test_realtime_offset_removes_a_thermal_drift_and_reports_its_latency(rclpy_c
     statuses: list = []
     node.create_subscription(DiagnosticArray, "/diagnostics", lambda m: statuses.extend(
         s for s in m.status if s.name.endswith("encoder_publisher: compensation")), 50)
+    # The instrument listens before the machine streams (it waits for the broadcaster's
+    # and this node's scales subscriptions): the drift is seen from the first reading.
+    listened = _subscribe(node)
     start_ns = time.time_ns() + 3_000_000_000
     common = {"scenario": str(scenario_path), "rate_factor": 2.0, "start_stamp_ns": start_ns}
     broadcaster = start_node("compensation_broadcaster", {"model": str(model),
@@ -128,9 +139,9 @@ def test_realtime_offset_removes_a_thermal_drift_and_reports_its_latency(rclpy_c
     machine = start_node("encoder_publisher", {**common, "batch_period_s": 0.05, "compensation_input": "realtime",
                                                "max_compensation_age_s": 2.0,
                                                "compensation_delay_s": 0.02,
-                                               "min_subscribers": 1}, quiet=True)
+                                               "min_subscribers": 2}, quiet=True)
     try:
-        readings = _readings(node, 100)
+        readings = _readings(node, 100, readings=listened)
         assert spin_until(node, lambda: bool(statuses), 10)
     finally:
         machine.stop()
