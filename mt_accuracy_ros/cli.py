@@ -5,10 +5,15 @@ import argparse
 import sys
 
 
+#: The main job's scenario on each bundled machine.
+DEMO_SCENARIOS = {"kidani_hmc": "demo", "khan_chen_rpppr": "demo_5axis"}
+
+
 def _demo(args: argparse.Namespace) -> int:
     from .demo import run_demo
 
-    return run_demo(out_dir=args.out, rate_factor=args.rate, scenario=args.scenario,
+    return run_demo(out_dir=args.out, rate_factor=args.rate,
+                    scenario=args.scenario or DEMO_SCENARIOS[args.machine],
                     compensation_mode=args.compensation)
 
 
@@ -205,7 +210,11 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", default="demo_output", help="output directory")
     demo.add_argument("--rate", type=float, default=2.0,
                       help="sim seconds per wall second (the 90 s scenario takes 90/rate s)")
-    demo.add_argument("--scenario", default="demo", help="bundled scenario or path")
+    demo.add_argument("--scenario", default=None,
+                      help="bundled scenario or path (default: the machine's demo scenario)")
+    demo.add_argument("--machine", default="kidani_hmc", choices=sorted(DEMO_SCENARIOS),
+                      help="the virtual machine: the 3-axis HMC (scenario 'demo') or Khan & "
+                           "Chen's 5-axis RPPPR grinder (scenario 'demo_5axis')")
     demo.add_argument("--compensation", default="hybrid",
                       choices=["hybrid", "realtime", "table", "off"],
                       help="how the virtual CNC takes the compensation: tables + real-time "

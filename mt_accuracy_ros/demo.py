@@ -136,12 +136,20 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     listener.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 50)
     references: list[tuple] = []   # (data time [s], measured (3,), applied (3,), version)
 
+    orientations: list[tuple] = []  # (measured (3,), applied (3,), uncertainty) [rad]
+
     def on_reference(m: ReferenceMeasurement) -> None:
         references.append(((stamp_to_nanoseconds(m.header.stamp) - start_ns) / 1e9,
                            np.array([m.error.x, m.error.y, m.error.z]),
                            np.array([m.applied_correction.x, m.applied_correction.y,
                                      m.applied_correction.z]),
                            int(m.compensation_model_version), float(m.uncertainty)))
+        if m.orientation_measured:
+            orientations.append((
+                np.array([m.orientation_error.x, m.orientation_error.y, m.orientation_error.z]),
+                np.array([m.applied_orientation_correction.x, m.applied_orientation_correction.y,
+                          m.applied_orientation_correction.z]),
+                float(m.orientation_uncertainty)))
 
     listener.create_subscription(ReferenceMeasurement, "reference/tcp_error", on_reference,
                                  RESULT_QOS)
@@ -189,12 +197,16 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     if models:
         # The saved model is the final one, every effect added with its parameters.
         (out / "model.yaml").write_text(models[-1][1].model_yaml)
-    story = loop_story(references, models, alarms, compensation_mode=compensation_mode)
+    story = loop_story(references, models, alarms, compensation_mode=compensation_mode,
+                       orientations=orientations if len(orientations) == len(references)
+                       else None)
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
-                         references, losses, story, delivery)
-    print(f"mt_accuracy_ros demo - virtual HMC, scenario '{scenario}' (warm-up, Y guideway "
-          "deterioration at 50 s, column drift and an X ball-screw pitch error missing from the "
-          f"model); the CNC applies the compensation ({compensation_mode})")
+                         references, losses, story, delivery, scenario)
+    from .nodes._scenario import resolve_scenario
+
+    chosen = resolve_scenario(scenario)
+    print(f"mt_accuracy_ros demo - virtual {chosen.machine.name}, scenario '{scenario}' "
+          f"({chosen.description}); the CNC applies the compensation ({compensation_mode})")
     for key, value in summary.items():
         if not isinstance(value, (list, dict)):
             print(f"  {key:42s} {value:.4g}" if isinstance(value, float) else
@@ -232,13 +244,16 @@ def delivery_losses(delivery: dict[str, dict[str, str]]) -> list[str]:
     return lines
 
 
-def loop_story(references, models, alarms, *, compensation_mode: str) -> dict:
+def loop_story(references, models, alarms, *, compensation_mode: str,
+               orientations=None) -> dict:
     """The closed loop told in numbers: the machine's TCP error per phase of the run.
 
     ``references``: (data time [s], measured (3,), applied (3,), model version,
     uncertainty k = 2 [m]) per reading; ``models``: (time, ModelVersion);
     ``alarms``: (time [s], axis). A model version's phase starts at the first
-    reading the CNC took with its compensation applied.
+    reading the CNC took with its compensation applied. ``orientations``
+    (five-axis: one (measured (3,), applied (3,), uncertainty) [rad] per
+    reading) adds the tool-direction error per phase.
     """
     from .core.workbench.closed_loop import COMPONENTS, loop_phases
     from .core.workbench.statistics import format_with_uncertainty
@@ -290,6 +305,26 @@ def loop_story(references, models, alarms, *, compensation_mode: str) -> dict:
                     "uncertainty" if within else
                     f" - OUTSIDE the instrument's band ({band * 1e6:.1f} um) by more than their "
                     "uncertainty: something the model lacks remains"))
+    result_orientation = None
+    if orientations:
+        turned = np.array([orientations[i][0] for i in order])
+        turn = np.array([orientations[i][1] for i in order])
+        band_rad = float(np.median([o[2] for o in orientations]))
+        tilt = loop_phases(time_s, turned, turn, events, band_rad)
+        lines.append(f"  {'tool direction error at the same readings, RMS [urad]':58s}"
+                     + "".join(f"{'about ' + c:>20s}" for c in COMPONENTS))
+
+        def row_urad(label: str, figures) -> str:
+            return f"  {label[:58]:58s}" + "".join(
+                f"{format_with_uncertainty(f.rms * 1e6, f.rms_u_k2 * 1e6, ''):>20s}"
+                .replace(" (k = 2)", "") for f in figures)
+
+        lines.append(row_urad("without compensation (whole run)", tilt[0].without))
+        for phase in tilt[1:]:
+            lines.append(row_urad(f"{phase.label} [{phase.start_s:.0f}-{phase.end_s:.0f} s]",
+                                  phase.with_compensation))
+        result_orientation = {"phases": [p.as_dict() for p in tilt], "band_urad": band_rad * 1e6,
+                              "end_within_band": bool(tilt[-1].within(band_rad))}
     for when, axis in alarms:
         after = [p for p in phases if p.label.startswith(f"after the {axis.upper()}")]
         if after:
@@ -299,11 +334,13 @@ def loop_story(references, models, alarms, *, compensation_mode: str) -> dict:
                          + ("absorbed: the end state is back within the band" if within else
                             "not absorbed by the end of the run"))
     return {"phases": [p.as_dict() for p in phases], "lines": lines,
-            "end_state_within_band": bool(within), "band_um": band * 1e6}
+            "end_state_within_band": bool(within), "band_um": band * 1e6,
+            "orientation": result_orientation}
 
 
 def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
-               references, losses: list[str], story: dict, delivery: dict) -> dict:
+               references, losses: list[str], story: dict, delivery: dict,
+               scenario: str = "demo") -> dict:
     from .io.bag_reader import bag_info
 
     info = bag_info(out / "bag")
@@ -344,14 +381,16 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "final_diagnosis": checks[-1][1].diagnosis if checks else "",
         "stream_losses": "; ".join(losses) or "none: every node processed every sample",
         "closed_loop": story["phases"],
+        "tool_direction": story.get("orientation"),
     }
-    report = _write_report(out, checks, actions, alarms, losses, story)
+    report = _write_report(out, checks, actions, alarms, losses, story, scenario)
     summary["report"] = report.as_dict()
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
     return summary
 
 
-def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: dict):
+def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: dict,
+                  scenario: str = "demo"):
     """The bag's full report, with the run as the demo's user saw it live."""
     from .check import check_bag
     from .core.errors import MtAccuracyError
@@ -372,10 +411,12 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: 
     figure = save_figure(fig, out, "report_run", "The model monitor's checks as the user saw "
                          "them, at wall-clock time x rate (behind the data when the graph "
                          "lags): the residual RMSE, the effect the user added, the alarm.")
+    from .nodes._scenario import resolve_scenario
+
+    chosen = resolve_scenario(scenario)
     run = Section("The run", figures=[figure], paragraphs=[
-        "The virtual machining centre ran the demo scenario (X and Y moving, a warm-up, the Y "
-        "guideway deteriorating at 50 s, a column thermal drift the starting model lacks) "
-        "through the live graph, every node its own process."])
+        f"The virtual {chosen.machine.name} ran the scenario '{scenario}' "
+        f"({chosen.description}) through the live graph, every node its own process."])
     for action in actions:
         run.paragraphs.append(f"At {action['time_s']:.1f} s the user added {action['added']} "
                               f"({'accepted' if action['accepted'] else 'refused: ' + action['reason']}).")

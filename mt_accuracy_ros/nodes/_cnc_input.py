@@ -60,7 +60,9 @@ class CompensationInput:
         self.health = health
         self.machine = machine
         self._now = now_stamp_ns
-        self.offset = RealtimeOffset(cycle_s, delay_s, max_age_s)
+        self.rotary_axes = [a for a in machine.axis_order if machine.axes[a].is_rotary]
+        self.offset = RealtimeOffset(cycle_s, delay_s, max_age_s,
+                                     rotary_axes=len(self.rotary_axes))
         self.tables = TableCompensation(machine)
         self._reported = (0, 0)
         self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", 10)
@@ -82,8 +84,9 @@ class CompensationInput:
         if arrival is None:
             raise InputDataError("compensation before the controller runs: not applied")
         self.health.sequence("compensation", message.sequence)
-        rotary = [a for a in self.machine.axis_order if self.machine.axes[a].is_rotary]
-        if len(message.rotary_positions) != len(rotary):
+        rotary = self.rotary_axes
+        if len(message.rotary_positions) != len(rotary) or \
+                len(message.rotary_corrections) not in (0, len(rotary)):
             raise InputDataError(
                 f"unknown axis: compensation for {len(message.rotary_positions)} rotary axes, "
                 f"the machine has {len(rotary)} ({', '.join(rotary) or 'none'}); the last "
@@ -97,7 +100,8 @@ class CompensationInput:
             correction = correction - self.tables.correction(
                 {a: np.array([position.get(a, 0.0)]) for a in self.machine.axis_order})[0]
         reason = self.offset.offer(stamp_to_nanoseconds(message.header.stamp), arrival,
-                                   correction, int(message.model_version))
+                                   correction, int(message.model_version),
+                                   rotary_rad=np.asarray(message.rotary_corrections, float))
         if reason is None:
             self.health.processed("compensation")
         elif not reason.startswith("stale"):
@@ -119,20 +123,30 @@ class CompensationInput:
     def corrections(self, stamps_ns: np.ndarray, positions: dict[str, np.ndarray]
                     ) -> tuple[np.ndarray, np.ndarray]:
         """Correction (N, 3) [m] added to the command at each sample and its model version."""
+        applied, _, versions = self.corrections_with_rotary(stamps_ns, positions)
+        return applied, versions
+
+    def corrections_with_rotary(self, stamps_ns: np.ndarray, positions: dict[str, np.ndarray]
+                                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """TCP correction (N, 3) [m], rotary-axis corrections (N, R) [rad], model version (N,).
+
+        The rotary part (the tool's direction, from the real-time input) is
+        added to the rotary commands; the tables carry position only.
+        """
         n = np.size(stamps_ns)
-        if self.mode == "realtime":
-            values, versions = self.offset.at(stamps_ns)
+        rotary = np.zeros((n, len(self.rotary_axes)))
+        if self.mode in ("realtime", "hybrid"):
+            values, versions = self.offset.at_with_rotary(stamps_ns)
             # Memory stays bounded on a long run: older corrections are superseded.
             self.offset.forget_before(int(np.min(stamps_ns)) - 2 * self.offset.max_age_ns)
-            return values, versions
+            applied, rotary = values[:, :3], values[:, 3:]
+            if self.mode == "hybrid":
+                applied = self.tables.correction(positions) + applied
+            return applied, rotary, versions
         if self.mode == "table":
-            return self.tables.correction(positions), np.full(n, self.tables.version,
-                                                                dtype=np.int64)
-        if self.mode == "hybrid":
-            rest, versions = self.offset.at(stamps_ns)
-            self.offset.forget_before(int(np.min(stamps_ns)) - 2 * self.offset.max_age_ns)
-            return self.tables.correction(positions) + rest, versions
-        return np.zeros((n, 3)), np.zeros(n, dtype=np.int64)
+            return self.tables.correction(positions), rotary, np.full(n, self.tables.version,
+                                                                        dtype=np.int64)
+        return np.zeros((n, 3)), rotary, np.zeros(n, dtype=np.int64)
 
     def publish_status(self) -> None:
         stats = self.offset.statistics

@@ -5,7 +5,11 @@ From the CNC command positions in ``scales`` (``ScaleBatch``), the latest
 current :class:`~mt_accuracy_ros.core.compensation.error_model.ErrorModel` gives the TCP
 error at the command position, published on ``compensation``
 (``VolumetricCompensation``, reliable) at ``publish_rate_hz`` of data time
-(every n-th sample, whatever the batch boundaries), with correction = -error.
+(every n-th sample, whatever the batch boundaries), with correction = -error;
+on a machine with rotary axes the correction also turns the rotary axes
+(``rotary_corrections``) so that the tool's direction is nominal again, and
+the TCP correction includes the shift that turn causes
+(:mod:`mt_accuracy_ros.core.compensation.five_axis`).
 Whenever the model changes (a new profile, a new effect) the per-axis
 component tables go out on ``compensation_table`` (``CompensationTable``,
 reliable + transient local, so a node started later still gets them).
@@ -25,6 +29,7 @@ from rclpy.node import Node
 from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompensation
 
 from ..core.compensation.error_model import resolve_model
+from ..core.compensation.five_axis import five_axis_correction
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.validation import sample_period
 from ._common import (COMPENSATION_QOS, TABLE_QOS, run_node, RESULT_QOS,  # noqa: F401
@@ -141,6 +146,13 @@ class CompensationBroadcaster(Node):
             error, orientation = model.tcp_error(positions, self.inputs.temperatures, velocities,
                                                  directions, time_s=times,
                                                  accelerations=accelerations)
+            rotary = [a for a in model.machine.axis_order if model.machine.axes[a].is_rotary]
+            correction, rotary_correction = -error, np.zeros((rows.size, 0))
+            if rotary:
+                # The tool's direction is put right by the rotary axes, its tip by the
+                # linear ones (including the shift the rotary correction causes).
+                five = five_axis_correction(model.kinematics, positions, error, orientation)
+                correction, rotary_correction = five.position_m, five.rotary_rad
         except MtAccuracyError as exc:
             self._warn(f"no compensation for this batch: {exc}")
             return
@@ -155,11 +167,14 @@ class CompensationBroadcaster(Node):
             out.command_position.x = point.get("X", 0.0)
             out.command_position.y = point.get("Y", 0.0)
             out.command_position.z = point.get("Z", 0.0)
-            out.rotary_positions = [float(positions[a][k]) for a in axes if a in "ABC"]
+            # The machine's order, the same as rotary_corrections'.
+            out.rotary_positions = [float(positions[a][k]) for a in rotary]
             out.error.x, out.error.y, out.error.z = (float(v) for v in error[k])
             (out.orientation_error.x, out.orientation_error.y,
              out.orientation_error.z) = (float(v) for v in orientation[k])
-            out.correction.x, out.correction.y, out.correction.z = (float(-v) for v in error[k])
+            out.correction.x, out.correction.y, out.correction.z = (float(v) for v in
+                                                                    correction[k])
+            out.rotary_corrections = [float(v) for v in rotary_correction[k]]
             out.uncertainty = 0.0
             out.model_version = int(model.version)
             out.sequence = self._compensation_sequence

@@ -49,6 +49,8 @@ from ._scenario import ScenarioClock, resolve_scenario
 
 #: Simulated seconds generated per window.
 WINDOW_S = 2.0
+#: The 5-axis reference instrument's tool-direction uncertainty (k = 2) [rad].
+ORIENTATION_UNCERTAINTY_RAD = 2e-6
 
 
 class EncoderPublisher(Node):
@@ -218,8 +220,10 @@ class EncoderPublisher(Node):
         frame = str(self.get_parameter("frame_id").value) or self.scenario.machine.name
         stamps = self._scenario_clock.start_ns + np.round(
             (first + np.arange(self._batch)) / self._rate * 1e9).astype(np.int64)
-        applied, versions = self.compensation.corrections(
+        applied, rotary_applied, versions = self.compensation.corrections_with_rotary(
             stamps, {a: window.command[a][rows] for a in self._axes})
+        if not np.any(rotary_applied):
+            rotary_applied = np.zeros((self._batch, 0))
         readings = window.scale_readings[rows]
         if np.any(applied):
             readings = readings.copy()
@@ -237,6 +241,11 @@ class EncoderPublisher(Node):
         message.command_axes = [a.lower() for a in self._axes]
         message.command_positions = pack_float64(
             np.column_stack([window.command[a][rows] for a in self._axes]).ravel())
+        message.encoder_names = [a.lower() for a in window.encoder_axes]
+        encoders = window.encoder_readings[rows]
+        if rotary_applied.size:
+            encoders = encoders + rotary_applied  # the CNC turned the axes by the correction
+        message.encoder_angles = pack_float64(encoders.ravel())
         self._scales.publish(message)
         period = float(self.get_parameter("reference_period_s").value)
         if period > 0:
@@ -245,7 +254,8 @@ class EncoderPublisher(Node):
                 index = int(round(self._next_reference_s * self._rate)) - window.first_index
                 index = min(max(index, offset), offset + self._batch - 1)
                 self._publish_reference(window, index, frame, applied[index - offset],
-                                        int(versions[index - offset]))
+                                        rotary_applied[index - offset] if rotary_applied.size
+                                        else np.zeros(0), int(versions[index - offset]))
                 self._next_reference_s += period
 
     def _direction(self, window: SimulationResult, axis: str, index: int) -> int:
@@ -256,17 +266,41 @@ class EncoderPublisher(Node):
         return self._last_direction.get(axis, 0)
 
     def _publish_reference(self, window: SimulationResult, index: int, frame: str,
-                           applied: np.ndarray, version: int) -> None:
+                           applied: np.ndarray, rotary_applied: np.ndarray, version: int) -> None:
         uncertainty = 1e-6  # k = 2
         # The compensated machine: the TCP lands where its error puts it plus the
-        # correction the CNC added to the command.
-        error = window.tcp_error(np.array([index]))[0] + applied + \
-            self._rng.normal(0.0, uncertainty / 2, 3)
+        # correction the CNC added to the command (and where turning the rotary axes by
+        # their correction took the tool).
+        rows = np.array([index])
+        position, orientation = window.tcp_error(rows, with_orientation=True)
+        shift, turn = np.zeros((1, 3)), np.zeros((1, 3))
+        if rotary_applied.size:
+            shift, turn = window.rotary_turn(rows, rotary_applied[None, :])
+        # What the compensation did to the TCP: the linear correction and the shift the
+        # rotary turn caused (the controller knows both through its nominal kinematics).
+        applied = applied + shift[0]
+        error = position[0] + applied + self._rng.normal(0.0, uncertainty / 2, 3)
         message = ReferenceMeasurement()
+        if window.encoder_axes:
+            # A two-sphere R-test: the tool's direction as well as its tip; the rotation
+            # about the tool axis is invisible to it (and irrelevant to a cutting tool).
+            axis = window.tool_axis(rows)[0]
+            seen = orientation[0] + turn[0] + self._rng.normal(
+                0.0, ORIENTATION_UNCERTAINTY_RAD / 2, 3)
+            direction = seen - axis * (seen @ axis)
+            turned = turn[0] - axis * (turn[0] @ axis)
+            message.applied_orientation_correction.x, message.applied_orientation_correction.y, \
+                message.applied_orientation_correction.z = (float(v) for v in turned)
+            message.orientation_error.x, message.orientation_error.y, \
+                message.orientation_error.z = (float(v) for v in direction)
+            message.orientation_measured = True
+            message.orientation_uncertainty = ORIENTATION_UNCERTAINTY_RAD
+            message.applied_rotary_correction = [float(v) for v in rotary_applied] or \
+                [0.0] * len(window.encoder_axes)
         message.header.stamp = nanoseconds_to_stamp(
             self._scenario_clock.stamp_ns((window.first_index + index) / self._rate))
         message.header.frame_id = frame
-        message.instrument = "reference_probe"
+        message.instrument = "r_test_two_sphere" if window.encoder_axes else "reference_probe"
         message.command_axes = [a.lower() for a in self._axes]
         message.command_positions = [float(window.command[a][index]) for a in self._axes]
         message.command_velocities = [float(window.velocity[a][index]) for a in self._axes]

@@ -34,6 +34,7 @@ from rclpy.node import Node
 from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ModelVersion, ReferenceMeasurement
 
 from ..core.compensation.error_model import resolve_model
+from ..core.compensation.five_axis import tool_direction
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.workbench.diagnosis import (Candidate, Observations, add_effect, diagnose,
                                         effect_name_problem, pick_candidate)
@@ -80,6 +81,11 @@ class ModelMonitor(Node):
         self.last_diagnosis = None
         self.history: list[dict] = []
         self._check = self.create_publisher(ModelCheck, "model_check", RESULT_QOS)
+        # Five-axis references that also measure the tool's direction are checked on
+        # their own topic: model_check stays the TCP position's story for every consumer.
+        self._direction_check = self.create_publisher(ModelCheck, "model_check/tool_direction",
+                                                      RESULT_QOS)
+        self._direction_sequence = 0
         self._model_topic = self.create_publisher(ModelVersion, "model", LATCHED_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.create_subscription(ReferenceMeasurement, "reference/tcp_error",
@@ -222,7 +228,21 @@ class ModelMonitor(Node):
             len(axes) else [0.0] * len(axes)
         directions = list(message.command_directions) if len(message.command_directions) == \
             len(axes) else []
+        direction_error = None
+        if message.orientation_measured:
+            direction_error = np.array([
+                message.orientation_error.x - message.applied_orientation_correction.x,
+                message.orientation_error.y - message.applied_orientation_correction.y,
+                message.orientation_error.z - message.applied_orientation_correction.z])
+            if not (np.all(np.isfinite(direction_error)) and np.all(np.abs(direction_error) < 0.1)
+                    and np.isfinite(message.orientation_uncertainty)
+                    and 0 <= message.orientation_uncertainty < 0.1):
+                raise InputDataError("reference reading with a tool-direction error or "
+                                     "uncertainty that is not finite or beyond 0.1 rad "
+                                     "(degrees sent as radians?): skipped")
         self._readings.append({
+            "direction_error": direction_error,
+            "direction_uncertainty": float(message.orientation_uncertainty),
             "directions": dict(zip(axes, directions)),
             "time": stamp_to_nanoseconds(message.header.stamp) * 1e-9,
             "positions": dict(zip(axes, message.command_positions)),
@@ -325,6 +345,7 @@ class ModelMonitor(Node):
                 check.peak_axis, check.peak_component = peak.axis, peak.component
                 check.peak_period, check.peak_amplitude = peak.period_m, peak.amplitude
         self._check.publish(check)
+        self._check_direction(model, obs)
         self.history.append({"version": model.version, "rmse": diagnosis.baseline_rmse})
         found = diagnosis.found
         level = DiagnosticStatus.OK if found is None and diagnosis.baseline_rmse <= obs.uncertainty_m \
@@ -335,6 +356,43 @@ class ModelMonitor(Node):
             KeyValue(key="missing_effect", value=found.effect if found else "")])
         if found is not None and self.get_parameter("auto_add").value:
             self._add(found.name, "auto_add", found)
+
+    def _check_direction(self, model, obs: Observations) -> None:
+        """The model's tool-direction error against the readings that measured it."""
+        sensors = set(self._readings[-1]["temperatures"])   # as _observations chose them
+        readings = [r for r in self._readings if sensors <= set(r["temperatures"])]
+        if len(readings) != obs.n or any(r["direction_error"] is None for r in readings) or \
+                obs.predicted_orientation is None:
+            return
+        measured = np.array([r["direction_error"] for r in readings])
+        axis = tool_direction(model.kinematics, obs.positions)
+        predicted = obs.predicted_orientation
+        predicted = predicted - axis * np.einsum("ni,ni->n", predicted, axis)[:, None]
+        residual = measured - predicted
+        norm = np.linalg.norm(residual, axis=1)
+        band = float(np.median([r["direction_uncertainty"] for r in readings])) or 1e-6
+        check = ModelCheck()
+        check.header.stamp = self.get_clock().now().to_msg()
+        check.model_version = int(model.version)
+        check.sequence = self._direction_sequence
+        self._direction_sequence += 1
+        check.quantity = "tool_direction"
+        check.unit = "rad"
+        check.effects_included = sorted(model.effects)
+        check.sample_count = obs.n
+        before = float(np.sqrt(np.mean(np.sum(measured ** 2, axis=1))))
+        check.rmse = float(np.sqrt(np.mean(norm ** 2)))
+        check.max_abs_error = float(np.max(norm))
+        check.band = band
+        check.fraction_outside_band = float(np.mean(norm > band))
+        check.diagnosis = (f"tool-direction residual {check.rmse * 1e6:.1f} urad RMS over "
+                           f"{obs.n} readings (the machine's own error {before * 1e6:.1f} urad; "
+                           f"instrument band {band * 1e6:.1f} urad)")
+        check.verdict = ("the model explains the tool's direction within the instrument's band"
+                         if check.rmse <= band else
+                         f"an unexplained tool-direction error of {check.rmse * 1e6:.1f} urad "
+                         "remains")
+        self._direction_check.publish(check)
 
     def _diagnose(self, model, obs):
         return diagnose(model, obs,

@@ -100,6 +100,23 @@ EFFECTS: dict[str, EffectSpec] = {spec.name: spec for spec in [
                                 "(the column's warm-up: structural_thermal_drift's rise_k, "
                                 "time_constant_s)")}),
     EffectSpec(
+        "rotary_location", "Where the rotary axes really are: each axis line offset and "
+        "tilted from its nominal place, and its zero angle shifted (what Heidenhain "
+        "KinematicsOpt / Siemens Cycle 996 identify by probing a sphere). Position-"
+        "independent, so the TCP error it causes turns with the rotary axes.",
+        "T_loc = Trans(EX0R, EY0R, EZ0R) Rot(EA0R, EB0R, EC0R) before the axis' rotation",
+        "ISO 230-1 location errors of a rotary axis R; Khan & Chen section 5", "tcp",
+        {"errors": ({"EY0A": 25e-6, "EZ0A": -20e-6, "EB0A": 40e-6, "EC0A": -30e-6,
+                     "EX0B": 20e-6, "EA0B": 30e-6}, "m (EX0/EY0/EZ0) or rad (EA0/EB0/EC0)")}),
+    EffectSpec(
+        "rotary_runout", "An eccentric bearing or encoder disc of one rotary axis: a radial "
+        "error motion and an angular positioning error, each once per revolution.",
+        "E_radial(theta) = r (cos(theta + phi), sin(theta + phi));  E_RR(theta) = p sin(theta + phi)",
+        "ISO 230-7 (error motions of axes of rotation); Zhu section 5.2", "tcp",
+        {"axis": ("A", "rotary axis"), "radial_m": (8e-6, "m, radius of the radial error motion"),
+         "positioning_rad": (20e-6, "rad, amplitude of the angular positioning error"),
+         "phase_rad": (0.4, "rad")}),
+    EffectSpec(
         "reversal", "Backlash in the drive: the axis lags by b/2 against the direction of "
         "motion (semi-closed loop; the scales see it).", "q = c - sign(v) b / 2",
         "ISO 230-2 reversal value B", "both", {"backlash_m": (6e-6, "m"), "axes": (["X", "Y", "Z"], "axes")}),

@@ -88,6 +88,8 @@ def write_bag(result: SimulationResult, bag_dir: str | Path, *, batch_period_s: 
                 message.positions = pack_float64(result.scale_readings[rows].ravel())
                 message.command_axes = [a.lower() for a in axes]
                 message.command_positions = pack_float64(command[rows].ravel())
+                message.encoder_names = [a.lower() for a in result.encoder_axes]
+                message.encoder_angles = pack_float64(result.encoder_readings[rows].ravel())
                 bag.write(scales_topic, serialize_message(message), stamp_ns, stamp_ns)
             else:
                 message = TemperatureArray()

@@ -41,6 +41,9 @@ from .thermal_state import ScaleTemperatureField, first_order_response, thermoco
 
 #: Default distance between the scales of a pair when the machine file has none [m].
 DEFAULT_SCALE_DISTANCE_M = 0.5
+#: Rotary encoders: white noise [rad] and resolution (27 bits per turn) [rad].
+ENCODER_NOISE_RAD = 0.1e-6
+ENCODER_RESOLUTION_RAD = 2.0 * np.pi / 2 ** 27
 #: Fastest feed of the test machine [m/s] (60 m/min, Kidani Table 3.1).
 MAX_FEED_M_PER_S = 1.0
 
@@ -67,6 +70,9 @@ class SimulationResult:
     spindle_speed_rpm: NDArray[np.float64]       # (M,)
     program: object
     first_index: int = 0                         # index of time_s[0] in the whole run
+    encoder_axes: list[str] = field(default_factory=list)   # rotary axes with an angle encoder
+    encoder_readings: NDArray[np.float64] = field(             # (N, len(encoder_axes)) [rad]
+        default_factory=lambda: np.zeros((0, 0)))
     _masks: dict[str, NDArray[np.float64]] = field(repr=False, default_factory=dict)
     _profiles: dict = field(repr=False, default_factory=dict)
     _thermal: dict[str, NDArray[np.float64]] = field(repr=False, default_factory=dict)
@@ -146,6 +152,24 @@ class SimulationResult:
             for name, value in scenario.parameters("squareness")["errors_rad"].items():
                 if name[-1] in machine.axes:
                     overrides.location[name] = float(value) * on
+        if scenario.ever_enabled("rotary_location"):
+            on = self.mask("rotary_location", indices)
+            for name, value in scenario.parameters("rotary_location")["errors"].items():
+                overrides.location[name] = overrides.location.get(name, 0.0) + float(value) * on
+        if scenario.ever_enabled("rotary_runout"):
+            params = scenario.parameters("rotary_runout")
+            axis = params["axis"]
+            on = self.mask("rotary_runout", indices)
+            angle = self.actual[axis][indices] + float(params["phase_rad"])
+            # The two directions across the axis, in cyclic order after its own (A: Y, Z).
+            along = "XYZ"["ABC".index(axis)]
+            first, second = "XYZ"[("XYZ".index(along) + 1) % 3], "XYZ"[("XYZ".index(along) + 2) % 3]
+            radius = float(params["radial_m"]) * on
+            for component, value in ((first, radius * np.cos(angle)),
+                                     (second, radius * np.sin(angle)),
+                                     (axis, float(params["positioning_rad"]) * np.sin(angle) * on)):
+                name = motion_error_name(component, axis)
+                overrides.motion[name] = overrides.motion.get(name, 0.0) + value
         drift = np.zeros((np.size(self.time_s[indices]), 6))
         if scenario.ever_enabled("structural_thermal_drift"):
             beta = np.asarray(scenario.parameters("structural_thermal_drift")["beta_m_per_k"])
@@ -193,6 +217,44 @@ class SimulationResult:
         if with_orientation:
             return position, result["orientation"]
         return position
+
+
+    def rotary_turn(self, indices, turn_rad: NDArray[np.float64]
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """How the tool's pose relative to the workpiece changes when the CNC turns the
+        rotary axes by ``turn_rad`` (N, R) beyond the command (a compensation).
+
+        Exact (the nominal chain at both commands, no linearisation). Returns the
+        TCP shift (N, 3) [m] and the rotation vector (N, 3) [rad], bed frame.
+        """
+        from ..core.kinematics.htm import rotation_vector
+
+        indices = np.arange(self.time_s.size)[indices]
+        model = KinematicModel(self.scenario.machine)
+        command = {a: self.command[a][indices] for a in self.scenario.machine.axis_order}
+        turned = dict(command)
+        for k, axis in enumerate(self.encoder_axes):
+            turned[axis] = command[axis] + turn_rad[:, k]
+        poses = []
+        for q in (command, turned):
+            tool = model.branch("tool", q, errors=False, check_stroke=False)
+            work = model.branch("workpiece", q, errors=False, check_stroke=False)
+            poses.append((tool, work))
+        (tool0, work0), (tool1, work1) = poses
+        shift = (tool1[:, :3, 3] - work1[:, :3, 3]) - (tool0[:, :3, 3] - work0[:, :3, 3])
+        tool_turn = tool1[:, :3, :3] @ np.swapaxes(tool0[:, :3, :3], 1, 2)
+        work_turn = work1[:, :3, :3] @ np.swapaxes(work0[:, :3, :3], 1, 2)
+        return shift, rotation_vector(np.swapaxes(work_turn, 1, 2) @ tool_turn)
+
+    def tool_axis(self, indices) -> NDArray[np.float64]:
+        """Nominal unit tool direction (N, 3) in the bed frame at the commands."""
+        indices = np.arange(self.time_s.size)[indices]
+        model = KinematicModel(self.scenario.machine)
+        command = {a: self.command[a][indices] for a in self.scenario.machine.axis_order}
+        tool = model.branch("tool", command, errors=False, check_stroke=False)
+        vector = np.asarray(self.scenario.machine.tool, dtype=np.float64)
+        norm = np.linalg.norm(vector)
+        return tool[:, :3, :3] @ (vector / norm if norm > 0 else np.array([0.0, 0.0, 1.0]))
 
 
 def yaw_lever_m(machine, axis: str) -> float:
@@ -274,11 +336,12 @@ def _axis_motion(scenario: Scenario, program, time_s: NDArray, masks: dict) -> t
     return command, actual, velocity
 
 
-def _block_noise(entropy: int, first: int, stop: int, channels: int, sigma: float) -> NDArray:
+def _block_noise(entropy: int, first: int, stop: int, channels: int, sigma: float,
+                 stream: int = 0x5CA1E) -> NDArray:
     """White noise (stop - first, channels) identical for any window of the same run."""
     out = np.empty((stop - first, channels))
     for block in range(first // NOISE_BLOCK, (stop - 1) // NOISE_BLOCK + 1 if stop > first else 0):
-        rng = np.random.default_rng(np.random.SeedSequence([entropy, 0x5CA1E, block]))
+        rng = np.random.default_rng(np.random.SeedSequence([entropy, stream, block]))
         values = rng.normal(0.0, sigma, (NOISE_BLOCK, channels))
         lo, hi = max(first, block * NOISE_BLOCK), min(stop, (block + 1) * NOISE_BLOCK)
         out[lo - first:hi - first] = values[lo - block * NOISE_BLOCK:hi - block * NOISE_BLOCK]
@@ -439,6 +502,19 @@ def simulate(scenario: Scenario, *, start_index: int = 0, stop_index: int | None
             readings[:, 2 * k + i - 1] = reading
             channels.append(name)
 
+    # Rotary encoders (one angle encoder per rotary axis, read by the same trigger as the
+    # scales): the CNC closes its loop on them, so they read the commanded angle; how far
+    # the table really is from it (rotary_runout's positioning error, the location
+    # errors) is what only a reference instrument sees.
+    encoder_axes = [a for a in machine.axis_order if machine.axes[a].is_rotary]
+    encoder_readings = np.column_stack([actual[a] for a in encoder_axes]) if encoder_axes \
+        else np.zeros((n, 0))
+    if encoder_axes:
+        encoder_readings = encoder_readings + _block_noise(
+            noise_entropy, start, stop, len(encoder_axes), ENCODER_NOISE_RAD, stream=0xE4C)
+        encoder_readings = np.round(encoder_readings / ENCODER_RESOLUTION_RAD) \
+            * ENCODER_RESOLUTION_RAD
+
     mean_c = float(ambient_cfg["mean_c"])
     for name, key, scale in (("column", "column", 1.0), ("bed", "bed", 1.0),
                              ("spindle", "spindle", 8.0)):
@@ -458,6 +534,7 @@ def simulate(scenario: Scenario, *, start_index: int = 0, stop_index: int | None
         scale_distance_m=distances, yaw_truth=yaw_truth, temperature_time_s=temperature_time,
         temperature_names=temperature_names, temperatures_c=measured,
         temperatures_true_c=true_c, thermocouple_positions_m=tc_positions,
-        spindle_speed_rpm=speed, program=program, first_index=start, _masks=masks,
+        spindle_speed_rpm=speed, program=program, first_index=start,
+        encoder_axes=encoder_axes, encoder_readings=encoder_readings, _masks=masks,
         _profiles=profiles,
         _thermal=thermal)

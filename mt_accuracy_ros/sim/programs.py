@@ -238,14 +238,30 @@ def diagonal(machine: MachineDescription, kind: str = "body", feed_m_per_min: fl
 
 def random_points(machine: MachineDescription, axes=None, points: int = 30, seed: int = 0,
                   dwell_s: float = 1.0, feed_m_per_min: float = 10.0,
-                  margin: float = 0.02) -> Program:
+                  margin: float = 0.02, limits: dict | None = None) -> Program:
     """Stops at ``points`` random positions of the work volume (a volumetric survey,
     e.g. with a laser tracker); every axis moves independently, so position-dependent
-    effects (squareness) are separable from one another."""
+    effects (squareness) are separable from one another.
+
+    ``limits``: axis -> [low, high] inside its stroke (e.g. the tilt range a
+    five-axis job uses, in rad); the feed is the speed along the path in the
+    axes' own units (m, rad) per minute.
+    """
     axes = tuple(axes or [a for a in machine.axis_order if not machine.axes[a].is_rotary])
     rng = np.random.default_rng(seed)
-    lows = np.array([_stroke(machine, a)[0] for a in axes])
-    highs = np.array([_stroke(machine, a)[1] for a in axes])
+    limits = dict(limits or {})
+    for axis, span in limits.items():
+        if axis not in axes or not isinstance(span, (list, tuple)) or len(span) != 2:
+            raise ScenarioError(f"limits: {axis!r} -> [low, high] for one of the moving axes "
+                                f"({', '.join(axes)})")
+        for value, label in zip(span, ("low", "high")):
+            _check_inside(machine, axis, float(value), f"limits {axis} {label}")
+        if not float(span[0]) < float(span[1]):
+            raise ScenarioError(f"limits {axis}: low must be below high, got {span}")
+    lows = np.array([float(limits[a][0]) if a in limits else _stroke(machine, a)[0]
+                     for a in axes])
+    highs = np.array([float(limits[a][1]) if a in limits else _stroke(machine, a)[1]
+                      for a in axes])
     span = highs - lows
     stops = lows + span * margin + rng.random((int(points), len(axes))) * span * (1 - 2 * margin)
     feed = _feed(feed_m_per_min)

@@ -26,6 +26,7 @@ and line.
 from __future__ import annotations
 
 import copy
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -261,6 +262,7 @@ def _check_effect_axes(scenario: Scenario) -> None:
             if axis not in machine.axes or machine.axes[axis].is_rotary:
                 raise ScenarioError(f"{scenario.source}: effect {name}: axis {axis!r} is not a "
                                     f"linear axis of {machine.name}")
+    _check_rotary_effects(scenario)
     if scenario.ever_enabled("guideway_deterioration"):
         params = scenario.parameters("guideway_deterioration")
         low, high = machine.axes[params["axis"]].stroke
@@ -269,6 +271,35 @@ def _check_effect_axes(scenario: Scenario) -> None:
                 raise ScenarioError(f"{scenario.source}: guideway_deterioration {key} = "
                                     f"{params[key]} m is outside the {params['axis']} stroke "
                                     f"[{low}, {high}] m")
+
+
+def _check_rotary_effects(scenario: Scenario) -> None:
+    machine = scenario.machine
+    rotary = [a for a in machine.axis_order if machine.axes[a].is_rotary]
+    for name in ("rotary_location", "rotary_runout"):
+        if scenario.ever_enabled(name) and not rotary:
+            raise ScenarioError(f"{scenario.source}: effect {name}: {machine.name} has no "
+                                "rotary axis")
+    if scenario.ever_enabled("rotary_location"):
+        errors = scenario.parameters("rotary_location")["errors"]
+        if not isinstance(errors, dict):
+            raise ScenarioError(f"{scenario.source}: rotary_location errors must be a mapping "
+                                "such as {EY0A: 2.0e-5, EB0A: 3.0e-5}")
+        for key, value in errors.items():
+            match = re.fullmatch(r"E[XYZABC]0([A-Z])", str(key))
+            if not match or match.group(1) not in rotary:
+                raise ScenarioError(f"{scenario.source}: rotary_location error {key!r} is not a "
+                                    f"location error of a rotary axis of {machine.name} "
+                                    f"({', '.join(rotary)}), e.g. EY0{rotary[0]}")
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                    not math.isfinite(value) or abs(value) > 0.01:
+                raise ScenarioError(f"{scenario.source}: rotary_location {key} = {value!r}: "
+                                    "expected a finite number below 0.01 (m or rad)")
+    if scenario.ever_enabled("rotary_runout"):
+        axis = scenario.parameters("rotary_runout")["axis"]
+        if axis not in rotary:
+            raise ScenarioError(f"{scenario.source}: effect rotary_runout: axis {axis!r} is not "
+                                f"a rotary axis of {machine.name} ({', '.join(rotary)})")
 
 
 @reraise_as(ScenarioError, "scenario")

@@ -37,6 +37,8 @@ from ..kinematics.machine import MachineDescription
 
 #: Largest correction a controller takes [m]: more is a unit mistake or a broken model.
 MAX_CORRECTION_M = 1e-3
+#: A rotary correction larger than this [rad] (0.5 deg) is refused as a unit mistake.
+MAX_CORRECTION_RAD = float(np.radians(0.5))
 #: Component letters of a table column, ISO 230-1: E<component><axis>.
 TABLE_COMPONENTS = "XYZABC"
 
@@ -73,9 +75,14 @@ class RealtimeOffset:
         Fixed input delay [s] (>= 0): a correction stamped t applies from t + delay.
     max_age_s : float
         A correction arriving more than this after its stamp is stale [s] (> delay).
+    rotary_axes : int
+        Rotary axes of the machine: each correction also carries one angle [rad]
+        per rotary axis (the tool-orientation part of a 5-axis compensation),
+        held and applied together with its position part.
     """
 
-    def __init__(self, cycle_s: float, delay_s: float, max_age_s: float) -> None:
+    def __init__(self, cycle_s: float, delay_s: float, max_age_s: float,
+                 rotary_axes: int = 0) -> None:
         for name, value, low in (("cycle_s", cycle_s, 1e-6), ("delay_s", delay_s, 0.0),
                                  ("max_age_s", max_age_s, 1e-6)):
             if not (np.isfinite(value) and value >= low):
@@ -83,6 +90,7 @@ class RealtimeOffset:
         if max_age_s < delay_s:
             raise ParameterError(f"max_age_s ({max_age_s} s) must not be below delay_s "
                                  f"({delay_s} s): every correction would be stale")
+        self.rotary_axes = int(rotary_axes)
         self.cycle_ns = int(round(cycle_s * 1e9))
         self.delay_ns = int(round(delay_s * 1e9))
         self.max_age_ns = int(round(max_age_s * 1e9))
@@ -106,15 +114,27 @@ class RealtimeOffset:
         return reason
 
     def offer(self, stamp_ns: int, arrival_ns: int, correction_m: ArrayLike,
-              version: int) -> str | None:
-        """Take one correction (3,) [m] stamped ``stamp_ns``; ``None`` or the refusal reason."""
+              version: int, rotary_rad: ArrayLike = ()) -> str | None:
+        """Take one correction (3,) [m] (and ``rotary_rad`` (R,) [rad]) stamped ``stamp_ns``.
+
+        Returns ``None`` or the refusal reason.
+        """
         self.statistics.offered += 1
         correction = np.asarray(correction_m, dtype=np.float64).reshape(-1)
+        rotary = np.asarray(rotary_rad, dtype=np.float64).reshape(-1)
         if correction.size != 3 or not np.all(np.isfinite(correction)):
             return self._refuse("not finite: correction with NaN/inf or not 3 components")
+        if rotary.size not in (0, self.rotary_axes) or not np.all(np.isfinite(rotary)):
+            return self._refuse(f"not finite: rotary correction with NaN/inf or not "
+                                f"{self.rotary_axes} components")
         if np.max(np.abs(correction)) > MAX_CORRECTION_M:
             return self._refuse(f"too large: |correction| {np.max(np.abs(correction)):.3g} m "
                                 f"> {MAX_CORRECTION_M} m (a unit mistake?)")
+        if rotary.size and np.max(np.abs(rotary)) > MAX_CORRECTION_RAD:
+            return self._refuse(f"too large: |rotary correction| {np.max(np.abs(rotary)):.3g} rad"
+                                f" > {MAX_CORRECTION_RAD} rad (degrees sent as radians?)")
+        correction = np.concatenate([correction, rotary if rotary.size
+                                     else np.zeros(self.rotary_axes)])
         if stamp_ns <= self._last_stamp:
             return self._refuse(f"out of order: stamp {stamp_ns} ns not after the last "
                                 f"accepted {self._last_stamp} ns")
@@ -141,9 +161,15 @@ class RealtimeOffset:
         The offset live at time t is the last accepted correction applied from
         a cycle tick at or before t (zero and version 0 before the first).
         """
+        values, versions = self.at_with_rotary(times_ns)
+        return values[:, :3], versions
+
+    def at_with_rotary(self, times_ns: ArrayLike) -> tuple[NDArray[np.float64],
+                                                          NDArray[np.int64]]:
+        """As :meth:`at`, the values (N, 3 + R): position [m], then rotary [rad]."""
         t = np.atleast_1d(np.asarray(times_ns, dtype=np.int64))
         tick = (t // self.cycle_ns) * self.cycle_ns
-        out = np.zeros((t.size, 3))
+        out = np.zeros((t.size, 3 + self.rotary_axes))
         versions = np.zeros(t.size, dtype=np.int64)
         if not self._applied_from:
             return out, versions

@@ -430,6 +430,11 @@ class ErrorModel:
                         out[name] = out.get(name, 0.0) + value
         return out
 
+    @property
+    def kinematics(self) -> KinematicModel:
+        """The machine's nominal kinematic chain (what a controller inverts)."""
+        return self._kinematics
+
     def axis_direction(self, axis: str, positions: dict[str, NDArray]) -> NDArray[np.float64]:
         """d(tool - workpiece)/d q_axis (N, 3): where a unit move of the axis takes the TCP.
 

@@ -154,3 +154,16 @@ def test_loop_phases_split_a_run_and_judge_the_end_state():
     assert not phases[1].within(1e-6) and phases[-1].within(1e-6)
     np.testing.assert_allclose([f.rms for f in phases[2].with_compensation], 0.5e-6, rtol=0.25)
     assert phases[2].count == int((t >= 11.0).sum())  # 1 s settling left out
+
+
+def test_a_five_axis_correction_holds_its_rotary_part_with_its_position_part():
+    offset = RealtimeOffset(cycle_s=0.001, delay_s=0.0, max_age_s=1.0, rotary_axes=2)
+    assert offset.offer(1 * MS, 1 * MS, [1e-6, 0, 0], 1, rotary_rad=[2e-5, -3e-5]) is None
+    assert offset.offer(5 * MS, 5 * MS, [2e-6, 0, 0], 1) is None      # position only: zero turn
+    values, versions = offset.at_with_rotary(np.array([0, 2, 6]) * MS)
+    np.testing.assert_array_equal(values[:, 3:], [[0, 0], [2e-5, -3e-5], [0, 0]])
+    np.testing.assert_array_equal(offset.at(np.array([2]) * MS)[0], [[1e-6, 0, 0]])
+    assert "not finite" in offset.offer(6 * MS, 6 * MS, [0, 0, 0], 1, rotary_rad=[1e-5])
+    assert "not finite" in offset.offer(7 * MS, 7 * MS, [0, 0, 0], 1, rotary_rad=[np.nan, 0])
+    assert "degrees" in offset.offer(8 * MS, 8 * MS, [0, 0, 0], 1, rotary_rad=[0.5, 0.0])
+    assert offset.statistics.refused == 3

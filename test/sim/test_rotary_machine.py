@@ -1,0 +1,93 @@
+"""The virtual five-axis machine: rotary effects against closed forms, rotary encoders."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.core.errors import ScenarioError
+from mt_accuracy_ros.core.kinematics.chain import KinematicModel
+from mt_accuracy_ros.sim.machine_tool import (ENCODER_NOISE_RAD, ENCODER_RESOLUTION_RAD,
+                                              simulate)
+from mt_accuracy_ros.sim.scenario import scenario_from_yaml
+
+PROGRAM = ("{type: random_points, axes: [X, Y, Z, A, B], points: 8, seed: 2, dwell_s: 0.2, "
+           "feed_m_per_min: 30, limits: {A: [-1.0, 1.0], B: [-0.7, 0.7]}}")
+
+
+def _run(effects: str, duration: float = 12.0, extra: str = ""):
+    return simulate(scenario_from_yaml(
+        f"machine: khan_chen_rpppr\nseed: 4\nduration_s: {duration}\nsample_rate_hz: 500\n"
+        f"program: {PROGRAM}\neffects: {effects}\n{extra}"))
+
+
+def test_an_offset_rotary_axis_line_shifts_the_work_by_the_offset_at_every_pose():
+    """EY0A, EZ0A: the A axis line displaced before it turns - the work moves with it,
+    whatever the angle: e = -(0, dy, dz)."""
+    result = _run("{geometric: false, rotary_location: {errors: {EY0A: 2.5e-5, EZ0A: -2.0e-5}}}")
+    rows = np.arange(0, result.time_s.size, 97)
+    assert np.ptp(result.command["A"][rows]) > 1.0        # the table really turned
+    error = result.tcp_error(rows)
+    np.testing.assert_allclose(error, np.tile([0.0, -2.5e-5, 2.0e-5], (rows.size, 1)), atol=1e-15)
+
+
+def test_a_rotary_positioning_error_is_an_extra_turn_of_the_axis():
+    """rotary_runout with no radial part: the table stands at A + p sin(A + phi) - the
+    nominal chain turned by that much is the same TCP error (a second formulation)."""
+    result = _run("{geometric: false, rotary_runout: {axis: A, radial_m: 0.0, "
+                  "positioning_rad: 2.0e-5, phase_rad: 0.4}}")
+    rows = np.arange(0, result.time_s.size, 53)
+    model = KinematicModel(result.scenario.machine)
+    q = {a: result.command[a][rows] for a in result.scenario.machine.axis_order}
+    turned = dict(q)
+    turned["A"] = q["A"] + 2.0e-5 * np.sin(q["A"] + 0.4)
+    expected = model.nominal_relative(turned) - model.nominal_relative(q)
+    np.testing.assert_allclose(result.tcp_error(rows), expected, atol=1e-12)
+    assert np.max(np.abs(expected)) > 1e-7
+
+
+def test_a_radial_error_motion_turns_with_the_axis_once_per_revolution():
+    """EYA, EZA = r (cos, sin)(A + phi) in the turning frame: the work point's displacement
+    has magnitude r at every angle (a circle of radius r), for the A table at any X."""
+    result = _run("{geometric: false, rotary_runout: {axis: A, radial_m: 6.0e-6, "
+                  "positioning_rad: 0.0}}")
+    rows = np.arange(0, result.time_s.size, 41)
+    error = result.tcp_error(rows)
+    assert np.abs(error[:, 0]).max() < 1e-15              # nothing along the axis
+    np.testing.assert_allclose(np.linalg.norm(error[:, 1:], axis=1), 6.0e-6, rtol=1e-9)
+
+
+def test_rotary_encoders_read_the_commanded_angle_to_their_noise_and_resolution():
+    result = _run("{}")
+    assert result.encoder_axes == ["A", "B"]
+    deviation = result.encoder_readings - np.column_stack([result.actual["A"],
+                                                           result.actual["B"]])
+    assert np.std(deviation) == pytest.approx(ENCODER_NOISE_RAD, rel=0.05)
+    assert np.all(np.abs(deviation) < 6 * ENCODER_NOISE_RAD + ENCODER_RESOLUTION_RAD)
+    steps = result.encoder_readings / ENCODER_RESOLUTION_RAD
+    np.testing.assert_allclose(steps, np.round(steps), atol=1e-6)
+    # A window of the run reads exactly what the whole run read there (live streaming).
+    window = simulate(result.scenario, start_index=1500, stop_index=2500)
+    np.testing.assert_array_equal(window.encoder_readings, result.encoder_readings[1500:2500])
+    three_axis = simulate(scenario_from_yaml("machine: kidani_hmc\nduration_s: 1\n"))
+    assert three_axis.encoder_axes == [] and three_axis.encoder_readings.shape[1] == 0
+
+
+@pytest.mark.parametrize("machine, effects, message", [
+    ("kidani_hmc", "{rotary_location: {}}", "has no rotary axis"),
+    ("khan_chen_rpppr", "{rotary_location: {errors: {EY0X: 1.0e-5}}}",
+     "'EY0X' is not a location error of a rotary axis"),
+    ("khan_chen_rpppr", "{rotary_location: {errors: {EY0A: 0.5}}}", "below 0.01"),
+    ("khan_chen_rpppr", "{rotary_runout: {axis: X}}", "'X' is not a rotary axis"),
+])
+def test_rotary_effects_on_the_wrong_machine_or_axis_are_refused(machine, effects, message):
+    with pytest.raises(ScenarioError, match=message):
+        scenario_from_yaml(f"machine: {machine}\neffects: {effects}\n")
+
+
+def test_random_points_limits_are_checked():
+    with pytest.raises(ScenarioError, match="limits A high = 4 m is outside the A stroke"):
+        scenario_from_yaml("machine: khan_chen_rpppr\nprogram: {type: random_points, axes: "
+                           "[X, A], limits: {A: [0, 4]}}\n")
+    with pytest.raises(ScenarioError, match="low must be below high"):
+        scenario_from_yaml("machine: khan_chen_rpppr\nprogram: {type: random_points, axes: "
+                           "[X, A], limits: {A: [0.5, 0.1]}}\n")
