@@ -45,17 +45,28 @@ def _ballbar(args: argparse.Namespace) -> int:
     from .io.rotary_csv import atomic_write_text, ballbar_csv_text, read_ballbar_csv
     from .sim.rotary_instruments import BallBarPlan, RotaryTableTruth, ballbar_test
 
-    if args.simulate is not None:
+    if args.simulate is not None and args.scenario:
+        from dataclasses import replace
+
+        from .nodes._scenario import resolve_scenario
+        from .sim.rotary_instruments import table_truth
+
+        truth = replace(table_truth(resolve_scenario(args.scenario), args.axis),
+                        reversal_lost_motion_rad=1e-4 if args.backlash else 0.0)
+    elif args.simulate is not None:
         truth = RotaryTableTruth(radial_m=(15e-6, -15e-6), axial_m=2.68e-6,
                                  tilt_rad=(7.93 * ARCSEC, 7.38 * ARCSEC), positioning_rad=0.15e-3,
                                  reversal_lost_motion_rad=1e-4 if args.backlash else 0.0,
                                  reversal_tilt_rad=(0.0, 12e-6) if args.backlash else (0.0, 0.0))
+    if args.simulate is not None:
         plan = BallBarPlan(radius_m=args.radius_mm * 1e-3)
         data = ballbar_test(truth, plan, seed=args.simulate)
         atomic_write_text(args.file, ballbar_csv_text(data.angles_deg, data.short, data.long,
                                                       plan.short_bar_m, plan.long_bar_m))
-        print(f"simulated ball-bar runs written to {args.file} (true E_x 7.93\", E_y 7.38\", "
-              f"D_z 2.68 um{', with a rotary backlash' if args.backlash else ''})")
+        print(f"simulated ball-bar runs written to {args.file} (true E_x "
+              f"{truth.tilt_rad[0] / ARCSEC:.2f}\", E_y {truth.tilt_rad[1] / ARCSEC:.2f}\", "
+              f"D_z {truth.axial_m * 1e6:.2f} um"
+              f"{', with a rotary backlash' if args.backlash else ''})")
     short, long = read_ballbar_csv(args.file, args.radius_mm * 1e-3, args.socket_height_mm * 1e-3)
     result = calibrate(short, long)
     print(result.text())
@@ -74,7 +85,15 @@ def _probe(args: argparse.Namespace) -> int:
     from .io.rotary_csv import atomic_write_text, probing_csv_text, read_probing_csv
     from .sim.rotary_instruments import ProbingPlan, probe_sphere
 
-    machine = load_machine(args.machine)
+    scenario_truth = None
+    if args.scenario:
+        from .nodes._scenario import resolve_scenario
+        from .sim.rotary_instruments import location_errors_of
+
+        scenario = resolve_scenario(args.scenario)
+        machine, scenario_truth = scenario.machine, location_errors_of(scenario)
+    else:
+        machine = load_machine(args.machine)
     rotary = {a for a in machine.axis_order if machine.axes[a].is_rotary}
     if not rotary:
         raise ValueError(f"machine {machine.name} has no rotary axis to probe")
@@ -82,7 +101,8 @@ def _probe(args: argparse.Namespace) -> int:
     if args.simulate is not None:
         truth = {"EY0A": 20e-6, "EZ0A": -15e-6, "EB0A": 30e-6, "EC0A": -25e-6,
                  "EA0B": 15e-6, "EC0B": -20e-6}
-        truth = {k: v for k, v in truth.items() if k[-1] in rotary}
+        truth = {k: v for k, v in truth.items() if k[-1] in rotary} \
+            if scenario_truth is None else scenario_truth
         linear = {a: float(np.mean(machine.axes[a].stroke)) for a in machine.axis_order
                   if a not in rotary}
         plan = ProbingPlan({a: list(np.arange(-60.0, 61.0, 20.0)) for a in sorted(rotary)},
@@ -150,6 +170,9 @@ def add_parser(commands) -> None:
                          help="R_z: the table ball's height above the table centre [mm]")
     ballbar.add_argument("--simulate", type=int, metavar="SEED",
                          help="first write FILE from the virtual rotary table")
+    ballbar.add_argument("--scenario", help="with --simulate: measure this scenario's "
+                         "virtual machine (its rotary_location errors of --axis)")
+    ballbar.add_argument("--axis", default="A", help="the rotary axis of --scenario's machine")
     ballbar.add_argument("--backlash", action="store_true",
                          help="with --simulate: the table has a lost motion")
     ballbar.add_argument("--report", help="HTML report with polar plots")
@@ -159,6 +182,8 @@ def add_parser(commands) -> None:
     probe.add_argument("file", help="probing CSV: cycle, <axis>_mm|_deg, px_mm, py_mm, pz_mm")
     probe.add_argument("--machine", default="khan_chen_rpppr",
                        help="machine description (bundled name or YAML)")
+    probe.add_argument("--scenario", help="the machine of this scenario (and, with "
+                       "--simulate, its true rotary_location errors) instead of --machine")
     probe.add_argument("--sphere-radius-mm", type=float, default=12.5)
     probe.add_argument("--sphere-mm", type=float, nargs=3, default=[50.0, 80.0, 60.0],
                        metavar=("X", "Y", "Z"),

@@ -122,3 +122,26 @@ def test_export_writes_reads_back_and_refuses_a_bad_spacing(tmp_path, capsys):
 
 def test_arcsec_is_the_unit_zhu_uses():
     assert 1 / ARCSEC == pytest.approx(206264.806247, rel=1e-9)
+
+
+def test_the_instruments_measure_the_five_axis_scenarios_own_machine(tmp_path, capsys):
+    """--scenario: the probe and the ball bar read the virtual machine the live graph runs
+    (demo_5axis's rotary_location), not a truth of their own."""
+    from mt_accuracy_ros.core.rotary.ballbar import ARCSEC
+    from mt_accuracy_ros.nodes._scenario import resolve_scenario
+
+    truth = resolve_scenario("demo_5axis").parameters("rotary_location")["errors"]
+    assert main(["probe", str(tmp_path / "p.csv"), "--simulate", "2", "--scenario", "demo_5axis",
+                 "--json", str(tmp_path / "p.json")]) == 0
+    summary = json.loads((tmp_path / "p.json").read_text())
+    for name in ("EY0A", "EZ0A", "EB0A", "EC0A", "EA0B"):
+        assert abs(summary["parameters"][name] - truth[name]) <= \
+            3 * summary["uncertainties_k1"][name] + 1e-9, name
+    assert "EX0B" in summary["not_observable"]       # one sphere cannot see it: said so
+    assert main(["ballbar", str(tmp_path / "b.csv"), "--simulate", "2", "--scenario",
+                 "demo_5axis", "--axis", "A", "--json", str(tmp_path / "b.json")]) == 0
+    result = json.loads((tmp_path / "b.json").read_text())
+    # A turns about X: Zhu's table frame is (Y, Z, X), so E_x = EB0A and E_y = EC0A.
+    l2 = result["l2"]
+    assert abs(l2["tilt_x_rad"] - truth["EB0A"]) < 0.5 * ARCSEC
+    assert abs(l2["tilt_y_rad"] - truth["EC0A"]) < 0.5 * ARCSEC

@@ -169,3 +169,36 @@ def probe_sphere(machine, plan: ProbingPlan, location_errors: dict[str, float], 
     points = centres[:, None, :] + plan.sphere_radius_m * directions \
         + rng.normal(0.0, plan.noise_m, (n, plan.touches, 3))
     return {"positions": positions, "touch_points_m": points, "centres_m": centres}
+
+
+# ------------------------------------------------------------- from a scenario
+def location_errors_of(scenario) -> dict[str, float]:
+    """The rotary axes' true location errors of a scenario's virtual machine [m, rad]
+    (its ``rotary_location`` effect; empty when that is off)."""
+    if not scenario.ever_enabled("rotary_location"):
+        return {}
+    return {str(k): float(v) for k, v in scenario.parameters("rotary_location")["errors"].items()}
+
+
+def table_truth(scenario, axis: str) -> RotaryTableTruth:
+    """The ball bar's view of rotary ``axis`` of a scenario's machine, in Zhu's table frame.
+
+    Zhu's table turns about its own z; for an axis turning about machine
+    direction d the table frame is (d+1, d+2, d) cyclically (A: Y, Z, X). The
+    location errors of the axis line map to Zhu's radial (D_x, D_y), axial (D_z)
+    and tilt (E_x, E_y) errors; its zero-angle error to the positioning E_z.
+    """
+    machine = scenario.machine
+    if axis not in machine.axes or not machine.axes[axis].is_rotary:
+        raise ValueError(f"{axis!r} is not a rotary axis of {machine.name}")
+    errors = location_errors_of(scenario)
+    along = "ABC".index(axis)
+    local_x, local_y = (along + 1) % 3, (along + 2) % 3
+
+    def value(component: str) -> float:
+        return errors.get(f"E{component}0{axis}", 0.0)
+
+    return RotaryTableTruth(
+        radial_m=(value("XYZ"[local_x]), value("XYZ"[local_y])), axial_m=value("XYZ"[along]),
+        tilt_rad=(value("ABC"[local_x]), value("ABC"[local_y])),
+        positioning_rad=value(axis))
