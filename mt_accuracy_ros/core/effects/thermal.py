@@ -28,11 +28,27 @@ from .base import Context, EffectFamily, per_component
 TIME_CONSTANTS_S = tuple(float(300.0 * 2.0 ** (k / 2)) for k in range(13))
 
 
+#: The longest time constant searched, in multiples of the data's time span.
+MAX_TAU_PER_SPAN = 4.0
+
+
 class _SearchedTimeConstant:
-    """Families whose time constant is searched (in-fold) over TIME_CONSTANTS_S."""
+    """Families whose time constant is searched (in-fold) over TIME_CONSTANTS_S.
+
+    Only time constants up to MAX_TAU_PER_SPAN x the data's span: a lag much
+    longer than the record is a ramp to the data, its gain (m/K of a signal of
+    millikelvin) is arbitrary, and evaluated later - in a broadcaster whose lag
+    has run longer - it extrapolates to millimetres.
+    """
 
     def settings(self, ctx, variant):
-        return [{"tau_s": tau} for tau in TIME_CONSTANTS_S]
+        taus = TIME_CONSTANTS_S
+        time_s = ctx.variables.time_s
+        if time_s is not None and np.size(time_s) > 1:
+            span = float(np.ptp(time_s))
+            taus = tuple(t for t in TIME_CONSTANTS_S if t <= MAX_TAU_PER_SPAN * span) \
+                or TIME_CONSTANTS_S[:1]
+        return [{"tau_s": tau} for tau in taus]
 
     def describe_setting(self, setting):
         return f"tau {setting['tau_s'] / 60:.0f} min"
