@@ -325,6 +325,16 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
                                   phase.with_compensation))
         result_orientation = {"phases": [p.as_dict() for p in tilt], "band_urad": band_rad * 1e6,
                               "end_within_band": bool(tilt[-1].within(band_rad))}
+    in_end = (time_s >= end.start_s) & (time_s <= end.end_s)
+    if np.count_nonzero(in_end) >= 3:
+        # An R-test or probe is zeroed on the part: a constant offset of the whole end
+        # state is a datum (what a work-offset touch-off takes out), its spread is not.
+        mean, spread = measured[in_end].mean(axis=0), measured[in_end].std(axis=0)
+        lines.append("  end state about its mean (the datum a work-offset touch-off takes out: "
+                     + ", ".join(f"{m * 1e6:+.2f}" for m in mean) + " um): spread "
+                     + ", ".join(f"e_{c} {v * 1e6:.2f} um" for c, v in zip(COMPONENTS, spread))
+                     + (" - within the instrument's band" if np.all(spread <= band) else
+                        " - beyond the instrument's band"))
     for when, axis in alarms:
         after = [p for p in phases if p.label.startswith(f"after the {axis.upper()}")]
         if after:
