@@ -141,7 +141,11 @@ def test_realtime_offset_removes_a_thermal_drift_and_reports_its_latency(rclpy_c
                                                "compensation_delay_s": 0.02,
                                                "min_subscribers": 2}, quiet=True)
     try:
-        readings = _readings(node, 100, readings=listened)
+        # Until 60 readings were taken with the compensation live: on a loaded host the
+        # broadcaster's first corrections come later, not fewer (the run is 600 s long).
+        assert spin_until(node, lambda: len(listened) >= 100 and sum(
+            r.compensation_model_version >= 1 for r in listened) >= 60, 240), len(listened)
+        readings = listened
         assert spin_until(node, lambda: bool(statuses), 10)
     finally:
         machine.stop()
@@ -286,7 +290,7 @@ def test_five_axis_compensation_puts_the_tools_tip_and_direction_right(rclpy_con
                                                           "follow_model_topic": False},
                              quiet=True)
     machine = start_node("encoder_publisher", {
-        "scenario": str(scenario_path), "batch_period_s": 0.05, "rate_factor": 2.0,
+        "scenario": str(scenario_path), "batch_period_s": 0.05, "rate_factor": 1.0,
         "compensation_input": "realtime", "max_compensation_age_s": 2.0,
         "compensation_delay_s": 0.02, "min_subscribers": 2}, quiet=True)
     scales: list = []
@@ -294,20 +298,27 @@ def test_five_axis_compensation_puts_the_tools_tip_and_direction_right(rclpy_con
 
     from mt_accuracy_ros.nodes._common import SENSOR_QOS
     node.create_subscription(ScaleBatch, "scales", scales.append, SENSOR_QOS)
+    def settled_and_live(readings) -> np.ndarray:
+        # At a stop for two readings already (1 s): in motion, and just after a stop, the
+        # correction live is the graph's latency late - longer on a loaded host.
+        commands = np.array([list(r.command_positions) for r in readings])
+        versions = np.array([r.compensation_model_version for r in readings])
+        same = np.all(commands[1:] == commands[:-1], axis=1)
+        settled = np.r_[False, False, same[1:] & same[:-1]] if len(readings) > 2 \
+            else np.zeros(len(readings), bool)
+        return settled & (versions >= 1)
+
     try:
-        readings = _readings(node, 150, readings=listened)
+        # Until 30 settled readings with the compensation live (the run is 600 s long).
+        assert spin_until(node, lambda: len(listened) > 2 and
+                          settled_and_live(listened).sum() >= 30, 300), len(listened)
+        readings = list(listened)
     finally:
         machine.stop()
         broadcaster.stop()
         node.destroy_node()
     measured, applied, versions = _arrays(readings)
-    # Readings settled at a stop (the axes stood there at the reading before too): in
-    # motion, and just after a stop, the correction live is the graph's latency late.
-    commands = np.array([list(r.command_positions) for r in readings])
-    still = np.array([max(abs(v) for v in r.command_velocities) < 1e-9 for r in readings])
-    settled = still & np.r_[False, np.all(commands[1:] == commands[:-1], axis=1)]
-    live = (versions >= 1) & settled
-    assert live.sum() >= 30, (live.sum(), settled.sum())
+    live = settled_and_live(readings)
     assert all(r.instrument == "r_test_two_sphere" and r.orientation_measured for r in readings)
     direction = np.array([(r.orientation_error.x, r.orientation_error.y, r.orientation_error.z)
                           for r in readings])
