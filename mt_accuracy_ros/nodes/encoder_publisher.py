@@ -38,6 +38,7 @@ from rclpy.node import Node
 from mt_accuracy_msgs.msg import ReferenceMeasurement, ScaleBatch
 
 from ..core.compensation.error_model import ErrorModel
+from ..core.compensation.five_axis import tool_direction
 from ..core.errors import MtAccuracyError
 from ..sim.machine_tool import SimulationResult, simulate
 from ._cnc_input import MODES, CompensationInput
@@ -123,6 +124,7 @@ class EncoderPublisher(Node):
         # Where a unit move of each linear axis takes the TCP (+-unit vectors): the
         # axes realise a TCP correction c by moving c . direction each.
         model = ErrorModel(self.scenario.machine)
+        self._kinematics = model.kinematics
         middle = {a: np.array([0.5 * sum(self.scenario.machine.axes[a].stroke)])
                   for a in self._axes}
         self._axis_directions = {
@@ -222,8 +224,6 @@ class EncoderPublisher(Node):
             (first + np.arange(self._batch)) / self._rate * 1e9).astype(np.int64)
         applied, rotary_applied, versions = self.compensation.corrections_with_rotary(
             stamps, {a: window.command[a][rows] for a in self._axes})
-        if not np.any(rotary_applied):
-            rotary_applied = np.zeros((self._batch, 0))
         readings = window.scale_readings[rows]
         if np.any(applied):
             readings = readings.copy()
@@ -243,7 +243,7 @@ class EncoderPublisher(Node):
             np.column_stack([window.command[a][rows] for a in self._axes]).ravel())
         message.encoder_names = [a.lower() for a in window.encoder_axes]
         encoders = window.encoder_readings[rows]
-        if rotary_applied.size:
+        if np.any(rotary_applied):
             encoders = encoders + rotary_applied  # the CNC turned the axes by the correction
         message.encoder_angles = pack_float64(encoders.ravel())
         self._scales.publish(message)
@@ -254,8 +254,8 @@ class EncoderPublisher(Node):
                 index = int(round(self._next_reference_s * self._rate)) - window.first_index
                 index = min(max(index, offset), offset + self._batch - 1)
                 self._publish_reference(window, index, frame, applied[index - offset],
-                                        rotary_applied[index - offset] if rotary_applied.size
-                                        else np.zeros(0), int(versions[index - offset]))
+                                        rotary_applied[index - offset],
+                                        int(versions[index - offset]))
                 self._next_reference_s += period
 
     def _direction(self, window: SimulationResult, axis: str, index: int) -> int:
@@ -274,7 +274,7 @@ class EncoderPublisher(Node):
         rows = np.array([index])
         position, orientation = window.tcp_error(rows, with_orientation=True)
         shift, turn = np.zeros((1, 3)), np.zeros((1, 3))
-        if rotary_applied.size:
+        if np.any(rotary_applied):
             shift, turn = window.rotary_turn(rows, rotary_applied[None, :])
         # What the compensation did to the TCP: the linear correction and the shift the
         # rotary turn caused (the controller knows both through its nominal kinematics).
@@ -284,7 +284,8 @@ class EncoderPublisher(Node):
         if window.encoder_axes:
             # A two-sphere R-test: the tool's direction as well as its tip; the rotation
             # about the tool axis is invisible to it (and irrelevant to a cutting tool).
-            axis = window.tool_axis(rows)[0]
+            axis = tool_direction(self._kinematics, {a: window.command[a][rows]
+                                                     for a in self._axes})[0]
             seen = orientation[0] + turn[0] + self._rng.normal(
                 0.0, ORIENTATION_UNCERTAINTY_RAD / 2, 3)
             direction = seen - axis * (seen @ axis)
@@ -295,8 +296,7 @@ class EncoderPublisher(Node):
                 message.orientation_error.z = (float(v) for v in direction)
             message.orientation_measured = True
             message.orientation_uncertainty = ORIENTATION_UNCERTAINTY_RAD
-            message.applied_rotary_correction = [float(v) for v in rotary_applied] or \
-                [0.0] * len(window.encoder_axes)
+            message.applied_rotary_correction = [float(v) for v in rotary_applied]
         message.header.stamp = nanoseconds_to_stamp(
             self._scenario_clock.stamp_ns((window.first_index + index) / self._rate))
         message.header.frame_id = frame

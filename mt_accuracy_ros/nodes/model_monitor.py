@@ -69,7 +69,7 @@ class ModelMonitor(Node):
             "Add the top significant candidate by itself"))
         self.add_on_set_parameters_callback(self._validate)
         self.health = DeliveryHealth(self)
-        self._check_sequence = 0
+        self._check_sequences: dict[str, int] = {}   # ModelCheck.sequence per quantity
         self._model_sequence = 0
         self._reason = "start"
         self.versions: list[dict] = []   # every version published: version, reason, effects
@@ -85,7 +85,6 @@ class ModelMonitor(Node):
         # their own topic: model_check stays the TCP position's story for every consumer.
         self._direction_check = self.create_publisher(ModelCheck, "model_check/tool_direction",
                                                       RESULT_QOS)
-        self._direction_sequence = 0
         self._model_topic = self.create_publisher(ModelVersion, "model", LATCHED_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.create_subscription(ReferenceMeasurement, "reference/tcp_error",
@@ -277,13 +276,17 @@ class ModelMonitor(Node):
                                                                 **sub.model_inputs())
         obs.predicted_m, obs.predicted_orientation = position, orientation
 
+    def _comparable_readings(self) -> list[dict]:
+        """Readings that have every sensor the latest has (those taken before the first
+        temperatures arrived cannot enter a thermal comparison)."""
+        sensors = set(self._readings[-1]["temperatures"])
+        return [r for r in self._readings if sensors <= set(r["temperatures"])]
+
     def _observations(self, model=None) -> Observations | None:
         if not self._readings:
             return None
-        # Readings taken before the first temperatures arrived cannot enter a
-        # thermal comparison: keep those that have every sensor the latest has.
-        sensors = set(self._readings[-1]["temperatures"])
-        readings = [r for r in self._readings if sensors <= set(r["temperatures"])]
+        readings = self._comparable_readings()
+        sensors = set(readings[-1]["temperatures"])
         if len(readings) < 10:
             return None
         axes = list(readings[0]["positions"])
@@ -316,15 +319,7 @@ class ModelMonitor(Node):
             self._status(DiagnosticStatus.WARN, f"no check: {exc}")
             return
         self.last_diagnosis = diagnosis
-        check = ModelCheck()
-        check.header.stamp = self.get_clock().now().to_msg()
-        check.model_version = int(model.version)
-        check.sequence = self._check_sequence
-        self._check_sequence += 1
-        check.quantity = "tcp_error"
-        check.unit = "m"
-        check.effects_included = sorted(model.effects)
-        check.sample_count = obs.n
+        check = self._new_check(model, obs, "tcp_error", "m")
         check.rmse = diagnosis.baseline_rmse
         check.max_abs_error = diagnosis.max_abs_error
         check.band = obs.uncertainty_m
@@ -357,10 +352,22 @@ class ModelMonitor(Node):
         if found is not None and self.get_parameter("auto_add").value:
             self._add(found.name, "auto_add", found)
 
+    def _new_check(self, model, obs: Observations, quantity: str, unit: str) -> ModelCheck:
+        """A ModelCheck of ``quantity`` with its header, version and running sequence."""
+        check = ModelCheck()
+        check.header.stamp = self.get_clock().now().to_msg()
+        check.model_version = int(model.version)
+        check.sequence = self._check_sequences.get(quantity, 0)
+        self._check_sequences[quantity] = check.sequence + 1
+        check.quantity = quantity
+        check.unit = unit
+        check.effects_included = sorted(model.effects)
+        check.sample_count = obs.n
+        return check
+
     def _check_direction(self, model, obs: Observations) -> None:
         """The model's tool-direction error against the readings that measured it."""
-        sensors = set(self._readings[-1]["temperatures"])   # as _observations chose them
-        readings = [r for r in self._readings if sensors <= set(r["temperatures"])]
+        readings = self._comparable_readings()
         if len(readings) != obs.n or any(r["direction_error"] is None for r in readings) or \
                 obs.predicted_orientation is None:
             return
@@ -371,15 +378,7 @@ class ModelMonitor(Node):
         residual = measured - predicted
         norm = np.linalg.norm(residual, axis=1)
         band = float(np.median([r["direction_uncertainty"] for r in readings])) or 1e-6
-        check = ModelCheck()
-        check.header.stamp = self.get_clock().now().to_msg()
-        check.model_version = int(model.version)
-        check.sequence = self._direction_sequence
-        self._direction_sequence += 1
-        check.quantity = "tool_direction"
-        check.unit = "rad"
-        check.effects_included = sorted(model.effects)
-        check.sample_count = obs.n
+        check = self._new_check(model, obs, "tool_direction", "rad")
         before = float(np.sqrt(np.mean(np.sum(measured ** 2, axis=1))))
         check.rmse = float(np.sqrt(np.mean(norm ** 2)))
         check.max_abs_error = float(np.max(norm))

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.kinematics.chain import ErrorOverrides, KinematicModel
-from ..core.kinematics.machine import location_error_name, motion_error_name
+from ..core.kinematics.machine import motion_error_name
 from ..core.scales.dual_scale import YAW_COMPONENT
 from .effects import SineProfile, deterioration_bump, random_profiles
 from .programs import PROGRAMS
@@ -245,16 +245,6 @@ class SimulationResult:
         tool_turn = tool1[:, :3, :3] @ np.swapaxes(tool0[:, :3, :3], 1, 2)
         work_turn = work1[:, :3, :3] @ np.swapaxes(work0[:, :3, :3], 1, 2)
         return shift, rotation_vector(np.swapaxes(work_turn, 1, 2) @ tool_turn)
-
-    def tool_axis(self, indices) -> NDArray[np.float64]:
-        """Nominal unit tool direction (N, 3) in the bed frame at the commands."""
-        indices = np.arange(self.time_s.size)[indices]
-        model = KinematicModel(self.scenario.machine)
-        command = {a: self.command[a][indices] for a in self.scenario.machine.axis_order}
-        tool = model.branch("tool", command, errors=False, check_stroke=False)
-        vector = np.asarray(self.scenario.machine.tool, dtype=np.float64)
-        norm = np.linalg.norm(vector)
-        return tool[:, :3, :3] @ (vector / norm if norm > 0 else np.array([0.0, 0.0, 1.0]))
 
 
 def yaw_lever_m(machine, axis: str) -> float:
