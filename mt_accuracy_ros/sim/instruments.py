@@ -150,4 +150,7 @@ def calibrate_machine(result: SimulationResult, *, step_m: float = 0.02, seed: i
             f"{machine.name} as calibrated on the virtual machine tool (seed {scenario.seed})",
             "chain": machine.chain, "tool": machine.tool.tolist(),
             "workpiece": machine.workpiece.tolist(),
-            "scale_distance_m": dict(machine.scale_distance_m), "axes": axes}
+            "scale_distance_m": dict(machine.scale_distance_m), "axes": axes,
+            **({"structure_length_m": machine.structure_length_m}
+               if machine.structure_length_m is not None else {}),
+            **({"cnc": dict(machine.cnc)} if machine.cnc else {})}

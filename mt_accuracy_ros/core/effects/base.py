@@ -157,6 +157,13 @@ class EffectFamily:
         long grids); None = let the workbench choose by BIC over every setting."""
         return None
 
+    def parameter_limits(self, ctx: Context, variant: str, setting: dict
+                         ) -> dict[str, tuple[float, str]]:
+        """The largest |value| physics allows each parameter on ``ctx.machine``, with the
+        reason: ``{name: (bound, why)}``; parameters not named are bounded only by the
+        consistency rule and the controller's limits (:mod:`.physics`)."""
+        return {}
+
     def describe_setting(self, setting: dict) -> str:
         return ", ".join(f"{k} {v:g}" if isinstance(v, (int, float)) else f"{k} {v}"
                          for k, v in setting.items())

@@ -23,32 +23,42 @@ from __future__ import annotations
 import numpy as np
 
 from .base import Context, EffectFamily, per_component
+from .physics import (BENDING_LEVER, GENEROUS_CTE_PER_K, MAX_RISE_K, structure_length_m,
+                      thermal_gain_limit_m_per_k)
 
 #: Searched time constants: 5 min to 5.3 h, half an octave apart.
 TIME_CONSTANTS_S = tuple(float(300.0 * 2.0 ** (k / 2)) for k in range(13))
 
 
-#: The longest time constant searched, in multiples of the data's time span.
-MAX_TAU_PER_SPAN = 4.0
+#: The longest time constant searched, in multiples of the data's time span: a lag
+#: is supported by a record that sees it at least once.
+MAX_TAU_PER_SPAN = 1.0
+
+
+def _free_expansion_limits(ctx, names, lever: float = 1.0, per: str = "K"):
+    bound = thermal_gain_limit_m_per_k(ctx.machine) * lever
+    why = (f"free expansion of {structure_length_m(ctx.machine):.2g} m of structure at "
+           f"{GENEROUS_CTE_PER_K * 1e6:.0f} um/m/K" + (f" x a bending lever of {lever:g}"
+                                                        if lever != 1.0 else "") + f" per {per}")
+    return {name: (bound, why) for name in names}
 
 
 class _SearchedTimeConstant:
     """Families whose time constant is searched (in-fold) over TIME_CONSTANTS_S.
 
-    Only time constants up to MAX_TAU_PER_SPAN x the data's span: a lag much
-    longer than the record is a ramp to the data, its gain (m/K of a signal of
-    millikelvin) is arbitrary, and evaluated later - in a broadcaster whose lag
-    has run longer - it extrapolates to millimetres.
+    Only time constants up to MAX_TAU_PER_SPAN x the data's span, and none at
+    all on a record shorter than the shortest: a lag longer than the record is
+    a ramp to the data, its gain (m/K of a signal of millikelvin) is arbitrary,
+    and evaluated later - in a broadcaster whose lag has run longer - it
+    extrapolates to millimetres.
     """
 
     def settings(self, ctx, variant):
-        taus = TIME_CONSTANTS_S
         time_s = ctx.variables.time_s
-        if time_s is not None and np.size(time_s) > 1:
-            span = float(np.ptp(time_s))
-            taus = tuple(t for t in TIME_CONSTANTS_S if t <= MAX_TAU_PER_SPAN * span) \
-                or TIME_CONSTANTS_S[:1]
-        return [{"tau_s": tau} for tau in taus]
+        if time_s is None or np.size(time_s) < 2:
+            return []
+        span = float(np.ptp(time_s))
+        return [{"tau_s": tau} for tau in TIME_CONSTANTS_S if tau <= MAX_TAU_PER_SPAN * span]
 
     def describe_setting(self, setting):
         return f"tau {setting['tau_s'] / 60:.0f} min"
@@ -83,6 +93,9 @@ class StructuralDrift(EffectFamily):
     def design(self, ctx, variant, setting):
         return per_component(ctx.variables.rise(variant))
 
+    def parameter_limits(self, ctx, variant, setting):
+        return _free_expansion_limits(ctx, ["bx", "by", "bz"])
+
     def explanation(self, variant, setting):
         return (f"the residual follows the temperature of the {variant} sensor in every "
                 "direction at once, independent of position - the structure grows as it warms "
@@ -106,6 +119,9 @@ class ThermalLag(_SearchedTimeConstant, EffectFamily):
         lagged = ctx.variables.lag(f"T_{variant}", ctx.variables.rise(variant), setting["tau_s"])
         return per_component(lagged)
 
+    def parameter_limits(self, ctx, variant, setting):
+        return _free_expansion_limits(ctx, ["bx", "by", "bz"])
+
     def explanation(self, variant, setting):
         return (f"the residual follows the {variant} temperature {setting['tau_s'] / 60:.0f} min "
                 "late - the structure's thermal time constant (Zhu eqs. 3.9-3.10)")
@@ -126,6 +142,10 @@ class ThermalGradient(EffectFamily):
 
     def design(self, ctx, variant, setting):
         return per_component(temperature_variable(ctx, variant))
+
+    def parameter_limits(self, ctx, variant, setting):
+        return _free_expansion_limits(ctx, ["bx", "by", "bz"], BENDING_LEVER,
+                                      "K of difference")
 
     def explanation(self, variant, setting):
         a, b = variant.split("-", 1)
@@ -164,6 +184,16 @@ class HeatSource(_SearchedTimeConstant, EffectFamily):
                                    setting["tau_s"], from_rest=True)
         return per_component(lagged)
 
+    def parameter_limits(self, ctx, variant, setting):
+        fastest = float(np.max(np.abs(self.driver(ctx, variant)), initial=0.0))
+        if fastest <= 0:
+            return {}
+        unit = "krpm" if variant == "spindle_speed" else "m/min"
+        bound = thermal_gain_limit_m_per_k(ctx.machine) * MAX_RISE_K / fastest
+        why = (f"at the fastest {fastest:.3g} {unit} seen, a rise of at most {MAX_RISE_K:g} K "
+               f"of {structure_length_m(ctx.machine):.2g} m of structure")
+        return {name: (bound, why) for name in ("gx", "gy", "gz")}
+
     def explanation(self, variant, setting):
         what = "the spindle speed (spindle power heats the head)" if variant == "spindle_speed" \
             else f"the {variant[-1]} feed (drive and guideway heat)"
@@ -188,6 +218,10 @@ class PositionDependentThermal(EffectFamily):
         axis, sensor = variant.split(":", 1)
         column = ctx.variables.positions[axis] * ctx.variables.rise(sensor)
         return (ctx.jacobian(f"E{axis}{axis}") * column[:, None])[:, :, None]
+
+    def parameter_limits(self, ctx, variant, setting):
+        return {"alpha_per_k": (GENEROUS_CTE_PER_K, "no structure expands faster than "
+                                f"{GENEROUS_CTE_PER_K * 1e6:.0f} um/m/K relative to its scale")}
 
     def explanation(self, variant, setting):
         axis, sensor = variant.split(":", 1)
@@ -216,6 +250,11 @@ class ThermalSquareness(EffectFamily):
         square, temperature = variant.split(":", 1)
         column = temperature_variable(ctx, temperature)
         return (ctx.jacobian(square) * column[:, None])[:, :, None]
+
+    def parameter_limits(self, ctx, variant, setting):
+        bound = GENEROUS_CTE_PER_K * BENDING_LEVER
+        return {"rad_per_k": (bound, f"a link tilts at most {GENEROUS_CTE_PER_K * 1e6:.0f} "
+                                     f"urad/K x a slenderness of {BENDING_LEVER:g}")}
 
     def explanation(self, variant, setting):
         square, temperature = variant.split(":", 1)

@@ -8,6 +8,8 @@
         parameters: [k]                               # enter linearly; the workbench fits them
         acts_on: x            # x, y, z, a list of them, or an axis (X): along its motion
         values: {k: 0.0}      # optional: fitted values (the model applies it once given)
+        bounds: {k: 1.0e-4}   # optional: the largest |k| its physics allows; a fit
+                              # beyond it is refused (units of the parameter)
 
 With several components in ``acts_on`` each gets its own parameters
 (``k_x``, ``k_z``). Linearity in the parameters is checked numerically on
@@ -37,7 +39,7 @@ def user_declaration(name: str, spec: dict) -> dict:
     if not isinstance(spec, dict):
         raise ParameterError(f"{where}: expected a mapping with expression, parameters, acts_on")
     unknown = set(spec) - {"expression", "parameters", "acts_on", "values", "explanation",
-                           "family", "variant"}
+                           "family", "variant", "bounds"}
     if unknown:
         raise ParameterError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}")
     expression = parse(spec.get("expression", ""), where)
@@ -70,9 +72,20 @@ def user_declaration(name: str, spec: dict) -> dict:
                     not np.isfinite(value):
                 raise ParameterError(f"{where}: value of {key} must be a finite number")
         values = {k: float(v) for k, v in values.items()}
+    bounds = spec.get("bounds")
+    if bounds is not None:
+        if not isinstance(bounds, dict) or set(bounds) - set(parameters):
+            raise ParameterError(f"{where}: 'bounds' must map some of its parameters "
+                                 f"({', '.join(parameters)}) to the largest |value| allowed")
+        for key, value in bounds.items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                    not np.isfinite(value) or value <= 0:
+                raise ParameterError(f"{where}: bound of {key} must be a positive number")
+        bounds = {k: float(v) for k, v in bounds.items()}
     return {"expression": expression.text, "parameters": list(parameters),
             "acts_on": targets if isinstance(acts_on, list) else targets[0],
             **({"values": values} if values is not None else {}),
+            **({"bounds": bounds} if bounds is not None else {}),
             **({"explanation": str(spec["explanation"])} if "explanation" in spec else {})}
 
 
@@ -159,6 +172,15 @@ class UserExpression(EffectFamily):
                 direction = ctx.jacobian(f"E{target}{target}")
             design[:, :, j * n_base:(j + 1) * n_base] = direction[:, :, None] * columns[:, None, :]
         return design
+
+    def parameter_limits(self, ctx, variant, setting):
+        bounds = self.declaration.get("bounds") or {}
+        out = {}
+        for name in self.parameter_names(variant, setting):
+            base = name if name in bounds else name.rsplit("_", 1)[0]
+            if base in bounds:
+                out[name] = (bounds[base], "the bound declared with the effect")
+        return out
 
     def explanation(self, variant, setting):
         return self.declaration.get("explanation") or \

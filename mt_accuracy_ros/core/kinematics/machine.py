@@ -85,6 +85,12 @@ class MachineDescription:
     workpiece: np.ndarray
     description: str = ""
     scale_distance_m: dict[str, float] = field(default_factory=dict)
+    #: Length of structure between a temperature sensor and the tool [m] that can
+    #: expand (bounds thermal gains); None = estimated from the chain's dimensions.
+    structure_length_m: float | None = None
+    #: The controller's compensation limits (``cnc:`` in the YAML; see
+    #: :mod:`mt_accuracy_ros.core.compensation.limits`), validated numbers.
+    cnc: dict = field(default_factory=dict)
 
     @property
     def axis_order(self) -> tuple[str, ...]:
@@ -200,7 +206,58 @@ def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
         tool_branch=tool_branch, axes=axes, tool=_vector(data["tool"], f"{source}: tool"),
         workpiece=_vector(data["workpiece"], f"{source}: workpiece"),
         description=str(data.get("description", "")),
-        scale_distance_m={str(k): float(v) for k, v in (data.get("scale_distance_m") or {}).items()})
+        scale_distance_m={str(k): float(v) for k, v in (data.get("scale_distance_m") or {}).items()},
+        structure_length_m=_positive_or_none(data.get("structure_length_m"),
+                                             f"{source}: structure_length_m"),
+        cnc=_cnc_section(data.get("cnc"), f"{source}: cnc"))
+
+
+#: Keys of a machine's ``cnc:`` section and what each holds (SI units).
+CNC_KEYS = {
+    "max_correction_m": "largest correction per TCP component the controller takes [m] "
+                        "(a number, or {X: .., Y: .., Z: ..})",
+    "max_correction_rate_m_per_s": "largest change of the correction per second [m/s]",
+    "max_feed_m_per_s": "fastest feed of a linear axis [m/s]",
+    "temperature_range_k": "temperatures the model must stay bounded over: +- this about "
+                           "each sensor's reference [K]",
+    "max_temperature_rate_k_per_s": "fastest temperature change of a structure [K/s]",
+    "max_spindle_speed_rpm": "fastest spindle speed [rpm]",
+}
+
+
+def _positive_or_none(value, where: str) -> float | None:
+    if value is None:
+        return None
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as exc:
+        raise MachineDescriptionError(f"{where}: expected a positive number, got {value!r}") \
+            from exc
+    if not (np.isfinite(number) and number > 0):
+        raise MachineDescriptionError(f"{where}: expected a positive number, got {value!r}")
+    return number
+
+
+def _cnc_section(spec, where: str) -> dict:
+    """The ``cnc:`` mapping with every value a positive finite number (per-axis mapping
+    allowed for ``max_correction_m``)."""
+    if spec is None:
+        return {}
+    if not isinstance(spec, dict):
+        raise MachineDescriptionError(f"{where}: expected a mapping of {', '.join(CNC_KEYS)}")
+    unknown = set(spec) - set(CNC_KEYS)
+    if unknown:
+        raise MachineDescriptionError(f"{where}: unknown key(s) {', '.join(sorted(map(str, unknown)))};"
+                                      f" known: {', '.join(CNC_KEYS)}")
+    out: dict = {}
+    for key, value in spec.items():
+        if key == "max_correction_m" and isinstance(value, dict):
+            if not value or set(value) - set("XYZ"):
+                raise MachineDescriptionError(f"{where}.{key}: per component X, Y, Z")
+            out[key] = {str(a): _positive_or_none(v, f"{where}.{key}.{a}") for a, v in value.items()}
+        else:
+            out[key] = _positive_or_none(value, f"{where}.{key}")
+    return out
 
 
 @reraise_as(MachineDescriptionError, "machine description")

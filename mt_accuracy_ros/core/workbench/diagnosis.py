@@ -127,6 +127,8 @@ class Candidate:
     share_of_excess: float = 0.0      # of the residual above noise it removes (held out)
     group: str = ""
     declaration: dict | None = None   # a user effect's declaration
+    #: Why physics refuses this fit ("" if it does not): never named, never added.
+    refusal: str = ""
 
     @property
     def name(self) -> str:
@@ -139,7 +141,8 @@ class Candidate:
                 "significant": self.significant, "confidence": self.confidence,
                 "share_of_excess": self.share_of_excess, "explanation": self.explanation,
                 "parameters": self.parameters,
-                "parameter_uncertainties": self.parameter_uncertainties}
+                "parameter_uncertainties": self.parameter_uncertainties,
+                "refusal": self.refusal}
 
 
 @dataclass
@@ -187,7 +190,12 @@ class Diagnosis:
                     f"{'them' if len(self.selected) > 1 else 'it'} would leave "
                     f"{self.final_cv_rmse * 1e6:.2f} um (cross-validated)")
         elif self.residual_above_noise:
-            text = f"{head}; no catalogue effect explains it"
+            refused = [c for c in self.ranking if c.refusal]
+            closest = min(refused, key=lambda c: c.cv_rmse_after) if refused else None
+            text = f"{head}; no catalogue effect explains it" + (
+                f" (the closest fit, {closest.name}, is refused by physics: {closest.refusal})"
+                if closest is not None and closest.cv_rmse_after <=
+                min(c.cv_rmse_after for c in self.ranking) else "")
         else:
             where = self.localisation.sentence() if self.localisation else ""
             return (f"{head}; within the instrument's noise ({self.noise_sigma * 1e6:.2f} um): "
@@ -233,6 +241,8 @@ def candidate_terms(model: ErrorModel, ctx: Context,
             continue
         for variant in family.variants(ctx):
             term = Term(family, variant, family.settings(ctx, variant))
+            if not term.settings:
+                continue  # e.g. a lag the record is too short to support
             if isinstance(family, UserExpression) or term.name not in covered:
                 terms.append(term)
     return terms
@@ -287,8 +297,9 @@ def _candidate(scored, explanation_of, significant: bool) -> Candidate:
     return Candidate(term.family.name, dict(zip(names, map(float, values))), scored.cv_rmse,
                      scored.reduction, significant, explanation_of(scored), term.variant,
                      dict(zip(names, map(float, errors))), dict(scored.setting),
-                     float(1.0 - scored.adjusted_p), float(scored.share_of_excess),
-                     term.family.group, declaration)
+                     float(1.0 - scored.adjusted_p) if significant else 0.0,
+                     float(scored.share_of_excess), term.family.group, declaration,
+                     scored.refusal)
 
 
 def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.05,
@@ -318,7 +329,7 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
 
     ranking = [_candidate(s, explain, s.significant) for s in (first.ranking if first else [])]
     selected = [_candidate(s.added, explain, True) for s in steps if s.added is not None]
-    for candidate, step in zip(selected, steps):
+    for candidate, step in zip(selected, [s for s in steps if s.added is not None]):
         candidate.cv_rmse_after = step.added.cv_rmse
     in_sample = float(np.sqrt(np.mean(residual[mask] ** 2))) if mask.any() else 0.0
     remaining = selector.remaining_residual()

@@ -22,6 +22,10 @@ catalogue's candidate terms, each step
    Candidates whose held-out error is within ``tie`` (2 % in mean square) of the
    best cannot be told apart by these data: the simplest of them (fewest
    assumptions, :attr:`EffectFamily.complexity`) is taken - Occam's razor;
+   a candidate whose full-data fit physics does not allow (beyond its
+   family's :meth:`~..effects.base.EffectFamily.parameter_limits`, or larger
+   at the readings than the residual it explains - :mod:`..effects.physics`)
+   is **refused**, with the reason, and the next one is considered;
 3. if it passes, adds it (setting chosen on all readings), refits every
    selected term jointly, and looks again; otherwise stops.
 
@@ -38,6 +42,7 @@ from scipy import stats
 
 from ..errors import InsufficientDataError
 from ..effects.base import Context, EffectFamily
+from ..effects.physics import consistency_problems, limit_problems
 
 
 @dataclass
@@ -69,6 +74,8 @@ class Scored:
     coefficients: NDArray[np.float64] | None = None
     standard_errors: NDArray[np.float64] | None = None
     parameter_names: list[str] = field(default_factory=list)
+    #: Why physics refuses its full-data fit ("" if it does not).
+    refusal: str = ""
 
 
 @dataclass
@@ -131,6 +138,18 @@ class Selector:
     def base_columns(self) -> NDArray[np.float64]:
         columns = [self.offsets] + [self.design_rows(t, s) for t, s in self.selected]
         return np.column_stack(columns)
+
+    def physics_refusal(self, term: Term, setting: dict, coefficients: NDArray[np.float64]
+                        ) -> str:
+        """Why physics refuses ``term`` fitted with ``coefficients`` ("" if it may stand)."""
+        names = term.family.parameter_names(term.variant, setting)
+        problems = limit_problems(names, coefficients,
+                                  term.family.parameter_limits(self.ctx, term.variant, setting))
+        flat = np.zeros(self.mask.size)
+        flat[self.rows] = self.design_rows(term, setting) @ np.asarray(coefficients, float)
+        problems += consistency_problems(flat.reshape(-1, 3), self.residual, self.mask,
+                                         self.noise_sigma)
+        return "; ".join(problems)
 
     # ------------------------------------------------------------ scoring
     def _per_sample(self, squared_rows: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -229,17 +248,21 @@ class Selector:
             coefficients, standard, _ = self.fit_full(self.selected + [(s.term, s.setting)])
             s.coefficients, s.standard_errors = coefficients[-1], standard[-1]
             s.parameter_names = s.term.family.parameter_names(s.term.variant, s.setting)
+            s.refusal = self.physics_refusal(s.term, s.setting, s.coefficients)
         scored.sort(key=lambda s: s.cv_rmse)
+        # Physics first: a fit it refuses is no explanation, however well it scores.
+        plausible = [s for s in scored if not s.refusal]
+        scored = plausible + [s for s in scored if s.refusal]
         # Occam: among candidates the held-out data cannot tell apart from the best
         # (out-of-fold MSE within ``tie``), the simplest explanation is named first.
-        if scored:
+        if plausible:
             limit = scored[0].cv_rmse ** 2 * (1.0 + self.tie)
-            tied = [s for s in scored if s.cv_rmse ** 2 <= limit]
+            tied = [s for s in plausible if s.cv_rmse ** 2 <= limit]
             simplest = min(tied, key=lambda s: (s.term.family.complexity, s.cv_rmse))
             scored.remove(simplest)
             scored.insert(0, simplest)
         added = None
-        if scored:
+        if plausible:
             best = scored[0]
             setting = best.setting
             if len(best.term.settings) > 1:
@@ -248,10 +271,12 @@ class Selector:
             best.setting = setting
             best.coefficients, best.standard_errors = coefficients[-1], standard[-1]
             best.parameter_names = best.term.family.parameter_names(best.term.variant, setting)
+            best.refusal = self.physics_refusal(best.term, setting, best.coefficients)
             strong = bool(np.any(np.abs(coefficients[-1]) > 3.0 * standard[-1]))
             best.significant = bool(best.adjusted_p < self.alpha and
                                     best.reduction >= self.min_reduction and
-                                    best.share_of_excess >= self.min_share and strong)
+                                    best.share_of_excess >= self.min_share and strong and
+                                    not best.refusal)
             if best.significant:
                 added = best
         return Step(float(np.sqrt(base_mse)), scored, added)
@@ -306,7 +331,8 @@ class Selector:
             coefficients, standard, _ = self.fit_full(self.selected + [(first.term, setting),
                                                                        (second.term,
                                                                         second.setting)])
-            strong = bool(np.any(np.abs(coefficients[-2]) > 3.0 * standard[-2]))
+            strong = bool(np.any(np.abs(coefficients[-2]) > 3.0 * standard[-2])) and \
+                not self.physics_refusal(first.term, setting, coefficients[-2])
             if adjusted < self.alpha and share >= 2 * self.min_share and strong and \
                     1.0 - np.sqrt(mse / base_mse) >= self.min_reduction:
                 first.setting, first.adjusted_p = setting, adjusted
@@ -345,11 +371,26 @@ class Selector:
                 break
             self.selected.append((step.added.term, step.added.setting))
             remaining = [t for t in remaining if t.name != step.added.term.name]
-        added = [s.added for s in steps if s.added is not None]
-        if added:
+        while True:
+            added = [s.added for s in steps if s.added is not None]
+            if not added:
+                break
             coefficients, standard, _ = self.fit_full(self.selected)
             for scored, c, s in zip(added, coefficients, standard):
                 scored.coefficients, scored.standard_errors = c, s
+            # Jointly refit, a term physics refuses is taken out again (named, refused).
+            refused = next((k for k, scored in enumerate(added) if self.physics_refusal(
+                scored.term, scored.setting, scored.coefficients)), None)
+            if refused is None:
+                break
+            scored = added[refused]
+            scored.refusal = "in the joint fit: " + self.physics_refusal(
+                scored.term, scored.setting, scored.coefficients)
+            scored.significant = False
+            self.selected = [(t, st) for t, st in self.selected if t.name != scored.term.name]
+            for step in steps:
+                if step.added is scored:
+                    step.added = None
         return steps
 
     def remaining_residual(self) -> NDArray[np.float64]:

@@ -1,0 +1,95 @@
+"""What physics allows a fitted effect on the machine at hand.
+
+A least-squares fit returns whatever numbers make the residual smallest; on
+a short record a sensor that barely moved takes a gain of millimetres per
+kelvin to follow noise. Such a fit is not a finding, and live it would move
+the machine by that gain times every later temperature change. Each family
+therefore declares the range its physics allows
+(:meth:`~.base.EffectFamily.parameter_limits`), and every fitted effect must
+also be **consistent with the residual it explains**: its own spread at the
+readings may not exceed a small multiple of the residual's (an effect twice
+as large as what it explains is cancelling against another term, not
+describing the machine).
+
+Bounds are generous on purpose - they refuse the absurd, never a real
+machine's effect:
+
+* thermal gains [m/K]: free expansion of the structure between a sensor and
+  the tool, ``GENEROUS_CTE_PER_K`` (aluminium is 23e-6, steel 11.5e-6, cast
+  iron 10e-6) times the structure's length (the machine description's
+  ``structure_length_m``, else the sum of the chain's strokes, offsets, tool
+  and workpiece) - Zhu eq. 3.12 with the largest plausible coefficient;
+* gradients and tilts: that expansion times a lever of ``BENDING_LEVER``
+  (a link's slenderness L/h, Zhu Table 4.2: deflection alpha dT L^2 / 2h);
+* heat sources: the gain times the fastest driver seen may not exceed the
+  free expansion over ``MAX_RISE_K``;
+* a relative expansion coefficient [1/K] (Zhu eq. 3.13): ``GENEROUS_CTE_PER_K``;
+* user effects: the ``bounds`` they declare in the model YAML.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: Largest thermal expansion coefficient any machine structure has [1/K].
+GENEROUS_CTE_PER_K = 30e-6
+#: Slenderness of a link bent by a gradient (deflection per K of difference over
+#: the free expansion per K).
+BENDING_LEVER = 10.0
+#: Largest steady temperature rise a heat source drives in a structure [K].
+MAX_RISE_K = 30.0
+#: An effect's spread at the readings may be at most this times the residual's RMS
+#: (plus twice the instrument's noise) in every component it acts on.
+CONSISTENCY_FACTOR = 2.0
+
+
+def structure_length_m(machine) -> float:
+    """Length of structure that can expand between a sensor and the tool [m]."""
+    if getattr(machine, "structure_length_m", None):
+        return float(machine.structure_length_m)
+    length = float(np.linalg.norm(machine.tool) + np.linalg.norm(machine.workpiece))
+    for axis in machine.axis_order:
+        spec = machine.axes[axis]
+        if not spec.is_rotary:
+            length += spec.stroke[1] - spec.stroke[0]
+        length += float(np.linalg.norm(spec.offset))
+    return max(length, 0.1)
+
+
+def thermal_gain_limit_m_per_k(machine) -> float:
+    """Largest TCP displacement per kelvin of one sensor's rise [m/K]."""
+    return GENEROUS_CTE_PER_K * structure_length_m(machine)
+
+
+def limit_problems(names: list[str], values: NDArray[np.float64],
+                   limits: dict[str, tuple[float, str]]) -> list[str]:
+    """Parameters beyond their declared limits, each named with its limit and reason."""
+    out = []
+    for name, value in zip(names, np.asarray(values, dtype=float)):
+        if name not in limits:
+            continue
+        bound, why = limits[name]
+        if not np.isfinite(value) or abs(value) > bound:
+            out.append(f"{name} = {value:.3g} exceeds +-{bound:.3g} ({why})")
+    return out
+
+
+def consistency_problems(contribution: NDArray[np.float64], residual: NDArray[np.float64],
+                         mask: NDArray[np.bool_], noise_sigma: float) -> list[str]:
+    """Components where an effect's own spread (N, 3) is larger than the residual allows."""
+    out = []
+    for c, component in enumerate("xyz"):
+        rows = mask[:, c]
+        if not rows.any():
+            continue
+        own = contribution[rows, c]
+        spread = float(np.sqrt(np.mean((own - own.mean()) ** 2)))
+        if spread == 0.0:
+            continue
+        r = residual[rows, c]
+        allowed = CONSISTENCY_FACTOR * float(np.sqrt(np.mean((r - r.mean()) ** 2))) + \
+            2.0 * noise_sigma
+        if not np.isfinite(spread) or spread > allowed:
+            out.append(f"it would move {component} by {spread * 1e6:.3g} um RMS at the readings, "
+                       f"more than the {allowed * 1e6:.3g} um the residual there allows")
+    return out
