@@ -168,6 +168,9 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
             if candidate is None:
                 raise InputDataError(f"cannot add {name}: not a candidate here (in the model "
                                      "already, unknown, or no regressors in this data)")
+            if candidate.refusal:
+                raise InputDataError(f"cannot add {candidate.name}: physics refuses its fit "
+                                     f"({candidate.refusal})")
             chosen = [candidate]
         elif auto and diagnosis.selected and \
                 sum(len(s.get("added", [])) for s in steps) < auto:

@@ -204,8 +204,17 @@ def _check(args: argparse.Namespace) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """No abbreviated options anywhere (``--rat 2`` is an error, not ``--rate 2``);
+    subcommands' parsers are of this class too (argparse makes them with type(parent))."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="mt-accuracy",
         description="Live accuracy monitor and volumetric compensation for CNC machine tools.")
     commands = parser.add_subparsers(dest="command", required=True)

@@ -80,6 +80,12 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
 
         shutil.rmtree(bag)
     started = time.monotonic()
+    from .nodes._scenario import resolve_scenario
+
+    chosen = resolve_scenario(scenario)
+    print(f"mt_accuracy_ros demo - virtual {chosen.machine.name}, scenario '{scenario}' "
+          f"({chosen.description}); the CNC applies the compensation ({compensation_mode}); "
+          f"{chosen.duration_s:.0f} s of data at {rate_factor:g}x", flush=True)
     model = _prepare(out, scenario)
     start_ns = time.time_ns() + 4_000_000_000
     machine = {"scenario": scenario, "start_stamp_ns": start_ns, "rate_factor": rate_factor}
@@ -110,11 +116,17 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     def now_s() -> float:
         return (time.time_ns() - start_ns) / 1e9 * rate_factor
 
+    def data_s(stamp) -> float:
+        """Data time [s] of a message stamped in the run's time base: what the user acts
+        on, so that host load cannot change which effect is named or when."""
+        return (stamp_to_nanoseconds(stamp) - start_ns) / 1e9
+
     def on_profile(message: SystematicProfile) -> None:
         if message.deterioration and not any(a[1] == message.axis for a in alarms):
-            alarms.append((now_s(), message.axis))
+            alarms.append((data_s(message.header.stamp), message.axis))
 
-    listener.create_subscription(ModelCheck, "model_check", lambda m: checks.append((now_s(), m)),
+    listener.create_subscription(ModelCheck, "model_check",
+                                 lambda m: checks.append((data_s(m.header.stamp), m)),
                                  RESULT_QOS)
     for axis in ("x", "y", "z"):
         listener.create_subscription(SystematicProfile, f"systematic/{axis}", on_profile,
@@ -156,17 +168,51 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     models: list[tuple[float, ModelVersion]] = []
     listener.create_subscription(ModelVersion, "model", lambda m: models.append((now_s(), m)),
                                  LATCHED_QOS)
+    diagnostics_text: list[tuple[float, str]] = []
+
+    def on_model_status(message: DiagnosticArray) -> None:
+        for status in message.status:
+            if status.name.endswith(": model") and status.level >= 2:
+                diagnostics_text.append((now_s(), status.message))
+
+    listener.create_subscription(DiagnosticArray, "/diagnostics", on_model_status, 50)
+    progress = {"next": time.monotonic() + 5.0}
+
+    def report_progress() -> None:
+        # Feedback while it runs: data time, the phase at the machine, model, stale count.
+        if time.monotonic() < progress["next"]:
+            return
+        progress["next"] += 5.0
+        controller = delivery.get("/encoder_publisher:compensation", {})
+        if references:
+            version = references[-1][3]
+            reasons = {int(m.version): m.reason for _, m in models}
+            phase = f"v{version} live at the machine ({reasons.get(version, 'model')})" \
+                if version else "no compensation applied yet"
+            when = f"data {references[-1][0]:5.1f} s"
+        else:
+            phase, when = "waiting for the machine", "data   -  "
+        print(f"  [{time.monotonic() - started:5.0f} s wall] {when} | {phase} | checks "
+              f"{len(checks)} | corrections applied {controller.get('applied', 0)}, stale "
+              f"{controller.get('stale', 0)}", flush=True)
+
     try:
         def act() -> None:
+            report_progress()
             latest = checks[-1][1] if checks else None
-            # The user looks once the machine has warmed for a while (35 s of the run).
+            # The user looks once the machine has warmed for a while (35 s of data), at the
+            # first check that names something: data time, not wall time.
             if latest is not None and not actions and latest.named and checks[-1][0] > 35:
                 # Everything the monitor names, in one decision (its joint fit).
                 effects = [score.name for score in latest.named]
                 ok, reason = _set_parameter(listener, "/model_monitor", "add_effects", effects)
-                actions.append({"time_s": now_s(), "added": ", ".join(effects), "effects": effects,
-                                "accepted": ok, "reason": reason, "rmse_before_m": latest.rmse,
-                                "where": latest.localisation, "diagnosis": latest.diagnosis})
+                actions.append({"time_s": checks[-1][0], "added": ", ".join(effects),
+                                "effects": effects, "accepted": ok, "reason": reason,
+                                "rmse_before_m": latest.rmse, "where": latest.localisation,
+                                "diagnosis": latest.diagnosis})
+                print(f"  data {checks[-1][0]:.1f} s: the monitor names {', '.join(effects)}; "
+                      f"the user adds {'them' if len(effects) > 1 else 'it'} - "
+                      + ("accepted" if ok else f"refused: {reason}"), flush=True)
 
         def monitor_done() -> bool:
             # Every reference reading the machine made has been judged by the monitor.
@@ -200,24 +246,44 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     story = loop_story(references, models, alarms, compensation_mode=compensation_mode,
                        orientations=orientations if len(orientations) == len(references)
                        else None)
+    print("  the run is over; writing the report", flush=True)
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
-                         references, losses, story, delivery, scenario)
-    from .nodes._scenario import resolve_scenario
-
-    chosen = resolve_scenario(scenario)
-    print(f"mt_accuracy_ros demo - virtual {chosen.machine.name}, scenario '{scenario}' "
-          f"({chosen.description}); the CNC applies the compensation ({compensation_mode})")
+                         references, losses, story, delivery, scenario,
+                         [text for _, text in diagnostics_text])
+    # The headline first: what the instrument measured on the compensated machine.
+    for line in story["lines"]:
+        print(line)
     for key, value in summary.items():
         if not isinstance(value, (list, dict)):
             print(f"  {key:42s} {value:.4g}" if isinstance(value, float) else
                   f"  {key:42s} {value}")
-    for line in story["lines"]:
-        print(line)
     for line in losses:
         # Overload is loud: a graph that could not keep up says so.
         print(f"  WARNING {line}")
+    for text in summary["model_alarms"]:
+        print(f"  ALARM {text}")
     print(f"  report: {out / 'report.html'}   bag: {bag}   final model: {out / 'model.yaml'}")
-    return 0 if checks and summary["bag_messages"] > 0 else 1
+    failures = demo_failures(summary, story)
+    for failure in failures:
+        print(f"  FAILED: {failure}")
+    return 1 if failures else 0
+
+
+def demo_failures(summary: dict, story: dict) -> list[str]:
+    """Why the main job did not do its job (empty when it did): the command exits
+    non-zero with these, whatever the host's speed."""
+    out = []
+    if not summary.get("model_checks"):
+        out.append("the model monitor published no check")
+    if not summary.get("bag_messages"):
+        out.append("nothing was recorded")
+    if summary.get("compensation_input", "hybrid") != "off" and \
+            not summary.get("compensation_applied"):
+        out.append("the loop never closed: the CNC applied no real-time correction "
+                   f"({summary.get('compensation_stale', 0)} arrived too late to apply)")
+    if not story.get("end_state_within_band"):
+        out.append("the end state is outside the instrument's band (see the table above)")
+    return out
 
 
 def delivery_losses(delivery: dict[str, dict[str, str]]) -> list[str]:
@@ -242,6 +308,18 @@ def delivery_losses(delivery: dict[str, dict[str, str]]) -> list[str]:
                              f"({share:.0f} %) and refused {refused} messages: it could not "
                              "keep up or the input was bad; the results above miss them")
     return lines
+
+
+LABEL_WIDTH = 58
+
+
+def table_row(label: str, cells: list[str], width: int = 20) -> str:
+    """One aligned row of the printed phase table: a label that does not fit its column
+    goes on a line of its own, so it never runs into the numbers."""
+    numbers = "".join(f"{cell:>{width}s}" for cell in cells)
+    if len(label) > LABEL_WIDTH - 2:
+        return f"  {label}\n  {'':{LABEL_WIDTH}s}{numbers}"
+    return f"  {label:{LABEL_WIDTH}s}{numbers}"
 
 
 def loop_story(references, models, alarms, *, compensation_mode: str,
@@ -287,9 +365,8 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
              f"reference instrument (U = {band * 1e6:.1f} um, k = 2) measures the machine", header]
 
     def row(label: str, figures) -> str:
-        return f"  {label[:58]:58s}" + "".join(
-            f"{format_with_uncertainty(f.rms * 1e6, f.rms_u_k2 * 1e6, ''):>20s}"
-            .replace(" (k = 2)", "") for f in figures)
+        return table_row(label, [format_with_uncertainty(f.rms * 1e6, f.rms_u_k2 * 1e6, "")
+                                 .replace(" (k = 2)", "").strip() for f in figures])
 
     whole = phases[0]
     lines.append(row(f"without compensation (whole run, {whole.count} readings)", whole.without))
@@ -314,10 +391,7 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
         lines.append(f"  {'tool direction error at the same readings, RMS [urad]':58s}"
                      + "".join(f"{'about ' + c:>20s}" for c in COMPONENTS))
 
-        def row_urad(label: str, figures) -> str:
-            return f"  {label[:58]:58s}" + "".join(
-                f"{format_with_uncertainty(f.rms * 1e6, f.rms_u_k2 * 1e6, ''):>20s}"
-                .replace(" (k = 2)", "") for f in figures)
+        row_urad = row
 
         lines.append(row_urad("without compensation (whole run)", tilt[0].without))
         for phase in tilt[1:]:
@@ -345,39 +419,48 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
                             "not absorbed by the end of the run"))
     return {"phases": [p.as_dict() for p in phases], "lines": lines,
             "end_state_within_band": bool(within), "band_um": band * 1e6,
+            "compensation_mode": compensation_mode,
             "orientation": result_orientation}
 
 
 def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
                references, losses: list[str], story: dict, delivery: dict,
-               scenario: str = "demo") -> dict:
+               scenario: str = "demo", model_alarms: list[str] | None = None) -> dict:
     from .io.bag_reader import bag_info
 
     info = bag_info(out / "bag")
     before = [c.rmse for t, c in checks if not actions or t < actions[0]["time_s"]]
     # The checks right after the change (before anything else happens to the machine).
     after = [c.rmse for t, c in checks if actions and t > actions[0]["time_s"]][:2]
-    raw = np.array([r[1] - r[2] for r in references]) if references else np.zeros((0, 3))
-    measured = np.array([r[1] for r in references]) if references else np.zeros((0, 3))
     end = story["phases"][-1] if story["phases"] else None
+    whole = story["phases"][0] if story["phases"] else None
     controller = delivery.get("/encoder_publisher:compensation", {})
+
+    def pooled(phase, kind):
+        # One way everywhere: the per-component RMS of the phase table, pooled.
+        return float(np.sqrt(np.mean([phase[kind][c]["rms_um"] ** 2 for c in "xyz"]))) \
+            if phase else float("nan")
+
     summary = {
-        "tcp_error_uncompensated_rms_um": float(np.sqrt(np.mean(raw ** 2)) * 1e6) if raw.size
-        else float("nan"),
-        "tcp_error_compensated_rms_um": float(np.sqrt(np.mean(measured ** 2)) * 1e6)
-        if measured.size else float("nan"),
-        "tcp_error_end_state_rms_um": float(np.sqrt(np.mean(
-            [end["with_compensation"][c]["rms_um"] ** 2 for c in "xyz"]))) if end else float("nan"),
+        # The headline is the instrument's measurement of the machine (the loop table).
+        "headline": "measured by the reference instrument on the compensated machine",
+        "tcp_error_uncompensated_rms_um": pooled(whole, "without_compensation"),
+        "tcp_error_compensated_rms_um": pooled(whole, "with_compensation"),
+        "tcp_error_end_state_rms_um": pooled(end, "with_compensation"),
         "end_state_within_band": story["end_state_within_band"],
+        "compensation_input": story.get("compensation_mode", "hybrid"),
         "instrument_band_um": story.get("band_um", float("nan")),
         "model_checks": len(checks),
-        "residual_rmse_before_um": float(np.mean(before[-3:]) * 1e6) if before else float("nan"),
+        # A second, labelled figure: the monitor's offline residual (reference - model).
+        "offline_residual_rmse_before_um": float(np.mean(before[-3:]) * 1e6) if before
+        else float("nan"),
         "missing_effect_found": actions[0]["added"] if actions else "",
         "missing_effects_found": actions[0]["effects"] if actions else [],
         "where_the_residual_lived": actions[0]["where"] if actions else "",
         "effect_added_accepted": bool(actions and actions[0]["accepted"]),
-        "residual_rmse_after_um": float(np.mean(after) * 1e6) if after else float("nan"),
-        "residual_rmse_end_um": checks[-1][1].rmse * 1e6 if checks else float("nan"),
+        "offline_residual_rmse_after_um": float(np.mean(after) * 1e6) if after
+        else float("nan"),
+        "offline_residual_rmse_end_um": checks[-1][1].rmse * 1e6 if checks else float("nan"),
         "deterioration_alarm_axis": ",".join(a[1] for a in alarms),
         "deterioration_alarm_at_s": alarms[0][0] if alarms else float("nan"),
         "compensation_messages": len(compensation),
@@ -391,6 +474,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "final_diagnosis": checks[-1][1].diagnosis if checks else "",
         "stream_losses": "; ".join(losses) or "none: every node processed every sample",
         "closed_loop": story["phases"],
+        "model_alarms": list(model_alarms or []),
         "tool_direction": story.get("orientation"),
     }
     report = _write_report(out, checks, actions, alarms, losses, story, scenario)
@@ -435,8 +519,11 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: 
     run.paragraphs.append("Delivery: " + ("; ".join(losses) if losses else
                                           "every node processed every sample and message."))
     try:
-        added = [name for a in actions if a["accepted"] for name in a.get("effects", [])]
-        result = check_bag(out / "bag", str(out / "model_start.yaml"), added, 0, "", 0.05)
+        # The workbench judges the model that was live at the end (model.yaml, its
+        # versions and coefficients as the graph made them), not an offline re-fit.
+        final = out / "model.yaml"
+        result = check_bag(out / "bag", str(final if final.is_file() else
+                                           out / "model_start.yaml"), [], 0, "", 0.05)
     except MtAccuracyError as exc:
         run.paragraphs.append(f"The workbench could not judge this bag: {exc}")
         result = None

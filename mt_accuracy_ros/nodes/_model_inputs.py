@@ -24,12 +24,14 @@ class ModelInputs:
     ``follow_topic``: also take the model versions published on ``model``
     (``ModelVersion``) by the model monitor, with their version numbers; a
     version below the live one is refused (counted, on /diagnostics) and the
-    live model stays.
+    live model stays. With ``gate`` (model -> reason or ""), a version the gate
+    refuses is refused the same way: the last good version stays live.
     """
 
     def __init__(self, node, model_text: str, *, follow_topic: bool, on_change, health,
-                 delay_s: float = 0.5, on_profiles=None) -> None:
+                 delay_s: float = 0.5, on_profiles=None, gate=None) -> None:
         self.on_profiles = on_profiles
+        self.gate = gate
         self.node = node
         self.health = health
         self.model: ErrorModel = resolve_model(model_text)
@@ -76,6 +78,11 @@ class ModelInputs:
             model = resolve_model(message.model_yaml)
         except MtAccuracyError as exc:
             self.health.refused("model", f"model refused, version {self.model.version} kept: {exc}")
+            return
+        problem = self.gate(model) if self.gate is not None else ""
+        if problem:
+            self.health.refused("model", f"model version {message.version} refused before going "
+                                f"live: {problem}; version {self.model.version} stays")
             return
         self.health.processed("model")
         model.version = int(message.version)

@@ -16,7 +16,12 @@ reliable + transient local, so a node started later still gets them).
 
 The model comes from the ``model`` parameter (bundled name, path or inline
 YAML; changeable at run time) and, with ``follow_model_topic``, from the
-model monitor's ``model`` topic.
+model monitor's ``model`` topic. Either way a version whose corrections would
+exceed the controller's limits (the machine's ``cnc:`` section:
+``max_correction_m``, ``max_correction_rate_m_per_s``) anywhere in the travel
+and temperature range is refused before it goes live - counted and said on
+``/diagnostics`` - and the last good version stays
+(:mod:`..core.compensation.limits`).
 """
 from __future__ import annotations
 
@@ -30,6 +35,7 @@ from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompen
 
 from ..core.compensation.error_model import resolve_model
 from ..core.compensation.five_axis import five_axis_correction
+from ..core.compensation.limits import gate_problem
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.validation import sample_period
 from ._common import (COMPENSATION_QOS, TABLE_QOS, run_node, RESULT_QOS,  # noqa: F401
@@ -60,7 +66,8 @@ class CompensationBroadcaster(Node):
         self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
                                   follow_topic=bool(self.get_parameter("follow_model_topic").value),
                                   on_change=self._model_changed, health=self.health,
-                                  delay_s=float(self.get_parameter("input_delay_s").value))
+                                  delay_s=float(self.get_parameter("input_delay_s").value),
+                                  gate=gate_problem)
         self._compensation = self.create_publisher(VolumetricCompensation, "compensation",
                                                    COMPENSATION_QOS)
         self._tables = self.create_publisher(CompensationTable, "compensation_table", TABLE_QOS)
@@ -90,6 +97,12 @@ class CompensationBroadcaster(Node):
                 except MtAccuracyError as exc:
                     self.health.refused("parameters", f"model refused: {exc}")
                     return refuse(f"model refused: {exc}")
+                problem = gate_problem(model)
+                if problem:
+                    text = (f"model refused before going live: {problem}; version "
+                            f"{self.inputs.model.version} stays")
+                    self.health.refused("parameters", text)
+                    return refuse(text)
                 self.inputs.set_model(model)
             if parameter.name == "publish_rate_hz" and not np.isfinite(parameter.value):
                 return refuse("publish_rate_hz must be finite")

@@ -16,6 +16,19 @@ the recorder and any replay.
 Readings of a compensated machine carry the correction the CNC applied; the
 model is judged against the machine's own error, ``error - applied_correction``.
 
+Every model version - a user's ``add_effects`` / ``remove_effects`` / ``model``,
+the monitor's own ``auto_add`` - passes one gate before it goes live: an
+effect whose fit physics refuses is not added, and a model whose corrections
+would exceed the controller's limits anywhere in the travel and temperature
+range (:mod:`..core.compensation.limits`) is refused; the live version stays
+and the refusal is an ERROR on ``/diagnostics``. Once a version is live at the
+machine (readings carry ``compensation_model_version``), the next
+``judge_readings`` readings of the compensated machine are compared with the
+previous version's last ones (:func:`..core.workbench.closed_loop.judge_version`);
+if the measured error rose beyond its uncertainty the monitor rolls back: a
+new version holding the previous model, reason ``rolled back: measured error
+rose from X to Y um``, and an ERROR on ``/diagnostics``.
+
 Model changes at run time: set ``add_effects`` (e.g. ``["structural_thermal_drift"]``);
 the monitor fits them to the readings it holds, adds them and publishes the new
 model version. ``remove_effects`` takes effects out. ``auto_add`` adds the top
@@ -33,13 +46,15 @@ from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ModelVersion, ReferenceMeasurement
 
-from ..core.compensation.error_model import resolve_model
+from ..core.compensation.error_model import model_from_dict, model_to_dict, resolve_model
+from ..core.compensation.limits import gate_problem
+from ..core.workbench.closed_loop import judge_version
 from ..core.compensation.five_axis import tool_direction
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.workbench.diagnosis import (Candidate, Observations, add_effect, diagnose,
                                         effect_name_problem, pick_candidate)
 from ._common import (run_node, LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
-                      plain_descriptor, refuse, stamp_to_nanoseconds)
+                      nanoseconds_to_stamp, plain_descriptor, refuse, stamp_to_nanoseconds)
 from ._health import DeliveryHealth
 from ._model_inputs import ModelInputs
 
@@ -67,6 +82,12 @@ class ModelMonitor(Node):
             "Effects to take out of the model now (run-time action)"))
         self.declare_parameter("auto_add", False, plain_descriptor(
             "Add the top significant candidate by itself"))
+        self.declare_parameter("judge_readings", 15, int_descriptor(
+            "Readings of a new version's compensated machine judged against the previous "
+            "version's last ones (roll back if worse)", 5, 10000))
+        self.declare_parameter("settle_readings", 2, int_descriptor(
+            "Readings after a version went live that are not judged (the change settling)",
+            0, 1000))
         self.add_on_set_parameters_callback(self._validate)
         self.health = DeliveryHealth(self)
         self._check_sequences: dict[str, int] = {}   # ModelCheck.sequence per quantity
@@ -77,6 +98,12 @@ class ModelMonitor(Node):
                                   follow_topic=False, on_change=self._publish_model,
                                   health=self.health)
         self._readings: deque = deque(maxlen=int(self.get_parameter("window").value))
+        # The compensated machine's measured error per reading and the version that was
+        # live at the machine then: what a new version is judged on.
+        self._judge_log: deque = deque(maxlen=4000)
+        self._judging: dict | None = None
+        self.rolled_back: set[str] = set()   # effects a roll-back took out
+        self._last_check: tuple | None = None   # (version, observations, diagnosis)
         self._since_check = 0
         self.last_diagnosis = None
         self.history: list[dict] = []
@@ -109,8 +136,9 @@ class ModelMonitor(Node):
                     model = resolve_model(str(parameter.value))
                 except MtAccuracyError as exc:
                     return refuse(f"model refused: {exc}")
-                self._reason = "model parameter set"
-                self.inputs.set_model(model)
+                problem = self._make_live(model, "model parameter set")
+                if problem:
+                    return refuse(problem)
             elif parameter.name == "window":
                 self._readings = deque(self._readings, maxlen=int(parameter.value))
             elif parameter.name == "add_effects":
@@ -132,65 +160,141 @@ class ModelMonitor(Node):
                 model = self.inputs.model
                 for name in names:
                     model = model.without_effect(name)
-                self._reason = f"removed {', '.join(names)} (user)"
-                self.inputs.set_model(model)
+                problem = self._make_live(model, f"removed {', '.join(names)} (user)")
+                if problem:
+                    return refuse(problem)
                 self._since_check = int(self.get_parameter("check_every").value)
         return accept()
 
+    def _make_live(self, model, reason: str, *, rollback: bool = False) -> str | None:
+        """The one gate every model version passes: refused (the live one stays, an ERROR on
+        /diagnostics) when its corrections exceed the controller's limits; otherwise
+        published, and - unless it is a roll-back - judged at the machine next."""
+        live = self.inputs.model
+        problem = "" if rollback else gate_problem(model)
+        if problem:
+            text = (f"model version refused before going live ({reason}): {problem}; "
+                    f"version {live.version} stays")
+            self.health.refused("model_gate", text)
+            self._status(DiagnosticStatus.ERROR, text,
+                         [KeyValue(key="model_version", value=str(live.version))])
+            return text
+        previous = {"model": model_to_dict(live), "version": int(live.version)}
+        self._reason = reason
+        self.inputs.set_model(model)
+        self._judging = None if rollback else {
+            **previous, "version_new": int(self.inputs.model.version), "reason": reason}
+        return None
+
+    def _fitted_candidates(self, names: list[str]) -> tuple[list[Candidate], object] | str:
+        """The candidates ``names`` ask for, fitted on the readings of the last check when
+        the model has not changed since (what the user saw), else on the readings now."""
+        last = self._last_check
+        if last is not None and last[0] == self.inputs.model.version:
+            obs, diagnosis = last[1], last[2]
+        else:
+            obs = self._observations()
+            if obs is None:
+                return f"cannot fit {', '.join(names)}: only {len(self._readings)} reference " \
+                    "readings yet"
+            try:
+                diagnosis = self._diagnose(self.inputs.model, obs)
+            except MtAccuracyError as exc:
+                return f"cannot fit {', '.join(names)}: {exc}"
+        chosen = []
+        for name in names:
+            candidate = pick_candidate(diagnosis, name)
+            if candidate is None:
+                return f"cannot fit {name}: it has no regressors in these readings"
+            if candidate.refusal:
+                return f"cannot add {candidate.name}: physics refuses its fit ({candidate.refusal})"
+            chosen.append(candidate)
+        return chosen, obs
+
     def _add_many(self, names: list[str], who: str) -> str | None:
         """Fit and add several effects from one diagnosis (their joint fit where the
-        forward selection named them together)."""
+        forward selection named them together), through the gate."""
         wanted = [n for n in names if not (n in self.inputs.model.effects and
                                            "expression" not in self.inputs.model.effects[n])]
         if not wanted:
             return None
-        obs = self._observations()
-        if obs is None:
-            return f"cannot fit {', '.join(wanted)}: only {len(self._readings)} reference " \
-                "readings yet"
-        try:
-            diagnosis = self._diagnose(self.inputs.model, obs)
-        except MtAccuracyError as exc:
-            return f"cannot fit {', '.join(wanted)}: {exc}"
-        chosen = []
-        for name in wanted:
-            candidate = pick_candidate(diagnosis, name)
-            if candidate is None:
-                return f"cannot fit {name}: it has no regressors in these readings"
-            chosen.append(candidate)
+        fitted = self._fitted_candidates(wanted)
+        if isinstance(fitted, str):
+            return fitted
+        chosen, obs = fitted
         model = self.inputs.model
         for candidate in chosen:
             model = add_effect(model, candidate, obs)
-            self.get_logger().info(f"added {candidate.name} {candidate.parameters}")
         model.version = self.inputs.model.version + 1   # one decision, one version
-        self._reason = f"added {', '.join(c.name for c in chosen)} ({who})"
-        self.inputs.set_model(model)
+        problem = self._make_live(model, f"added {', '.join(c.name for c in chosen)} ({who})")
+        if problem:
+            return problem
+        for candidate in chosen:
+            self.get_logger().info(f"added {candidate.name} {candidate.parameters}")
         self._since_check = int(self.get_parameter("check_every").value)  # check at once
         return None
 
     def _add(self, name: str, who: str, candidate: Candidate | None = None) -> str | None:
+        if candidate is None:
+            return self._add_many([name], who)
         model = self.inputs.model
         if name in model.effects and "expression" not in model.effects[name]:
             return None
-        if candidate is None:
-            obs = self._observations()
-            if obs is None:
-                return f"cannot fit {name}: only {len(self._readings)} reference readings yet"
-            try:
-                diagnosis = self._diagnose(model, obs)
-            except MtAccuracyError as exc:
-                return f"cannot fit {name}: {exc}"
-            candidate = pick_candidate(diagnosis, name)
-            if candidate is None:
-                return f"cannot fit {name}: it has no regressors in these readings"
-        else:
-            obs = self._observations()
-        self._reason = f"added {candidate.name} ({who})"
-        self.inputs.set_model(add_effect(self.inputs.model, candidate, obs))
+        if candidate.refusal:
+            return f"cannot add {candidate.name}: physics refuses its fit ({candidate.refusal})"
+        obs = self._last_check[1] if self._last_check is not None else self._observations()
+        problem = self._make_live(add_effect(model, candidate, obs),
+                                  f"added {candidate.name} ({who})")
+        if problem:
+            return problem
         self.get_logger().info(f"added {candidate.name} {candidate.parameters}; model version "
                                f"{self.inputs.model.version}")
         self._since_check = int(self.get_parameter("check_every").value)  # check at once
         return None
+
+    def _judge_live_version(self) -> None:
+        """Roll the model back when the version that went live made the machine worse."""
+        judging = self._judging
+        if judging is None:
+            return
+        count = int(self.get_parameter("judge_readings").value)
+        settle = int(self.get_parameter("settle_readings").value)
+        after = [r for r in self._judge_log if r[0] == judging["version_new"]]
+        if len(after) < settle + count:
+            return
+        self._judging = None
+        before = [r for r in self._judge_log if r[0] == judging["version"]][-count:]
+        band = float(np.median([r[2] for r in after])) or 1e-6
+        if len(before) < 5:
+            self._status(DiagnosticStatus.OK, f"model version {judging['version_new']} live "
+                         f"at the machine; not judged: version {judging['version']} was measured "
+                         f"at only {len(before)} readings")
+            return
+        judgement = judge_version(np.array([r[1] for r in before]),
+                                  np.array([r[1] for r in after[settle:settle + count]]), band)
+        version = judging["version_new"]
+        if judgement.worse is None:
+            self._status(DiagnosticStatus.OK, f"model version {version} judged at the machine: "
+                         f"{judgement.sentence()}")
+            return
+        before_um, after_um = (v * 1e6 for v in judgement.rise)
+        reason = (f"rolled back: measured error rose from {before_um:.2f} to {after_um:.2f} um "
+                  f"(e_{judgement.worse}) with version {version} ({judging['reason']})")
+        try:
+            previous = model_from_dict(judging["model"], "<previous version>")
+        except MtAccuracyError as exc:
+            self._status(DiagnosticStatus.ERROR, f"model version {version} made the machine "
+                         f"worse ({judgement.sentence()}) but version {judging['version']} "
+                         f"cannot be restored: {exc}")
+            return
+        self.rolled_back.update(set(self.inputs.model.effects) - set(previous.effects))
+        previous.version = self.inputs.model.version + 1
+        self._make_live(previous, reason, rollback=True)
+        self._status(DiagnosticStatus.ERROR, f"model version {version} {reason}; now version "
+                     f"{self.inputs.model.version} (the previous model)",
+                     [KeyValue(key="rolled_back_version", value=str(version)),
+                      KeyValue(key="rmse_before_m", value=f"{judgement.rise[0]:.3e}"),
+                      KeyValue(key="rmse_after_m", value=f"{judgement.rise[1]:.3e}")])
 
     # ---------------------------------------------------------------- data
     def _on_reading(self, message: ReferenceMeasurement) -> None:
@@ -239,7 +343,12 @@ class ModelMonitor(Node):
                 raise InputDataError("reference reading with a tool-direction error or "
                                      "uncertainty that is not finite or beyond 0.1 rad "
                                      "(degrees sent as radians?): skipped")
+        self._judge_log.append((int(message.compensation_model_version),
+                                np.where(measured, [message.error.x, message.error.y,
+                                                    message.error.z], 0.0),
+                                float(message.uncertainty)))
         self._readings.append({
+            "stamp_ns": stamp_to_nanoseconds(message.header.stamp),
             "direction_error": direction_error,
             "direction_uncertainty": float(message.orientation_uncertainty),
             "directions": dict(zip(axes, directions)),
@@ -252,6 +361,7 @@ class ModelMonitor(Node):
             "profiles": dict(self.inputs.model.profiles),
             "uncertainty": float(message.uncertainty)})
         self._since_check += 1
+        self._judge_live_version()
         if len(self._readings) >= int(self.get_parameter("min_readings").value) and \
                 self._since_check >= int(self.get_parameter("check_every").value):
             self._since_check = 0
@@ -319,6 +429,7 @@ class ModelMonitor(Node):
             self._status(DiagnosticStatus.WARN, f"no check: {exc}")
             return
         self.last_diagnosis = diagnosis
+        self._last_check = (model.version, obs, diagnosis)
         check = self._new_check(model, obs, "tcp_error", "m")
         check.rmse = diagnosis.baseline_rmse
         check.max_abs_error = diagnosis.max_abs_error
@@ -349,13 +460,19 @@ class ModelMonitor(Node):
             KeyValue(key="rmse_m", value=f"{diagnosis.baseline_rmse:.3e}"),
             KeyValue(key="model_version", value=str(model.version)),
             KeyValue(key="missing_effect", value=found.effect if found else "")])
-        if found is not None and self.get_parameter("auto_add").value:
-            self._add(found.name, "auto_add", found)
+        if found is not None and self.get_parameter("auto_add").value and \
+                found.name not in self.rolled_back:
+            problem = self._add(found.name, "auto_add", found)
+            if problem:
+                self.get_logger().warning(problem)
 
     def _new_check(self, model, obs: Observations, quantity: str, unit: str) -> ModelCheck:
         """A ModelCheck of ``quantity`` with its header, version and running sequence."""
         check = ModelCheck()
-        check.header.stamp = self.get_clock().now().to_msg()
+        # Stamped with the data it judged (its newest reading), not the wall clock: a
+        # subscriber acting on checks acts on data time, whatever the host's load.
+        check.header.stamp = nanoseconds_to_stamp(self._readings[-1]["stamp_ns"]) \
+            if self._readings else self.get_clock().now().to_msg()
         check.model_version = int(model.version)
         check.sequence = self._check_sequences.get(quantity, 0)
         self._check_sequences[quantity] = check.sequence + 1

@@ -36,7 +36,9 @@ def bag_report_sections(data: BagData, check: dict | None, directory: Path, stem
     if check is not None:
         sections += [_where_section(data, check, directory, stem),
                      localisation_section(check, directory, stem),
-                     _evidence_section(check), _versions_section(check)]
+                     _evidence_section(check),
+                     _recorded_versions_section(data) if data.models else
+                     _versions_section(check)]
     else:
         sections.append(Section("Where the model fails", paragraphs=[
             "This data has no reference measurements (reference/tcp_error): the model cannot "
@@ -100,30 +102,78 @@ def _component_figures(values: np.ndarray, mask: np.ndarray, u_k2: float) -> lis
     return out
 
 
+def _measured_headline(data: BagData) -> tuple[Table, str] | None:
+    """The instrument's measurement of the compensated machine per phase (None when the
+    machine applied no compensation)."""
+    from ..core.workbench.closed_loop import loop_phases
+    from ..io.fields import machine_error
+
+    if data is None or not data.references:
+        return None
+    measured = np.array([(r.error.x, r.error.y, r.error.z) for _, r in data.references])
+    raw = np.array([machine_error(r) for _, r in data.references])
+    if not np.any(measured - raw):
+        return None
+    band = float(np.median([r.uncertainty for _, r in data.references])) or 1e-6
+    phases = loop_phases(data.seconds([s for s, _ in data.references]), measured,
+                         measured - raw, loop_events(data), band)
+    table = Table(["state", "readings"] + [f"RMS e_{c}" for c in COMPONENTS],
+                  caption="Measured: RMS of the TCP error the reference instrument read on the "
+                          "machine, per component, with its k = 2 uncertainty; 'without "
+                          "compensation' is what it read minus what the CNC had added, at "
+                          "every reading of the run")
+    table.add("without compensation (whole run)", phases[0].count,
+              *[format_with_uncertainty(f.rms * UM, f.rms_u_k2 * UM, "µm")
+                for f in phases[0].without])
+    for phase in phases[1:]:
+        table.add(f"{phase.label} [{phase.start_s:.0f}-{phase.end_s:.0f} s]", phase.count,
+                  *[format_with_uncertainty(f.rms * UM, f.rms_u_k2 * UM, "µm")
+                    for f in phase.with_compensation],
+                  css_class="best" if phase.label == "end state" and phase.within(band) else "")
+    end = phases[-1]
+    verdict = (f"End of the run: {'within' if end.within(band) else 'OUTSIDE'} the instrument's "
+               f"band (± {band * UM:.2g} µm, k = 2).")
+    return table, verdict
+
+
 def _headline_section(data: BagData | None, check: dict | None) -> Section:
     section = Section("Headline: TCP error per component")
+    measured = _measured_headline(data)
+    if measured is not None:
+        section.tables.append(measured[0])
+        section.paragraphs.append("The headline is the measurement: the reference instrument "
+                                  "on the compensated machine, phase by phase. " + measured[1])
     if check is None:
-        section.paragraphs.append("No reference measurements: no TCP error to report.")
+        if measured is None:
+            section.paragraphs.append("No reference measurements: no TCP error to report.")
         return section
     plot = check["_plot"]
     mask, band = plot["mask"], check["band"]
+    offline = "Offline (a second figure, not a measurement of the compensated machine): " \
+        if measured is not None else ""
     table = Table(["state", "model version"] + [f"RMS e_{c}" for c in COMPONENTS],
-                  caption="RMS of the TCP error at the reference points, per component, with "
-                          "its k = 2 uncertainty (sampling and instrument)")
-    measured = plot["measured"] - np.nanmean(np.where(mask, plot["measured"], np.nan), axis=0)
-    table.add("without compensation (mean removed)", "-",
-              *_component_figures(np.nan_to_num(measured), mask, band))
+                  caption=offline + "RMS of reference minus model at the reference points, per "
+                          "component, each component's mean removed (an instrument's own "
+                          "zero), with its k = 2 uncertainty (sampling and instrument)")
+    measured_error = plot["measured"] - np.nanmean(np.where(mask, plot["measured"], np.nan),
+                                                   axis=0)
+    table.add("no model: the machine's error, mean removed", "-",
+              *_component_figures(np.nan_to_num(measured_error), mask, band))
     steps = check["steps"]
     for k, (step, residual) in enumerate(zip(steps, plot["step_residuals"])):
-        label = "with the starting model's compensation" if k == 0 else \
+        label = "the model as given" if k == 0 else \
             f"after adding {', '.join(steps[k - 1]['added'])}"
         table.add(label, step["model_version"], *_component_figures(residual, mask, band))
     section.tables.append(table)
     section.paragraphs.append(
         f"{check['readings']} reference readings; the instrument's band is ± "
-        f"{band * UM:.2g} µm (k = 2). 'With compensation' is the error that remains when the "
-        "model's correction is applied at the reference points (reference minus model).")
-    section.paragraphs.append(f"End state: {check['final_diagnosis']}.")
+        f"{band * UM:.2g} µm (k = 2). " + (
+            "The offline table is the model's residual (reference minus model) at the same "
+            "readings: what the model explains, not what the machine did."
+            if measured is not None else
+            "'Reference minus model' is the error that would remain if the model's correction "
+            "were applied at the reference points."))
+    section.paragraphs.append(f"Offline diagnosis of the final model: {check['final_diagnosis']}.")
     return section
 
 
@@ -333,11 +383,15 @@ def _evidence_section(check: dict) -> Section:
         parameters = "; ".join(
             f"{name} = {value:.3g} ± {entry.get('parameter_uncertainties', {}).get(name, np.nan):.2g}"
             for name, value in entry.get("parameters", {}).items())
-        table.add(entry.get("name", entry["effect"]),
-                  "accepted" if accepted else "rejected", entry["cv_rmse_after"] * UM,
+        refusal = entry.get("refusal", "")
+        status = "accepted" if accepted else ("refused by physics" if refusal else "rejected")
+        table.add(entry.get("name", entry["effect"]), status, entry["cv_rmse_after"] * UM,
                   f"{100 * entry['error_reduction']:.1f} %",
-                  f"{100 * entry.get('confidence', 0.0):.0f} %", parameters,
-                  entry["explanation"] if accepted else f"(rejected) {entry['explanation']}",
+                  # A rejected candidate has no confidence: it did not pass the test.
+                  f"{100 * entry.get('confidence', 0.0):.0f} %" if accepted else "—",
+                  parameters,
+                  entry["explanation"] if accepted else
+                  f"({status}{': ' + refusal if refusal else ''}) {entry['explanation']}",
                   css_class="accepted" if accepted else "rejected")
     section.tables.append(table)
     added = [s for s in check["steps"] if "added" in s]
@@ -351,6 +405,27 @@ def _evidence_section(check: dict) -> Section:
     if not added:
         section.paragraphs.append("No effect was added.")
     return section
+
+
+def _recorded_versions_section(data: BagData) -> Section:
+    """The model versions as the graph published them (the bag's ``model`` topic): the
+    same versions, reasons and coefficients as the saved model.yaml."""
+    table = Table(["model version", "reason", "effects and fitted coefficients"],
+                  caption="Every model version recorded on 'model', in order; coefficients in "
+                          "SI units exactly as in the version's YAML")
+    for _, text, version, reason in data.models:
+        try:
+            model = yaml.safe_load(text) or {}
+        except yaml.YAMLError:
+            model = {}
+        parts = []
+        for name, entry in (model.get("effects") or {}).items():
+            values = (entry or {}).get("coefficients") or (entry or {}).get("values") \
+                if isinstance(entry, dict) else None
+            parts.append(name + (" (" + ", ".join(f"{k} = {v:.4g}" for k, v in values.items())
+                                 + ")" if values else ""))
+        table.add(version if version is not None else "?", reason or "-", "; ".join(parts))
+    return Section("Model versions", tables=[table])
 
 
 def _versions_section(check: dict) -> Section:

@@ -44,8 +44,9 @@ DEFAULT_LIMITS = {
     "max_spindle_speed_rpm": 20000.0,
 }
 
-_LINE_STEP_M = 1.0e-3          # dense line spacing along a linear axis [m]
-_LINE_MAX_POINTS = 801
+_LINE_STEP_M = 1.0e-3          # dense line spacing along a linear axis [m] ...
+_PER_PERIOD = 32               # ... or finer: this many points per shortest period
+_LINE_MAX_POINTS = 4001
 _ROTARY_STEP_RAD = np.radians(1.0)
 
 
@@ -104,11 +105,20 @@ class Envelope:
         return out
 
 
-def _axis_grid(machine: MachineDescription, axis: str, dense: bool) -> NDArray[np.float64]:
+def _shortest_period_m(model) -> float:
+    """The shortest period of the model's periodic effects [m] (inf if none)."""
+    periods = [float(entry["setting"]["period_m"]) for entry in model.effects.values()
+               if isinstance(entry, dict) and isinstance(entry.get("setting"), dict)
+               and isinstance(entry["setting"].get("period_m"), (int, float))]
+    return min(periods, default=float("inf"))
+
+
+def _axis_grid(machine: MachineDescription, axis: str, dense: bool,
+               step_m: float = _LINE_STEP_M) -> NDArray[np.float64]:
     low, high = machine.axes[axis].stroke
     if not dense:
         return np.array([low, 0.5 * (low + high), high])
-    step = _ROTARY_STEP_RAD if machine.axes[axis].is_rotary else _LINE_STEP_M
+    step = _ROTARY_STEP_RAD if machine.axes[axis].is_rotary else step_m
     count = int(min(_LINE_MAX_POINTS, max(3, np.ceil((high - low) / step) + 1)))
     return np.linspace(low, high, count)
 
@@ -159,6 +169,8 @@ def correction_envelope(model, limits: CorrectionLimits) -> Envelope:
     for sensor in sensors:
         state.reference_temperatures_c.setdefault(sensor, 20.0)
     reference = dict(state.reference_temperatures_c)
+    # Fine enough that a screw pitch's slope is resolved, not aliased to zero.
+    step_m = min(_LINE_STEP_M, _shortest_period_m(model) / _PER_PERIOD)
     max_abs, max_rate = np.zeros(3), np.zeros(3)
     where = ["nowhere"] * 3
     points = 0
@@ -166,7 +178,7 @@ def correction_envelope(model, limits: CorrectionLimits) -> Envelope:
     for dense_axis in axes:
         others = [a for a in axes if a != dense_axis]
         corners = list(itertools.product(*[_axis_grid(machine, a, False) for a in others]))
-        line = _axis_grid(machine, dense_axis, True)
+        line = _axis_grid(machine, dense_axis, True, step_m)
         positions = {dense_axis: np.tile(line, len(corners))}
         for k, a in enumerate(others):
             positions[a] = np.repeat([c[k] for c in corners], line.size)

@@ -111,3 +111,64 @@ def loop_phases(time_s: ArrayLike, measured_m: ArrayLike, applied_m: ArrayLike,
                         _figures(raw[rows], instrument_u_k2, 90),
                         _figures(measured[rows], instrument_u_k2, 95)))
     return phases
+
+
+@dataclass(frozen=True)
+class VersionJudgement:
+    """A model version judged at the machine: the compensated machine's measured error
+    over the readings after it went live against the previous version's last ones.
+
+    ``before`` / ``after``: per component x, y, z, RMS of the compensated error with its
+    k = 2 uncertainty (sampling and instrument). ``worse`` names the component whose
+    error rose by more than the two uncertainties combined (``None`` if none did).
+    """
+
+    before: tuple[Figure, Figure, Figure]
+    after: tuple[Figure, Figure, Figure]
+    worse: str | None
+
+    @property
+    def rise(self) -> tuple[float, float]:
+        """(before, after) RMS [m] of the component that rose most (or of the worst)."""
+        k = COMPONENTS.index(self.worse) if self.worse else int(np.argmax(
+            [a.rms - b.rms for a, b in zip(self.after, self.before)]))
+        return self.before[k].rms, self.after[k].rms
+
+    def sentence(self) -> str:
+        before, after = self.rise
+        if self.worse:
+            return (f"measured error rose from {before * 1e6:.2f} to {after * 1e6:.2f} um "
+                    f"(e_{self.worse}, beyond the k = 2 uncertainty of both)")
+        return ("measured error " + ", ".join(
+            f"e_{c} {b.rms * 1e6:.2f} -> {a.rms * 1e6:.2f} um"
+            for c, b, a in zip(COMPONENTS, self.before, self.after)) +
+            ": not worse beyond the uncertainty")
+
+
+def judge_version(before_m: ArrayLike, after_m: ArrayLike, instrument_u_k2: float,
+                  *, min_readings: int = 5) -> VersionJudgement:
+    """Is the machine worse with the new version? (see :class:`VersionJudgement`)
+
+    Parameters
+    ----------
+    before_m : (N, 3) [m] compensated error the instrument measured under the previous
+        version (its last readings).
+    after_m : (M, 3) [m] the same under the new version (its first readings after it
+        settled).
+    instrument_u_k2 : the instrument's expanded uncertainty [m].
+    """
+    before = np.asarray(before_m, dtype=np.float64).reshape(-1, 3)
+    after = np.asarray(after_m, dtype=np.float64).reshape(-1, 3)
+    if before.shape[0] < min_readings or after.shape[0] < min_readings:
+        raise InputDataError(f"{before.shape[0]} readings before and {after.shape[0]} after: "
+                             f"need {min_readings} of each to judge a version")
+    if not (np.all(np.isfinite(before)) and np.all(np.isfinite(after))):
+        raise InputDataError("readings to judge a version must be finite")
+    figures_before = _figures(before, instrument_u_k2, 11)
+    figures_after = _figures(after, instrument_u_k2, 23)
+    worse, margin = None, 0.0
+    for c, b, a in zip(COMPONENTS, figures_before, figures_after):
+        excess = (a.rms - b.rms) - float(np.hypot(a.rms_u_k2, b.rms_u_k2))
+        if excess > margin:
+            worse, margin = c, excess
+    return VersionJudgement(figures_before, figures_after, worse)

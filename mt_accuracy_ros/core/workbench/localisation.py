@@ -84,10 +84,11 @@ class Localisation:
         peak = self.peaks[0] if self.peaks else None
         if peak is not None and peak.share >= 0.3 and peak.amplitude > self.noise_sigma and \
                 (best is None or peak.share >= 0.6 * best.share):
-            return (f"the residual along {peak.component} repeats every "
+            return (f"the residual's {peak.component} component repeats every "
                     f"{peak.period_m * 1e3:.1f} mm of {peak.axis} travel with "
-                    f"{peak.amplitude * 1e6:.1f} um amplitude: typical of a ball-screw pitch "
-                    "error (or a rack, or a wavy guideway)")
+                    f"{peak.amplitude * 1e6:.1f} um amplitude ({peak.share:.0%} of its "
+                    f"variance): typical of a ball-screw pitch error of {peak.axis} (or a rack, "
+                    "or a wavy guideway)")
         if best is None or best.share < 0.1:
             return ""
         v = best.variable
@@ -242,8 +243,13 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
             periods = 1.0 / np.arange(20.0, 500.0, step)
             explained, amplitude = periodogram(q, r, np.ones(r.size), periods, harmonics=1)
             best = int(np.argmax(explained))
-            peaks.append(Peak(axis, component, float(periods[best]), float(amplitude[best]),
-                              float(explained[best] / (variance * r.size))))
+            share = float(explained[best] / (variance * r.size))
+            # The amplitude the share supports (a sinusoid of amplitude A holds A^2/2 of
+            # variance): an uneven sampling can fit a large sinusoid that explains little,
+            # and a finding must not claim more than it explains.
+            supported = float(np.sqrt(2.0 * max(share, 0.0) * variance))
+            peaks.append(Peak(axis, component, float(periods[best]),
+                              min(float(amplitude[best]), supported), share))
     shares.sort(key=lambda s: -s.share)
     # Time is a proxy, never a cause: a physical variable explaining nearly as much
     # (within 5 %) is named before it.
