@@ -65,7 +65,7 @@ REFERENCE_PERIOD_S = 0.37
 def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
              scenario: str = "demo", compensation_mode: str = "hybrid") -> int:
     import rclpy
-    from diagnostic_msgs.msg import DiagnosticArray
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
     from mt_accuracy_msgs.msg import (ModelCheck, ModelVersion, ReferenceMeasurement,
                                       SystematicProfile, VolumetricCompensation)
 
@@ -172,7 +172,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
 
     def on_model_status(message: DiagnosticArray) -> None:
         for status in message.status:
-            if status.name.endswith(": model") and status.level >= 2:
+            if status.name.endswith(": model") and status.level == DiagnosticStatus.ERROR:
                 diagnostics_text.append((now_s(), status.message))
 
     listener.create_subscription(DiagnosticArray, "/diagnostics", on_model_status, 50)
