@@ -54,6 +54,8 @@ def _set_parameter(node, target: str, name: str, value) -> tuple[bool, str]:
 #: demo's batch period (docs/benchmarks.md).
 CONTROLLER = {"controller_cycle_s": 0.001, "compensation_delay_s": 0.05,
               "max_compensation_age_s": 0.5}
+#: Data time [s] after which the scripted user acts on the first check naming effects.
+USER_LOOKS_AFTER_S = 30.0
 #: Scale batch period of the demo's machine [s].
 BATCH_PERIOD_S = 0.05
 #: The reference instrument's reading period [s]: not a divisor of the program's
@@ -200,9 +202,11 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
         def act() -> None:
             report_progress()
             latest = checks[-1][1] if checks else None
-            # The user looks once the machine has warmed for a while (35 s of data), at the
-            # first check that names something: data time, not wall time.
-            if latest is not None and not actions and latest.named and checks[-1][0] > 35:
+            # The user looks once the machine has warmed for a while (30 s of data), at the
+            # first check that names something: data time, not wall time, so the readings
+            # behind the decision are the same on any host (checks every 30 readings).
+            if latest is not None and not actions and latest.named and \
+                    checks[-1][0] > USER_LOOKS_AFTER_S:
                 # Everything the monitor names, in one decision (its joint fit).
                 effects = [score.name for score in latest.named]
                 ok, reason = _set_parameter(listener, "/model_monitor", "add_effects", effects)
@@ -216,7 +220,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
 
         def monitor_done() -> bool:
             # Every reference reading the machine made has been judged by the monitor.
-            counts = delivery.get("model_monitor", {})
+            counts = delivery.get("/model_monitor", {})
             handled = sum(int(counts.get(f"reference/tcp_error.{k}", "0"))
                           for k in ("processed", "refused", "lost"))
             return handled >= len(references) > 0

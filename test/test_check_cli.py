@@ -138,7 +138,9 @@ def test_survey_csv_from_a_data_logger_names_a_pitch_error(tmp_path, capsys):
     assert summary["named"][0]["name"] == expected
     assert summary["added"][0] == expected
     assert "repeats every" in summary["localisation"]["sentence"]
-    assert f"named: {expected}" in out and "where: the residual along" in out
+    assert f"named: {expected}" in out and "where: the residual's" in out
+    axis = expected[-1]
+    assert f"of {axis} travel" in out and f"pitch error of {axis}" in out
     assert summary["figures_after_m"]["rmse"] < 0.5 * summary["figures_before_m"]["rmse"]
     assert expected in summary["model_yaml"]
     from browser import validate_html

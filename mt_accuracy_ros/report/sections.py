@@ -188,6 +188,15 @@ def loop_events(data: BagData) -> list[tuple[float, str]]:
             label = f"starting model's compensation (v{version})" if len(seen) == 1 else \
                 f"v{version}: {reasons.get(version, 'model change')}"
             events.append((float(data.seconds([stamp])[0]), label))
+    # The estimator's deterioration alarms cut the run as the demo's story does.
+    for axis in sorted(data.axes):
+        alarm = next((p for p in data.axes[axis].profiles if getattr(p, "deterioration", False)),
+                     None)
+        if alarm is not None:
+            from ..io.fields import stamp_to_nanoseconds
+
+            events.append((float(data.seconds([stamp_to_nanoseconds(alarm.header.stamp)])[0]),
+                           f"after the {axis.upper()} deterioration alarm"))
     return events
 
 

@@ -15,7 +15,7 @@ amplitude of the strongest peak, for pitch and waviness that a smoother of
 the whole stroke would blur.
 
 :func:`localise` returns the numbers and :func:`Localisation.sentence` the
-plain sentence a user reads first, e.g. "the residual along x repeats every
+plain sentence a user reads first, e.g. "the residual's x component repeats every
 10.0 mm of X travel with 4.0 um amplitude: typical of a ball-screw pitch
 error".
 """
@@ -82,8 +82,13 @@ class Localisation:
         """One plain sentence on where the residual lives (empty if it lives nowhere)."""
         best = self.top()
         peak = self.peaks[0] if self.peaks else None
+        # A period is the finding only where it explains at least as much of its
+        # component as the best smooth variable there: a drift read by a periodic program
+        # aliases into a sinusoid of position that explains much, but less.
+        rival = max((s.share for s in self.shares if peak is not None and
+                     s.component == peak.component), default=0.0)
         if peak is not None and peak.share >= 0.3 and peak.amplitude > self.noise_sigma and \
-                (best is None or peak.share >= 0.6 * best.share):
+                peak.share >= rival:
             return (f"the residual's {peak.component} component repeats every "
                     f"{peak.period_m * 1e3:.1f} mm of {peak.axis} travel with "
                     f"{peak.amplitude * 1e6:.1f} um amplitude ({peak.share:.0%} of its "
@@ -170,9 +175,12 @@ def candidate_variables(variables: Variables, structure_sensors: list[str]) -> d
             out[name] = values
     if variables.time_s is not None and variables.n > 2:
         # A structure following its sensor late lives in the sensor's lag, not in the
-        # sensor: the lags of every structure sensor at a few time constants.
+        # sensor: the lags of every structure sensor at a few time constants - only those
+        # the record is long enough to see (a 40 min lag of a 90 s record is a ramp).
+        span = float(np.ptp(variables.time_s))
+        lags = [tau for tau in LOCALISATION_LAGS_S if tau <= span]
         for sensor in structure_sensors:
-            for tau in LOCALISATION_LAGS_S:
+            for tau in lags:
                 values = variables.lag(f"where_{sensor}", variables.rise(sensor), tau)
                 if np.ptp(values) > 0:
                     out[f"T_{sensor}@{tau / 60:.0f}min"] = values
@@ -185,7 +193,7 @@ def candidate_variables(variables: Variables, structure_sensors: list[str]) -> d
         for name, signal in drivers.items():
             if np.ptp(signal) <= 0:
                 continue
-            for tau in LOCALISATION_LAGS_S:
+            for tau in lags:
                 out[f"{name}@{tau / 60:.0f}min"] = variables.lag(f"where_{name}", signal, tau,
                                                                  from_rest=True)
     linear = sorted(a for a in variables.positions if a in "XYZ")
@@ -202,6 +210,21 @@ def candidate_variables(variables: Variables, structure_sensors: list[str]) -> d
             if np.ptp(values) > 0:
                 out[f"T_{a}-{b}"] = values
     return out
+
+
+def _blocked_share(q: NDArray[np.float64], r: NDArray[np.float64], period_m: float,
+                   folds: int) -> float:
+    """Share of r's variance a sinusoid of ``period_m`` along q predicts in held-out
+    contiguous time blocks (fitted, with an offset, on the other blocks)."""
+    phase = 2.0 * np.pi * q / period_m
+    design = np.column_stack([np.ones(q.size), np.cos(phase), np.sin(phase)])
+    block = np.repeat(np.arange(folds), -(-q.size // folds))[:q.size]
+    squared = 0.0
+    for fold in range(folds):
+        test = block == fold
+        coefficients, *_ = np.linalg.lstsq(design[~test], r[~test], rcond=None)
+        squared += float(np.sum((design[test] @ coefficients - r[test]) ** 2))
+    return max(0.0, 1.0 - squared / float(np.sum(r ** 2)))
 
 
 def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: Variables,
@@ -243,7 +266,11 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
             periods = 1.0 / np.arange(20.0, 500.0, step)
             explained, amplitude = periodogram(q, r, np.ones(r.size), periods, harmonics=1)
             best = int(np.argmax(explained))
-            share = float(explained[best] / (variance * r.size))
+            # The best of hundreds of periods explains much in-sample even of a smooth drift
+            # (regular readings of a periodic program alias time into position); held-out
+            # time blocks tell a period that lives in the data from one that fits it.
+            share = min(float(explained[best] / (variance * r.size)),
+                        _blocked_share(q, r, float(periods[best]), folds))
             # The amplitude the share supports (a sinusoid of amplitude A holds A^2/2 of
             # variance): an uneven sampling can fit a large sinusoid that explains little,
             # and a finding must not claim more than it explains.
