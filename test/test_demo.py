@@ -45,8 +45,19 @@ def test_demo_records_from_the_first_sample_and_accounts_for_every_stream(demo_r
     from mt_accuracy_ros.io.bag_reader import decode, read_messages
 
     code, out, printed = demo_run
-    assert code == 0
     summary = json.loads((out / "summary.json").read_text())
+    # The exit code tells the truth (issue 26): 0 only when the loop closed and the end
+    # state is within the band; otherwise the summary says why.
+    from mt_accuracy_ros.demo import demo_failures
+
+    failures = demo_failures(summary, {"end_state_within_band":
+                                       summary["end_state_within_band"]})
+    assert (code == 0) == (not failures)
+    assert all(f"FAILED: {failure}" in printed for failure in failures)
+    # Feedback while it runs: a progress line at least every 5 s of wall time.
+    progress = [line for line in printed.splitlines() if " s wall] " in line]
+    assert len(progress) >= int(summary["wall_time_s"] // 5) - 3
+    assert all("| checks " in line and "stale" in line for line in progress)
     # The recorder was subscribed before the machine streamed: the bag starts at sample 0
     # and at the first temperature reading.
     first_scales = next(m for m in read_messages(out / "bag", ["/scales"]))
@@ -85,6 +96,21 @@ def test_demo_report_renders_in_a_browser_with_every_section_and_image(demo_run)
     headline = summary["report"]["sections"][1]["tables"][0]["rows"]
     assert headline[0]["state"].startswith("without compensation")
     assert all("(k = 2)" in row["RMS e_x"] for row in headline)
+    # The headline is the measurement (issue 26): the report's first table equals the
+    # summary's closed-loop phases, number for number; the offline residual is second and
+    # labelled as such.
+    from mt_accuracy_ros.core.workbench.statistics import format_with_uncertainty
+
+    phases = summary["closed_loop"]
+    expected = [[phases[0]["without_compensation"][c] for c in "xyz"]] + \
+        [[p["with_compensation"][c] for c in "xyz"] for p in phases[1:]]
+    assert len(headline) == len(expected)
+    for row, figures in zip(headline, expected):
+        assert [row[f"RMS e_{c}"] for c in "xyz"] == [
+            format_with_uncertainty(f["rms_um"], f["u_k2_um"], "µm") for f in figures]
+    offline = summary["report"]["sections"][1]["tables"][1]
+    assert offline["caption"].startswith("Offline (a second figure")
+    assert not any(r["state"].startswith("without compensation") for r in offline["rows"])
     if chromium() is None:
         pytest.skip("chromium not installed (make setup installs it where it can)")
     facts = page_facts(page)
@@ -150,6 +176,14 @@ def test_demo_closes_the_loop_and_tells_the_end_state(demo_run):
     versions = [decode(m) for m in read_messages(out / "bag", ["/model"])]
     assert [v.version for v in versions] == sorted({v.version for v in versions})
     assert versions[0].reason == "start"
+    # The report's model versions are those the graph published; its last is model.yaml.
+    rows = summary["report"]["sections"][REPORT_SECTIONS.index("Model versions")][
+        "tables"][0]["rows"]
+    assert [int(r["model version"]) for r in rows] == [v.version for v in versions]
+    assert final["version"] == versions[-1].version
+    for name, entry in final["effects"].items():
+        for key, value in (entry or {}).get("coefficients", {}).items():
+            assert f"{key} = {value:.4g}" in rows[-1]["effects and fitted coefficients"]
     if added:
         assert any(f"added {summary['missing_effect_found']}" in v.reason for v in versions)
     # The whole story: the machine's error fell to the instrument's band by the end,

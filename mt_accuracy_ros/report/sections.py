@@ -181,6 +181,10 @@ def loop_events(data: BagData) -> list[tuple[float, str]]:
     """Where each compensation model version went live at the machine [s], and its reason."""
     reasons = {version: reason for _, _, version, reason in data.models if version is not None}
     events, seen = [], set()
+    if data.references and not int(getattr(data.references[0][1],
+                                           "compensation_model_version", 0)):
+        events.append((float(data.seconds([data.references[0][0]])[0]),
+                       "before the first compensation arrived"))
     for stamp, reading in data.references:
         version = int(getattr(reading, "compensation_model_version", 0))
         if version and version not in seen:
