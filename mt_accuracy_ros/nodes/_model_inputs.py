@@ -25,7 +25,11 @@ class ModelInputs:
     (``ModelVersion``) by the model monitor, with their version numbers; a
     version below the live one is refused (counted, on /diagnostics) and the
     live model stays. With ``gate`` (model -> reason or ""), a version the gate
-    refuses is refused the same way: the last good version stays live.
+    refuses is refused the same way: the last good version stays live. A version
+    from the topic is parsed and gated in a worker thread (the gate evaluates the
+    model over the whole travel, a few hundred ms) and made live when it passes,
+    so that a model change never holds up the real-time path: until then the live
+    version keeps compensating.
     """
 
     def __init__(self, node, model_text: str, *, follow_topic: bool, on_change, health,
@@ -48,9 +52,18 @@ class ModelInputs:
             node.create_subscription(SystematicProfile, f"systematic/{axis}",
                                      health.guard(f"systematic/{axis}", self._on_profile),
                                      RESULT_QOS)
+        self._pending_model = None   # (message, future of (model, problem))
+        self._queued_model = None    # a newer message while one is being gated
+        self._pool = None
         if follow_topic:
+            from concurrent.futures import ThreadPoolExecutor
+
+            from rclpy.clock import Clock, ClockType
+
+            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="model_gate")
             node.create_subscription(ModelVersion, "model", health.guard("model", self._on_model),
                                      LATCHED_QOS)
+            node.create_timer(0.02, self._poll_model, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     def set_model(self, model: ErrorModel, *, keep_version: bool = False) -> None:
         """Make ``model`` live. Its version becomes the live one + 1 unless ``keep_version``
@@ -69,20 +82,56 @@ class ModelInputs:
 
     def _on_model(self, message: ModelVersion) -> None:
         self.health.sequence("model", message.sequence)
-        if message.version < self.model.version:
-            # Counted and on /diagnostics; the live model stays.
-            self.health.refused("model", f"model version {message.version} is older than the "
-                                f"live version {self.model.version}: refused, the live one stays")
+        if self._pending_model is not None:
+            self._queued_model = message   # gated once the one in hand is settled
             return
+        self._submit(message)
+
+    def _older_than_live(self, message: ModelVersion) -> bool:
+        if message.version >= self.model.version:
+            return False
+        # Counted and on /diagnostics; the live model stays.
+        self.health.refused("model", f"model version {message.version} is older than the "
+                            f"live version {self.model.version}: refused, the live one stays")
+        return True
+
+    def _submit(self, message: ModelVersion) -> None:
+        if not self._older_than_live(message):
+            self._pending_model = (message, self._pool.submit(self._prepare, message.model_yaml))
+
+    def _prepare(self, text: str):
+        """(model, "") or (None, reason): parse and gate a version off the real-time path."""
         try:
-            model = resolve_model(message.model_yaml)
+            model = resolve_model(text)
         except MtAccuracyError as exc:
-            self.health.refused("model", f"model refused, version {self.model.version} kept: {exc}")
+            return None, f"model refused, version {self.model.version} kept: {exc}"
+        try:
+            problem = self.gate(model) if self.gate is not None else ""
+        except Exception as exc:  # noqa: BLE001 - a model must never kill the node
+            problem = f"its corrections cannot be evaluated ({type(exc).__name__}: {exc})"
+        return model, problem
+
+    def _poll_model(self) -> None:
+        """Settle a gated version (live or refused) once its worker is done, then gate
+        the version that arrived meanwhile, if any."""
+        if self._pending_model is None or not self._pending_model[1].done():
             return
-        problem = self.gate(model) if self.gate is not None else ""
+        message, future = self._pending_model
+        self._pending_model = None
+        self._settle(message, *future.result())
+        if self._queued_model is not None:
+            queued, self._queued_model = self._queued_model, None
+            self._submit(queued)
+
+    def _settle(self, message: ModelVersion, model: ErrorModel | None, problem: str) -> None:
+        if model is None:
+            self.health.refused("model", problem)
+            return
         if problem:
             self.health.refused("model", f"model version {message.version} refused before going "
                                 f"live: {problem}; version {self.model.version} stays")
+            return
+        if self._older_than_live(message):   # the live one moved on while this was gated
             return
         self.health.processed("model")
         model.version = int(message.version)
@@ -90,6 +139,10 @@ class ModelInputs:
                 model_to_dict(model)["effects"] != model_to_dict(self.model)["effects"] or \
                 model.reference_temperatures_c != self.model.reference_temperatures_c:
             self.set_model(model, keep_version=True)
+
+    def shutdown(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
 
     def _on_temperatures(self, message: TemperatureArray) -> None:
         values = unpack_float64(message.temperatures)

@@ -82,6 +82,10 @@ class CompensationBroadcaster(Node):
                                  SENSOR_QOS)
         self._publish_tables()
 
+    def destroy_node(self) -> None:
+        self.inputs.shutdown()
+        super().destroy_node()
+
     def _validate(self, parameters):
         try:
             return self._apply(parameters)

@@ -40,3 +40,20 @@ def call_service(node, client, request, timeout_s: float = 60.0, attempt_s: floa
             return future.result()
         client.remove_pending_request(future)
     raise AssertionError(f"{client.srv_name} did not answer in {timeout_s} s")
+
+
+def set_parameter_again_until_answered(node, target: str, name: str, value,
+                                       timeout_s: float = 60.0) -> tuple[bool, str]:
+    """Set a parameter of ``target`` through its service, asking again while unanswered
+    (see ``call_service``): only for settings whose repetition changes nothing - a
+    refused value, or the same plain value twice. (accepted, reason)."""
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.parameter import Parameter
+
+    client = node.create_client(SetParameters, f"{target}/set_parameters")
+    try:
+        request = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
+        result = call_service(node, client, request, timeout_s=timeout_s).results[0]
+        return bool(result.successful), str(result.reason)
+    finally:
+        node.destroy_client(client)

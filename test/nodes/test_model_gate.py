@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import yaml
 
-from graph_helpers import spin_until
+from graph_helpers import set_parameter_again_until_answered, spin_until
 from mt_accuracy_ros.model_tools import set_remote_parameter
 from mt_accuracy_ros.processes import start_node
 
@@ -76,13 +76,16 @@ def test_the_gate_refuses_and_a_worse_version_is_rolled_back(rclpy_context, tmp_
         assert spin_until(node, lambda: sum(r.compensation_model_version == 1
                                             for r in readings) >= 15, 120.0)
         # 1. The gate, in the monitor: refused with the reason, version 1 stays.
-        ok, reason = set_remote_parameter(node, "/model_monitor", "model", str(absurd))
+        # (Refusals: asking again changes nothing, so the race of a first request
+        # with discovery cannot fail the test.)
+        ok, reason = set_parameter_again_until_answered(node, "/model_monitor", "model",
+                                                        str(absurd))
         assert not ok
         assert "refused before going live" in reason and "beyond the controller's" in reason
         # 2. The gate, in the broadcaster: its parameter, and a forged newer version on
         # the model topic - both refused, counted, said on /diagnostics.
-        ok, reason = set_remote_parameter(node, "/compensation_broadcaster", "model",
-                                          str(absurd))
+        ok, reason = set_parameter_again_until_answered(node, "/compensation_broadcaster",
+                                                        "model", str(absurd))
         assert not ok and "refused before going live" in reason
         forged.publish(ModelVersion(version=7, reason="forged", effects=[],
                                     model_yaml=absurd.read_text(), sequence=0))

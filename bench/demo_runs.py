@@ -1,0 +1,89 @@
+"""The main job run again and again, as a new user would: idle and with CPU burners.
+
+Every run is reported - never the best of them: exit code, the effects the user
+added, the end state per component against the instrument's band, the model
+versions (roll-backs included), stale corrections and the latency p99. The
+markdown table goes to stdout (for docs/closed_loop.md).
+
+    .venv/bin/python -m bench.demo_runs --runs 5 --burners 0
+    .venv/bin/python -m bench.demo_runs --runs 3 --burners 2 --rate 1
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def _burners(count: int) -> list[subprocess.Popen]:
+    return [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(count)]
+
+
+def run_once(out: Path, rate: float | None, machine: str) -> dict:
+    command = [sys.executable, "-m", "mt_accuracy_ros.cli", "demo", "--out", str(out),
+               "--machine", machine]
+    if rate is not None:
+        command += ["--rate", str(rate)]
+    started = time.monotonic()
+    done = subprocess.run(command, capture_output=True, text=True)
+    wall = time.monotonic() - started
+    summary_path = out / "summary.json"
+    summary = json.loads(summary_path.read_text()) if summary_path.is_file() else {}
+    end = (summary.get("closed_loop") or [{}])[-1].get("with_compensation", {})
+    return {"code": done.returncode, "wall_s": wall,
+            "added": ", ".join(summary.get("missing_effects_found", [])) or "-",
+            "accepted": summary.get("effect_added_accepted"),
+            "end_um": [end.get(c, {}).get("rms_um", float("nan")) for c in "xyz"],
+            "within": summary.get("end_state_within_band"),
+            "stale": summary.get("compensation_stale"),
+            "applied": summary.get("compensation_applied"),
+            "p99_ms": summary.get("compensation_latency_p99_ms"),
+            "rolled_back": sum("rolled back" in a for a in summary.get("model_alarms", [])),
+            "failed": [line.strip()[len("FAILED: "):] for line in done.stdout.splitlines()
+                       if line.strip().startswith("FAILED: ")]}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, allow_abbrev=False)
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--burners", type=int, default=0,
+                        help="CPU-burning processes alongside")
+    parser.add_argument("--rate", type=float, default=None, help="the demo's --rate")
+    parser.add_argument("--machine", default="kidani_hmc")
+    args = parser.parse_args(argv)
+    burners = _burners(args.burners)
+    rows = []
+    try:
+        with tempfile.TemporaryDirectory() as scratch:
+            for k in range(args.runs):
+                result = run_once(Path(scratch) / f"run{k}", args.rate, args.machine)
+                rows.append(result)
+                print(f"run {k + 1}/{args.runs}: exit {result['code']}, end state "
+                      + "/".join(f"{v:.2f}" for v in result["end_um"])
+                      + f" um, stale {result['stale']}, {result['wall_s']:.0f} s",
+                      file=sys.stderr, flush=True)
+    finally:
+        for process in burners:
+            process.kill()
+    rate = args.rate if args.rate is not None else "default"
+    print(f"\n`python -m bench.demo_runs --runs {args.runs} --burners {args.burners}"
+          + (f" --rate {args.rate}" if args.rate is not None else "") + "`"
+          f" ({args.machine}, rate {rate}, {args.burners} CPU burners)\n")
+    print("| run | exit | effects the user added | end state e_x / e_y / e_z [um] | within "
+          "band | roll-backs | corrections applied / stale | p99 [ms] | wall [s] | why not 0 |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for k, r in enumerate(rows, 1):
+        print(f"| {k} | {r['code']} | {r['added']} | "
+              + " / ".join(f"{v:.2f}" for v in r["end_um"])
+              + f" | {'yes' if r['within'] else 'no'} | {r['rolled_back']} | {r['applied']} / "
+              f"{r['stale']} | {r['p99_ms']:.0f} | {r['wall_s']:.0f} | "
+              f"{'; '.join(r['failed']) or '-'} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
