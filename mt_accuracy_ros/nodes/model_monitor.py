@@ -37,11 +37,14 @@ the same from a terminal.
 """
 from __future__ import annotations
 
+import copy
 import sys
 from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ModelVersion, ReferenceMeasurement
@@ -117,7 +120,14 @@ class ModelMonitor(Node):
         self.create_subscription(ReferenceMeasurement, "reference/tcp_error",
                                  self.health.guard("reference/tcp_error", self._on_reading),
                                  RESULT_QOS)
+        self._checking = None   # (model, observations, stamp, future) of the check under way
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="diagnosis")
+        self.create_timer(0.02, self._poll_check, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._publish_model()
+
+    def destroy_node(self) -> None:
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        super().destroy_node()
 
     # ---------------------------------------------------------------- parameters
     def _validate(self, parameters):
@@ -364,13 +374,10 @@ class ModelMonitor(Node):
         self._judge_live_version()
         if len(self._readings) >= int(self.get_parameter("min_readings").value) and \
                 self._since_check >= int(self.get_parameter("check_every").value):
-            self._since_check = 0
             self._run_check()
 
     def _predict(self, model, readings, obs: Observations) -> None:
         """Model predictions of each reading with the profiles live when it was taken."""
-        import copy
-
         position = np.zeros((obs.n, 3))
         orientation = np.zeros((obs.n, 3))
         groups: dict[tuple, list[int]] = {}
@@ -417,20 +424,51 @@ class ModelMonitor(Node):
         return obs
 
     def _run_check(self) -> None:
+        """Start a check: observations taken here, the diagnosis (seconds of CPU) in the
+        worker thread, so that readings keep arriving - none lost to a full queue - and
+        the judge keeps judging while it searches. One check at a time: the next starts
+        once this one is published and ``check_every`` readings have come."""
+        if self._checking is not None:
+            return
         model = self.inputs.model
         try:
             # A user effect the readings cannot evaluate (a sensor it names is missing)
             # stops this check, not the node: said on /diagnostics.
             obs = self._observations()
-            if obs is None:
-                return
-            diagnosis = self._diagnose(model, obs)
         except MtAccuracyError as exc:
             self._status(DiagnosticStatus.WARN, f"no check: {exc}")
             return
+        if obs is None:
+            return
+        self._since_check = 0
+        # The worker gets its own copy: profiles arrive meanwhile on this thread.
+        snapshot = copy.copy(model)
+        snapshot.profiles = dict(model.profiles)
+        snapshot._lag_states = {}   # lagged effects start at the window's first reading
+        stamp_ns = self._readings[-1]["stamp_ns"]
+        self._checking = (model, obs, stamp_ns, self._pool.submit(self._diagnose, snapshot, obs))
+
+    def _poll_check(self) -> None:
+        if self._checking is None or not self._checking[3].done():
+            return
+        model, obs, stamp_ns, future = self._checking
+        self._checking = None
+        try:
+            diagnosis = future.result()
+        except MtAccuracyError as exc:
+            self._status(DiagnosticStatus.WARN, f"no check: {exc}")
+            return
+        except Exception as exc:  # noqa: BLE001 - a failed search must not end the monitor
+            self._status(DiagnosticStatus.ERROR, f"check failed: {type(exc).__name__}: {exc}")
+            return
+        self._publish_check(model, obs, stamp_ns, diagnosis)
+        if self._since_check >= int(self.get_parameter("check_every").value):
+            self._run_check()
+
+    def _publish_check(self, model, obs: Observations, stamp_ns: int, diagnosis) -> None:
         self.last_diagnosis = diagnosis
         self._last_check = (model.version, obs, diagnosis)
-        check = self._new_check(model, obs, "tcp_error", "m")
+        check = self._new_check(model, obs, "tcp_error", "m", stamp_ns)
         check.rmse = diagnosis.baseline_rmse
         check.max_abs_error = diagnosis.max_abs_error
         check.band = obs.uncertainty_m
@@ -451,7 +489,7 @@ class ModelMonitor(Node):
                 check.peak_axis, check.peak_component = peak.axis, peak.component
                 check.peak_period, check.peak_amplitude = peak.period_m, peak.amplitude
         self._check.publish(check)
-        self._check_direction(model, obs)
+        self._check_direction(model, obs, stamp_ns)
         self.history.append({"version": model.version, "rmse": diagnosis.baseline_rmse})
         found = diagnosis.found
         level = DiagnosticStatus.OK if found is None and diagnosis.baseline_rmse <= obs.uncertainty_m \
@@ -466,13 +504,13 @@ class ModelMonitor(Node):
             if problem:
                 self.get_logger().warning(problem)
 
-    def _new_check(self, model, obs: Observations, quantity: str, unit: str) -> ModelCheck:
+    def _new_check(self, model, obs: Observations, quantity: str, unit: str,
+                   stamp_ns: int) -> ModelCheck:
         """A ModelCheck of ``quantity`` with its header, version and running sequence."""
         check = ModelCheck()
         # Stamped with the data it judged (its newest reading), not the wall clock: a
         # subscriber acting on checks acts on data time, whatever the host's load.
-        check.header.stamp = nanoseconds_to_stamp(self._readings[-1]["stamp_ns"]) \
-            if self._readings else self.get_clock().now().to_msg()
+        check.header.stamp = nanoseconds_to_stamp(stamp_ns)
         check.model_version = int(model.version)
         check.sequence = self._check_sequences.get(quantity, 0)
         self._check_sequences[quantity] = check.sequence + 1
@@ -482,9 +520,10 @@ class ModelMonitor(Node):
         check.sample_count = obs.n
         return check
 
-    def _check_direction(self, model, obs: Observations) -> None:
+    def _check_direction(self, model, obs: Observations, stamp_ns: int) -> None:
         """The model's tool-direction error against the readings that measured it."""
-        readings = self._comparable_readings()
+        readings = [r for r in self._comparable_readings() if r["stamp_ns"] <= stamp_ns]
+        readings = readings[-obs.n:]
         if len(readings) != obs.n or any(r["direction_error"] is None for r in readings) or \
                 obs.predicted_orientation is None:
             return
@@ -495,7 +534,7 @@ class ModelMonitor(Node):
         residual = measured - predicted
         norm = np.linalg.norm(residual, axis=1)
         band = float(np.median([r["direction_uncertainty"] for r in readings])) or 1e-6
-        check = self._new_check(model, obs, "tool_direction", "rad")
+        check = self._new_check(model, obs, "tool_direction", "rad", stamp_ns)
         before = float(np.sqrt(np.mean(np.sum(measured ** 2, axis=1))))
         check.rmse = float(np.sqrt(np.mean(norm ** 2)))
         check.max_abs_error = float(np.max(norm))
