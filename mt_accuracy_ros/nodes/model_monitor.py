@@ -595,12 +595,14 @@ def _score(candidate: Candidate) -> EffectScore:
                            n, float("nan"))) for n in names])
 
 
-#: Scheduling niceness of the monitor's process (environment ``MT_ACCURACY_MONITOR_NICE``
-#: overrides; 0 keeps the default priority). Its diagnosis takes seconds of CPU per check;
-#: on a 2-core machine at normal priority it delayed the real-time path (encoder ->
-#: broadcaster -> CNC) by hundreds of ms. Set before rclpy starts, so every thread of
-#: the process - the DDS ones included - inherits it.
-MONITOR_NICENESS = 10
+#: Scheduling niceness of the monitor's process (environment ``MT_ACCURACY_MONITOR_NICE``;
+#: set before rclpy starts, so every thread of the process inherits it). 0 by default:
+#: measured with two CPU burners alongside (docs/closed_loop.md), a niced monitor did
+#: not make the corrections reliably fresher - the burners starve the real-time nodes
+#: whatever the monitor does - but its checks came so late that the loop closed after
+#: the run. On a cell where the real-time path must win, set it (e.g. 10) and accept
+#: slower diagnosis.
+MONITOR_NICENESS = 0
 
 
 def lower_priority(default: int = MONITOR_NICENESS) -> int:
