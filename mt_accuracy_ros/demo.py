@@ -286,7 +286,16 @@ def demo_failures(summary: dict, story: dict) -> list[str]:
         out.append("the loop never closed: the CNC applied no real-time correction "
                    f"({summary.get('compensation_stale', 0)} arrived too late to apply)")
     if not story.get("end_state_within_band"):
-        out.append("the end state is outside the instrument's band (see the table above)")
+        why = "the end state is outside the instrument's band (see the table above)"
+        messages = int(summary.get("compensation_messages") or 0)
+        stale = int(summary.get("compensation_stale") or 0)
+        if messages and stale > 0.1 * messages:
+            # The machine then runs on corrections held from seconds before: the
+            # host, not the model, is what failed.
+            why += (f"; {stale} of {messages} corrections arrived too late to apply "
+                    f"({100.0 * stale / messages:.0f} %): this host did not keep the "
+                    "real-time path's deadline (a loaded machine?), the CNC held old ones")
+        out.append(why)
     return out
 
 

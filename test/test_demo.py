@@ -26,6 +26,22 @@ def test_delivery_losses_are_plain_sentences():
     assert delivery_losses({"/n": {"scales.processed": "5", "scales.lost": "0"}}) == []
 
 
+def test_a_failed_end_state_says_whether_the_host_or_the_model_failed():
+    from mt_accuracy_ros.demo import demo_failures
+
+    base = {"model_checks": 5, "bag_messages": 10, "compensation_applied": 3383,
+            "compensation_messages": 9000}
+    outside = {"end_state_within_band": False}
+    assert demo_failures(dict(base, compensation_stale=5231), {"end_state_within_band": True}) \
+        == []
+    late, = demo_failures(dict(base, compensation_stale=5231), outside)
+    assert "5231 of 9000 corrections arrived too late to apply (58 %)" in late
+    model, = demo_failures(dict(base, compensation_stale=400), outside)
+    assert model == "the end state is outside the instrument's band (see the table above)"
+    never, _ = demo_failures(dict(base, compensation_applied=0, compensation_stale=9000), outside)
+    assert never.startswith("the loop never closed")
+
+
 @pytest.fixture(scope="module")
 def demo_run(tmp_path_factory):
     """The main job, run once for the tests below (about 40 s)."""
