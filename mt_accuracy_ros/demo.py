@@ -54,6 +54,10 @@ def _set_parameter(node, target: str, name: str, value) -> tuple[bool, str]:
 #: demo's batch period (docs/benchmarks.md).
 CONTROLLER = {"controller_cycle_s": 0.001, "compensation_delay_s": 0.05,
               "max_compensation_age_s": 0.5}
+#: Wall seconds the demo waits for every node to be up before starting the machine.
+GRAPH_READY_TIMEOUT_S = 60.0
+#: Wall seconds between the start stamp being set and the machine's sample 0.
+START_LEAD_S = 1.0
 #: Data time [s] after which the scripted user acts on the first check naming effects.
 USER_LOOKS_AFTER_S = 30.0
 #: Scale batch period of the demo's machine [s].
@@ -72,6 +76,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
                                       SystematicProfile, VolumetricCompensation)
 
     from .nodes._common import COMPENSATION_QOS, LATCHED_QOS, RESULT_QOS, stamp_to_nanoseconds
+    from .model_tools import set_remote_parameter
     from .processes import start_node
 
     out = Path(out_dir)
@@ -89,8 +94,11 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
           f"({chosen.description}); the CNC applies the compensation ({compensation_mode}); "
           f"{chosen.duration_s:.0f} s of data at {rate_factor:g}x", flush=True)
     model = _prepare(out, scenario)
-    start_ns = time.time_ns() + 4_000_000_000
-    machine = {"scenario": scenario, "start_stamp_ns": start_ns, "rate_factor": rate_factor}
+    # The machine's clock starts once every node is up (below): started at a fixed
+    # moment, a node still importing would meet a backlog of seconds of data, every
+    # correction of it stale on arrival.
+    start_ns = time.time_ns() + 3600_000_000_000   # set when the graph is ready
+    machine = {"scenario": scenario, "start_stamp_ns": -1, "rate_factor": rate_factor}
     # The machine holds its streams until every consumer - the recorder first of all -
     # is subscribed, so the bag holds the run from its first sample: scales go to the
     # estimator, broadcaster and recorder; temperatures also to the monitor.
@@ -199,6 +207,29 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
               f"{controller.get('stale', 0)}", flush=True)
 
     try:
+        def graph_ready() -> bool:
+            # Every consumer subscribed, the broadcaster's compensation matched by the
+            # CNC (and this listener), the monitor constructed (its latched version 1).
+            return (listener.count_subscribers("/scales") >= scales_consumers and
+                    listener.count_subscribers("/temperatures") >= temperature_consumers and
+                    listener.count_publishers("/compensation") >= 1 and
+                    listener.count_subscribers("/compensation") >= 2 and bool(models))
+
+        ready_by = time.monotonic() + GRAPH_READY_TIMEOUT_S
+        while not graph_ready() and time.monotonic() < ready_by:
+            rclpy.spin_once(listener, timeout_sec=0.05)
+            report_progress()
+        if not graph_ready():
+            print(f"  WARNING the graph was not complete after {GRAPH_READY_TIMEOUT_S:.0f} s; "
+                  "starting the machine anyway", flush=True)
+        start_ns = time.time_ns() + int(START_LEAD_S * 1e9)
+        for publisher in ("/encoder_publisher", "/temperature_publisher"):
+            # The same stamp twice changes nothing: asked again while unanswered.
+            ok, reason = set_remote_parameter(listener, publisher, "start_stamp_ns", start_ns,
+                                              resend_after_s=2.0)
+            if not ok:
+                raise RuntimeError(f"could not start {publisher}: {reason}")
+
         def act() -> None:
             report_progress()
             latest = checks[-1][1] if checks else None
@@ -244,6 +275,14 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
         listener.destroy_node()
         rclpy.try_shutdown()
     losses = delivery_losses(delivery)
+    # The headline is computed from the record - the bag the report is made from - so
+    # that the summary and the report tell one story, reading for reading.
+    recorded = _recorded_references(bag, start_ns)
+    if recorded[0]:
+        if len(recorded[0]) != len(references):
+            losses.append(f"the bag holds {len(recorded[0])} reference readings, this listener "
+                          f"received {len(references)}: the headline is the bag's")
+        references, orientations = recorded
     if models:
         # The saved model is the final one, every effect added with its parameters.
         (out / "model.yaml").write_text(models[-1][1].model_yaml)
@@ -271,6 +310,33 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     for failure in failures:
         print(f"  FAILED: {failure}")
     return 1 if failures else 0
+
+
+def _recorded_references(bag: Path, start_ns: int) -> tuple[list[tuple], list[tuple]]:
+    """The reference readings of the bag as the demo's listener holds them: (data time
+    [s], measured (3,), applied (3,), version, uncertainty) and, where the tool's
+    direction was measured, (measured (3,), applied (3,), uncertainty) [rad]."""
+    from .io.bag_reader import decode, read_messages
+    from .nodes._common import stamp_to_nanoseconds
+
+    references, orientations = [], []
+    try:
+        messages = [decode(m) for m in read_messages(bag, ["/reference/tcp_error"])]
+    except Exception:  # noqa: BLE001 - no readable bag: the listener's readings stand
+        return [], []
+    for m in messages:
+        references.append(((stamp_to_nanoseconds(m.header.stamp) - start_ns) / 1e9,
+                           np.array([m.error.x, m.error.y, m.error.z]),
+                           np.array([m.applied_correction.x, m.applied_correction.y,
+                                     m.applied_correction.z]),
+                           int(m.compensation_model_version), float(m.uncertainty)))
+        if m.orientation_measured:
+            orientations.append((
+                np.array([m.orientation_error.x, m.orientation_error.y, m.orientation_error.z]),
+                np.array([m.applied_orientation_correction.x, m.applied_orientation_correction.y,
+                          m.applied_orientation_correction.z]),
+                float(m.orientation_uncertainty)))
+    return references, orientations
 
 
 def demo_failures(summary: dict, story: dict) -> list[str]:

@@ -15,11 +15,15 @@ import time
 from .core.errors import ParameterError
 
 
-def set_remote_parameter(node, target: str, name: str, value,
-                         timeout_s: float = 30.0) -> tuple[bool, str]:
+def set_remote_parameter(node, target: str, name: str, value, timeout_s: float = 30.0,
+                         *, resend_after_s: float | None = None) -> tuple[bool, str]:
     """Set parameter ``name`` of node ``target`` through its set_parameters service.
 
     Returns (accepted, reason); (False, why) when the service is missing or silent.
+    With ``resend_after_s``, a request still unanswered after that long is sent again
+    (the first answer counts): a request sent before the server's reader matched this
+    client is lost without a trace, which a node that has just started makes likely.
+    Only for settings whose repetition changes nothing.
     """
     import rclpy
     from rcl_interfaces.srv import SetParameters
@@ -31,13 +35,21 @@ def set_remote_parameter(node, target: str, name: str, value,
             return False, f"{target}/set_parameters not available (is the node running?)"
         request = SetParameters.Request(
             parameters=[Parameter(name, value=value).to_parameter_msg()])
-        future = client.call_async(request)
+        futures = [client.call_async(request)]
         deadline = time.monotonic() + timeout_s
-        while not future.done() and time.monotonic() < deadline:
+        resend_at = deadline if resend_after_s is None else time.monotonic() + resend_after_s
+        while not any(f.done() for f in futures) and time.monotonic() < deadline:
             rclpy.spin_once(node, timeout_sec=0.05)
-        if not future.done():
+            if time.monotonic() >= resend_at:
+                futures.append(client.call_async(request))
+                resend_at = time.monotonic() + resend_after_s
+        answered = [f for f in futures if f.done()]
+        for future in futures:
+            if not future.done():
+                client.remove_pending_request(future)
+        if not answered:
             return False, f"{target} did not answer within {timeout_s:.0f} s"
-        result = future.result().results[0]
+        result = answered[0].result().results[0]
         return bool(result.successful), str(result.reason)
     finally:
         node.destroy_client(client)

@@ -13,6 +13,48 @@ from ._common import (LATCHED_QOS, RESULT_QOS, SENSOR_QOS, TABLE_QOS,  # noqa: F
 
 
 
+def gate_model_text(text: str, gate) -> tuple[str, str]:
+    """(parse error, gate problem) of a model's YAML: run in the gate's worker process."""
+    try:
+        model = resolve_model(text)
+    except MtAccuracyError as exc:
+        return str(exc), ""
+    try:
+        return "", (gate(model) if gate is not None else "")
+    except Exception as exc:  # noqa: BLE001 - a model must never kill the node
+        return "", f"its corrections cannot be evaluated ({type(exc).__name__}: {exc})"
+
+
+#: Niceness of the gate's worker process: a model change may wait, the real-time path not.
+GATE_NICENESS = 10
+
+
+def _lower_worker_priority() -> None:
+    import os
+
+    try:
+        os.nice(GATE_NICENESS)
+    except OSError:
+        pass
+    from ..core.compensation import limits  # noqa: F401 - imported once, at start
+
+
+def _gate_pool():
+    """One worker *process* for the gate. Evaluating a model over the whole travel takes
+    ~0.7 s of pure Python and numpy; in a thread of the broadcaster it held the GIL
+    against the executor and made corrections late while a new version was gated."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+
+    try:
+        pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
+                                   initializer=_lower_worker_priority)
+        pool.submit(int)   # start the worker (and its imports) now, not at the first model
+        return pool
+    except (OSError, ValueError, NotImplementedError):
+        return ThreadPoolExecutor(max_workers=1, thread_name_prefix="model_gate")
+
+
 class ModelInputs:
     """Subscribes temperatures and systematic/<axis>; holds the current ErrorModel.
 
@@ -52,15 +94,14 @@ class ModelInputs:
             node.create_subscription(SystematicProfile, f"systematic/{axis}",
                                      health.guard(f"systematic/{axis}", self._on_profile),
                                      RESULT_QOS)
-        self._pending_model = None   # (message, future of (model, problem))
+        self._pending_model = None   # (message, future of (parse error, gate problem))
+        self.model_refusals: list[str] = []
         self._queued_model = None    # a newer message while one is being gated
         self._pool = None
         if follow_topic:
-            from concurrent.futures import ThreadPoolExecutor
-
             from rclpy.clock import Clock, ClockType
 
-            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="model_gate")
+            self._pool = _gate_pool()
             node.create_subscription(ModelVersion, "model", health.guard("model", self._on_model),
                                      LATCHED_QOS)
             node.create_timer(0.02, self._poll_model, clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -97,19 +138,8 @@ class ModelInputs:
 
     def _submit(self, message: ModelVersion) -> None:
         if not self._older_than_live(message):
-            self._pending_model = (message, self._pool.submit(self._prepare, message.model_yaml))
-
-    def _prepare(self, text: str):
-        """(model, "") or (None, reason): parse and gate a version off the real-time path."""
-        try:
-            model = resolve_model(text)
-        except MtAccuracyError as exc:
-            return None, f"model refused, version {self.model.version} kept: {exc}"
-        try:
-            problem = self.gate(model) if self.gate is not None else ""
-        except Exception as exc:  # noqa: BLE001 - a model must never kill the node
-            problem = f"its corrections cannot be evaluated ({type(exc).__name__}: {exc})"
-        return model, problem
+            self._pending_model = (message, self._pool.submit(gate_model_text, message.model_yaml,
+                                                          self.gate))
 
     def _poll_model(self) -> None:
         """Settle a gated version (live or refused) once its worker is done, then gate
@@ -118,7 +148,17 @@ class ModelInputs:
             return
         message, future = self._pending_model
         self._pending_model = None
-        self._settle(message, *future.result())
+        try:
+            parse_error, problem = future.result()
+            model = None if parse_error else resolve_model(message.model_yaml)
+        except Exception as exc:  # noqa: BLE001 - a dead worker must not kill the node
+            parse_error, problem, model = "", f"its gate failed ({type(exc).__name__}: {exc})", None
+        if parse_error:
+            problem = f"model refused, version {self.model.version} kept: {parse_error}"
+        elif model is None:
+            problem = f"model version {message.version} refused before going live: " \
+                      f"{problem}; version {self.model.version} stays"
+        self._settle(message, model, problem)
         if self._queued_model is not None:
             queued, self._queued_model = self._queued_model, None
             self._submit(queued)
@@ -126,10 +166,13 @@ class ModelInputs:
     def _settle(self, message: ModelVersion, model: ErrorModel | None, problem: str) -> None:
         if model is None:
             self.health.refused("model", problem)
+            self.model_refusals.append(problem)
             return
         if problem:
-            self.health.refused("model", f"model version {message.version} refused before going "
-                                f"live: {problem}; version {self.model.version} stays")
+            problem = (f"model version {message.version} refused before going live: {problem}; "
+                       f"version {self.model.version} stays")
+            self.health.refused("model", problem)
+            self.model_refusals.append(problem)
             return
         if self._older_than_live(message):   # the live one moved on while this was gated
             return

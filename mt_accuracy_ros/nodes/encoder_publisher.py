@@ -69,8 +69,8 @@ class EncoderPublisher(Node):
         self.declare_parameter("rate_factor", 1.0, float_descriptor(
             "Sim seconds per wall second", 0.01, 1000.0, read_only=True))
         self.declare_parameter("start_stamp_ns", 0, int_descriptor(
-            "Stamp of sample 0 [ns] (0: now); give several nodes the same one", 0, 2**63 - 1,
-            read_only=True))
+            "Stamp of sample 0 [ns] (0: now; -1: hold the stream until it is set); give "
+            "several nodes the same one", -1, 2**63 - 1))
         self.declare_parameter("min_subscribers", 0, int_descriptor(
             "Hold the stream until this many subscriptions match 'scales'", 0, 100,
             read_only=True))
@@ -136,12 +136,17 @@ class EncoderPublisher(Node):
 
     def _validate(self, parameters):
         for parameter in parameters:
+            if parameter.name == "start_stamp_ns" and self._scenario_clock is not None and \
+                    parameter.value != self.get_parameter("start_stamp_ns").value:
+                return refuse("start_stamp_ns cannot change once the stream has started")
             if parameter.name == "reference_period_s" and not (
                     np.isfinite(parameter.value) and parameter.value >= 0):
                 return refuse("reference_period_s must be finite and >= 0 [s]")
         return accept()
 
     def _start(self) -> bool:
+        if int(self.get_parameter("start_stamp_ns").value) < 0:
+            return False   # held until a start stamp is set (the demo sets it when all are up)
         wanted = int(self.get_parameter("min_subscribers").value)
         if self._scales.get_subscription_count() < wanted:
             return False

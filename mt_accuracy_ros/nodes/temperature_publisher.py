@@ -33,7 +33,8 @@ class TemperaturePublisher(Node):
         self.declare_parameter("rate_factor", 1.0, float_descriptor(
             "Sim seconds per wall second", 0.01, 1000.0, read_only=True))
         self.declare_parameter("start_stamp_ns", 0, int_descriptor(
-            "Stamp of sim time 0 [ns] (0: now)", 0, 2**63 - 1, read_only=True))
+            "Stamp of sim time 0 [ns] (0: now; -1: hold the stream until it is set)",
+            -1, 2**63 - 1))
         self.declare_parameter("dead_sensors", [""], plain_descriptor(
             "Sensors that report NaN (fault injection)"))
         self.declare_parameter("frame_id", "", plain_descriptor("frame_id (empty: machine name)"))
@@ -48,17 +49,27 @@ class TemperaturePublisher(Node):
         self._values = result.temperatures_c
         self._variance = float(self.scenario.noise["thermocouple_k"]) ** 2
         self._next = 0
-        start = int(self.get_parameter("start_stamp_ns").value) or \
-            self.get_clock().now().nanoseconds
-        self._scenario_clock = ScenarioClock(start, float(self.get_parameter("rate_factor").value))
+        self._scenario_clock: ScenarioClock | None = None
+        self._set_clock(int(self.get_parameter("start_stamp_ns").value))
         self.finished = False
         self._released = False
         self._matched_at: float | None = None
         self._publisher = self.create_publisher(TemperatureArray, "temperatures", SENSOR_QOS)
         self.create_timer(0.05, self._tick)
 
+    def _set_clock(self, start_stamp_ns: int) -> None:
+        if start_stamp_ns >= 0:
+            start = start_stamp_ns or self.get_clock().now().nanoseconds
+            self._scenario_clock = ScenarioClock(start,
+                                                 float(self.get_parameter("rate_factor").value))
+
     def _validate(self, parameters):
         for parameter in parameters:
+            if parameter.name == "start_stamp_ns" and \
+                    parameter.value != self.get_parameter("start_stamp_ns").value:
+                if self._scenario_clock is not None:
+                    return refuse("start_stamp_ns cannot change once it is set")
+                self._set_clock(int(parameter.value))
             if parameter.name == "dead_sensors":
                 unknown = [s for s in parameter.value if s and s not in self._names]
                 if unknown:
@@ -68,6 +79,8 @@ class TemperaturePublisher(Node):
 
     def _tick(self) -> None:
         wanted = int(self.get_parameter("min_subscribers").value)
+        if self._scenario_clock is None:
+            return   # held until a start stamp is set
         if not self._released:
             if self._publisher.get_subscription_count() < wanted:
                 return
