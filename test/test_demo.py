@@ -38,6 +38,15 @@ def test_a_failed_end_state_says_whether_the_host_or_the_model_failed():
     assert "5231 of 9000 corrections arrived too late to apply (58 %)" in late
     model, = demo_failures(dict(base, compensation_stale=400), outside)
     assert model == "the end state is outside the instrument's band (see the table above)"
+    late_model, = demo_failures(dict(base, compensation_stale=0, added_version_live_at_s=84.0,
+                                     run_data_s=90.0), outside)
+    assert "reached the machine at 84 s of 90 s: the monitor's diagnosis fell behind" in late_model
+    never_live, = demo_failures(dict(base, compensation_stale=0, added_version_live_at_s=None,
+                                     run_data_s=90.0), outside)
+    assert "only after the run" in never_live
+    in_time, = demo_failures(dict(base, compensation_stale=0, added_version_live_at_s=41.0,
+                                  run_data_s=90.0), outside)
+    assert "fell behind" not in in_time
     never, _ = demo_failures(dict(base, compensation_applied=0, compensation_stale=9000), outside)
     assert never.startswith("the loop never closed")
 
