@@ -596,13 +596,13 @@ def _score(candidate: Candidate) -> EffectScore:
 
 
 #: Scheduling niceness of the monitor's process (environment ``MT_ACCURACY_MONITOR_NICE``;
-#: set before rclpy starts, so every thread of the process inherits it). The real
-#: time path (encoder -> estimator -> broadcaster -> CNC) comes first: at normal
-#: priority the diagnosis' seconds of CPU per check made 300-1,600 of the demo's 9,000
-#: corrections stale on this 2-core machine; niced, none (docs/closed_loop.md). The
-#: price, on a loaded host: checks come late, and the demo says so when that is why
-#: its end state missed the band. 0 gives the monitor normal priority.
-MONITOR_NICENESS = 10
+#: set before rclpy starts, so every thread of the process inherits it). 0 by default,
+#: as measured on this 2-core machine (docs/closed_loop.md): idle, a niced monitor
+#: changed nothing (0-250 stale corrections of 9,000 either way, once the machine's
+#: clock waits for every node); with two CPU burners it made no fewer stale but its
+#: checks came too late for the user to act within the run. For a cell where
+#: the real-time path must win at any price, set it (e.g. 10).
+MONITOR_NICENESS = 0
 
 
 def lower_priority(default: int = MONITOR_NICENESS) -> int:
