@@ -164,17 +164,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     orientations: list[tuple] = []  # (measured (3,), applied (3,), uncertainty) [rad]
 
     def on_reference(m: ReferenceMeasurement) -> None:
-        references.append(((stamp_to_nanoseconds(m.header.stamp) - start_ns) / 1e9,
-                           np.array([m.error.x, m.error.y, m.error.z]),
-                           np.array([m.applied_correction.x, m.applied_correction.y,
-                                     m.applied_correction.z]),
-                           int(m.compensation_model_version), float(m.uncertainty)))
-        if m.orientation_measured:
-            orientations.append((
-                np.array([m.orientation_error.x, m.orientation_error.y, m.orientation_error.z]),
-                np.array([m.applied_orientation_correction.x, m.applied_orientation_correction.y,
-                          m.applied_orientation_correction.z]),
-                float(m.orientation_uncertainty)))
+        _take_reference(m, start_ns, references, orientations)
 
     listener.create_subscription(ReferenceMeasurement, "reference/tcp_error", on_reference,
                                  RESULT_QOS)
@@ -327,7 +317,6 @@ def _recorded_references(bag: Path, start_ns: int) -> tuple[list[tuple], list[tu
     [s], measured (3,), applied (3,), version, uncertainty) and, where the tool's
     direction was measured, (measured (3,), applied (3,), uncertainty) [rad]."""
     from .io.bag_reader import decode, read_messages
-    from .nodes._common import stamp_to_nanoseconds
 
     references, orientations = [], []
     try:
@@ -335,18 +324,25 @@ def _recorded_references(bag: Path, start_ns: int) -> tuple[list[tuple], list[tu
     except Exception:  # noqa: BLE001 - no readable bag: the listener's readings stand
         return [], []
     for m in messages:
-        references.append(((stamp_to_nanoseconds(m.header.stamp) - start_ns) / 1e9,
-                           np.array([m.error.x, m.error.y, m.error.z]),
-                           np.array([m.applied_correction.x, m.applied_correction.y,
-                                     m.applied_correction.z]),
-                           int(m.compensation_model_version), float(m.uncertainty)))
-        if m.orientation_measured:
-            orientations.append((
-                np.array([m.orientation_error.x, m.orientation_error.y, m.orientation_error.z]),
-                np.array([m.applied_orientation_correction.x, m.applied_orientation_correction.y,
-                          m.applied_orientation_correction.z]),
-                float(m.orientation_uncertainty)))
+        _take_reference(m, start_ns, references, orientations)
     return references, orientations
+
+
+def _take_reference(m, start_ns: int, references: list, orientations: list) -> None:
+    """Append a ReferenceMeasurement as the demo holds it (see _recorded_references)."""
+    from .nodes._common import stamp_to_nanoseconds
+
+    references.append(((stamp_to_nanoseconds(m.header.stamp) - start_ns) / 1e9,
+                       np.array([m.error.x, m.error.y, m.error.z]),
+                       np.array([m.applied_correction.x, m.applied_correction.y,
+                                 m.applied_correction.z]),
+                       int(m.compensation_model_version), float(m.uncertainty)))
+    if m.orientation_measured:
+        orientations.append((
+            np.array([m.orientation_error.x, m.orientation_error.y, m.orientation_error.z]),
+            np.array([m.applied_orientation_correction.x, m.applied_orientation_correction.y,
+                      m.applied_orientation_correction.z]),
+            float(m.orientation_uncertainty)))
 
 
 def demo_failures(summary: dict, story: dict) -> list[str]:
@@ -367,13 +363,12 @@ def demo_failures(summary: dict, story: dict) -> list[str]:
         stale = int(summary.get("compensation_stale") or 0)
         live_at, run_s = summary.get("added_version_live_at_s", -1), summary.get("run_data_s")
         if run_s and (live_at is None or live_at > run_s - LATE_MODEL_S):
-            # The monitor runs at a lower priority than the real-time path: on a loaded
-            # host its diagnosis falls behind the data, and the model the user added
-            # arrives after the run's last phase.
+            # On a loaded host the diagnosis and the gates fall behind the data, and the
+            # model the user added arrives after the run's last phase.
             why += ("; the model the user added reached the machine "
                     + ("only after the run" if live_at is None else f"at {live_at:.0f} s of "
-                       f"{run_s:.0f} s") + ": the monitor's diagnosis fell behind the data (it "
-                    "yields the CPU to the real-time path; a loaded machine?)")
+                       f"{run_s:.0f} s") + ": the monitor's diagnosis or the gates fell behind "
+                    "the data (a loaded machine?)")
         if messages and stale > 0.1 * messages:
             # The machine then runs on corrections held from seconds before: the
             # host, not the model, is what failed.

@@ -25,30 +25,22 @@ def gate_model_text(text: str, gate) -> tuple[str, str]:
         return "", f"its corrections cannot be evaluated ({type(exc).__name__}: {exc})"
 
 
-#: Niceness of the gate's worker process: a model change may wait, the real-time path not.
-GATE_NICENESS = 10
-
-
-def _lower_worker_priority() -> None:
-    import os
-
-    try:
-        os.nice(GATE_NICENESS)
-    except OSError:
-        pass
+def _warm_worker() -> None:
     from ..core.compensation import limits  # noqa: F401 - imported once, at start
 
 
 def _gate_pool():
     """One worker *process* for the gate. Evaluating a model over the whole travel takes
     ~0.7 s of pure Python and numpy; in a thread of the broadcaster it held the GIL
-    against the executor and made corrections late while a new version was gated."""
+    against the executor and made corrections late while a new version was gated.
+    Not niced: with two CPU burners a niced gate took so long that the user's model
+    reached the machine after the run (docs/closed_loop.md)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
     try:
         pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
-                                   initializer=_lower_worker_priority)
+                                   initializer=_warm_worker)
         pool.submit(int)   # start the worker (and its imports) now, not at the first model
         return pool
     except (OSError, ValueError, NotImplementedError):
