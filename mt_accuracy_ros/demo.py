@@ -286,13 +286,6 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
                          references, losses, story, delivery, scenario,
                          [text for _, text in diagnostics_text])
-    # When the user's model reached the machine (data time of the first reading it
-    # compensated): a monitor that fell behind the data makes it late.
-    if actions and actions[0]["accepted"]:
-        summary["added_version_live_at_s"] = next(
-            (round(t, 1) for t, _, _, version, _ in references
-             if t > actions[0]["time_s"] and version > 1), None)
-        summary["run_data_s"] = float(chosen.duration_s)
     # The headline first: what the instrument measured on the compensated machine.
     for line in story["lines"]:
         print(line)
@@ -570,6 +563,15 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "model_alarms": list(model_alarms or []),
         "tool_direction": story.get("orientation"),
     }
+    if actions and actions[0]["accepted"]:
+        # When the user's model reached the machine (data time of the first reading it
+        # compensated): a monitor or gate that fell behind the data makes it late.
+        summary["added_version_live_at_s"] = next(
+            (round(t, 1) for t, _, _, version, _ in references
+             if t > actions[0]["time_s"] and version > 1), None)
+        from .nodes._scenario import resolve_scenario
+
+        summary["run_data_s"] = float(resolve_scenario(scenario).duration_s)
     report = _write_report(out, checks, actions, alarms, losses, story, scenario)
     summary["report"] = report.as_dict()
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
