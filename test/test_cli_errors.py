@@ -87,3 +87,12 @@ def test_playing_nothing_is_an_error():
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 2
     assert "nothing to play" in result.stderr and "/no_such_topic" in result.stderr
+
+
+@pytest.mark.parametrize("argv", [["demo", "--rat", "2"], ["check", "x.csv", "--targ", "e_um"]])
+def test_abbreviated_options_are_refused(argv, capsys):
+    # `--rat 2` once ran the demo at rate 2 without a word (issue 26): no guessing.
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    assert f"unrecognized arguments: {argv[-2]}" in capsys.readouterr().err
