@@ -270,7 +270,12 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     losses = delivery_losses(delivery)
     # The headline is computed from the record - the bag the report is made from - so
     # that the summary and the report tell one story, reading for reading.
-    recorded = _recorded_references(bag, start_ns)
+    try:
+        recorded = _recorded_references(bag, start_ns)
+    except Exception as exc:  # noqa: BLE001 - an unreadable bag: the listener's readings stand
+        losses.append(f"the bag's reference readings could not be read ({type(exc).__name__}: "
+                      f"{exc}): the headline is this listener's")
+        recorded = ([], [])
     if recorded[0]:
         if len(recorded[0]) != len(references):
             losses.append(f"the bag holds {len(recorded[0])} reference readings, this listener "
@@ -312,11 +317,7 @@ def _recorded_references(bag: Path, start_ns: int) -> tuple[list[tuple], list[tu
     from .io.bag_reader import decode, read_messages
 
     references, orientations = [], []
-    try:
-        messages = [decode(m) for m in read_messages(bag, ["/reference/tcp_error"])]
-    except Exception:  # noqa: BLE001 - no readable bag: the listener's readings stand
-        return [], []
-    for m in messages:
+    for m in (decode(m) for m in read_messages(bag, ["/reference/tcp_error"])):
         _take_reference(m, start_ns, references, orientations)
     return references, orientations
 

@@ -60,7 +60,7 @@ class ModelInputs:
     version below the live one is refused (counted, on /diagnostics) and the
     live model stays. With ``gate`` (model -> reason or ""), a version the gate
     refuses is refused the same way: the last good version stays live. A version
-    from the topic is parsed and gated in a worker thread (the gate evaluates the
+    from the topic is parsed and gated in a worker process (the gate evaluates the
     model over the whole travel, a few hundred ms) and made live when it passes,
     so that a model change never holds up the real-time path: until then the live
     version keeps compensating.
@@ -87,7 +87,6 @@ class ModelInputs:
                                      health.guard(f"systematic/{axis}", self._on_profile),
                                      RESULT_QOS)
         self._pending_model = None   # (message, future of (parse error, gate problem))
-        self.model_refusals: list[str] = []
         self._queued_model = None    # a newer message while one is being gated
         self._pool = None
         if follow_topic:
@@ -142,32 +141,22 @@ class ModelInputs:
         self._pending_model = None
         try:
             parse_error, problem = future.result()
-            model = None if parse_error else resolve_model(message.model_yaml)
+            model = None if parse_error or problem else resolve_model(message.model_yaml)
         except Exception as exc:  # noqa: BLE001 - a dead worker must not kill the node
-            parse_error, problem, model = "", f"its gate failed ({type(exc).__name__}: {exc})", None
+            parse_error, problem = "", f"its gate failed ({type(exc).__name__}: {exc})"
         if parse_error:
-            problem = f"model refused, version {self.model.version} kept: {parse_error}"
-        elif model is None:
-            problem = f"model version {message.version} refused before going live: " \
-                      f"{problem}; version {self.model.version} stays"
-        self._settle(message, model, problem)
+            self.health.refused("model", f"model refused, version {self.model.version} kept: "
+                                f"{parse_error}")
+        elif problem:
+            self.health.refused("model", f"model version {message.version} refused before going "
+                                f"live: {problem}; version {self.model.version} stays")
+        elif not self._older_than_live(message):   # the live one may have moved on meanwhile
+            self._make_live(message, model)
         if self._queued_model is not None:
             queued, self._queued_model = self._queued_model, None
             self._submit(queued)
 
-    def _settle(self, message: ModelVersion, model: ErrorModel | None, problem: str) -> None:
-        if model is None:
-            self.health.refused("model", problem)
-            self.model_refusals.append(problem)
-            return
-        if problem:
-            problem = (f"model version {message.version} refused before going live: {problem}; "
-                       f"version {self.model.version} stays")
-            self.health.refused("model", problem)
-            self.model_refusals.append(problem)
-            return
-        if self._older_than_live(message):   # the live one moved on while this was gated
-            return
+    def _make_live(self, message: ModelVersion, model: ErrorModel) -> None:
         self.health.processed("model")
         model.version = int(message.version)
         if model.version > self.model.version or \

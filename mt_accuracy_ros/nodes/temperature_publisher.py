@@ -49,27 +49,18 @@ class TemperaturePublisher(Node):
         self._values = result.temperatures_c
         self._variance = float(self.scenario.noise["thermocouple_k"]) ** 2
         self._next = 0
-        self._scenario_clock: ScenarioClock | None = None
-        self._set_clock(int(self.get_parameter("start_stamp_ns").value))
+        self._scenario_clock: ScenarioClock | None = None   # set at the first tick not held
         self.finished = False
         self._released = False
         self._matched_at: float | None = None
         self._publisher = self.create_publisher(TemperatureArray, "temperatures", SENSOR_QOS)
         self.create_timer(0.05, self._tick)
 
-    def _set_clock(self, start_stamp_ns: int) -> None:
-        if start_stamp_ns >= 0:
-            start = start_stamp_ns or self.get_clock().now().nanoseconds
-            self._scenario_clock = ScenarioClock(start,
-                                                 float(self.get_parameter("rate_factor").value))
-
     def _validate(self, parameters):
         for parameter in parameters:
-            if parameter.name == "start_stamp_ns" and \
+            if parameter.name == "start_stamp_ns" and self._scenario_clock is not None and \
                     parameter.value != self.get_parameter("start_stamp_ns").value:
-                if self._scenario_clock is not None:
-                    return refuse("start_stamp_ns cannot change once it is set")
-                self._set_clock(int(parameter.value))
+                return refuse("start_stamp_ns cannot change once the stream has started")
             if parameter.name == "dead_sensors":
                 unknown = [s for s in parameter.value if s and s not in self._names]
                 if unknown:
@@ -80,7 +71,11 @@ class TemperaturePublisher(Node):
     def _tick(self) -> None:
         wanted = int(self.get_parameter("min_subscribers").value)
         if self._scenario_clock is None:
-            return   # held until a start stamp is set
+            start = int(self.get_parameter("start_stamp_ns").value)
+            if start < 0:
+                return   # held until a start stamp is set (the demo sets it when all are up)
+            self._scenario_clock = ScenarioClock(start or self.get_clock().now().nanoseconds,
+                                                 float(self.get_parameter("rate_factor").value))
         if not self._released:
             if self._publisher.get_subscription_count() < wanted:
                 return

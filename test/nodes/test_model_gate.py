@@ -123,3 +123,24 @@ def test_the_gate_refuses_and_a_worse_version_is_rolled_back(rclpy_context, tmp_
     assert rms(worse_version)[0] > 5e-6
     assert np.all(rms(rollback.version) < 1.5e-6), rms(rollback.version)
     assert all(r.compensation_model_version != 7 for r in readings)
+
+
+def test_the_monitor_niceness_knob_lowers_only_its_own_process():
+    # MT_ACCURACY_MONITOR_NICE (docs/closed_loop.md): applied by the monitor's main()
+    # to its own process before rclpy starts; 0 by default; a bad value is the default.
+    import os
+    import subprocess
+    import sys
+
+    probe = ("import os; from mt_accuracy_ros.nodes.model_monitor import lower_priority; "
+             "before = os.nice(0); applied = lower_priority(); "
+             "print(before, applied, os.nice(0) - before)")
+    for value, increment in (("3", 3), ("0", 0), ("three", 0), (None, 0)):
+        env = {k: v for k, v in os.environ.items() if k != "MT_ACCURACY_MONITOR_NICE"}
+        if value is not None:
+            env["MT_ACCURACY_MONITOR_NICE"] = value
+        before, applied, lowered = map(int, subprocess.run(
+            [sys.executable, "-c", probe], env=env, capture_output=True, text=True,
+            check=True).stdout.split())
+        assert applied == increment, value
+        assert lowered == min(increment, 19 - before), value   # 19: the kernel's floor
