@@ -137,6 +137,10 @@ class EffectFamily:
     def variants(self, ctx: Context) -> list[str]:
         raise NotImplementedError
 
+    #: The key of a setting that is a continuous quantity searched on a grid (a period, a
+    #: time constant): the workbench refines it between grid points; None if none is.
+    continuous_setting: str | None = None
+
     def settings(self, ctx: Context, variant: str) -> list[dict[str, Any]]:
         return [{}]
 

@@ -35,10 +35,10 @@ import numpy as np
 from numpy.polynomial import legendre
 
 from .base import Context, EffectFamily, along
+from .spectral import frequency_grid, grid_periodogram
 
 #: ISO 230-1 component letters of a linear axis' errors, by kind.
 _KIND_COMPONENTS = {"positioning": "self", "straightness": "XYZ", "angular": "ABC"}
-_PERIOD_RANGE_M = (0.002, 0.05)
 
 
 def _legendre_columns(u, first: int, last: int):
@@ -68,6 +68,7 @@ class ComponentError(EffectFamily):
     def __init__(self, kind: str, periodic: bool) -> None:
         self.kind = kind
         self.periodic = periodic
+        self.continuous_setting = "period_m" if periodic else None
         # A rotation acting through a lever is a more elaborate hypothesis than a
         # translation: when the data cannot tell them apart (a constant arm), the
         # translation is named.
@@ -86,9 +87,7 @@ class ComponentError(EffectFamily):
         if self.periodic:
             low, high = ctx.machine.axes[variant[2]].stroke
             # Frequencies a quarter cycle apart over the stroke: no peak falls between.
-            step = 1.0 / (4.0 * (high - low))
-            frequencies = np.arange(1.0 / _PERIOD_RANGE_M[1], 1.0 / _PERIOD_RANGE_M[0], step)
-            return [{"period_m": float(1.0 / f)} for f in frequencies]
+            return [{"period_m": float(1.0 / f)} for f in frequency_grid(high - low)]
         first = 2 if self.kind == "straightness" else 1
         return [{"order": k} for k in range(first, first + 6)]
 
@@ -127,18 +126,11 @@ class ComponentError(EffectFamily):
         weight = np.where(train, np.sum(np.where(mask, jac ** 2, 0.0), axis=1), 0.0)
         target = np.where(train, np.sum(np.where(mask, jac * residual, 0.0), axis=1), 0.0)
         q = ctx.variables.positions[variant[2]]
-        periods = np.array([s["period_m"] for s in settings])
-        # Coarse pass on every second period of the grid, then the grid around the best.
-        key = ("periodic_basis", variant[2], len(settings))
-        if key not in ctx.cache:
-            ctx.cache[key] = periodic_basis(q, periods[::2])
+        frequencies = np.array([1.0 / s["period_m"] for s in settings])
         # The period is chosen by the fundamental alone: with its harmonic too, readings
         # taken on the fly (positions on a near-lattice) let aliases fit as well.
-        coarse, _ = periodogram(None, target, weight, None, basis=ctx.cache[key][:, :, :3])
-        centre = 2 * int(np.argmax(coarse))
-        near = np.arange(max(0, centre - 2), min(periods.size, centre + 3))
-        fine, _ = periodogram(q, target, weight, periods[near], harmonics=1)
-        return settings[int(near[np.argmax(fine)])]
+        explained, _ = grid_periodogram(q, target, weight, frequencies)
+        return settings[int(np.argmax(explained))]
 
     def explanation(self, variant: str, setting: dict) -> str:
         axis = variant[2]
@@ -156,39 +148,6 @@ class ComponentError(EffectFamily):
         if self.periodic:
             return f"period {setting['period_m'] * 1e3:.3f} mm"
         return f"order {setting['order']}"
-
-
-def periodic_basis(q, periods):
-    """(P, N, 5): 1, cos, sin of 2 pi q / lambda and of twice that, for each period."""
-    phase = 2.0 * np.pi * np.asarray(q, float)[None, :] / np.asarray(periods, float)[:, None]
-    cos, sin = np.cos(phase), np.sin(phase)
-    return np.stack([np.ones_like(phase), cos, sin, 2.0 * cos * cos - 1.0, 2.0 * sin * cos],
-                    axis=2)
-
-
-def periodogram(q, target, weight, periods, *, basis=None, harmonics: int = 2):
-    """Weighted least-squares periodogram (Lomb-Scargle with an offset, 1 or 2 harmonics).
-
-    For each period lambda fits target ~ w (c0 + sum_h a_h cos + b_h sin)(2 pi h q / lambda)
-    in the weighted sense (target = J . r, weight = |J|^2 per reading) and returns
-    (explained sum of squares beyond the offset (P,), amplitude of the fundamental (P,)).
-    ``basis`` = :func:`periodic_basis` (q, periods), or its first 1 + 2 h columns, may be
-    passed precomputed.
-    """
-    if basis is None:
-        basis = periodic_basis(q, periods)[:, :, :1 + 2 * harmonics]
-    columns = basis.shape[2]
-    weighted = np.swapaxes(basis * np.asarray(weight, float)[None, :, None], 1, 2)  # (P, C, N)
-    normal = weighted @ basis
-    # A degenerate period (the axis barely moved) must not be singular: a ridge far below
-    # any real signal's normal-equation scale.
-    normal += (1e-12 * np.trace(normal, axis1=1, axis2=2)[:, None, None] + 1e-300) * \
-        np.eye(columns)
-    rhs = np.swapaxes(basis, 1, 2) @ np.asarray(target, float)                      # (P, 5)
-    coefficients = np.linalg.solve(normal, rhs[:, :, None])[:, :, 0]
-    explained = np.einsum("pi,pi->p", coefficients, rhs)
-    explained -= (rhs[:, 0] ** 2) / max(float(np.sum(weight)), 1e-300)  # offset alone
-    return explained, np.hypot(coefficients[:, 1], coefficients[:, 2])
 
 
 class Squareness(EffectFamily):

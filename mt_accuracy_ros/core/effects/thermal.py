@@ -53,6 +53,8 @@ class _SearchedTimeConstant:
     extrapolates to millimetres.
     """
 
+    continuous_setting = "tau_s"
+
     def settings(self, ctx, variant):
         time_s = ctx.variables.time_s
         if time_s is None or np.size(time_s) < 2:

@@ -72,11 +72,24 @@ def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
     decay = np.exp(-dt / tau_s)
     with np.errstate(divide="ignore", invalid="ignore"):
         slope_tau = np.where(dt > 0, np.diff(u) / np.where(dt > 0, dt, 1.0), 0.0) * tau_s
-    y = np.empty_like(u)
-    y[0] = u[0] if initial is None else float(initial)
-    for k in range(u.size - 1):
-        y[k + 1] = u[k + 1] - slope_tau[k] + (y[k] - u[k] + slope_tau[k]) * decay[k]
-    return y
+    start = u[0] if initial is None else float(initial)
+    # The lag e = y - u obeys e_{k+1} = decay_k e_k + slope_tau_k (decay_k - 1), solved in
+    # closed form over stretches whose total decay stays above e^-500 (no underflow):
+    # e_n = P_n (e_s + sum_j b_j / P_{j+1}), P the running product of the decays.
+    gain = slope_tau * np.expm1(-dt / tau_s)
+    log_product = np.concatenate(([0.0], np.cumsum(-dt / tau_s)))
+    lag = np.empty_like(u)
+    lag[0] = start - u[0]
+    s = 0
+    while s < u.size - 1:
+        end = max(s + 1, int(np.searchsorted(-log_product, -log_product[s] + 500.0,
+                                             side="right")) - 1)
+        end = min(end, u.size - 1)
+        relative = log_product[s:end + 1] - log_product[s]          # log P_n / P_s
+        inflow = np.cumsum(gain[s:end] * np.exp(-relative[1:]))
+        lag[s + 1:end + 1] = np.exp(relative[1:]) * (lag[s] + inflow)
+        s = end
+    return u + lag
 
 
 @dataclass

@@ -314,32 +314,64 @@ def cross_validate_k(positions: ArrayLike, values: ArrayLike, k_lim: int = 100,
     k_lim = int(k_lim)
     if k_lim < 1:
         raise ParameterError(f"k_lim must be >= 1, got {k_lim}")
-    fold_rmse = np.empty((n_folds, k_lim))
-    for fold in range(n_folds):
-        held_out = fold_of == fold
-        if not held_out.any():
-            raise InsufficientDataError(f"fold {fold} holds no sample")
-        training = SortedTraining.build(x[~held_out], y[~held_out])
-        if len(training) < k_lim:
-            raise InsufficientDataError(
-                f"fold {fold}: k_lim = {k_lim} exceeds its {len(training)} training points")
-        # Sorted queries make every gather below walk memory in order.
-        query_order = np.argsort(x[held_out], kind="stable")
-        queries = x[held_out][query_order]
-        truth = y[held_out][query_order]
-        squared = np.empty(k_lim)
-
-        def score(step, running, _sq, _rank):
-            residual = running / step - truth
-            squared[step - 1] = residual @ residual
-
-        _grow_windows(training, queries, k_lim, score)
-        fold_rmse[fold] = np.sqrt(squared / truth.size)
+    fold_rmse = _fold_rmse(x, y, fold_of, n_folds, k_lim)
     rmse_by_k = fold_rmse.mean(axis=0)
     best = int(np.argmin(rmse_by_k))
     return CrossValidationResult(k=best + 1, cv_rmse=float(rmse_by_k[best]),
                                  k_values=np.arange(1, k_lim + 1), rmse_by_k=rmse_by_k,
                                  fold_rmse=fold_rmse, folds=fold_of)
+
+
+def _fold_rmse(x: NDArray[np.float64], y: NDArray[np.float64], fold_of: NDArray[np.intp],
+               n_folds: int, k_lim: int) -> NDArray[np.float64]:
+    """RMSE(k) of every fold, k = 1 .. k_lim: (n_folds, k_lim).
+
+    Every fold's windows grow in one pass: the folds' training sets are laid end to
+    end, each between -inf/+inf sentinels, so a query's window never leaves its own
+    fold's segment (a sentinel is never nearer than a training point). One stable
+    sort serves every fold: a stable-sorted array restricted to a subset is that
+    subset stable-sorted.
+    """
+    order = np.argsort(x, kind="stable")
+    sorted_fold = fold_of[order]
+    xs_parts, ys_parts, query_parts, truth_parts, starts, sizes = [], [], [], [], [], []
+    offset = 0
+    for fold in range(n_folds):
+        held_out = sorted_fold == fold
+        if not held_out.any():
+            raise InsufficientDataError(f"fold {fold} holds no sample")
+        training = order[~held_out]
+        if training.size < k_lim:
+            raise InsufficientDataError(
+                f"fold {fold}: k_lim = {k_lim} exceeds its {training.size} training points")
+        xs_parts += [[-np.inf], x[training], [np.inf]]
+        ys_parts += [[0.0], y[training], [0.0]]
+        # Held-out queries in sorted order: every gather below walks memory in order.
+        queries = x[order[held_out]]
+        query_parts.append(queries)
+        truth_parts.append(y[order[held_out]])
+        # Insertion point inside the segment, as a padded index of the left candidate.
+        starts.append(offset + np.searchsorted(x[training], queries, side="left"))
+        sizes.append(queries.size)
+        offset += training.size + 2
+    xs_pad = np.concatenate(xs_parts)
+    ys_pad = np.concatenate(ys_parts)
+    queries = np.concatenate(query_parts)
+    truth = np.concatenate(truth_parts)
+    left = np.concatenate(starts)      # pad index of the next left candidate
+    right = left + 1                   # pad index of the next right candidate
+    running = np.zeros(queries.size)
+    boundaries = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    squared = np.empty((n_folds, k_lim))
+    for k in range(1, k_lim + 1):
+        take_left = (queries - xs_pad[left]) <= (xs_pad[right] - queries)
+        admitted = np.where(take_left, left, right)
+        running += ys_pad[admitted]
+        left -= take_left
+        right += ~take_left
+        residual = running / k - truth
+        squared[:, k - 1] = np.add.reduceat(residual * residual, boundaries)
+    return np.sqrt(squared / np.asarray(sizes, float)[:, None])
 
 
 def rmse(predicted: ArrayLike, measured: ArrayLike) -> float:

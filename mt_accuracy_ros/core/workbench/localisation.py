@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..scales.knn import cross_validate_k
-from ..effects.geometric import periodogram
+from ..effects.spectral import frequency_grid, grid_periodogram
 from ..effects.variables import Variables
 
 COMPONENTS = "xyz"
@@ -262,9 +262,8 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
             span = float(np.ptp(q))
             if span <= 0:
                 continue
-            step = 1.0 / (4.0 * span)
-            periods = 1.0 / np.arange(20.0, 500.0, step)
-            explained, amplitude = periodogram(q, r, np.ones(r.size), periods, harmonics=1)
+            periods = 1.0 / frequency_grid(span)
+            explained, amplitude = grid_periodogram(q, r, np.ones(r.size), 1.0 / periods)
             best = int(np.argmax(explained))
             # The best of hundreds of periods explains much in-sample even of a smooth drift
             # (regular readings of a periodic program alias time into position); held-out

@@ -87,6 +87,63 @@ class Step:
     added: Scored | None
 
 
+#: Directions of a scaled normal matrix with eigenvalue below this fraction of its largest
+#: are dropped (minimum-norm solution, as ``lstsq`` gives): a Gram matrix's eigenvalues
+#: are accurate to ~1e-15 of the largest, so a kept direction is known to 0.1 %.
+NORMAL_RCOND = 1e-12
+
+
+def solve_normal(gram: NDArray[np.float64], rhs: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Minimum-norm least-squares coefficients from normal equations, batched.
+
+    Parameters
+    ----------
+    gram : ndarray, shape (..., p, p)
+        X'X (symmetric, positive semi-definite).
+    rhs : ndarray, shape (..., p)
+        X'y.
+
+    Returns
+    -------
+    ndarray, shape (..., p)
+        Columns are equilibrated first (a zero column gets coefficient 0), so the
+        cut-off does not depend on the columns' units.
+    """
+    diagonal = np.sqrt(np.clip(np.einsum("...ii->...i", gram), 0.0, None))
+    scale = np.divide(1.0, diagonal, out=np.zeros_like(diagonal), where=diagonal > 0)
+    scaled = gram * scale[..., :, None] * scale[..., None, :]
+    values, vectors = np.linalg.eigh(scaled)
+    keep = values > NORMAL_RCOND * np.maximum(values[..., -1:], 1e-300)
+    inverse = np.divide(1.0, values, out=np.zeros_like(values), where=keep)
+    projected = np.einsum("...ji,...j->...i", vectors, rhs * scale)
+    return scale * np.einsum("...ij,...j->...i", vectors, inverse * projected)
+
+
+def normal_inverse(gram: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(X'X)^-1 with the cut-off of :func:`solve_normal` (the coefficients' covariance per
+    unit variance); directions it drops get zero variance."""
+    diagonal = np.sqrt(np.clip(np.diag(gram), 0.0, None))
+    scale = np.divide(1.0, diagonal, out=np.zeros_like(diagonal), where=diagonal > 0)
+    values, vectors = np.linalg.eigh(gram * scale[:, None] * scale[None, :])
+    keep = values > NORMAL_RCOND * max(values[-1], 1e-300)
+    inverse = np.divide(1.0, values, out=np.zeros_like(values), where=keep)
+    return scale[:, None] * ((vectors * inverse) @ vectors.T) * scale[None, :]
+
+
+@dataclass
+class _BaseStatistics:
+    """The selected model's columns and per-fold products of [columns, y] with themselves."""
+
+    base: NDArray[np.float64]
+    products: NDArray[np.float64]   # (folds, q + 1, q + 1)
+    with_y: NDArray[np.float64]     # (rows, q + 1): [base, y]
+
+
+def _train(per_fold: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per-fold sums -> sums over every other fold (the training blocks)."""
+    return per_fold.sum(axis=0, keepdims=True) - per_fold
+
+
 def time_blocks(n: int, count: int) -> NDArray[np.intp]:
     """Block number 0..count-1 of each of n readings in time order (contiguous, near equal)."""
     sizes = np.full(count, n // count)
@@ -117,6 +174,9 @@ class Selector:
         self.fold_of_sample = time_blocks(n, folds)
         self.fold_of_row = self.fold_of_sample[self.sample_of_row]
         self.folds = folds
+        # Rows are in time order and folds contiguous: each fold is one slice of rows.
+        edges = np.searchsorted(self.fold_of_row, np.arange(folds + 1))
+        self.fold_bounds = [(int(edges[f]), int(edges[f + 1])) for f in range(folds)]
         self.block_of_sample = time_blocks(n, max(4, min(n_blocks, n // 6)))
         self.noise_sigma = float(noise_sigma)
         self.alpha, self.min_reduction, self.min_share = alpha, min_reduction, min_share
@@ -152,52 +212,152 @@ class Selector:
         return "; ".join(problems)
 
     # ------------------------------------------------------------ scoring
+    # Every fold's fit is solved from normal equations: the training blocks' products
+    # are the whole record's minus the held-out block's, and each block's products are
+    # computed once per design (the selected model's once per step). A candidate then
+    # costs one pass over its own columns instead of a refit per fold and setting.
     def _per_sample(self, squared_rows: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.bincount(self.sample_of_row, weights=squared_rows, minlength=self.n)
 
-    def out_of_fold(self, base: NDArray[np.float64], term: Term | None
+    def _block_products(self, left: NDArray[np.float64], right: NDArray[np.float64]
+                        ) -> NDArray[np.float64]:
+        """(folds, a, b): left_f^T right_f over each fold's rows."""
+        return np.stack([left[a:b].T @ right[a:b] for a, b in self.fold_bounds])
+
+    def base_statistics(self, base: NDArray[np.float64]) -> _BaseStatistics:
+        """The selected model's per-fold products (its columns with themselves and y)."""
+        with_y = np.column_stack([base, self.y])
+        products = self._block_products(with_y, with_y)
+        return _BaseStatistics(base, products, with_y)
+
+    def _candidate_products(self, stats: _BaseStatistics, design: NDArray[np.float64]):
+        """Training-block normal equations (folds, q+p, q+p), (folds, q+p) and y'y (folds,)
+        of base + ``design``."""
+        q = stats.base.shape[1]
+        with_base = self._block_products(design, stats.with_y)     # (folds, p, q + 1)
+        own = self._block_products(design, design)                 # (folds, p, p)
+        products = stats.products
+        size = q + design.shape[1]
+        gram = np.empty((self.folds, size, size))
+        gram[:, :q, :q] = products[:, :q, :q]
+        gram[:, q:, :q] = with_base[:, :, :q]
+        gram[:, q:, q:] = own
+        gram[:, :q, q:] = np.swapaxes(with_base[:, :, :q], 1, 2)
+        rhs = np.concatenate([products[:, :q, q], with_base[:, :, q]], axis=1)
+        return _train(gram), _train(rhs), _train(products[:, q, q])
+
+    def _held_out_errors(self, x: NDArray[np.float64], coefficients: NDArray[np.float64]
+                         ) -> NDArray[np.float64]:
+        squared = np.empty(self.y.size)
+        for fold, (a, b) in enumerate(self.fold_bounds):
+            squared[a:b] = (x[a:b] @ coefficients[fold] - self.y[a:b]) ** 2
+        return squared
+
+    def out_of_fold(self, stats: _BaseStatistics, term: Term | None
                     ) -> tuple[NDArray[np.float64], dict]:
         """Per-sample out-of-fold squared errors of base (+ term, setting chosen in-fold)."""
-        squared = np.zeros(self.y.size)
-        chosen = {}
-        for fold in range(self.folds):
-            test = self.fold_of_row == fold
-            train = ~test
-            setting = {}
-            if term is not None:
-                setting = self.choose_setting(term, base, train)
-                x = np.column_stack([base, self.design_rows(term, setting)])
-            else:
-                x = base
-            coefficients, *_ = np.linalg.lstsq(x[train], self.y[train], rcond=None)
-            error = x[test] @ coefficients - self.y[test]
-            squared[test] = error ** 2
-            chosen[fold] = setting
-        return self._per_sample(squared), chosen
+        if term is None:
+            q = stats.base.shape[1]
+            coefficients = solve_normal(_train(stats.products[:, :q, :q]),
+                                        _train(stats.products[:, :q, q]))
+            return self._per_sample(self._held_out_errors(stats.base, coefficients)), {}
+        settings = self.choose_settings(term, stats)
+        squared = np.empty(self.y.size)
+        q = stats.base.shape[1]
+        for key in {tuple(sorted(s.items())) for s in settings}:
+            setting = dict(key)
+            design = self.design_rows(term, setting)
+            gram, rhs, _ = self._candidate_products(stats, design)
+            coefficients = solve_normal(gram, rhs)
+            for fold, (a, b) in enumerate(self.fold_bounds):
+                if settings[fold] == setting:
+                    squared[a:b] = (stats.base[a:b] @ coefficients[fold, :q] +
+                                    design[a:b] @ coefficients[fold, q:] - self.y[a:b]) ** 2
+        return self._per_sample(squared), dict(enumerate(settings))
 
-    def choose_setting(self, term: Term, base: NDArray[np.float64], train: NDArray[np.bool_]
-                       ) -> dict:
+    def choose_settings(self, term: Term, stats: _BaseStatistics) -> list[dict]:
+        """The setting each fold's training blocks choose (preselection or BIC)."""
         if len(term.settings) == 1:
-            return term.settings[0]
-        train_samples = np.zeros(self.n, dtype=bool)
-        train_samples[self.sample_of_row[train]] = True
-        coefficients, *_ = np.linalg.lstsq(base[train], self.y[train], rcond=None)
-        after_base = np.zeros(self.mask.size)
-        after_base[self.rows] = self.y - base @ coefficients
-        picked = term.family.preselect(self.ctx, term.variant, term.settings,
-                                       after_base.reshape(-1, 3), self.mask, train_samples)
-        if picked is not None:
-            return picked
-        n = int(train.sum())
-        best, best_bic = term.settings[0], np.inf
+            return [term.settings[0]] * self.folds
+        q = stats.base.shape[1]
+        base_coefficients = solve_normal(_train(stats.products[:, :q, :q]),
+                                         _train(stats.products[:, :q, q]))
+        chosen: list[dict | None] = []
+        for fold, (a, b) in enumerate(self.fold_bounds):
+            train_samples = np.ones(self.n, dtype=bool)
+            train_samples[self.sample_of_row[a:b]] = False
+            after_base = np.zeros(self.mask.size)
+            after_base[self.rows] = self.y - stats.base @ base_coefficients[fold]
+            chosen.append(term.family.preselect(self.ctx, term.variant, term.settings,
+                                                after_base.reshape(-1, 3), self.mask,
+                                                train_samples))
+        if all(c is not None for c in chosen):
+            return chosen
+        counts = np.array([self.y.size - (b - a) for a, b in self.fold_bounds], float)
+        best_bic = np.full(self.folds, np.inf)
+        best = [term.settings[0]] * self.folds
         for setting in term.settings:
-            x = np.column_stack([base, self.design_rows(term, setting)])[train]
-            coefficients, *_ = np.linalg.lstsq(x, self.y[train], rcond=None)
-            rss = float(np.sum((x @ coefficients - self.y[train]) ** 2))
-            bic = n * np.log(max(rss, 1e-300) / n) + x.shape[1] * np.log(n)
-            if bic < best_bic:
-                best, best_bic = setting, bic
-        return best
+            design = self.design_rows(term, setting)
+            gram, rhs, yy = self._candidate_products(stats, design)
+            coefficients = solve_normal(gram, rhs)
+            rss = np.maximum(yy - np.einsum("fi,fi->f", coefficients, rhs), 1e-300)
+            bic = counts * np.log(rss / counts) + gram.shape[1] * np.log(counts)
+            for fold in np.flatnonzero(bic < best_bic):
+                best_bic[fold], best[fold] = bic[fold], setting
+        return [c if c is not None else b for c, b in zip(chosen, best)]
+
+    def choose_setting_all(self, term: Term, base: NDArray[np.float64]) -> dict:
+        """The setting all readings choose (preselection or BIC), refined continuously
+        where the family has a continuous setting (a period, a time constant)."""
+        setting = term.settings[0]
+        if len(term.settings) > 1:
+            after_base = np.zeros(self.mask.size)
+            coefficients, *_ = np.linalg.lstsq(base, self.y, rcond=None)
+            after_base[self.rows] = self.y - base @ coefficients
+            setting = term.family.preselect(self.ctx, term.variant, term.settings,
+                                            after_base.reshape(-1, 3), self.mask,
+                                            np.ones(self.n, dtype=bool))
+            if setting is None:
+                n = self.y.size
+                best_bic = np.inf
+                for candidate in term.settings:
+                    x = np.column_stack([base, self.design_rows(term, candidate)])
+                    coefficients, *_ = np.linalg.lstsq(x, self.y, rcond=None)
+                    rss = float(np.sum((x @ coefficients - self.y) ** 2))
+                    bic = n * np.log(max(rss, 1e-300) / n) + x.shape[1] * np.log(n)
+                    if bic < best_bic:
+                        setting, best_bic = candidate, bic
+        return self.refine_setting(term, base, setting)
+
+    def refine_setting(self, term: Term, base: NDArray[np.float64], setting: dict) -> dict:
+        """Polish a grid setting's continuous parameter between its grid neighbours by
+        minimising the residual sum of squares (variable projection: the linear
+        coefficients are solved for at each trial value; Brent's method)."""
+        key = term.family.continuous_setting
+        if key is None or len(term.settings) < 2 or key not in setting:
+            return setting
+        grid = np.array([s[key] for s in term.settings], dtype=float)
+        where = int(np.argmin(np.abs(grid - setting[key])))
+        low = grid[max(0, where - 1)]
+        high = grid[min(grid.size - 1, where + 1)]
+        low, high = min(low, high), max(low, high)
+        if not high > low:
+            return setting
+
+        def rss(value: float) -> float:
+            design = term.family.design(self.ctx, term.variant, dict(setting, **{key: value}))
+            x = np.column_stack([base, design.reshape(-1, design.shape[2])[self.rows]])
+            coefficients, *_ = np.linalg.lstsq(x, self.y, rcond=None)
+            return float(np.sum((x @ coefficients - self.y) ** 2))
+
+        from scipy.optimize import minimize_scalar
+
+        start = rss(setting[key])
+        result = minimize_scalar(rss, bounds=(low, high), method="bounded",
+                                 options={"xatol": (high - low) * 1e-6})
+        if not result.success or result.fun >= start:
+            return setting
+        return dict(setting, **{key: float(result.x)})
 
     def fit_full(self, terms: list[tuple[Term, dict]]):
         """Joint least-squares fit of the offsets and ``terms`` on every reading.
@@ -205,12 +365,12 @@ class Selector:
         Returns (coefficients per term, standard errors per term, residual rows)."""
         blocks = [self.design_rows(t, s) for t, s in terms]
         x = np.column_stack([self.offsets] + blocks)
-        coefficients, *_ = np.linalg.lstsq(x, self.y, rcond=None)
+        gram = x.T @ x
+        coefficients = solve_normal(gram, x.T @ self.y)
         residual = self.y - x @ coefficients
         dof = max(1, self.y.size - x.shape[1])
         sigma2 = float(residual @ residual) / dof
-        covariance = sigma2 * np.linalg.pinv(x.T @ x)
-        standard = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+        standard = np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
         out_c, out_s, start = [], [], 3
         for block in blocks:
             out_c.append(coefficients[start:start + block.shape[1]])
@@ -221,17 +381,18 @@ class Selector:
     def _baseline(self):
         """The current model's columns, out-of-fold squared errors per sample, the number
         of measured components, their mean square, and what of it stands above noise."""
-        base = self.base_columns()
-        base_sq, _ = self.out_of_fold(base, None)
+        stats = self.base_statistics(self.base_columns())
+        base_sq, _ = self.out_of_fold(stats, None)
         count = int(np.sum(self.mask))
         base_mse = float(base_sq.sum() / count)
-        return base, base_sq, count, base_mse, base_mse - self.noise_sigma ** 2
+        return stats, base_sq, count, base_mse, base_mse - self.noise_sigma ** 2
 
     def step(self, terms: list[Term]) -> Step:
-        base, base_sq, count, base_mse, excess = self._baseline()
+        stats, base_sq, count, base_mse, excess = self._baseline()
+        base = stats.base
         scored = []
         for term in terms:
-            per_sample, chosen = self.out_of_fold(base, term)
+            per_sample, chosen = self.out_of_fold(stats, term)
             mse = float(per_sample.sum() / count)
             p_value = self._block_test(base_sq, per_sample)
             share = (base_mse - mse) / excess if excess > 0 else (1.0 if mse < base_mse else 0.0)
@@ -264,9 +425,7 @@ class Selector:
         added = None
         if plausible:
             best = scored[0]
-            setting = best.setting
-            if len(best.term.settings) > 1:
-                setting = self.choose_setting(best.term, base, np.ones(self.y.size, dtype=bool))
+            setting = self.choose_setting_all(best.term, base)
             coefficients, standard, _ = self.fit_full(self.selected + [(best.term, setting)])
             best.setting = setting
             best.coefficients, best.standard_errors = coefficients[-1], standard[-1]
@@ -312,10 +471,10 @@ class Selector:
         error in its held-out blocks), try each of the ``beam`` best as a first term and
         the best second term after it; the pair must pass the block test against the
         current model (Bonferroni over every pair tried) and the second its own test."""
-        base, base_sq, count, base_mse, excess = self._baseline()
+        stats, base_sq, count, base_mse, excess = self._baseline()
         options = []
         for first in step.ranking[:beam]:
-            setting = self.choose_setting(first.term, base, np.ones(self.y.size, dtype=bool))
+            setting = self.choose_setting_all(first.term, stats.base)
             self.selected.append((first.term, setting))
             try:
                 inner = self.step([t for t in remaining if t.name != first.term.name])

@@ -30,6 +30,30 @@ def test_lag_matches_an_ode_solver_on_uneven_samples():
     np.testing.assert_allclose(y, solution.y[0], atol=1e-6)
 
 
+@pytest.mark.parametrize("tau_s", [5.0, 600.0, 1e6])
+def test_lag_in_closed_form_equals_the_step_by_step_recurrence(tau_s):
+    """The vectorised solution (stretches of bounded decay) against the documented
+    recurrence stepped one sample at a time - a long record whose total decay
+    underflows, repeated stamps, a time constant far beyond the record."""
+    rng = np.random.default_rng(5)
+    t = np.cumsum(rng.uniform(0, 30, 20000))
+    t[100:104] = t[100]
+    u = 20 + np.cumsum(rng.normal(0, 0.05, t.size))
+    # The reference in extended precision: with a long time constant the recurrence's
+    # own rounding (u - slope tau + ... of nearly cancelling terms) grows to 1e-9 K.
+    t_long, u_long = t.astype(np.longdouble), u.astype(np.longdouble)
+    dt = np.diff(t_long)
+    slope_tau = np.where(dt > 0, np.diff(u_long) / np.where(dt > 0, dt, 1), 0) * tau_s
+    decay = np.exp(-dt / tau_s)
+    expected = np.empty_like(u_long)
+    expected[0] = 18.0
+    for k in range(u.size - 1):
+        expected[k + 1] = u_long[k + 1] - slope_tau[k] + \
+            (expected[k] - u_long[k] + slope_tau[k]) * decay[k]
+    np.testing.assert_allclose(first_order_lag(t, u, tau_s, initial=18.0),
+                               expected.astype(float), rtol=0, atol=1e-10)
+
+
 def test_a_temperature_lag_starts_in_steady_state_not_from_zero():
     t = np.arange(0.0, 600.0, 10.0)
     u = np.full(t.size, 22.0)

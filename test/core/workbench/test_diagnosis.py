@@ -53,6 +53,20 @@ def test_a_ball_screw_pitch_error_is_named_and_located():
     assert np.std(after[:, 0]) < 1.2 * NOISE
 
 
+def test_more_readings_give_a_sharper_period_and_leave_only_noise():
+    """Issue 27: 10,000 readings of a 10.000 mm pitch - the period is refined between the
+    grid's points (9.99 mm on the grid alone) and nothing above the noise is left."""
+    obs, truth = _survey(_pitch, 2, n=10000)
+    diagnosis = diagnose(ErrorModel(MACHINE, {}), obs)
+    assert [c.name for c in diagnosis.selected] == ["positioning_periodic:EXX"]
+    assert diagnosis.selected[0].setting["period_m"] == pytest.approx(0.01, abs=2e-6)
+    assert not diagnosis.residual_above_noise
+    assert diagnosis.verdict() == ""
+    model = add_effects(ErrorModel(MACHINE, {}), diagnosis.selected, obs)
+    after = obs.measured_m - model.tcp_error(obs.positions)[0]
+    assert np.std(after[:, 0]) < 1.02 * NOISE
+
+
 def test_two_missing_effects_are_both_named_with_their_parameters():
     def truth(positions, t):
         out = _pitch(positions, t, 3e-6)

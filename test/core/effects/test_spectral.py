@@ -1,0 +1,79 @@
+"""The grid periodogram against the exact one, and the normal-equation solver against
+``lstsq``: two formulations of the same numbers."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.core.effects.spectral import (frequency_grid, grid_periodogram,
+                                                   periodogram)
+from mt_accuracy_ros.core.workbench.selection import solve_normal
+
+
+def _readings(seed: int, n: int = 3000):
+    rng = np.random.default_rng(seed)
+    # Readings also beyond the nominal travel: positions are taken modulo the grid's period.
+    q = rng.uniform(-0.1, 0.5, n)
+    weight = rng.uniform(0.5, 1.5, n)
+    weight[rng.random(n) < 0.2] = 0.0          # held-out readings: zero weight
+    target = weight * (3e-6 * np.sin(2 * np.pi * q / 0.01 + 0.3) + rng.normal(0, 1e-6, n))
+    return q, target, weight
+
+
+def test_frequency_grid_spans_2_to_50_mm_a_quarter_cycle_apart():
+    f = frequency_grid(0.4)
+    assert np.allclose(np.diff(f), 1.0 / 1.6)
+    assert 1.0 / f[0] <= 0.05 and 1.0 / f[-1] >= 0.002
+    assert 1.0 / f[0] > 0.05 - 0.0002 and 1.0 / f[-1] < 0.002 + 1e-6
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_grid_periodogram_equals_the_exact_one(seed):
+    q, target, weight = _readings(seed)
+    f = frequency_grid(0.39)
+    exact, exact_amplitude = periodogram(q, target, weight, 1.0 / f)
+    fast, fast_amplitude = grid_periodogram(q, target, weight, f)
+    assert np.max(np.abs(fast - exact)) < 1e-5 * exact.max()
+    assert np.max(np.abs(fast_amplitude - exact_amplitude)) < 1e-4 * exact_amplitude.max()
+    assert np.argmax(fast) == np.argmax(exact)
+    assert 1.0 / f[np.argmax(fast)] == pytest.approx(0.01, abs=1e-4)
+
+
+def test_exact_periodogram_is_the_least_squares_fit():
+    q, target, weight = _readings(3, 500)
+    period = 0.0123
+    explained, amplitude = periodogram(q, target, weight, [period])
+    phase = 2 * np.pi * q / period
+    basis = np.column_stack([np.ones_like(q), np.cos(phase), np.sin(phase)])
+    root = np.sqrt(weight)
+    keep = weight > 0
+    # target = w * model, fitted in the weighted sense: minimise sum (t/sqrt(w) - sqrt(w) b.c)^2
+    x = basis[keep] * root[keep, None]
+    y = target[keep] / root[keep]
+    c, *_ = np.linalg.lstsq(x, y, rcond=None)
+    total = float(c @ (x.T @ y)) - float(target.sum()) ** 2 / float(weight.sum())
+    assert explained[0] == pytest.approx(total, rel=1e-9)
+    assert amplitude[0] == pytest.approx(np.hypot(c[1], c[2]), rel=1e-9)
+
+
+def test_solve_normal_equals_lstsq_full_rank_and_rank_deficient():
+    rng = np.random.default_rng(4)
+    x = rng.normal(size=(200, 6)) * np.array([1e-6, 1.0, 1e3, 1.0, 1e-3, 1.0])
+    y = rng.normal(size=200)
+    expected, *_ = np.linalg.lstsq(x, y, rcond=None)
+    got = solve_normal(x.T @ x, x.T @ y)
+    assert np.allclose(x @ got, x @ expected, rtol=0, atol=1e-12 * np.abs(x @ expected).max())
+    # A zero column and a duplicated one: the same fit as lstsq's, and the minimum-norm
+    # coefficients (0 for the zero column, the duplicate's share split evenly) - where
+    # lstsq itself, at its default cut-off, splits by rounding.
+    x[:, 3] = 0.0
+    x[:, 5] = x[:, 1]
+    expected, *_ = np.linalg.lstsq(x, y, rcond=None)
+    got = solve_normal(x.T @ x, x.T @ y)
+    assert got[3] == 0.0
+    assert got[1] == pytest.approx(got[5], rel=1e-9)
+    assert got[1] + got[5] == pytest.approx(expected[1] + expected[5], rel=1e-6)
+    assert np.allclose(x @ got, x @ expected, rtol=0, atol=1e-9 * np.abs(x @ expected).max())
+    # Batched over a leading axis.
+    stacked = solve_normal(np.stack([x.T @ x] * 3), np.stack([x.T @ y] * 3))
+    assert np.allclose(stacked, got[None, :], rtol=1e-12, atol=0)
