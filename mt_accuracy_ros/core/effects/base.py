@@ -140,6 +140,9 @@ class EffectFamily:
     #: The key of a setting that is a continuous quantity searched on a grid (a period, a
     #: time constant): the workbench refines it between grid points; None if none is.
     continuous_setting: str | None = None
+    #: True when each setting's design is the first columns of the last setting's (a
+    #: polynomial order): the workbench then computes one design for all of them.
+    nested_settings: bool = False
 
     def settings(self, ctx: Context, variant: str) -> list[dict[str, Any]]:
         return [{}]
@@ -160,6 +163,14 @@ class EffectFamily:
         """Optionally choose a setting from the training readings' residual (fast path for
         long grids); None = let the workbench choose by BIC over every setting."""
         return None
+
+    def preselect_folds(self, ctx: Context, variant: str, settings: list[dict],
+                        residuals: NDArray[np.float64], mask: NDArray[np.bool_],
+                        trains: NDArray[np.bool_]) -> list[dict | None]:
+        """:meth:`preselect` for several training sets at once: ``residuals`` (F, N, 3),
+        ``trains`` (F, N); a family may do them together faster."""
+        return [self.preselect(ctx, variant, settings, r, mask, t)
+                for r, t in zip(residuals, trains)]
 
     def parameter_limits(self, ctx: Context, variant: str, setting: dict
                          ) -> dict[str, tuple[float, str]]:

@@ -69,6 +69,7 @@ class ComponentError(EffectFamily):
         self.kind = kind
         self.periodic = periodic
         self.continuous_setting = "period_m" if periodic else None
+        self.nested_settings = not periodic   # Legendre P_first .. P_order
         # A rotation acting through a lever is a more elaborate hypothesis than a
         # translation: when the data cannot tell them apart (a constant arm), the
         # translation is named.
@@ -119,18 +120,23 @@ class ComponentError(EffectFamily):
             np.asarray(coefficients, dtype=np.float64)
 
     def preselect(self, ctx, variant, settings, residual, mask, train):
+        return self.preselect_folds(ctx, variant, settings, residual[None], mask,
+                                    np.asarray(train)[None])[0]
+
+    def preselect_folds(self, ctx, variant, settings, residuals, mask, trains):
         if not self.periodic:
-            return None
+            return [None] * len(trains)
         jac = ctx.jacobian(variant)
-        # Readings outside the training folds get zero weight (no copy of the basis).
-        weight = np.where(train, np.sum(np.where(mask, jac ** 2, 0.0), axis=1), 0.0)
-        target = np.where(train, np.sum(np.where(mask, jac * residual, 0.0), axis=1), 0.0)
+        # Readings outside a training set get zero weight.
+        weight = np.sum(np.where(mask, jac ** 2, 0.0), axis=1)
+        weights = np.where(trains, weight[None, :], 0.0)
+        targets = np.where(trains, np.sum(np.where(mask, jac * residuals, 0.0), axis=2), 0.0)
         q = ctx.variables.positions[variant[2]]
         frequencies = np.array([1.0 / s["period_m"] for s in settings])
         # The period is chosen by the fundamental alone: with its harmonic too, readings
         # taken on the fly (positions on a near-lattice) let aliases fit as well.
-        explained, _ = grid_periodogram(q, target, weight, frequencies)
-        return settings[int(np.argmax(explained))]
+        explained, _ = grid_periodogram(q, targets.T, weights.T, frequencies)
+        return [settings[int(i)] for i in np.argmax(explained, axis=0)]
 
     def explanation(self, variant: str, setting: dict) -> str:
         axis = variant[2]

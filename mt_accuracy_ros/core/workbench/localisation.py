@@ -33,6 +33,9 @@ from ..effects.variables import Variables
 COMPONENTS = "xyz"
 #: Time constants of the lagged temperatures the residual is localised on [s].
 LOCALISATION_LAGS_S = (600.0, 1200.0, 2400.0)
+#: The kNN shares of a component are computed on at most this many of its readings,
+#: evenly spread in time (all of them below it).
+SHARE_READINGS = 4000
 
 
 @dataclass
@@ -245,14 +248,21 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
         rms[component] = float(np.sqrt(variance))
         if variance <= 0:
             continue
-        k_lim = max(1, min(60, int(r.size * (folds - 1) / folds) - 1))
+        # The shares are estimates with a resolution of ~1/sqrt(N); beyond a few thousand
+        # readings more of them sharpen nothing a reader sees, and cost O(N k) each.
+        subset, r_shares, variance_shares = slice(None), r, variance
+        if r.size > SHARE_READINGS:
+            subset = np.unique(np.linspace(0, r.size - 1, SHARE_READINGS).round().astype(np.intp))
+            r_shares = r[subset] - r[subset].mean()
+            variance_shares = float(np.mean(r_shares ** 2))
+        k_lim = max(1, min(60, int(r_shares.size * (folds - 1) / folds) - 1))
         for name, values in candidates.items():
-            v = values[rows]
+            v = values[rows][subset]
             # Ties (a stepped temperature, a direction) share their neighbours fairly: a
             # seeded jitter far below the variable's resolution breaks them.
             jitter = np.random.default_rng(0).uniform(-1e-9, 1e-9, v.size) * (np.ptp(v) or 1.0)
-            result = cross_validate_k(v + jitter, r, k_lim=k_lim, n_folds=folds, seed=0)
-            share = 1.0 - result.cv_rmse ** 2 / variance
+            result = cross_validate_k(v + jitter, r_shares, k_lim=k_lim, n_folds=folds, seed=0)
+            share = 1.0 - result.cv_rmse ** 2 / max(variance_shares, 1e-300)
             shares.append(Share(name, component, float(share),
                                 float(np.sqrt(max(share, 0.0) * variance))))
         for axis, values in variables.positions.items():

@@ -34,6 +34,7 @@ in ``bench/workbench_catalogue.py`` (docs/results.md).
 """
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -69,7 +70,8 @@ class Scored:
     adjusted_p: float
     share_of_excess: float
     setting: dict
-    per_sample_sq: NDArray[np.float64] = field(repr=False)
+    #: Held-out squared error per reading (kept for the best few candidates only).
+    per_sample_sq: NDArray[np.float64] | None = field(repr=False)
     significant: bool = False
     coefficients: NDArray[np.float64] | None = None
     standard_errors: NDArray[np.float64] | None = None
@@ -139,6 +141,33 @@ class _BaseStatistics:
     with_y: NDArray[np.float64]     # (rows, q + 1): [base, y]
 
 
+#: Designs kept for reuse (every candidate's columns at every setting would hold GBs for
+#: 1e5 readings); the least recently used beyond this are computed again when needed.
+DESIGN_CACHE_BYTES = 128 * 2 ** 20
+
+
+class _DesignCache:
+    """Least-recently-used arrays up to a byte budget."""
+
+    def __init__(self, max_bytes: int) -> None:
+        self.max_bytes = max_bytes
+        self._items: OrderedDict[tuple, NDArray[np.float64]] = OrderedDict()
+        self._bytes = 0
+
+    def get(self, key: tuple) -> NDArray[np.float64] | None:
+        item = self._items.get(key)
+        if item is not None:
+            self._items.move_to_end(key)
+        return item
+
+    def put(self, key: tuple, item: NDArray[np.float64]) -> None:
+        self._items[key] = item
+        self._bytes += item.nbytes
+        while self._bytes > self.max_bytes and len(self._items) > 1:
+            _, dropped = self._items.popitem(last=False)
+            self._bytes -= dropped.nbytes
+
+
 def _train(per_fold: NDArray[np.float64]) -> NDArray[np.float64]:
     """Per-fold sums -> sums over every other fold (the training blocks)."""
     return per_fold.sum(axis=0, keepdims=True) - per_fold
@@ -181,16 +210,27 @@ class Selector:
         self.noise_sigma = float(noise_sigma)
         self.alpha, self.min_reduction, self.min_share = alpha, min_reduction, min_share
         self.tie = tie
-        self._designs: dict[tuple, NDArray[np.float64]] = {}
+        self._designs = _DesignCache(DESIGN_CACHE_BYTES)
+        #: How many of a step's best candidates keep their per-reading errors.
+        self.keep_errors = 3
+        self._step_products: dict[tuple, tuple] = {}
         self.selected: list[tuple[Term, dict]] = []
 
     # ------------------------------------------------------------ designs
     def design_rows(self, term: Term, setting: dict) -> NDArray[np.float64]:
         key = (term.name, tuple(sorted(setting.items())))
-        if key not in self._designs:
+        design = self._designs.get(key)
+        if design is None:
+            if term.family.nested_settings and setting != term.settings[-1]:
+                # The first columns of the largest setting's design: a view, no copy.
+                size = len(term.family.parameter_names(term.variant, setting))
+                return self.design_rows(term, term.settings[-1])[:, :size]
             design = term.family.design(self.ctx, term.variant, setting)
-            self._designs[key] = design.reshape(-1, design.shape[2])[self.rows]
-        return self._designs[key]
+            design = design.reshape(-1, design.shape[2])
+            if self.rows.size != design.shape[0]:
+                design = design[self.rows]
+            self._designs.put(key, design)
+        return design
 
     def full_design(self, term: Term, setting: dict) -> NDArray[np.float64]:
         return term.family.design(self.ctx, term.variant, setting)
@@ -231,8 +271,9 @@ class Selector:
         return _BaseStatistics(base, products, with_y)
 
     def _candidate_products(self, stats: _BaseStatistics, design: NDArray[np.float64]):
-        """Training-block normal equations (folds, q+p, q+p), (folds, q+p) and y'y (folds,)
-        of base + ``design``."""
+        """Per-fold normal equations of base + ``design``: X_f'X_f (folds, q+p, q+p), X_f'y_f
+        (folds, q+p) and y_f'y_f (folds,); :func:`_train` turns them into the training
+        blocks', a sum over folds into the whole record's."""
         q = stats.base.shape[1]
         with_base = self._block_products(design, stats.with_y)     # (folds, p, q + 1)
         own = self._block_products(design, design)                 # (folds, p, p)
@@ -244,7 +285,22 @@ class Selector:
         gram[:, q:, q:] = own
         gram[:, :q, q:] = np.swapaxes(with_base[:, :, :q], 1, 2)
         rhs = np.concatenate([products[:, :q, q], with_base[:, :, q]], axis=1)
-        return _train(gram), _train(rhs), _train(products[:, q, q])
+        return gram, rhs, products[:, q, q]
+
+    def _products_of(self, stats: _BaseStatistics, term: Term, setting: dict):
+        """:meth:`_candidate_products` of ``term`` at ``setting``, kept for this step (the
+        full-data fit of the candidate reuses them)."""
+        key = (term.name, tuple(sorted(setting.items())))
+        if key not in self._step_products:
+            if term.family.nested_settings and setting != term.settings[-1]:
+                gram, rhs, yy = self._products_of(stats, term, term.settings[-1])
+                size = stats.base.shape[1] + len(term.family.parameter_names(term.variant,
+                                                                             setting))
+                self._step_products[key] = (gram[:, :size, :size], rhs[:, :size], yy)
+            else:
+                self._step_products[key] = self._candidate_products(
+                    stats, self.design_rows(term, setting))
+        return self._step_products[key]
 
     def _held_out_errors(self, x: NDArray[np.float64], coefficients: NDArray[np.float64]
                          ) -> NDArray[np.float64]:
@@ -267,8 +323,8 @@ class Selector:
         for key in {tuple(sorted(s.items())) for s in settings}:
             setting = dict(key)
             design = self.design_rows(term, setting)
-            gram, rhs, _ = self._candidate_products(stats, design)
-            coefficients = solve_normal(gram, rhs)
+            gram, rhs, _ = self._products_of(stats, term, setting)
+            coefficients = solve_normal(_train(gram), _train(rhs))
             for fold, (a, b) in enumerate(self.fold_bounds):
                 if settings[fold] == setting:
                     squared[a:b] = (stats.base[a:b] @ coefficients[fold, :q] +
@@ -282,23 +338,21 @@ class Selector:
         q = stats.base.shape[1]
         base_coefficients = solve_normal(_train(stats.products[:, :q, :q]),
                                          _train(stats.products[:, :q, q]))
-        chosen: list[dict | None] = []
+        trains = np.ones((self.folds, self.n), dtype=bool)
+        after_base = np.zeros((self.folds, self.mask.size))
         for fold, (a, b) in enumerate(self.fold_bounds):
-            train_samples = np.ones(self.n, dtype=bool)
-            train_samples[self.sample_of_row[a:b]] = False
-            after_base = np.zeros(self.mask.size)
-            after_base[self.rows] = self.y - stats.base @ base_coefficients[fold]
-            chosen.append(term.family.preselect(self.ctx, term.variant, term.settings,
-                                                after_base.reshape(-1, 3), self.mask,
-                                                train_samples))
+            trains[fold, self.sample_of_row[a:b]] = False
+            after_base[fold, self.rows] = self.y - stats.base @ base_coefficients[fold]
+        chosen: list[dict | None] = term.family.preselect_folds(
+            self.ctx, term.variant, term.settings, after_base.reshape(self.folds, -1, 3),
+            self.mask, trains)
         if all(c is not None for c in chosen):
             return chosen
         counts = np.array([self.y.size - (b - a) for a, b in self.fold_bounds], float)
         best_bic = np.full(self.folds, np.inf)
         best = [term.settings[0]] * self.folds
         for setting in term.settings:
-            design = self.design_rows(term, setting)
-            gram, rhs, yy = self._candidate_products(stats, design)
+            gram, rhs, yy = (_train(a) for a in self._products_of(stats, term, setting))
             coefficients = solve_normal(gram, rhs)
             rss = np.maximum(yy - np.einsum("fi,fi->f", coefficients, rhs), 1e-300)
             bic = counts * np.log(rss / counts) + gram.shape[1] * np.log(counts)
@@ -378,6 +432,16 @@ class Selector:
             start += block.shape[1]
         return out_c, out_s, residual
 
+    def _fit_products(self, gram, rhs, yy):
+        """Coefficients and standard errors of the whole record's fit from per-fold
+        products (what :meth:`fit_full` computes from the columns)."""
+        gram, rhs, yy = gram.sum(axis=0), rhs.sum(axis=0), float(yy.sum())
+        coefficients = solve_normal(gram, rhs)
+        dof = max(1, self.y.size - gram.shape[0])
+        sigma2 = max(yy - float(coefficients @ rhs), 0.0) / dof
+        standard = np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
+        return coefficients, standard
+
     def _baseline(self):
         """The current model's columns, out-of-fold squared errors per sample, the number
         of measured components, their mean square, and what of it stands above noise."""
@@ -388,6 +452,7 @@ class Selector:
         return stats, base_sq, count, base_mse, base_mse - self.noise_sigma ** 2
 
     def step(self, terms: list[Term]) -> Step:
+        self._step_products = {}
         stats, base_sq, count, base_mse, excess = self._baseline()
         base = stats.base
         scored = []
@@ -403,11 +468,12 @@ class Selector:
                                  1.0 - np.sqrt(mse / base_mse) if base_mse > 0 else 0.0,
                                  p_value, 1.0, float(share), setting, per_sample))
         tried = max(1, len(scored))
+        q = base.shape[1]
         for s in scored:
             s.adjusted_p = min(1.0, s.p_value * tried)
             # Every candidate carries its full-data fit, so that a user may add any of them.
-            coefficients, standard, _ = self.fit_full(self.selected + [(s.term, s.setting)])
-            s.coefficients, s.standard_errors = coefficients[-1], standard[-1]
+            s.coefficients, s.standard_errors = (
+                a[q:] for a in self._fit_products(*self._products_of(stats, s.term, s.setting)))
             s.parameter_names = s.term.family.parameter_names(s.term.variant, s.setting)
             s.refusal = self.physics_refusal(s.term, s.setting, s.coefficients)
         scored.sort(key=lambda s: s.cv_rmse)
@@ -438,6 +504,11 @@ class Selector:
                                     not best.refusal)
             if best.significant:
                 added = best
+        # Per-reading errors are kept only where a pair look-ahead may need them (N floats
+        # per candidate: GBs over a catalogue at 1e5 readings).
+        for s in scored[self.keep_errors:]:
+            if s is not added:
+                s.per_sample_sq = None
         return Step(float(np.sqrt(base_mse)), scored, added)
 
     def _block_test(self, base_sq: NDArray[np.float64], per_sample: NDArray[np.float64]
@@ -509,6 +580,7 @@ class Selector:
         jointly at the end (``Scored.coefficients`` of the added ones are the joint fit).
         A step where no single term passes tries pairs (:meth:`pair_lookahead`)."""
         steps = []
+        self.keep_errors = max(1, beam)
         remaining = list(terms)
         while len(self.selected) < max_terms and remaining:
             step = self.step(remaining)
