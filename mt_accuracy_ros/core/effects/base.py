@@ -143,6 +143,12 @@ class EffectFamily:
     #: True when each setting's design is the first columns of the last setting's (a
     #: polynomial order): the workbench then computes one design for all of them.
     nested_settings: bool = False
+    @property
+    def preselects(self) -> bool:
+        """Whether :meth:`preselect` may choose a setting (the workbench skips it if not):
+        a family that overrides it does."""
+        return type(self).preselect is not EffectFamily.preselect or \
+            type(self).preselect_folds is not EffectFamily.preselect_folds
 
     def settings(self, ctx: Context, variant: str) -> list[dict[str, Any]]:
         return [{}]

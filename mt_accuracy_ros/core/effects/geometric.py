@@ -32,7 +32,6 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.polynomial import legendre
 
 from .base import Context, EffectFamily, along
 from .spectral import frequency_grid, grid_periodogram
@@ -42,8 +41,13 @@ _KIND_COMPONENTS = {"positioning": "self", "straightness": "XYZ", "angular": "AB
 
 
 def _legendre_columns(u, first: int, last: int):
-    return np.column_stack([legendre.legval(u, np.eye(last + 1)[k])
-                            for k in range(first, last + 1)])
+    """P_first(u) .. P_last(u) as columns, by Bonnet's recurrence
+    (k + 1) P_{k+1} = (2k + 1) u P_k - k P_{k-1}."""
+    u = np.asarray(u, dtype=np.float64)
+    columns = [np.ones_like(u), u]
+    for k in range(1, last):
+        columns.append(((2 * k + 1) * u * columns[k] - k * columns[k - 1]) / (k + 1))
+    return np.column_stack(columns[first:last + 1])
 
 
 def component_names(ctx: Context, kind: str) -> list[str]:
@@ -118,6 +122,10 @@ class ComponentError(EffectFamily):
         q = np.asarray(q, dtype=np.float64)
         return self._basis(q, (2.0 * q - (low + high)) / (high - low), setting) @ \
             np.asarray(coefficients, dtype=np.float64)
+
+    @property
+    def preselects(self) -> bool:
+        return self.periodic    # by the periodogram
 
     def preselect(self, ctx, variant, settings, residual, mask, train):
         return self.preselect_folds(ctx, variant, settings, residual[None], mask,

@@ -34,6 +34,8 @@ PERIOD_RANGE_M = (0.002, 0.05)
 #: the cloud-in-cell transfer there is > 0.98, and the periodogram agrees with the
 #: exact one to ~1e-5 of its peak.
 _LATTICE_PER_PERIOD = 20
+#: Readings x frequencies up to which the sums are taken directly instead.
+_DIRECT_MAX_PRODUCT = 400_000
 
 
 def frequency_grid(span_m: float) -> NDArray[np.float64]:
@@ -148,9 +150,19 @@ def grid_periodogram(q, target, weight, frequencies):
         float(frequencies[0])
     k = np.rint(frequencies / step).astype(np.intp)
     count = 2 * int(k[-1]) + 1
-    spectra = grid_transform(q, np.column_stack([weight2, target2]), step, count)
     m = weight2.shape[1]
-    zw, zt = spectra[:, :m], spectra[:, m:]
+    q = np.asarray(q, float)
+    if q.size * k.size <= _DIRECT_MAX_PRODUCT:
+        # Few readings: the sums directly (fewer operations than the lattice's FFT).
+        e1 = np.exp(-2j * np.pi * frequencies[:, None] * q[None, :])
+        zw1, zt1 = e1 @ weight2, e1 @ target2
+        zw2 = (e1 * e1) @ weight2
+        zw = np.zeros((count, m), complex)
+        zt = np.zeros((count, m), complex)
+        zw[k], zt[k], zw[2 * k] = zw1, zt1, zw2
+    else:
+        spectra = grid_transform(q, np.column_stack([weight2, target2]), step, count)
+        zw, zt = spectra[:, :m], spectra[:, m:]
     out_e = np.empty((k.size, m))
     out_a = np.empty((k.size, m))
     for j in range(m):

@@ -28,13 +28,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import stats
 
 from ..compensation.error_model import ErrorModel
 from ..errors import InsufficientDataError, ParameterError
 from ..effects import Context, EffectFamily, families as catalogue_families, is_catalogue_entry
 from ..effects.user import UserExpression
 from .localisation import Localisation, localise
+from .distributions import chi2_sf
 from .selection import Selector, Term
 from ..effects.variables import Variables
 
@@ -344,8 +344,8 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
         mean_square = float(np.mean(r ** 2))
         unexplained[component] = float(np.sqrt(max(0.0, mean_square - noise_sigma ** 2)))
         # Chi-square: could these residuals be the instrument's noise alone?
-        if noise_sigma > 0 and mean_square * r.size / noise_sigma ** 2 > \
-                stats.chi2.ppf(0.999, r.size - 1) and unexplained[component] > 0.5 * noise_sigma:
+        if noise_sigma > 0 and chi2_sf(mean_square * r.size / noise_sigma ** 2, r.size - 1) < \
+                0.001 and unexplained[component] > 0.5 * noise_sigma:
             above = True
     localisation = localisation_after = None
     if localise_residual:

@@ -35,7 +35,7 @@ COMPONENTS = "xyz"
 LOCALISATION_LAGS_S = (600.0, 1200.0, 2400.0)
 #: The kNN shares of a component are computed on at most this many of its readings,
 #: evenly spread in time (all of them below it).
-SHARE_READINGS = 4000
+SHARE_READINGS = 2500
 
 
 @dataclass

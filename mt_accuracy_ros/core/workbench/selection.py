@@ -39,11 +39,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import stats
 
 from ..errors import InsufficientDataError
 from ..effects.base import Context, EffectFamily
 from ..effects.physics import consistency_problems, limit_problems
+from .distributions import chi2_sf, t_sf
+from .line_search import minimise_bounded
 
 
 @dataclass
@@ -335,17 +336,19 @@ class Selector:
         """The setting each fold's training blocks choose (preselection or BIC)."""
         if len(term.settings) == 1:
             return [term.settings[0]] * self.folds
-        q = stats.base.shape[1]
-        base_coefficients = solve_normal(_train(stats.products[:, :q, :q]),
-                                         _train(stats.products[:, :q, q]))
-        trains = np.ones((self.folds, self.n), dtype=bool)
-        after_base = np.zeros((self.folds, self.mask.size))
-        for fold, (a, b) in enumerate(self.fold_bounds):
-            trains[fold, self.sample_of_row[a:b]] = False
-            after_base[fold, self.rows] = self.y - stats.base @ base_coefficients[fold]
-        chosen: list[dict | None] = term.family.preselect_folds(
-            self.ctx, term.variant, term.settings, after_base.reshape(self.folds, -1, 3),
-            self.mask, trains)
+        chosen: list[dict | None] = [None] * self.folds
+        if term.family.preselects:
+            q = stats.base.shape[1]
+            base_coefficients = solve_normal(_train(stats.products[:, :q, :q]),
+                                             _train(stats.products[:, :q, q]))
+            trains = np.ones((self.folds, self.n), dtype=bool)
+            after_base = np.zeros((self.folds, self.mask.size))
+            for fold, (a, b) in enumerate(self.fold_bounds):
+                trains[fold, self.sample_of_row[a:b]] = False
+                after_base[fold, self.rows] = self.y - stats.base @ base_coefficients[fold]
+            chosen = term.family.preselect_folds(
+                self.ctx, term.variant, term.settings, after_base.reshape(self.folds, -1, 3),
+                self.mask, trains)
         if all(c is not None for c in chosen):
             return chosen
         counts = np.array([self.y.size - (b - a) for a, b in self.fold_bounds], float)
@@ -404,14 +407,11 @@ class Selector:
             coefficients, *_ = np.linalg.lstsq(x, self.y, rcond=None)
             return float(np.sum((x @ coefficients - self.y) ** 2))
 
-        from scipy.optimize import minimize_scalar
-
         start = rss(setting[key])
-        result = minimize_scalar(rss, bounds=(low, high), method="bounded",
-                                 options={"xatol": (high - low) * 1e-6})
-        if not result.success or result.fun >= start:
+        value, best = minimise_bounded(rss, low, high, x_tolerance=(high - low) * 1e-6)
+        if best >= start:
             return setting
-        return dict(setting, **{key: float(result.x)})
+        return dict(setting, **{key: float(value)})
 
     def fit_full(self, terms: list[tuple[Term, dict]]):
         """Joint least-squares fit of the offsets and ``terms`` on every reading.
@@ -455,6 +455,7 @@ class Selector:
         self._step_products = {}
         stats, base_sq, count, base_mse, excess = self._baseline()
         base = stats.base
+        q = base.shape[1]
         scored = []
         for term in terms:
             per_sample, chosen = self.out_of_fold(stats, term)
@@ -464,18 +465,19 @@ class Selector:
             # The setting reported is the most frequent in-fold choice.
             settings = [tuple(sorted(s.items())) for s in chosen.values()]
             setting = dict(max(set(settings), key=settings.count))
-            scored.append(Scored(term, float(np.sqrt(mse)),
-                                 1.0 - np.sqrt(mse / base_mse) if base_mse > 0 else 0.0,
-                                 p_value, 1.0, float(share), setting, per_sample))
+            candidate = Scored(term, float(np.sqrt(mse)),
+                               1.0 - np.sqrt(mse / base_mse) if base_mse > 0 else 0.0,
+                               p_value, 1.0, float(share), setting, per_sample)
+            # Every candidate carries its full-data fit, so that a user may add any of them
+            # (judged by physics now, while its design is at hand).
+            candidate.coefficients, candidate.standard_errors = (
+                a[q:] for a in self._fit_products(*self._products_of(stats, term, setting)))
+            candidate.parameter_names = term.family.parameter_names(term.variant, setting)
+            candidate.refusal = self.physics_refusal(term, setting, candidate.coefficients)
+            scored.append(candidate)
         tried = max(1, len(scored))
-        q = base.shape[1]
         for s in scored:
             s.adjusted_p = min(1.0, s.p_value * tried)
-            # Every candidate carries its full-data fit, so that a user may add any of them.
-            s.coefficients, s.standard_errors = (
-                a[q:] for a in self._fit_products(*self._products_of(stats, s.term, s.setting)))
-            s.parameter_names = s.term.family.parameter_names(s.term.variant, s.setting)
-            s.refusal = self.physics_refusal(s.term, s.setting, s.coefficients)
         scored.sort(key=lambda s: s.cv_rmse)
         # Physics first: a fit it refuses is no explanation, however well it scores.
         plausible = [s for s in scored if not s.refusal]
@@ -522,8 +524,7 @@ class Selector:
         spread = float(np.std(gain, ddof=1))
         if spread == 0:
             return 0.0 if np.mean(gain) > 0 else 1.0
-        return float(stats.t.sf(float(np.mean(gain)) / (spread / np.sqrt(gain.size)),
-                                gain.size - 1))
+        return t_sf(float(np.mean(gain)) / (spread / np.sqrt(gain.size)), gain.size - 1)
 
     def above_noise(self) -> bool:
         """Could what the selected terms leave be the instrument's noise alone? (chi-square
@@ -532,9 +533,8 @@ class Selector:
             return True
         _, _, rest = self.fit_full(self.selected)
         mean_square = float(rest @ rest) / rest.size
-        return bool(mean_square * rest.size / self.noise_sigma ** 2 >
-                    stats.chi2.ppf(0.999, rest.size - 1) and
-                    mean_square - self.noise_sigma ** 2 > (0.5 * self.noise_sigma) ** 2)
+        return bool(chi2_sf(mean_square * rest.size / self.noise_sigma ** 2, rest.size - 1) <
+                    0.001 and mean_square - self.noise_sigma ** 2 > (0.5 * self.noise_sigma) ** 2)
 
     def pair_lookahead(self, step: Step, remaining: list[Term], beam: int
                        ) -> tuple[Scored, Scored] | None:

@@ -77,3 +77,14 @@ def test_solve_normal_equals_lstsq_full_rank_and_rank_deficient():
     # Batched over a leading axis.
     stacked = solve_normal(np.stack([x.T @ x] * 3), np.stack([x.T @ y] * 3))
     assert np.allclose(stacked, got[None, :], rtol=1e-12, atol=0)
+
+
+def test_legendre_columns_by_recurrence_equal_numpy_legval():
+    from numpy.polynomial import legendre
+
+    from mt_accuracy_ros.core.effects.geometric import _legendre_columns
+
+    u = np.linspace(-1.0, 1.0, 101)
+    expected = np.column_stack([legendre.legval(u, np.eye(8)[k]) for k in range(2, 8)])
+    np.testing.assert_allclose(_legendre_columns(u, 2, 7), expected, rtol=0, atol=1e-14)
+    assert _legendre_columns(u, 1, 1).shape == (101, 1)
