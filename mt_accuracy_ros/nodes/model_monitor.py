@@ -40,7 +40,6 @@ from __future__ import annotations
 import copy
 import sys
 from collections import deque
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -54,12 +53,13 @@ from ..core.compensation.limits import gate_problem
 from ..core.workbench.closed_loop import judge_version
 from ..core.compensation.five_axis import tool_direction
 from ..core.errors import InputDataError, MtAccuracyError
-from ..core.workbench.diagnosis import (Candidate, Observations, add_effect, diagnose,
+from ..core.workbench.diagnosis import (Candidate, Observations, add_effect,
                                         effect_name_problem, pick_candidate)
 from ._common import (run_node, LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, plain_descriptor, refuse, stamp_to_nanoseconds)
 from ._health import DeliveryHealth
 from ._model_inputs import ModelInputs
+from ._search_worker import search, search_pool
 
 
 class ModelMonitor(Node):
@@ -121,7 +121,7 @@ class ModelMonitor(Node):
                                  self.health.guard("reference/tcp_error", self._on_reading),
                                  RESULT_QOS)
         self._checking = None   # (model, observations, stamp, future) of the check under way
-        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="diagnosis")
+        self._pool, self.search_niceness = search_pool()
         self.create_timer(0.02, self._poll_check, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._publish_model()
 
@@ -446,7 +446,34 @@ class ModelMonitor(Node):
         snapshot.profiles = dict(model.profiles)
         snapshot._lag_states = {}   # lagged effects start at the window's first reading
         stamp_ns = self._readings[-1]["stamp_ns"]
-        self._checking = (model, obs, stamp_ns, self._pool.submit(self._diagnose, snapshot, obs))
+        self._checking = (model, obs, stamp_ns, self._submit_search(snapshot, obs))
+
+    def _submit_search(self, model, obs):
+        """The search in the worker process; here, said on /diagnostics, when the inputs
+        cannot be sent to it (a plug-in effect that does not pickle)."""
+        import pickle
+        from concurrent.futures import Future
+        from concurrent.futures.process import BrokenProcessPool
+
+        settings = self._search_settings()
+        try:
+            pickle.dumps((model, obs))
+        except Exception as exc:  # noqa: BLE001 - any reason to not pickle: run here
+            self._status(DiagnosticStatus.WARN, f"search in the node's own process: its "
+                         f"inputs cannot go to the worker ({type(exc).__name__}: {exc})")
+            future = Future()
+            try:
+                future.set_result(search(model, obs, *settings))
+            except Exception as error:  # noqa: BLE001 - reported by _poll_check
+                future.set_exception(error)
+            return future
+        try:
+            return self._pool.submit(search, model, obs, *settings)
+        except BrokenProcessPool:
+            # The worker died (killed, out of memory): a new one for this and later checks.
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool, self.search_niceness = search_pool()
+            return self._pool.submit(search, model, obs, *settings)
 
     def _poll_check(self) -> None:
         if self._checking is None or not self._checking[3].done():
@@ -549,10 +576,12 @@ class ModelMonitor(Node):
                          "remains")
         self._direction_check.publish(check)
 
+    def _search_settings(self) -> tuple[float, int]:
+        return (float(self.get_parameter("min_reduction").value),
+                int(self.get_parameter("max_effects").value))
+
     def _diagnose(self, model, obs):
-        return diagnose(model, obs,
-                        min_reduction=float(self.get_parameter("min_reduction").value),
-                        max_effects=int(self.get_parameter("max_effects").value))
+        return search(model, obs, *self._search_settings())
 
     def _publish_model(self) -> None:
         model = self.inputs.model

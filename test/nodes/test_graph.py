@@ -270,10 +270,12 @@ def test_all_nodes_composed_in_one_executor(rclpy_context, tmp_path):
             executor.spin_once(timeout_sec=0.05)
         # Drain: until every sample is accounted for by the broadcaster and every
         # compensation it sent has reached the listener (a condition, not a sleep).
+        # The monitor's search runs in its worker process: its first check may come after
+        # the machine stopped.
         def drained() -> bool:
             counts = nodes[1].health.counts["scales"]
             return counts["first_seen"] + counts["processed"] + counts["lost"] >= 20000 and \
-                len(compensation) >= nodes[1]._compensation_sequence
+                len(compensation) >= nodes[1]._compensation_sequence and bool(checks)
         deadline = time.monotonic() + 60
         while not drained() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)

@@ -10,6 +10,7 @@ inside the controller's limits, so only the measurement can catch it.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import yaml
 
 from graph_helpers import set_parameter_again_until_answered, spin_until
@@ -144,3 +145,44 @@ def test_the_monitor_niceness_knob_lowers_only_its_own_process():
             check=True).stdout.split())
         assert applied == increment, value
         assert lowered == min(increment, 19 - before), value   # 19: the kernel's floor
+
+
+@pytest.mark.parametrize("idle_s, classes", [
+    (0.3, ["idle", "normal", "normal"]),   # idle first; promoted after 0.3 s; normal after
+    (0.0, ["normal", "normal", "normal"]),  # MT_ACCURACY_SEARCH_IDLE_S=0: never idle
+])
+def test_the_search_starts_idle_and_is_promoted_when_it_takes_long(idle_s, classes):
+    """Issue 27: the monitor's search runs in a worker process in the idle scheduling class
+    (the compensation path preempts it at once) and, beside CPU burners where it would
+    never run, continues at niceness 10 after its idle budget."""
+    import subprocess
+    import sys
+
+    probe = f"""
+import os, threading, time
+from mt_accuracy_ros.nodes import _search_worker as monitor
+seen = []
+def record():
+    policy = os.sched_getscheduler(0)
+    nice = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+    seen.append(("idle" if policy == os.SCHED_IDLE else "normal", nice))
+def slow_diagnosis(model, obs, **settings):
+    record(); time.sleep(0.8); record()
+    return "searched"
+monitor.diagnose = slow_diagnosis
+base = os.nice(0)
+monitor._search_worker({idle_s}, 10)
+print(monitor.search(None, None, 0.05, 3))
+record()
+print(seen)
+print(min(19, base + 10))
+import sys
+print("rclpy" in sys.modules)
+"""
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         timeout=60, check=True).stdout.splitlines()
+    assert out[0] == "searched"
+    seen = eval(out[1])  # noqa: S307 - our own probe's list of tuples
+    assert out[3] == "False"   # the worker never imports rclpy
+    assert [c for c, _ in seen] == classes
+    assert all(nice == int(out[2]) for _, nice in seen)   # 10 above the caller's niceness
