@@ -61,7 +61,7 @@ def write_survey(readings: int, folder: Path, seed: int = 1000) -> tuple[Path, P
                *(trial.measured_m[:, i] * 1e6 for i in range(3)),
                *(s.temperatures[k] for k in ("column", "bed", "spindle", "ambient"))]
     csv = folder / f"survey_{readings}.csv"
-    np.savetxt(csv, np.column_stack(columns), delimiter=",", fmt="%.9g", comments="",
+    np.savetxt(csv, np.column_stack(columns), delimiter=",", fmt="%.12g", comments="",
                header="minutes,X_mm,Y_mm,Z_mm,dev_x_um,dev_y_um,dev_z_um,T_col,T_bed,T_spin,"
                       "T_amb")
     mapping = folder / f"map_{readings}.yaml"
