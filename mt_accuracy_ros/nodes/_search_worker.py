@@ -8,17 +8,21 @@ from ..core.workbench.diagnosis import Observations, diagnose
 
 
 #: Scheduling of the search worker process. The search takes a core for as long as it
-#: runs; the compensation path (encoder -> estimator -> broadcaster -> CNC) wakes every
-#: batch and must not wait for it. So a search starts in the idle scheduling class
-#: (SCHED_IDLE: it runs only on CPU time nothing else wants, and any waking node
-#: preempts it at once). Measured (docs/benchmarks.md): a niced search still added
-#: 10-20 ms to the compensation path's p99; an idle-class one nothing measurable.
-#: Beside CPU burners an idle-class search would never finish, so one still running
-#: after ``SEARCH_IDLE_S`` of wall time (environment ``MT_ACCURACY_SEARCH_IDLE_S``;
-#: 0: never idle) continues as a normal process at niceness ``SEARCH_NICENESS``
-#: (``MT_ACCURACY_SEARCH_NICE``).
-SEARCH_IDLE_S = 5.0
-SEARCH_NICENESS = 10
+#: runs, in a process of its own: the monitor node keeps its GIL for the readings, and
+#: the compensation path (encoder -> estimator -> broadcaster -> CNC) is other
+#: processes. By default the worker runs at normal priority: measured
+#: (docs/benchmarks.md), an idle-class or niced search changed the path's p99 by
+#: less than the run-to-run spread, while with two CPU burners a niced one made no
+#: check at all in the demo's 90 s.
+#:
+#: ``MT_ACCURACY_SEARCH_IDLE_S`` > 0: a search starts in the idle scheduling class
+#: (SCHED_IDLE: CPU time nothing else wants; any waking node preempts it) and is put
+#: back in the normal class after that many wall seconds - which needs CAP_SYS_NICE
+#: (or RLIMIT_NICE): an unprivileged thread cannot leave the idle class, so without
+#: it a search stays idle (said once on the worker's stderr).
+#: ``MT_ACCURACY_SEARCH_NICE``: the worker's niceness (0-19).
+SEARCH_IDLE_S = 0.0
+SEARCH_NICENESS = 0
 #: The worker's scheduling, set by its initializer: (idle seconds, niceness).
 _WORKER_SCHEDULING: tuple[float, int] | None = None
 
@@ -34,8 +38,18 @@ def _set_thread_scheduling(thread_id: int, idle: bool, niceness: int) -> bool:
             os.sched_setscheduler(thread_id, os.SCHED_OTHER, os.sched_param(0))
             os.setpriority(os.PRIO_PROCESS, thread_id, niceness)
         return True
-    except (OSError, AttributeError):
+    except (OSError, AttributeError) as exc:
+        global _WARNED
+        if not _WARNED:
+            import sys
+
+            _WARNED = True
+            print(f"search worker: cannot change its scheduling ({exc}); it keeps the class "
+                  "it has", file=sys.stderr)
         return False
+
+
+_WARNED = False
 
 
 def search(model, obs: Observations, min_reduction: float, max_effects: int):
@@ -61,6 +75,9 @@ def _search_worker(idle_s: float, niceness: int) -> None:
     import os
 
     global _WORKER_SCHEDULING
+    # Import the engine now (at the caller's priority), not at the first check.
+    from ..core.workbench import diagnosis  # noqa: F401
+
     if niceness > 0:
         try:
             os.nice(niceness)
@@ -68,8 +85,6 @@ def _search_worker(idle_s: float, niceness: int) -> None:
             pass
     # The niceness a promoted search thread takes: the process' own (the caller's + ours).
     _WORKER_SCHEDULING = (idle_s, os.nice(0))
-    # Import the engine now, not at the first check.
-    from ..core.workbench import diagnosis  # noqa: F401
 
 
 def search_pool():
