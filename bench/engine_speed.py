@@ -41,7 +41,6 @@ import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
-import yaml  # noqa: E402
 
 CORE = 0
 
@@ -54,24 +53,12 @@ def _pin() -> None:
 def write_survey(readings: int, folder: Path, seed: int = 1000) -> tuple[Path, Path, str]:
     """A logger-style survey (mm, um, min) of kidani_hmc with a hidden ball-screw pitch."""
     from studies.foreign_machine import make_trial
+    from studies.survey_files import write_logger_survey
 
     trial = make_trial("kidani_hmc", ("ballscrew_pitch",), seed, readings=readings)
-    s = trial.survey
-    columns = [s.time_s / 60, *(s.positions[a] * 1e3 for a in "XYZ"),
-               *(trial.measured_m[:, i] * 1e6 for i in range(3)),
-               *(s.temperatures[k] for k in ("column", "bed", "spindle", "ambient"))]
     csv = folder / f"survey_{readings}.csv"
-    np.savetxt(csv, np.column_stack(columns), delimiter=",", fmt="%.12g", comments="",
-               header="minutes,X_mm,Y_mm,Z_mm,dev_x_um,dev_y_um,dev_z_um,T_col,T_bed,T_spin,"
-                      "T_amb")
     mapping = folder / f"map_{readings}.yaml"
-    mapping.write_text(yaml.safe_dump({
-        "time": {"column": "minutes", "unit": "min"},
-        "positions": {a: {"column": f"{a}_mm", "unit": "mm"} for a in "XYZ"},
-        "errors": {c: {"column": f"dev_{c}_um", "unit": "um"} for c in "xyz"},
-        "temperatures": {"column": "T_col", "bed": "T_bed", "spindle": "T_spin",
-                         "ambient": "T_amb"},
-        "uncertainty": {"value": 1.4, "unit": "um"}}))
+    write_logger_survey(trial, csv, mapping)
     (truth,) = trial.hidden[0].accepted
     return csv, mapping, truth
 

@@ -106,27 +106,12 @@ def test_survey_csv_from_a_data_logger_names_a_pitch_error(tmp_path, capsys):
     """A survey in a logger's own units (mm, um, degC, min) with a column map: the
     workbench names the ball-screw pitch error made by the foreign generator, says
     where it lives, and writes a valid report."""
-    import yaml
-
     from mt_accuracy_ros.cli import main
     from studies.foreign_machine import make_trial
+    from studies.survey_files import write_logger_survey
 
     trial = make_trial("kidani_hmc", ("ballscrew_pitch",), 1000, readings=400)
-    s = trial.survey
-    lines = ["minutes,X_mm,Y_mm,Z_mm,dev_x_um,dev_y_um,dev_z_um,T_col,T_bed,T_spin,T_amb"]
-    for i in range(s.time_s.size):
-        e = trial.measured_m[i] * 1e6
-        lines.append(",".join(f"{v:.9g}" for v in (
-            s.time_s[i] / 60, *(s.positions[a][i] * 1e3 for a in "XYZ"), *e,
-            *(s.temperatures[k][i] for k in ("column", "bed", "spindle", "ambient")))))
-    (tmp_path / "survey.csv").write_text("\n".join(lines) + "\n")
-    (tmp_path / "map.yaml").write_text(yaml.safe_dump({
-        "time": {"column": "minutes", "unit": "min"},
-        "positions": {a: {"column": f"{a}_mm", "unit": "mm"} for a in "XYZ"},
-        "errors": {c: {"column": f"dev_{c}_um", "unit": "um"} for c in "xyz"},
-        "temperatures": {"column": "T_col", "bed": "T_bed", "spindle": "T_spin",
-                         "ambient": "T_amb"},
-        "uncertainty": {"value": 1.4, "unit": "um"}}))
+    write_logger_survey(trial, tmp_path / "survey.csv", tmp_path / "map.yaml")
     code = main(["check", str(tmp_path / "survey.csv"), "--columns", str(tmp_path / "map.yaml"),
                  "--model", "{machine: kidani_hmc}", "--auto", "2",
                  "--json", str(tmp_path / "s.json"), "--report", str(tmp_path / "r.html")])

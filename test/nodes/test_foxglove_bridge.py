@@ -48,6 +48,9 @@ def test_bridge_relays_topics_a_foxglove_client_decodes(tmp_path):
         deadline = time.monotonic() + 60  # a fresh minute for discovery and data
         with connection:
             channels, decoded = {}, None
+            # Each advertisement of /temperatures gets its own subscription (a channel
+            # advertised again has a new id); what the server said is kept for the message.
+            subscriptions, said, binary = set(), [], []
             while decoded is None and time.monotonic() < deadline:
                 try:
                     frame = connection.recv(timeout=max(0.1, deadline - time.monotonic()))
@@ -55,15 +58,18 @@ def test_bridge_relays_topics_a_foxglove_client_decodes(tmp_path):
                     break
                 if isinstance(frame, str):
                     message = json.loads(frame)
+                    said.append(message["op"] if message["op"] == "advertise" else message)
                     if message["op"] == "advertise":
                         for channel in message["channels"]:
                             channels[channel["topic"]] = channel
                             if channel["topic"] == "/temperatures":
+                                subscriptions.add(7 + len(subscriptions))
                                 connection.send(json.dumps({"op": "subscribe", "subscriptions": [
-                                    {"id": 7, "channelId": channel["id"]}]}))
+                                    {"id": max(subscriptions), "channelId": channel["id"]}]}))
                     continue
                 opcode, subscription, _log_time = struct.unpack_from("<BIQ", frame)
-                if opcode == 1 and subscription == 7:
+                binary.append((opcode, subscription))
+                if opcode == 1 and subscription in subscriptions:
                     decoded = deserialize_message(frame[13:], TemperatureArray)
         assert "/temperatures" in channels, f"advertised only {sorted(channels)}; bridge " \
             f"exit code {bridge.popen.poll()}, publisher {publisher.popen.poll()}"
@@ -73,7 +79,9 @@ def test_bridge_relays_topics_a_foxglove_client_decodes(tmp_path):
         assert temperatures["schemaEncoding"] == "ros2msg"
         assert "float64[] temperatures" in temperatures["schema"]
         assert "/error_map" in channels  # the 3-D error map (foxglove.SceneUpdate)
-        assert decoded is not None and len(decoded.sensor_names) == len(decoded.temperatures) > 0
+        assert decoded is not None, f"no /temperatures data: server said {said[-10:]}, binary " \
+            f"frames {binary[-10:]}, publisher exit code {publisher.popen.poll()}"
+        assert len(decoded.sensor_names) == len(decoded.temperatures) > 0
     finally:
         publisher.stop()
         bridge.stop()
