@@ -127,7 +127,6 @@ def forward_ours(selector, terms, steps: int = 4) -> tuple[list[str], list[float
     remaining = list(terms)
     selector.selected = []
     for _ in range(steps):
-        selector._step_products = {}
         stats = selector.base_statistics(selector.base_columns())
         best = None
         for term in remaining:

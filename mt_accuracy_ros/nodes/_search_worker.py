@@ -71,6 +71,15 @@ def search(model, obs: Observations, min_reduction: float, max_effects: int):
         _set_thread_scheduling(me, False, niceness)
 
 
+def search_serialized(inputs: bytes, min_reduction: float, max_effects: int):
+    """:func:`search` of pickled (model, observations): the monitor pickles them once, to
+    know they can go to the worker, and the pool then only copies the bytes."""
+    import pickle
+
+    model, obs = pickle.loads(inputs)   # noqa: S301 - our own monitor's bytes
+    return search(model, obs, min_reduction, max_effects)
+
+
 def _search_worker(idle_s: float, niceness: int) -> None:
     import os
 
@@ -88,8 +97,8 @@ def _search_worker(idle_s: float, niceness: int) -> None:
 
 
 def search_pool():
-    """(executor, niceness): one spawned worker process for the searches, or a thread
-    where processes cannot be made."""
+    """One spawned worker process for the searches, or a thread where processes cannot
+    be made."""
     import multiprocessing
     import os
     from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
@@ -109,6 +118,6 @@ def search_pool():
         pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
                                    initializer=_search_worker, initargs=(idle_s, niceness))
         pool.submit(int)   # start the worker and its imports now
-        return pool, niceness
+        return pool
     except (OSError, ValueError, NotImplementedError):
-        return ThreadPoolExecutor(max_workers=1, thread_name_prefix="diagnosis"), 0
+        return ThreadPoolExecutor(max_workers=1, thread_name_prefix="diagnosis")

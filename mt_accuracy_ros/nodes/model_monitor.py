@@ -59,7 +59,7 @@ from ._common import (run_node, LATCHED_QOS, RESULT_QOS, accept, float_descripto
                       nanoseconds_to_stamp, plain_descriptor, refuse, stamp_to_nanoseconds)
 from ._health import DeliveryHealth
 from ._model_inputs import ModelInputs
-from ._search_worker import search, search_pool
+from ._search_worker import search, search_pool, search_serialized
 
 
 class ModelMonitor(Node):
@@ -121,7 +121,7 @@ class ModelMonitor(Node):
                                  self.health.guard("reference/tcp_error", self._on_reading),
                                  RESULT_QOS)
         self._checking = None   # (model, observations, stamp, future) of the check under way
-        self._pool, self.search_niceness = search_pool()
+        self._pool = search_pool()
         self.create_timer(0.02, self._poll_check, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._publish_model()
 
@@ -457,7 +457,7 @@ class ModelMonitor(Node):
 
         settings = self._search_settings()
         try:
-            pickle.dumps((model, obs))
+            inputs = pickle.dumps((model, obs))
         except Exception as exc:  # noqa: BLE001 - any reason to not pickle: run here
             self._status(DiagnosticStatus.WARN, f"search in the node's own process: its "
                          f"inputs cannot go to the worker ({type(exc).__name__}: {exc})")
@@ -468,12 +468,12 @@ class ModelMonitor(Node):
                 future.set_exception(error)
             return future
         try:
-            return self._pool.submit(search, model, obs, *settings)
+            return self._pool.submit(search_serialized, inputs, *settings)
         except BrokenProcessPool:
             # The worker died (killed, out of memory): a new one for this and later checks.
             self._pool.shutdown(wait=False, cancel_futures=True)
-            self._pool, self.search_niceness = search_pool()
-            return self._pool.submit(search, model, obs, *settings)
+            self._pool = search_pool()
+            return self._pool.submit(search_serialized, inputs, *settings)
 
     def _poll_check(self) -> None:
         if self._checking is None or not self._checking[3].done():

@@ -143,6 +143,7 @@ class EffectFamily:
     #: True when each setting's design is the first columns of the last setting's (a
     #: polynomial order): the workbench then computes one design for all of them.
     nested_settings: bool = False
+
     @property
     def preselects(self) -> bool:
         """Whether :meth:`preselect` may choose a setting (the workbench skips it if not):

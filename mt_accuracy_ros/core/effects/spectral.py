@@ -92,14 +92,16 @@ def periodogram(q, target, weight, periods, *, block: int = 64):
     explained = np.empty(frequencies.size)
     amplitude = np.empty(frequencies.size)
     for start in range(0, frequencies.size, block):
-        f = frequencies[start:start + block, None]
-        phase = 2.0 * np.pi * f * q[None, :]
-        e1 = np.exp(-1j * phase)
-        zw1, zt1 = e1 @ weight, e1 @ target
-        zw2 = (e1 * e1) @ weight
+        zw1, zw2, zt1 = _direct_sums(q, frequencies[start:start + block], weight, target)
         explained[start:start + block], amplitude[start:start + block] = _solve(
             float(weight.sum()), zw1, zw2, float(target.sum()), zt1)
     return explained, amplitude
+
+
+def _direct_sums(q, frequencies, weight, target):
+    """Z_w(f), Z_w(2f), Z_t(f) by explicit exponentials (P x N of them)."""
+    e1 = np.exp(-2j * np.pi * frequencies[:, None] * q[None, :])
+    return e1 @ weight, (e1 * e1) @ weight, e1 @ target
 
 
 def grid_transform(q, values, step: float, count: int):
@@ -154,9 +156,7 @@ def grid_periodogram(q, target, weight, frequencies):
     q = np.asarray(q, float)
     if q.size * k.size <= _DIRECT_MAX_PRODUCT:
         # Few readings: the sums directly (fewer operations than the lattice's FFT).
-        e1 = np.exp(-2j * np.pi * frequencies[:, None] * q[None, :])
-        zw1, zt1 = e1 @ weight2, e1 @ target2
-        zw2 = (e1 * e1) @ weight2
+        zw1, zw2, zt1 = _direct_sums(q, frequencies, weight2, target2)
         zw = np.zeros((count, m), complex)
         zt = np.zeros((count, m), complex)
         zw[k], zt[k], zw[2 * k] = zw1, zt1, zw2

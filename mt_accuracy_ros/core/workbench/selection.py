@@ -96,6 +96,16 @@ class Step:
 NORMAL_RCOND = 1e-12
 
 
+def _equilibrated_eigen(gram: NDArray[np.float64]):
+    """(scale, eigenvectors, inverse eigenvalues) of X'X with unit-diagonal columns; the
+    directions below :data:`NORMAL_RCOND` get inverse 0. Batched over leading axes."""
+    diagonal = np.sqrt(np.clip(np.einsum("...ii->...i", gram), 0.0, None))
+    scale = np.divide(1.0, diagonal, out=np.zeros_like(diagonal), where=diagonal > 0)
+    values, vectors = np.linalg.eigh(gram * scale[..., :, None] * scale[..., None, :])
+    keep = values > NORMAL_RCOND * np.maximum(values[..., -1:], 1e-300)
+    return scale, vectors, np.divide(1.0, values, out=np.zeros_like(values), where=keep)
+
+
 def solve_normal(gram: NDArray[np.float64], rhs: NDArray[np.float64]) -> NDArray[np.float64]:
     """Minimum-norm least-squares coefficients from normal equations, batched.
 
@@ -112,12 +122,7 @@ def solve_normal(gram: NDArray[np.float64], rhs: NDArray[np.float64]) -> NDArray
         Columns are equilibrated first (a zero column gets coefficient 0), so the
         cut-off does not depend on the columns' units.
     """
-    diagonal = np.sqrt(np.clip(np.einsum("...ii->...i", gram), 0.0, None))
-    scale = np.divide(1.0, diagonal, out=np.zeros_like(diagonal), where=diagonal > 0)
-    scaled = gram * scale[..., :, None] * scale[..., None, :]
-    values, vectors = np.linalg.eigh(scaled)
-    keep = values > NORMAL_RCOND * np.maximum(values[..., -1:], 1e-300)
-    inverse = np.divide(1.0, values, out=np.zeros_like(values), where=keep)
+    scale, vectors, inverse = _equilibrated_eigen(gram)
     projected = np.einsum("...ji,...j->...i", vectors, rhs * scale)
     return scale * np.einsum("...ij,...j->...i", vectors, inverse * projected)
 
@@ -125,11 +130,7 @@ def solve_normal(gram: NDArray[np.float64], rhs: NDArray[np.float64]) -> NDArray
 def normal_inverse(gram: NDArray[np.float64]) -> NDArray[np.float64]:
     """(X'X)^-1 with the cut-off of :func:`solve_normal` (the coefficients' covariance per
     unit variance); directions it drops get zero variance."""
-    diagonal = np.sqrt(np.clip(np.diag(gram), 0.0, None))
-    scale = np.divide(1.0, diagonal, out=np.zeros_like(diagonal), where=diagonal > 0)
-    values, vectors = np.linalg.eigh(gram * scale[:, None] * scale[None, :])
-    keep = values > NORMAL_RCOND * max(values[-1], 1e-300)
-    inverse = np.divide(1.0, values, out=np.zeros_like(values), where=keep)
+    scale, vectors, inverse = _equilibrated_eigen(gram)
     return scale[:, None] * ((vectors * inverse) @ vectors.T) * scale[None, :]
 
 
@@ -140,6 +141,8 @@ class _BaseStatistics:
     base: NDArray[np.float64]
     products: NDArray[np.float64]   # (folds, q + 1, q + 1)
     with_y: NDArray[np.float64]     # (rows, q + 1): [base, y]
+    #: Per-fold products of each candidate (term, setting) with these columns.
+    candidates: dict = field(default_factory=dict)
 
 
 #: Designs kept for reuse (every candidate's columns at every setting would hold GBs for
@@ -214,7 +217,6 @@ class Selector:
         self._designs = _DesignCache(DESIGN_CACHE_BYTES)
         #: How many of a step's best candidates keep their per-reading errors.
         self.keep_errors = 3
-        self._step_products: dict[tuple, tuple] = {}
         self.selected: list[tuple[Term, dict]] = []
 
     # ------------------------------------------------------------ designs
@@ -289,19 +291,19 @@ class Selector:
         return gram, rhs, products[:, q, q]
 
     def _products_of(self, stats: _BaseStatistics, term: Term, setting: dict):
-        """:meth:`_candidate_products` of ``term`` at ``setting``, kept for this step (the
+        """:meth:`_candidate_products` of ``term`` at ``setting``, kept with ``stats`` (the
         full-data fit of the candidate reuses them)."""
         key = (term.name, tuple(sorted(setting.items())))
-        if key not in self._step_products:
+        cache = stats.candidates
+        if key not in cache:
             if term.family.nested_settings and setting != term.settings[-1]:
                 gram, rhs, yy = self._products_of(stats, term, term.settings[-1])
                 size = stats.base.shape[1] + len(term.family.parameter_names(term.variant,
                                                                              setting))
-                self._step_products[key] = (gram[:, :size, :size], rhs[:, :size], yy)
+                cache[key] = (gram[:, :size, :size], rhs[:, :size], yy)
             else:
-                self._step_products[key] = self._candidate_products(
-                    stats, self.design_rows(term, setting))
-        return self._step_products[key]
+                cache[key] = self._candidate_products(stats, self.design_rows(term, setting))
+        return cache[key]
 
     def _held_out_errors(self, x: NDArray[np.float64], coefficients: NDArray[np.float64]
                          ) -> NDArray[np.float64]:
@@ -452,7 +454,6 @@ class Selector:
         return stats, base_sq, count, base_mse, base_mse - self.noise_sigma ** 2
 
     def step(self, terms: list[Term]) -> Step:
-        self._step_products = {}
         stats, base_sq, count, base_mse, excess = self._baseline()
         base = stats.base
         q = base.shape[1]
