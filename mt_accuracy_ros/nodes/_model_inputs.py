@@ -13,10 +13,25 @@ from ._common import (LATCHED_QOS, RESULT_QOS, SENSOR_QOS, TABLE_QOS,  # noqa: F
 
 
 
-def gate_model_text(text: str, gate) -> tuple[str, str]:
+MODEL_DIR_DESCRIPTION = (
+    "The one directory a model or machine named by the network (model topic, a model "
+    "parameter set at run time) may be read from; empty: none (inline YAML and bundled "
+    "names only)")
+
+
+def network_model(text: str, model_dir: str | None, trusted_machines: tuple[str, ...] = ()
+                  ) -> ErrorModel:
+    """A model a DDS peer sent (topic or run-time parameter): never a path (its machine:
+    a bundled one, one in ``model_dir`` or the node's start-up machine)."""
+    return resolve_model(text, from_network=True, model_dir=model_dir or None,
+                         trusted_machines=trusted_machines)
+
+
+def gate_model_text(text: str, gate, model_dir: str | None = None,
+                    trusted_machines: tuple[str, ...] = ()) -> tuple[str, str]:
     """(parse error, gate problem) of a model's YAML: run in the gate's worker process."""
     try:
-        model = resolve_model(text)
+        model = network_model(text, model_dir, trusted_machines)
     except MtAccuracyError as exc:
         return str(exc), ""
     try:
@@ -67,12 +82,17 @@ class ModelInputs:
     """
 
     def __init__(self, node, model_text: str, *, follow_topic: bool, on_change, health,
-                 delay_s: float = 0.5, on_profiles=None, gate=None) -> None:
+                 delay_s: float = 0.5, on_profiles=None, gate=None,
+                 model_dir: str | None = None) -> None:
+        self.model_dir = model_dir or None
         self.on_profiles = on_profiles
         self.gate = gate
         self.node = node
         self.health = health
-        self.model: ErrorModel = resolve_model(model_text)
+        # The start-up model comes from the node's own command line or parameter file.
+        self.model: ErrorModel = resolve_model(model_text, model_dir=self.model_dir)
+        #: The start-up machine, as models name it: network models may name it too.
+        self.trusted_machines = tuple({self.model.machine_source or self.model.machine.name})
         self.temperatures: dict[str, float] = {}
         self.dead: set[str] = set()
         self.on_change = on_change
@@ -130,7 +150,8 @@ class ModelInputs:
     def _submit(self, message: ModelVersion) -> None:
         if not self._older_than_live(message):
             self._pending_model = (message, self._pool.submit(gate_model_text, message.model_yaml,
-                                                          self.gate))
+                                                          self.gate, self.model_dir,
+                                                          self.trusted_machines))
 
     def _poll_model(self) -> None:
         """Settle a gated version (live or refused) once its worker is done, then gate
@@ -141,7 +162,8 @@ class ModelInputs:
         self._pending_model = None
         try:
             parse_error, problem = future.result()
-            model = None if parse_error or problem else resolve_model(message.model_yaml)
+            model = None if parse_error or problem else network_model(
+                message.model_yaml, self.model_dir, self.trusted_machines)
         except Exception as exc:  # noqa: BLE001 - a dead worker must not kill the node
             parse_error, problem = "", f"its gate failed ({type(exc).__name__}: {exc})"
         if parse_error:

@@ -33,7 +33,6 @@ from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompensation
 
-from ..core.compensation.error_model import resolve_model
 from ..core.compensation.five_axis import five_axis_correction
 from ..core.compensation.limits import gate_problem
 from ..core.errors import InputDataError, MtAccuracyError
@@ -43,7 +42,7 @@ from ._common import (COMPENSATION_QOS, TABLE_QOS, run_node, RESULT_QOS,  # noqa
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse,
                       stamp_to_nanoseconds, unpack_float64)
 from ._health import DeliveryHealth
-from ._model_inputs import ModelInputs
+from ._model_inputs import MODEL_DIR_DESCRIPTION, ModelInputs, network_model
 
 class CompensationBroadcaster(Node):
     """ScaleBatch command positions -> VolumetricCompensation; tables on model change."""
@@ -52,6 +51,8 @@ class CompensationBroadcaster(Node):
         super().__init__("compensation_broadcaster", **kwargs)
         self.declare_parameter("model", "demo", plain_descriptor(
             "Error model: bundled name, path to a model YAML, or inline YAML"))
+        self.declare_parameter("model_dir", "", plain_descriptor(MODEL_DIR_DESCRIPTION,
+                                                                read_only=True))
         self.declare_parameter("follow_model_topic", True, plain_descriptor(
             "Also take models published on 'model' (by the model monitor)", read_only=True))
         self.declare_parameter("publish_rate_hz", 100.0, float_descriptor(
@@ -67,7 +68,8 @@ class CompensationBroadcaster(Node):
                                   follow_topic=bool(self.get_parameter("follow_model_topic").value),
                                   on_change=self._model_changed, health=self.health,
                                   delay_s=float(self.get_parameter("input_delay_s").value),
-                                  gate=gate_problem)
+                                  gate=gate_problem,
+                                  model_dir=str(self.get_parameter("model_dir").value))
         self._compensation = self.create_publisher(VolumetricCompensation, "compensation",
                                                    COMPENSATION_QOS)
         self._tables = self.create_publisher(CompensationTable, "compensation_table", TABLE_QOS)
@@ -97,7 +99,8 @@ class CompensationBroadcaster(Node):
         for parameter in parameters:
             if parameter.name == "model":
                 try:
-                    model = resolve_model(str(parameter.value))
+                    model = network_model(str(parameter.value), self.inputs.model_dir,
+                                          self.inputs.trusted_machines)
                 except MtAccuracyError as exc:
                     self.health.refused("parameters", f"model refused: {exc}")
                     return refuse(f"model refused: {exc}")

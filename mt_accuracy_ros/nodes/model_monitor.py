@@ -48,7 +48,7 @@ from rclpy.node import Node
 
 from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ModelVersion, ReferenceMeasurement
 
-from ..core.compensation.error_model import model_from_dict, model_to_dict, resolve_model
+from ..core.compensation.error_model import model_from_dict, model_to_dict
 from ..core.compensation.limits import gate_problem
 from ..core.workbench.closed_loop import judge_version
 from ..core.compensation.five_axis import tool_direction
@@ -58,7 +58,7 @@ from ..core.workbench.diagnosis import (Candidate, Observations, add_effect,
 from ._common import (run_node, LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, plain_descriptor, refuse, stamp_to_nanoseconds)
 from ._health import DeliveryHealth
-from ._model_inputs import ModelInputs
+from ._model_inputs import MODEL_DIR_DESCRIPTION, ModelInputs, network_model
 from ._search_worker import search, search_pool, search_serialized
 
 
@@ -69,6 +69,8 @@ class ModelMonitor(Node):
         super().__init__("model_monitor", **kwargs)
         self.declare_parameter("model", "demo", plain_descriptor(
             "Error model: bundled name, path or inline YAML (setting it starts a new version)"))
+        self.declare_parameter("model_dir", "", plain_descriptor(MODEL_DIR_DESCRIPTION,
+                                                                read_only=True))
         self.declare_parameter("window", 200, int_descriptor(
             "Reference readings kept for the comparison", 10, 100000))
         self.declare_parameter("check_every", 10, int_descriptor(
@@ -99,7 +101,8 @@ class ModelMonitor(Node):
         self.versions: list[dict] = []   # every version published: version, reason, effects
         self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
                                   follow_topic=False, on_change=self._publish_model,
-                                  health=self.health)
+                                  health=self.health,
+                                  model_dir=str(self.get_parameter("model_dir").value))
         self._readings: deque = deque(maxlen=int(self.get_parameter("window").value))
         # The compensated machine's measured error per reading and the version that was
         # live at the machine then: what a new version is judged on.
@@ -143,7 +146,8 @@ class ModelMonitor(Node):
         for parameter in parameters:
             if parameter.name == "model":
                 try:
-                    model = resolve_model(str(parameter.value))
+                    model = network_model(str(parameter.value), self.inputs.model_dir,
+                                          self.inputs.trusted_machines)
                 except MtAccuracyError as exc:
                     return refuse(f"model refused: {exc}")
                 problem = self._make_live(model, "model parameter set")

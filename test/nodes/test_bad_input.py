@@ -3,6 +3,7 @@ counted refusals with their reason on /diagnostics, and the node keeps working."
 from __future__ import annotations
 
 import math
+import os
 
 import pytest
 
@@ -123,4 +124,59 @@ def test_a_bad_model_parameter_is_refused_and_the_monitor_lives(rclpy_context, v
         assert successful, reason
     finally:
         monitor.stop()
+        node.destroy_node()
+
+
+def test_a_network_model_opens_no_file_and_quotes_none(rclpy_context, tmp_path):
+    """Issue 29: paths on the model topic and in a run-time model parameter are refused
+    before anything is opened (a FIFO, /dev/zero, a secret, a valid model elsewhere);
+    no refusal quotes a file; the broadcaster keeps compensating with its model."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    from mt_accuracy_msgs.msg import ModelVersion, ScaleBatch, VolumetricCompensation
+    from mt_accuracy_ros.nodes._common import LATCHED_QOS, SENSOR_QOS
+    from mt_accuracy_ros.nodes.compensation_broadcaster import COMPENSATION_QOS
+
+    secret = tmp_path / "secret.yaml"
+    secret.write_text('user: root\npassword: "hunter2\n')
+    elsewhere = tmp_path / "valid.yaml"
+    elsewhere.write_text("machine: kidani_hmc\neffects: {squareness: {errors_rad: "
+                         "{EC0Y: 1.0e-5}}}\n")
+    fifo = tmp_path / "fifo.yaml"
+    os.mkfifo(fifo)
+    probes = ["/etc/passwd", "/proc/self/environ", "/dev/zero", str(fifo), str(elsewhere),
+              str(secret), f"{{machine: {secret}}}", "{machine: ../../../../etc/passwd}"]
+    node = rclpy.create_node("peer")
+    diagnostics, compensation = [], []
+    node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 100)
+    node.create_subscription(VolumetricCompensation, "compensation", compensation.append,
+                             COMPENSATION_QOS)
+    scales = node.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
+    model = node.create_publisher(ModelVersion, "model", LATCHED_QOS)
+    broadcaster = start_node("compensation_broadcaster", {"input_delay_s": 0.0}, quiet=True)
+    try:
+        assert spin_until(node, lambda: node.count_subscribers("model") > 0
+                          and node.count_publishers("compensation") > 0, 30)
+        for sequence, text in enumerate(probes):
+            model.publish(ModelVersion(version=5, model_yaml=text, sequence=sequence))
+            assert spin_until(node, lambda: sum("model refused" in r for r in
+                                                _refusals(diagnostics, "model"))
+                              >= sequence + 1, 20), text
+        for text in probes:
+            ok, reason = set_parameter_again_until_answered(node, "compensation_broadcaster",
+                                                            "model", text)
+            assert not ok and "never a path" in reason, (text, reason)
+            assert "hunter2" not in reason
+        refusals = _refusals(diagnostics, "model")
+        assert all("never a path" in r for r in refusals), refusals
+        every_text = " ".join(s.message + " ".join(v.value for v in s.values)
+                              for array in diagnostics for s in array.status)
+        assert "hunter2" not in every_text and "root:" not in every_text
+        assert broadcaster.popen.poll() is None, "the broadcaster died"
+        scales.publish(_batch(0, 2_000_000_000, 0.001))
+        assert spin_until(node, lambda: bool(compensation), 20)
+        assert compensation[-1].model_version == 1    # nothing from elsewhere went live
+    finally:
+        broadcaster.stop()
         node.destroy_node()

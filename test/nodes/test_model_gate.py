@@ -67,9 +67,12 @@ def test_the_gate_refuses_and_a_worse_version_is_rolled_back(rclpy_context, tmp_
     node.create_subscription(DiagnosticArray, "/diagnostics", lambda m: alarms.extend(
         (s.name, s.level, s.message) for s in m.status), 100)
     forged = node.create_publisher(ModelVersion, "model", LATCHED_QOS)
-    broadcaster = start_node("compensation_broadcaster", {"model": str(good)}, quiet=True)
+    # Models named at run time come from the nodes' model_dir (never a path: issue 29).
+    broadcaster = start_node("compensation_broadcaster", {"model": str(good),
+                                                          "model_dir": str(tmp_path)}, quiet=True)
     monitor = start_node("model_monitor", {"model": str(good), "check_every": 100000,
-                                           "judge_readings": 10}, quiet=True)
+                                           "judge_readings": 10, "model_dir": str(tmp_path)},
+                         quiet=True)
     cnc = start_node("encoder_publisher", {"batch_period_s": 0.05, "scenario": str(scenario),
                                            "compensation_input": "table", "rate_factor": 4.0,
                                            "min_subscribers": 2}, quiet=True)
@@ -80,13 +83,13 @@ def test_the_gate_refuses_and_a_worse_version_is_rolled_back(rclpy_context, tmp_
         # (Refusals: asking again changes nothing, so the race of a first request
         # with discovery cannot fail the test.)
         ok, reason = set_parameter_again_until_answered(node, "/model_monitor", "model",
-                                                        str(absurd))
+                                                        absurd.name)
         assert not ok
         assert "refused before going live" in reason and "beyond the controller's" in reason
         # 2. The gate, in the broadcaster: its parameter, and a forged newer version on
         # the model topic - both refused, counted, said on /diagnostics.
         ok, reason = set_parameter_again_until_answered(node, "/compensation_broadcaster",
-                                                        "model", str(absurd))
+                                                        "model", absurd.name)
         assert not ok and "refused before going live" in reason
         forged.publish(ModelVersion(version=7, reason="forged", effects=[],
                                     model_yaml=absurd.read_text(), sequence=0))
@@ -94,7 +97,7 @@ def test_the_gate_refuses_and_a_worse_version_is_rolled_back(rclpy_context, tmp_
             "compensation_broadcaster" in name and "model version 7 refused before going "
             "live" in text for name, _, text in alarms), 30.0)
         # 3. A worse model that passes the gate: live at the machine, judged, rolled back.
-        ok, reason = set_remote_parameter(node, "/model_monitor", "model", str(worse))
+        ok, reason = set_remote_parameter(node, "/model_monitor", "model", worse.name)
         assert ok, reason
         assert spin_until(node, lambda: any(v.reason.startswith("rolled back") for v in versions),
                           120.0), [v.reason for v in versions]

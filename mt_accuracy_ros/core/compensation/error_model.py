@@ -49,6 +49,7 @@ from ..kinematics.error_functions import ErrorFunction
 from ..errors import InputDataError, MachineDescriptionError, ParameterError, reraise_as
 from ..kinematics.chain import ErrorOverrides, KinematicModel
 from ..kinematics.machine import MachineDescription, load_machine
+from ..safe_files import load_yaml, plain_name, read_description
 
 MODEL_EFFECTS = ("geometric", "squareness", "structural_thermal_drift",
                  "position_dependent_thermal", "spindle_thermal_growth", "abbe_offset",
@@ -508,9 +509,15 @@ def model_to_dict(model: ErrorModel) -> dict:
 
 
 @reraise_as(ParameterError, "model")
-def model_from_dict(data: dict, source: str = "<dict>", base_dir: Path | None = None
-                    ) -> ErrorModel:
+def model_from_dict(data: dict, source: str = "<dict>", base_dir: Path | None = None, *,
+                    from_network: bool = False, model_dir: Path | None = None,
+                    trusted_machines: tuple[str, ...] = ()) -> ErrorModel:
     """``{machine: NAME|PATH, effects: {name: {params} | true}, reference_temperatures_c: {}}``.
+
+    ``from_network``: the model came from a message or a parameter any DDS peer may
+    set; its machine must then be a bundled name, a plain file name in ``model_dir``
+    (the node's configured directory) or one of ``trusted_machines`` (the machine
+    the node was started with, as its model names it) - never another path.
 
     Raises only :class:`ParameterError` (malformed content of any kind included).
     """
@@ -539,7 +546,9 @@ def model_from_dict(data: dict, source: str = "<dict>", base_dir: Path | None = 
         effects[str(name)] = {} if value is True or value is None else dict(value)
     try:
         machine_source = str(data["machine"])
-        if not Path(machine_source).is_absolute() and base_dir is not None and \
+        if from_network and machine_source not in trusted_machines:
+            machine_source = _network_machine(machine_source, model_dir)
+        elif not Path(machine_source).is_absolute() and base_dir is not None and \
                 (base_dir / machine_source).is_file():
             machine_source = str((base_dir / machine_source).resolve())
         model = ErrorModel(load_machine(machine_source), effects,
@@ -556,33 +565,94 @@ BUNDLED_MODELS = Path(__file__).resolve().parents[2] / "models"
 
 
 @reraise_as(ParameterError, "model")
-def resolve_model(text: str) -> ErrorModel:
-    """A bundled model name (``demo``), a path to a model YAML, or inline YAML text."""
-    import yaml
+def _inline(text: str) -> bool:
+    return "\n" in text or text.startswith("{")
 
+
+def _in_directory(name: str, directory: Path | None, what: str) -> Path | None:
+    """``directory / name`` when ``name`` is a plain file name of a regular file that
+    stays inside ``directory`` (a symlink out of it is refused), else None."""
+    if directory is None or not plain_name(name):
+        return None
+    path = directory / name
+    if not path.is_file():
+        return None
+    if path.resolve().parent != directory.resolve():
+        raise ParameterError(f"{what} {name!r} in the model directory links outside it: refused")
+    return path
+
+
+def _network_machine(name: str, model_dir: Path | None) -> str:
+    """A network model's machine: a bundled name or a plain file name in ``model_dir``."""
+    for candidate in (name, f"{name}.yaml"):
+        path = _in_directory(candidate, model_dir, "machine")
+        if path is not None and path.suffix in (".yaml", ".yml"):
+            return str(path)
+    if plain_name(name) and not Path(name).suffix:
+        return name   # a bundled name; load_machine refuses any other
+    raise ParameterError(f"machine {name[:80]!r} refused: a model from the network names a "
+                         "bundled machine or a file in the node's model_dir, never a path")
+
+
+def resolve_model(text: str, *, from_network: bool = False, model_dir: str | Path | None = None,
+                  trusted_machines: tuple[str, ...] = ()) -> ErrorModel:
+    """A bundled model name (``demo``), a path to a model YAML, or inline YAML text.
+
+    Parameters
+    ----------
+    text : str
+        What the user (or a peer) gave.
+    from_network : bool
+        True for a model a DDS peer can send (the ``model`` topic, a ``model``
+        parameter set at run time): it is then inline YAML, a bundled model name, or
+        a plain file name in ``model_dir`` - **never a path** - and its machine is a
+        bundled name or a file in ``model_dir``. False for the command line and a
+        node's start-up parameters, where paths are the user's own.
+    model_dir : str or Path, optional
+        The one directory network-named files may come from (a node's ``model_dir``
+        parameter; none by default).
+    trusted_machines : tuple of str
+        Machine references a network model may also use: the node's start-up machine
+        (a monitor publishes its versions naming the machine it was started with).
+
+    Every file is read as a regular file of bounded size, and errors never quote
+    a file's content (:mod:`mt_accuracy_ros.core.safe_files`).
+    """
     text = str(text).strip()
-    if "\n" in text or text.startswith("{"):
-        try:
-            return model_from_dict(yaml.safe_load(text), "<inline model>")
-        except yaml.YAMLError as exc:
-            raise ParameterError(f"inline model is not valid YAML: {exc}") from exc
+    directory = Path(model_dir) if model_dir else None
+    if _inline(text):
+        data = load_yaml(text, "inline model", ParameterError)
+        return model_from_dict(data, "<inline model>", from_network=from_network,
+                               model_dir=directory, trusted_machines=trusted_machines)
+    bundled = BUNDLED_MODELS / f"{text}.yaml"
+    if plain_name(text) and not Path(text).suffix and bundled.is_file():
+        return load_model(bundled)
+    if from_network:
+        path = _in_directory(text, directory, "model")
+        if path is None or path.suffix not in (".yaml", ".yml"):
+            raise ParameterError(
+                f"model {text[:80]!r} refused: a model from the network is inline YAML, a "
+                f"bundled model ({', '.join(_bundled_model_names())}) or a model file in "
+                "the node's model_dir" + ("" if directory else " (none configured)") +
+                ", never a path")
+        return load_model(path, from_network=True, model_dir=directory,
+                          trusted_machines=trusted_machines)
     path = Path(text)
     if path.suffix in (".yaml", ".yml") or path.exists():
         return load_model(path)
-    bundled = BUNDLED_MODELS / f"{text}.yaml"
-    if not bundled.is_file():
-        raise ParameterError(f"no model {text!r} (bundled: "
-                             f"{', '.join(sorted(p.stem for p in BUNDLED_MODELS.glob('*.yaml')))}; "
-                             "or a path, or inline YAML)")
-    return load_model(bundled)
+    raise ParameterError(f"no model {text[:80]!r} (bundled: {', '.join(_bundled_model_names())}"
+                         "; or a path, or inline YAML)")
 
 
-def load_model(path) -> ErrorModel:
-    import yaml
+def _bundled_model_names() -> list[str]:
+    return sorted(p.stem for p in BUNDLED_MODELS.glob("*.yaml"))
 
+
+def load_model(path, *, from_network: bool = False, model_dir: Path | None = None,
+               trusted_machines: tuple[str, ...] = ()) -> ErrorModel:
+    """A model YAML file (regular, bounded in size; errors do not quote it)."""
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise ParameterError(f"{path}: cannot read model ({exc})") from exc
-    return model_from_dict(data, str(path), base_dir=path.parent)
+    text = read_description(path, "model", ParameterError)
+    data = load_yaml(text, str(path), ParameterError)
+    return model_from_dict(data, str(path), base_dir=path.parent, from_network=from_network,
+                           model_dir=model_dir, trusted_machines=trusted_machines)

@@ -12,8 +12,8 @@ it once fitted.
 
 Kinematic sensitivities (how a unit motion or location error of an axis
 moves the TCP, with its Abbe arms, Khan & Chen eqs. 8-17, Kidani eq. 2.10)
-come from the machine's kinematic chain, by differentiating the full HTM
-product: :meth:`Context.jacobian`.
+come from the machine's kinematic chain, to first order in the errors (each
+error's frame and lever arm): :meth:`Context.jacobian`.
 """
 from __future__ import annotations
 
@@ -24,13 +24,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InputDataError
-from ..kinematics.chain import ErrorOverrides, KinematicModel
-from ..kinematics.machine import MachineDescription
+from ..kinematics.chain import KinematicModel
+from ..kinematics.machine import COMPONENTS, MachineDescription
 from .variables import Variables
 
 #: The scales' own thermocouples (x1_s0 ...) serve the scale compensation, not the structure.
 _SCALE_SENSOR = re.compile(r"^[xyzabc][12]_s\d+$", re.IGNORECASE)
-_STEP = 1e-6
 
 
 class Context:
@@ -49,6 +48,7 @@ class Context:
         self.orientation = orientation
         self.n = variables.n
         self._jacobians: dict[str, NDArray[np.float64]] = {}
+        self._frames: dict | None = None
         self.cache: dict = {}   # families' precomputed bases (e.g. periodic) for these readings
         missing = [a for a in machine.axis_order if a not in variables.positions]
         if missing:
@@ -58,19 +58,26 @@ class Context:
         """d e_TCP / d (error ``error_name``) at the readings, shape (N, 3) [m per m or rad].
 
         ``error_name`` is an ISO 230-1 motion error (``EXX``, ``EBX``, ``ECA``) or
-        location error (``EC0Y``, ``EX0B``). Exact HTM products at a 1e-6 step:
-        the chain is linear in its errors to well below 1e-12 m at that size.
+        location error (``EC0Y``, ``EX0B``). The analytic first-order sensitivity
+        of the HTM chain (:meth:`KinematicModel.error_frames`: the frame the
+        error acts in and its lever to the TCP); a name the chain does not have
+        moves nothing.
         """
         if error_name not in self._jacobians:
-            positions = {a: self.variables.positions[a] for a in self.machine.axis_order}
-            overrides = ErrorOverrides(use_description=False)
-            if len(error_name) == 4:
-                overrides.location[error_name] = _STEP
+            if self._frames is None:
+                positions = {a: self.variables.positions[a] for a in self.machine.axis_order}
+                self._frames = self.kinematics.error_frames(positions)
+            frame = self._frames.get(error_name)
+            if frame is None:
+                self._jacobians[error_name] = np.zeros((self.n, 3))
             else:
-                overrides.motion[error_name] = np.full(self.n, _STEP)
-            moved = self.kinematics.tcp_error(positions, overrides=overrides,
-                                              check_stroke=False)["position"]
-            self._jacobians[error_name] = moved / _STEP
+                sign, rotation, lever = frame
+                component = COMPONENTS.index(error_name[1])
+                if component < 3:
+                    sensitivity = rotation[:, :, component]
+                else:
+                    sensitivity = np.cross(rotation[:, :, component - 3], lever)
+                self._jacobians[error_name] = sign * np.ascontiguousarray(sensitivity)
         return self._jacobians[error_name]
 
     def normalised_position(self, axis: str) -> NDArray[np.float64]:
@@ -133,6 +140,11 @@ class EffectFamily:
     #: constant or input, 2 a function or a lag, 3 a searched period or a product. When
     #: the data cannot tell two candidates apart, the simpler is named (Occam).
     complexity = 2
+
+    def variant_complexity(self, variant: str) -> int:
+        """:attr:`complexity` of one variant (a family whose variants differ in what they
+        assume overrides this)."""
+        return self.complexity
 
     def variants(self, ctx: Context) -> list[str]:
         raise NotImplementedError

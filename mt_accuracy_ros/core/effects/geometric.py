@@ -38,6 +38,9 @@ from .spectral import frequency_grid, grid_periodogram
 
 #: ISO 230-1 component letters of a linear axis' errors, by kind.
 _KIND_COMPONENTS = {"positioning": "self", "straightness": "XYZ", "angular": "ABC"}
+#: Legendre orders searched per smooth error (from its first order on), and the largest.
+_ORDERS = 6
+_LARGEST_ORDER = 2 + _ORDERS - 1
 
 
 def _legendre_columns(u, first: int, last: int):
@@ -94,7 +97,7 @@ class ComponentError(EffectFamily):
             # Frequencies a quarter cycle apart over the stroke: no peak falls between.
             return [{"period_m": float(1.0 / f)} for f in frequency_grid(high - low)]
         first = 2 if self.kind == "straightness" else 1
-        return [{"order": k} for k in range(first, first + 6)]
+        return [{"order": k} for k in range(first, first + _ORDERS)]
 
     def parameter_names(self, variant: str, setting: dict) -> list[str]:
         if self.periodic:
@@ -104,15 +107,30 @@ class ComponentError(EffectFamily):
 
     def _basis(self, q, u, setting):
         if self.periodic:
-            phase = 2.0 * np.pi * q / setting["period_m"]
-            return np.column_stack([np.cos(phase), np.sin(phase), np.cos(2 * phase),
-                                    np.sin(2 * phase)])
+            phase = 2.0 * np.pi * np.asarray(q, dtype=np.float64) / setting["period_m"]
+            basis = np.empty((phase.size, 4))
+            basis[:, 0] = np.cos(phase)
+            basis[:, 1] = np.sin(phase)
+            # The second harmonic from the first (double-angle identities: no more trig).
+            basis[:, 2] = 2.0 * basis[:, 0] ** 2 - 1.0
+            basis[:, 3] = 2.0 * basis[:, 0] * basis[:, 1]
+            return basis
         first = 2 if self.kind == "straightness" else 1
         return _legendre_columns(u, first, setting["order"])
 
     def design(self, ctx: Context, variant: str, setting: dict):
         axis = variant[2]
-        basis = self._basis(ctx.variables.positions[axis], ctx.normalised_position(axis), setting)
+        if self.periodic or setting["order"] > _LARGEST_ORDER:
+            basis = self._basis(ctx.variables.positions[axis], ctx.normalised_position(axis),
+                                setting)
+        else:
+            # Every smooth error of an axis shares its Legendre columns: computed once.
+            key = ("legendre", axis)
+            if key not in ctx.cache:
+                ctx.cache[key] = _legendre_columns(ctx.normalised_position(axis), 0,
+                                                   _LARGEST_ORDER)
+            first = 2 if self.kind == "straightness" else 1
+            basis = ctx.cache[key][:, first:setting["order"] + 1]
         return along(ctx.jacobian(variant), basis)
 
     def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
@@ -207,6 +225,12 @@ class RotaryError(EffectFamily):
 
     def settings(self, ctx, variant):
         return [{"harmonics": h} for h in (1, 2, 3)]
+
+    def variant_complexity(self, variant: str) -> int:
+        # As for a linear axis: a wobble acting through a lever assumes more than a runout.
+        # With a constant lever the two are the same signature to the last bit, and
+        # the tie must not be broken by rounding.
+        return self.complexity + (variant[1] in "ABC")
 
     # The first harmonic of an error seen from the rotating frame is an offset or tilt of
     # the axis (its location errors, :class:`RotaryLocation`); the position-dependent

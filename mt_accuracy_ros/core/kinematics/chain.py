@@ -260,6 +260,47 @@ class KinematicModel:
                 orientation += sign * eps
         return {"position": position, "orientation": orientation}
 
+    def error_frames(self, positions: Positions, check_stroke: bool = False
+                     ) -> dict[str, tuple[float, NDArray, NDArray]]:
+        """Where every motion and location error acts: name -> (sign, R, lever).
+
+        ``R`` (N, 3, 3) is the nominal rotation of the frame the error twist acts
+        in, ``lever`` (N, 3) [m] the nominal vector from that frame's origin to
+        the branch end point, both in the bed frame, and ``sign`` +1 for the
+        tool branch, -1 for the workpiece branch. A unit error in component c
+        then moves the TCP by ``sign * R[:, :, c]`` (translations) or
+        ``sign * (R[:, :, c-3] x lever)`` (rotations): the same first-order
+        terms as :meth:`tcp_error_linear`, so a sensitivity costs one cross
+        product instead of a chain of matrix products. Frames of linear axes
+        share one rotation array (a linear motion does not turn the frame).
+        """
+        q, n = self._positions(positions, check_stroke)
+        frames: dict[str, tuple[float, NDArray, NDArray]] = {}
+        for which, sign in (("tool", 1.0), ("workpiece", -1.0)):
+            axes = self.machine.tool_branch if which == "tool" else self.machine.workpiece_branch
+            end_point = self.machine.tool if which == "tool" else self.machine.workpiece
+            rot = np.broadcast_to(np.eye(3), (n, 3, 3))
+            pos = np.zeros((n, 3))
+            origins = []
+            parent_offset = np.zeros(3)
+            for axis in axes:
+                pos = pos + rot @ parent_offset
+                origins.append((axis, "location", rot, pos))
+                spec = self.machine.axes[axis]
+                if spec.is_rotary:
+                    rot = rot @ rotation("xyz"[spec.direction], spec.sign * q[axis])[:, :3, :3]
+                else:
+                    pos = pos + rot[:, :, spec.direction] * (spec.sign * q[axis])[:, None]
+                origins.append((axis, "motion", rot, pos))
+                parent_offset = spec.offset
+            end = pos + rot @ (parent_offset + end_point)
+            for axis, kind, frame_rot, origin in origins:
+                name_of = location_error_name if kind == "location" else motion_error_name
+                lever = end - origin
+                for component in COMPONENTS:
+                    frames[name_of(component, axis)] = (sign, frame_rot, lever)
+        return frames
+
     def nominal_relative(self, positions: Positions, check_stroke: bool = False) -> NDArray:
         """(N, 3) nominal tool point relative to the workpiece point, bed frame."""
         tool0 = self.branch("tool", positions, errors=False, check_stroke=check_stroke)

@@ -18,10 +18,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from .error_functions import ErrorFunction, parse_error_function
 from ..errors import MachineDescriptionError, reraise_as
+from ..safe_files import load_yaml, plain_name, read_description
 
 AXIS_LETTERS = "XYZABC"
 COMPONENTS = "XYZABC"  # error motion components: translations X, Y, Z; rotations A, B, C
@@ -260,19 +260,34 @@ def _cnc_section(spec, where: str) -> dict:
     return out
 
 
+#: The bundled machine descriptions (``kidani_hmc``, ``khan_chen_rpppr``).
+BUNDLED_MACHINES = Path(__file__).resolve().parents[2] / "machines"
+
+
+def bundled_machine_names() -> list[str]:
+    return sorted(p.stem for p in BUNDLED_MACHINES.glob("*.yaml"))
+
+
+def bundled_machine_path(name: str) -> Path:
+    """The file of the bundled machine ``name``; a name that is not one is refused
+    (nothing outside the bundled directory is reachable through a name)."""
+    if not plain_name(name) or not (BUNDLED_MACHINES / f"{name}.yaml").is_file():
+        raise MachineDescriptionError(f"no bundled machine {name[:80]!r} (bundled: "
+                                      f"{', '.join(bundled_machine_names())}; or a path to a "
+                                      "machine YAML)")
+    return BUNDLED_MACHINES / f"{name}.yaml"
+
+
 @reraise_as(MachineDescriptionError, "machine description")
 def load_machine(path_or_name: str | Path) -> MachineDescription:
     """Load a description from a YAML file, or a bundled one by name
-    (``kidani_hmc``, ``khan_chen_rpppr``)."""
+    (``kidani_hmc``, ``khan_chen_rpppr``): a name has no suffix.
+
+    The file must be a regular file of at most
+    :data:`~mt_accuracy_ros.core.safe_files.MAX_DESCRIPTION_BYTES`; errors never quote it.
+    """
     path = Path(path_or_name)
     if not path.suffix:
-        path = Path(__file__).resolve().parents[2] / "machines" / f"{path_or_name}.yaml"
-    try:
-        data = yaml.safe_load(path.read_text())
-    except FileNotFoundError as exc:
-        raise MachineDescriptionError(f"machine description not found: {path}") from exc
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MachineDescriptionError(f"{path}: cannot read ({exc})") from exc
-    except yaml.YAMLError as exc:
-        raise MachineDescriptionError(f"{path}: not valid YAML ({exc})") from exc
-    return machine_from_dict(data, str(path))
+        path = bundled_machine_path(str(path_or_name))
+    text = read_description(path, "machine description", MachineDescriptionError)
+    return machine_from_dict(load_yaml(text, str(path), MachineDescriptionError), str(path))

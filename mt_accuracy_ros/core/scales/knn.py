@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InsufficientDataError, ParameterError
+from ..errors import InputDataError, InsufficientDataError, ParameterError
 from ..validation import finite_array, same_length
 
 
@@ -314,64 +314,120 @@ def cross_validate_k(positions: ArrayLike, values: ArrayLike, k_lim: int = 100,
     k_lim = int(k_lim)
     if k_lim < 1:
         raise ParameterError(f"k_lim must be >= 1, got {k_lim}")
-    fold_rmse = _fold_rmse(x, y, fold_of, n_folds, k_lim)
+    return _result(_fold_rmse(x, y, fold_of, n_folds, k_lim), fold_of)
+
+
+def _result(fold_rmse: NDArray[np.float64], fold_of: NDArray[np.intp]) -> CrossValidationResult:
     rmse_by_k = fold_rmse.mean(axis=0)
     best = int(np.argmin(rmse_by_k))
     return CrossValidationResult(k=best + 1, cv_rmse=float(rmse_by_k[best]),
-                                 k_values=np.arange(1, k_lim + 1), rmse_by_k=rmse_by_k,
+                                 k_values=np.arange(1, rmse_by_k.size + 1), rmse_by_k=rmse_by_k,
                                  fold_rmse=fold_rmse, folds=fold_of)
+
+
+def cross_validate_k_many(positions: ArrayLike, values: ArrayLike, k_lim: int = 100,
+                          n_folds: int = 5, seed: int | None = 0) -> list:
+    """:func:`cross_validate_k` of each of V variables against the same values, in one pass.
+
+    Parameters
+    ----------
+    positions : array_like, shape (V, N)
+        V candidate variables at the same N samples (e.g. which one a residual follows).
+    values : array_like, shape (N,) or (N, C)
+        One series, or C series measured at the same samples (their neighbours in a
+        variable are the same, so they share the search).
+    k_lim, n_folds, seed :
+        As :func:`cross_validate_k`; every variable gets the same shuffled folds, so
+        result v (v, c) equals ``cross_validate_k(positions[v], values[:, c], ...)``.
+
+    Returns
+    -------
+    list of V :class:`CrossValidationResult` (1-D values), or V lists of C of them.
+    """
+    y = np.asarray(values, dtype=np.float64)
+    if y.ndim not in (1, 2):
+        raise InputDataError(f"values must be (N,) or (N, C), got shape {y.shape}")
+    y = finite_array(y, "values", ndim=y.ndim)
+    if np.shape(positions)[:1] == (0,):
+        return []
+    x = finite_array(positions, "positions", ndim=2)
+    if x.shape[1] != y.shape[0]:
+        raise InputDataError(f"positions hold {x.shape[1]} samples per variable, "
+                             f"values {y.shape[0]}")
+    k_lim = int(k_lim)
+    if k_lim < 1:
+        raise ParameterError(f"k_lim must be >= 1, got {k_lim}")
+    fold_of = shuffled_folds(y.shape[0], n_folds, seed)
+    fold_rmse = _fold_rmse(x, y, fold_of, n_folds, k_lim)
+    if y.ndim == 1:
+        return [_result(per_variable, fold_of) for per_variable in fold_rmse]
+    return [[_result(per_variable[..., c], fold_of) for c in range(y.shape[1])]
+            for per_variable in fold_rmse]
 
 
 def _fold_rmse(x: NDArray[np.float64], y: NDArray[np.float64], fold_of: NDArray[np.intp],
                n_folds: int, k_lim: int) -> NDArray[np.float64]:
-    """RMSE(k) of every fold, k = 1 .. k_lim: (n_folds, k_lim).
+    """RMSE(k) of every fold, k = 1 .. k_lim: (n_folds, k_lim) for x (N,), or
+    (V, n_folds, k_lim) for V variables x (V, N) smoothing the same y; with y of
+    shape (N, C) (C series on the same samples: the neighbours depend on x alone)
+    a last axis of C.
 
-    Every fold's windows grow in one pass: the folds' training sets are laid end to
-    end, each between -inf/+inf sentinels, so a query's window never leaves its own
-    fold's segment (a sentinel is never nearer than a training point). One stable
-    sort serves every fold: a stable-sorted array restricted to a subset is that
-    subset stable-sorted.
+    Every fold's windows grow in one pass: the folds' training sets (of every
+    variable) are laid end to end, each between -inf/+inf sentinels, so a query's
+    window never leaves its own segment (a sentinel is never nearer than a
+    training point). One stable sort per variable serves every fold: a
+    stable-sorted array restricted to a subset is that subset stable-sorted.
     """
-    order = np.argsort(x, kind="stable")
-    sorted_fold = fold_of[order]
+    many = x.ndim == 2
+    xs_all = x if many else x[None, :]
     xs_parts, ys_parts, query_parts, truth_parts, starts, sizes = [], [], [], [], [], []
     offset = 0
-    for fold in range(n_folds):
-        held_out = sorted_fold == fold
-        if not held_out.any():
-            raise InsufficientDataError(f"fold {fold} holds no sample")
-        training = order[~held_out]
-        if training.size < k_lim:
-            raise InsufficientDataError(
-                f"fold {fold}: k_lim = {k_lim} exceeds its {training.size} training points")
-        xs_parts += [[-np.inf], x[training], [np.inf]]
-        ys_parts += [[0.0], y[training], [0.0]]
-        # Held-out queries in sorted order: every gather below walks memory in order.
-        queries = x[order[held_out]]
-        query_parts.append(queries)
-        truth_parts.append(y[order[held_out]])
-        # Insertion point inside the segment, as a padded index of the left candidate.
-        starts.append(offset + np.searchsorted(x[training], queries, side="left"))
-        sizes.append(queries.size)
-        offset += training.size + 2
+    # Series as rows (C, N): each k's admissions gather along contiguous rows.
+    series = y.T.reshape(-1, y.shape[0])
+    sentinel_y = np.zeros((series.shape[0], 1))
+    for xv in xs_all:
+        order = np.argsort(xv, kind="stable")
+        sorted_fold = fold_of[order]
+        for fold in range(n_folds):
+            held_out = sorted_fold == fold
+            if not held_out.any():
+                raise InsufficientDataError(f"fold {fold} holds no sample")
+            training = order[~held_out]
+            if training.size < k_lim:
+                raise InsufficientDataError(
+                    f"fold {fold}: k_lim = {k_lim} exceeds its {training.size} training points")
+            xs_parts += [[-np.inf], xv[training], [np.inf]]
+            ys_parts += [sentinel_y, series[:, training], sentinel_y]
+            # Held-out queries in sorted order: every gather below walks memory in order.
+            queries = xv[order[held_out]]
+            query_parts.append(queries)
+            truth_parts.append(series[:, order[held_out]])
+            # Insertion point inside the segment, as a padded index of the left candidate.
+            starts.append(offset + np.searchsorted(xv[training], queries, side="left"))
+            sizes.append(queries.size)
+            offset += training.size + 2
     xs_pad = np.concatenate(xs_parts)
-    ys_pad = np.concatenate(ys_parts)
+    ys_pad = np.concatenate(ys_parts, axis=1)
     queries = np.concatenate(query_parts)
-    truth = np.concatenate(truth_parts)
+    truth = np.concatenate(truth_parts, axis=1)
     left = np.concatenate(starts)      # pad index of the next left candidate
     right = left + 1                   # pad index of the next right candidate
-    running = np.zeros(queries.size)
+    running = np.zeros(truth.shape)
     boundaries = np.concatenate(([0], np.cumsum(sizes)[:-1]))
-    squared = np.empty((n_folds, k_lim))
+    squared = np.empty((len(sizes), k_lim, series.shape[0]))
     for k in range(1, k_lim + 1):
         take_left = (queries - xs_pad[left]) <= (xs_pad[right] - queries)
         admitted = np.where(take_left, left, right)
-        running += ys_pad[admitted]
+        running += np.take(ys_pad, admitted, axis=1)
         left -= take_left
         right += ~take_left
         residual = running / k - truth
-        squared[:, k - 1] = np.add.reduceat(residual * residual, boundaries)
-    return np.sqrt(squared / np.asarray(sizes, float)[:, None])
+        squared[:, k - 1] = np.add.reduceat(residual * residual, boundaries, axis=1).T
+    rmse_by_fold = np.sqrt(squared / np.asarray(sizes, float)[:, None, None])
+    if y.ndim == 1:
+        rmse_by_fold = rmse_by_fold[..., 0]
+    return rmse_by_fold.reshape((xs_all.shape[0], n_folds) + rmse_by_fold.shape[1:]) if many \
+        else rmse_by_fold
 
 
 def rmse(predicted: ArrayLike, measured: ArrayLike) -> float:

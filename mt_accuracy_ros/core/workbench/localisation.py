@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ..scales.knn import cross_validate_k
+from ..scales.knn import cross_validate_k_many
 from ..effects.spectral import frequency_grid, grid_periodogram
 from ..effects.variables import Variables
 
@@ -230,6 +230,50 @@ def _blocked_share(q: NDArray[np.float64], r: NDArray[np.float64], period_m: flo
     return max(0.0, 1.0 - squared / float(np.sum(r ** 2)))
 
 
+
+def _variable_shares(candidates: dict[str, NDArray], measured: dict, folds: int) -> list[Share]:
+    """Each candidate variable's held-out kNN share of each component's residual.
+
+    Components measured at the same readings share one neighbour search (the
+    neighbours depend on the variable alone).
+    """
+    groups: dict[bytes, list[str]] = {}
+    for component, (rows, _, _) in measured.items():
+        groups.setdefault(np.packbits(rows).tobytes() + bytes([rows.size % 8]), []
+                          ).append(component)
+    names = list(candidates)
+    found: dict[str, list[Share]] = {}
+    for components in groups.values():
+        rows = measured[components[0]][0]
+        n = int(rows.sum())
+        # The shares are estimates with a resolution of ~1/sqrt(N); beyond a few thousand
+        # readings more of them sharpen nothing a reader sees, and cost O(N k) each.
+        subset = slice(None)
+        if n > SHARE_READINGS:
+            subset = np.unique(np.linspace(0, n - 1, SHARE_READINGS).round().astype(np.intp))
+        r_shares = np.column_stack([measured[c][1][subset] for c in components])
+        r_shares = r_shares - r_shares.mean(axis=0)
+        variance_shares = np.mean(r_shares ** 2, axis=0)
+        size = r_shares.shape[0]
+        k_lim = max(1, min(60, int(size * (folds - 1) / folds) - 1))
+        jittered = np.empty((len(names), size))
+        unit_jitter = np.random.default_rng(0).uniform(-1e-9, 1e-9, size)
+        for i, name in enumerate(names):
+            v = candidates[name][rows][subset]
+            # Ties (a stepped temperature, a direction) share their neighbours fairly: a
+            # seeded jitter far below the variable's resolution breaks them.
+            jittered[i] = v + unit_jitter * (np.ptp(v) or 1.0)
+        results = cross_validate_k_many(jittered, r_shares, k_lim=k_lim, n_folds=folds, seed=0)
+        for j, component in enumerate(components):
+            variance = measured[component][2]
+            found[component] = []
+            for name, per_component in zip(names, results):
+                share = 1.0 - per_component[j].cv_rmse ** 2 / max(variance_shares[j], 1e-300)
+                found[component].append(Share(name, component, float(share),
+                                              float(np.sqrt(max(share, 0.0) * variance))))
+    return [share for component in COMPONENTS for share in found.get(component, [])]
+
+
 def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: Variables,
              structure_sensors: list[str], noise_sigma: float,
              strokes: dict[str, tuple[float, float]] | None = None, folds: int = 5
@@ -238,6 +282,7 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
     shares, peaks = [], []
     candidates = candidate_variables(variables, structure_sensors)
     rms = {}
+    measured = {}     # component -> (rows, centred residual, its variance)
     for c, component in enumerate(COMPONENTS):
         rows = mask[:, c]
         r = residual[rows, c]
@@ -246,25 +291,13 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
         r = r - r.mean()
         variance = float(np.mean(r ** 2))
         rms[component] = float(np.sqrt(variance))
-        if variance <= 0:
+        if variance > 0:
+            measured[component] = (rows, r, variance)
+    shares = _variable_shares(candidates, measured, folds)
+    for c, component in enumerate(COMPONENTS):
+        if component not in measured:
             continue
-        # The shares are estimates with a resolution of ~1/sqrt(N); beyond a few thousand
-        # readings more of them sharpen nothing a reader sees, and cost O(N k) each.
-        subset, r_shares, variance_shares = slice(None), r, variance
-        if r.size > SHARE_READINGS:
-            subset = np.unique(np.linspace(0, r.size - 1, SHARE_READINGS).round().astype(np.intp))
-            r_shares = r[subset] - r[subset].mean()
-            variance_shares = float(np.mean(r_shares ** 2))
-        k_lim = max(1, min(60, int(r_shares.size * (folds - 1) / folds) - 1))
-        for name, values in candidates.items():
-            v = values[rows][subset]
-            # Ties (a stepped temperature, a direction) share their neighbours fairly: a
-            # seeded jitter far below the variable's resolution breaks them.
-            jitter = np.random.default_rng(0).uniform(-1e-9, 1e-9, v.size) * (np.ptp(v) or 1.0)
-            result = cross_validate_k(v + jitter, r_shares, k_lim=k_lim, n_folds=folds, seed=0)
-            share = 1.0 - result.cv_rmse ** 2 / max(variance_shares, 1e-300)
-            shares.append(Share(name, component, float(share),
-                                float(np.sqrt(max(share, 0.0) * variance))))
+        rows, r, variance = measured[component]
         for axis, values in variables.positions.items():
             if strokes is None or axis not in strokes or axis in "ABC":
                 continue

@@ -488,7 +488,8 @@ class Selector:
         if plausible:
             limit = scored[0].cv_rmse ** 2 * (1.0 + self.tie)
             tied = [s for s in plausible if s.cv_rmse ** 2 <= limit]
-            simplest = min(tied, key=lambda s: (s.term.family.complexity, s.cv_rmse))
+            simplest = min(tied, key=lambda s: (s.term.family.variant_complexity(s.term.variant),
+                                                 s.cv_rmse))
             scored.remove(simplest)
             scored.insert(0, simplest)
         added = None

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from mt_accuracy_ros.core.errors import InputDataError, InsufficientDataError, ParameterError
-from mt_accuracy_ros.core.scales.knn import (SortedTraining, cross_validate_k, extract_systematic,
+from mt_accuracy_ros.core.scales.knn import (SortedTraining, cross_validate_k,
+                                      cross_validate_k_many, extract_systematic,
                                       knn_brute_force, knn_brute_force_indices,
                                       knn_neighbour_indices, knn_predict, knn_predict_all_k,
                                       shuffled_folds)
@@ -71,6 +72,28 @@ def test_cross_validation_equals_an_explicit_per_fold_brute_force():
     assert result.k == int(np.argmin(result.rmse_by_k)) + 1
     assert result.cv_rmse == pytest.approx(result.rmse_by_k.min())
 
+
+
+def test_many_variables_in_one_pass_equal_one_at_a_time():
+    """The batched cross-validation (every variable's folds as segments of one array)
+    gives each variable exactly what its own call gives, ties and steps included."""
+    rng = np.random.default_rng(3)
+    n = 700
+    y = rng.normal(0, 1e-6, n)
+    variables = np.stack([rng.uniform(0, 0.4, n),                 # smooth
+                          np.repeat(np.arange(7.0), n // 7),      # stepped: ties everywhere
+                          -np.linspace(0, 1, n),                  # sorted the other way
+                          y * 1e5])                               # follows y exactly
+    many = cross_validate_k_many(variables, y, k_lim=25, n_folds=5, seed=2)
+    assert len(many) == variables.shape[0]
+    for v, result in zip(variables, many):
+        alone = cross_validate_k(v, y, k_lim=25, n_folds=5, seed=2)
+        np.testing.assert_array_equal(result.fold_rmse, alone.fold_rmse)
+        assert (result.k, result.cv_rmse) == (alone.k, alone.cv_rmse)
+    assert many[3].cv_rmse < 0.5 * many[0].cv_rmse   # the variable y follows is found
+    assert cross_validate_k_many(np.empty((0, n)), y) == []
+    with pytest.raises(InputDataError, match="samples per variable"):
+        cross_validate_k_many(variables[:, :-1], y)
 
 def test_cross_validation_picks_a_moderate_k_and_predicts_new_data_as_well_as_it_claims():
     rng = np.random.default_rng(8)

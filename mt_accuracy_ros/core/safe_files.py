@@ -1,0 +1,86 @@
+"""Reading description files (machines, models) without trusting where their names came from.
+
+A machine or model may be named by a user on the command line, or by a message or
+parameter that any peer on the DDS network can send. Whatever the source, a
+description is read only from a **regular file** no larger than
+:data:`MAX_DESCRIPTION_BYTES` (a FIFO would block the reader forever, ``/dev/zero``
+would fill memory), opened non-blocking, and a YAML error names the line and
+column of the problem but never quotes the file's content (a line of a secret
+file must not travel to a foreign node inside an error on ``/diagnostics``).
+"""
+from __future__ import annotations
+
+import os
+import re
+import stat
+from pathlib import Path
+
+from .errors import MtAccuracyError
+
+#: The largest machine or model description read [bytes] (the bundled ones are < 10 kB).
+MAX_DESCRIPTION_BYTES = 1 << 20
+
+#: A plain name: letters, digits, '_', '-' and inner dots, no separator, no '..'.
+_PLAIN_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
+
+
+def plain_name(text: str) -> bool:
+    """Is ``text`` a bare file or bundled name (no directory part, no traversal)?"""
+    return bool(_PLAIN_NAME.match(text)) and ".." not in text and len(text) <= 255
+
+
+def read_description(path: str | Path, what: str, error_class: type[MtAccuracyError],
+                     max_bytes: int = MAX_DESCRIPTION_BYTES) -> str:
+    """The UTF-8 text of the description file ``path``.
+
+    Raises ``error_class`` (naming ``path`` and ``what``, never the content) when it is
+    missing, not a regular file, larger than ``max_bytes`` or not UTF-8 text.
+    """
+    path = Path(path)
+    try:
+        info = os.stat(path)
+    except FileNotFoundError as exc:
+        raise error_class(f"{what} not found: {path}") from exc
+    except OSError as exc:
+        raise error_class(f"{path}: cannot read {what} ({exc.strerror})") from exc
+    if not stat.S_ISREG(info.st_mode):
+        raise error_class(f"{path}: {what} is not a regular file")
+    if info.st_size > max_bytes:
+        raise error_class(f"{path}: {what} of {info.st_size} bytes exceeds the "
+                          f"{max_bytes}-byte limit")
+    try:
+        # Non-blocking: the file may have been swapped for a FIFO since the check.
+        descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+        with os.fdopen(descriptor, "rb") as handle:
+            data = handle.read(max_bytes + 1)
+    except OSError as exc:
+        raise error_class(f"{path}: cannot read {what} ({exc.strerror})") from exc
+    if len(data) > max_bytes:
+        raise error_class(f"{path}: {what} exceeds the {max_bytes}-byte limit")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error_class(f"{path}: {what} is not UTF-8 text (byte {exc.start})") from exc
+
+
+def yaml_problem(exc: Exception) -> str:
+    """Where and what a YAML error is, without the snippet of text it would quote."""
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    problem = getattr(exc, "problem", None) or getattr(exc, "context", None) or "malformed"
+    # PyYAML's problems quote at most a token ("found undefined alias 'secret'"): a
+    # quoted part longer than one character (an escape like '\t') is left out too.
+    problem = re.sub(r"'[^']{3,}'", "'...'", str(problem))
+    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+    return f"{problem}{where}"
+
+
+def load_yaml(text: str, source: str, error_class: type[MtAccuracyError]):
+    """``yaml.safe_load`` of ``text``; a YAML error becomes ``error_class`` without content."""
+    import yaml
+
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise error_class(f"{source}: not valid YAML ({yaml_problem(exc)})") from exc
+    except RecursionError as exc:
+        raise error_class(f"{source}: YAML nested too deeply") from exc
