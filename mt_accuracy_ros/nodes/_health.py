@@ -49,6 +49,13 @@ class DeliveryHealth:
         self._send([self._status(DiagnosticStatus.WARN, f"{stream}: refused: {reason}",
                                  self._values(stream))])
 
+    def alarm(self, message: str, topic: str = "model") -> None:
+        """An ERROR on /diagnostics (``<node>: <topic>``): something the operator must act on."""
+        self._node.get_logger().error(message)
+        self._send([DiagnosticStatus(level=DiagnosticStatus.ERROR, name=
+                                     f"{self._node.get_fully_qualified_name()}: {topic}",
+                                     message=message, hardware_id="", values=[])])
+
     def sequence(self, stream: str, sequence: int, count: int = 1) -> int:
         """Check a stream's running ``sequence``; return how many were lost before it.
 

@@ -91,6 +91,9 @@ class ModelInputs:
         self.health = health
         # The start-up model comes from the node's own command line or parameter file.
         self.model: ErrorModel = resolve_model(model_text, model_dir=self.model_dir)
+        # Versions that evaluated at the machine, newest last, and those that failed there.
+        self._evaluated: list[ErrorModel] = []
+        self._failed: set[int] = set()
         #: The start-up machine, as models name it: network models may name it too.
         self.trusted_machines = tuple({self.model.machine_source or self.model.machine.name})
         self.temperatures: dict[str, float] = {}
@@ -131,6 +134,28 @@ class ModelInputs:
             model.version = max(model.version, self.model.version + 1)
         self.model = model
         self.on_change()
+
+    def evaluated(self, model: ErrorModel) -> None:
+        """``model`` gave corrections at the machine: a version to fall back to."""
+        if not self._evaluated or self._evaluated[-1] is not model:
+            self._evaluated = [m for m in self._evaluated[-2:] if m is not model] + [model]
+
+    def revert_to_good(self, reason: str) -> bool:
+        """Make the newest other version that evaluated live again after the live one
+        failed (counted, ERROR on /diagnostics); False when there is none."""
+        failing = self.model
+        self._failed.add(id(failing))
+        good = next((m for m in reversed(self._evaluated)
+                     if m is not failing and id(m) not in self._failed), None)
+        if good is None:
+            return False
+        self.health.refused("model", f"{reason}; version {good.version}, the last that "
+                            "evaluated, is live again")
+        self.health.alarm(f"model version {failing.version} failed at the machine: "
+                          f"{reason}; version {good.version} is live again")
+        self.model = good
+        self.on_change()
+        return True
 
     def _on_model(self, message: ModelVersion) -> None:
         self.health.sequence("model", message.sequence)

@@ -157,25 +157,35 @@ class CompensationBroadcaster(Node):
         velocities = {a: velocity[rows, j] for j, a in enumerate(axes)}
         directions = {a: self._held_directions(a, velocity[:, j])[rows] for j, a in enumerate(axes)}
         model = self.inputs.model
+        # Sample times in data time: lagged catalogue effects continue their state.
+        times = (stamp + rows * period * 1e9) * 1e-9
+        accelerations = {a: np.gradient(velocity[:, j], period)[rows]
+                         if velocity.shape[0] > 2 else np.zeros(rows.size)
+                         for j, a in enumerate(axes)}
+        inputs = (positions, velocities, directions, times, accelerations)
         try:
-            # Sample times in data time: lagged catalogue effects continue their state.
-            times = (stamp + rows * period * 1e9) * 1e-9
-            accelerations = {a: np.gradient(velocity[:, j], period)[rows]
-                             if velocity.shape[0] > 2 else np.zeros(rows.size)
-                             for j, a in enumerate(axes)}
-            error, orientation = model.tcp_error(positions, self.inputs.temperatures, velocities,
-                                                 directions, time_s=times,
-                                                 accelerations=accelerations)
-            rotary = [a for a in model.machine.axis_order if model.machine.axes[a].is_rotary]
-            correction, rotary_correction = -error, np.zeros((rows.size, 0))
-            if rotary:
-                # The tool's direction is put right by the rotary axes, its tip by the
-                # linear ones (including the shift the rotary correction causes).
-                five = five_axis_correction(model.kinematics, positions, error, orientation)
-                correction, rotary_correction = five.position_m, five.rotary_rad
-        except MtAccuracyError as exc:
+            error, orientation, correction, rotary_correction = self._evaluate(model, *inputs)
+        except InputDataError as exc:   # the batch's fault, not the model's
             self._warn(f"no compensation for this batch: {exc}")
             return
+        except Exception as exc:  # noqa: BLE001 - a live model must never stop compensation
+            # A model that passed every load-time check and still fails here (an overflow
+            # or NaN on inputs outside the checked grid, a variable these data lack): the
+            # last version that evaluated takes over.
+            reason = f"{type(exc).__name__}: {exc}"[:300]
+            if not self.inputs.revert_to_good(f"version {model.version} failed to evaluate "
+                                              f"({reason})"):
+                self._warn(f"no compensation for this batch: the model failed ({reason})")
+                return
+            model = self.inputs.model
+            try:
+                error, orientation, correction, rotary_correction = self._evaluate(model,
+                                                                                   *inputs)
+            except Exception as again:  # noqa: BLE001
+                self._warn(f"no compensation for this batch: {type(again).__name__}: {again}")
+                return
+        self.inputs.evaluated(model)
+        rotary = [a for a in model.machine.axis_order if model.machine.axes[a].is_rotary]
         if self._published_version != (model.version, model.profile_revision):
             self._publish_tables()
         for k, row in enumerate(rows):
@@ -200,6 +210,25 @@ class CompensationBroadcaster(Node):
             out.sequence = self._compensation_sequence
             self._compensation_sequence += 1
             self._compensation.publish(out)
+
+    def _evaluate(self, model, positions, velocities, directions, times, accelerations):
+        """(error, orientation, linear correction, rotary correction) of ``model`` at the rows;
+        a non-finite result is an evaluation failure (FloatingPointError)."""
+        with np.errstate(all="ignore"):
+            error, orientation = model.tcp_error(positions, self.inputs.temperatures, velocities,
+                                                 directions, time_s=times,
+                                                 accelerations=accelerations)
+            rotary = [a for a in model.machine.axis_order if model.machine.axes[a].is_rotary]
+            correction, rotary_correction = -error, np.zeros((error.shape[0], 0))
+            if rotary:
+                # The tool's direction is put right by the rotary axes, its tip by the
+                # linear ones (including the shift the rotary correction causes).
+                five = five_axis_correction(model.kinematics, positions, error, orientation)
+                correction, rotary_correction = five.position_m, five.rotary_rad
+        if not (np.all(np.isfinite(correction)) and np.all(np.isfinite(rotary_correction))
+                and np.all(np.isfinite(orientation))):
+            raise FloatingPointError("non-finite compensation")
+        return error, orientation, correction, rotary_correction
 
     def _held_directions(self, axis: str, velocity: np.ndarray) -> np.ndarray:
         """Sign of each sample's last motion, carried across batches (backlash at a stop)."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 
 import pytest
 
@@ -177,6 +178,81 @@ def test_a_network_model_opens_no_file_and_quotes_none(rclpy_context, tmp_path):
         scales.publish(_batch(0, 2_000_000_000, 0.001))
         assert spin_until(node, lambda: bool(compensation), 20)
         assert compensation[-1].model_version == 1    # nothing from elsewhere went live
+    finally:
+        broadcaster.stop()
+        node.destroy_node()
+
+
+def test_a_live_model_that_fails_at_the_machine_gives_way_to_the_last_good_one(rclpy_context):
+    """Issue 29: a version that passed every load-time check (finite on the machine's
+    travel and temperature range) but overflows on what the machine then meets - a
+    temperature beyond the checked range - does not stop compensation: the last version
+    that evaluated is live again, counted, with an ERROR on /diagnostics."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    from mt_accuracy_msgs.msg import (ModelVersion, ScaleBatch, TemperatureArray,
+                                      VolumetricCompensation)
+    from mt_accuracy_ros.io.fields import nanoseconds_to_stamp
+    from mt_accuracy_ros.nodes._common import LATCHED_QOS, SENSOR_QOS
+    from mt_accuracy_ros.nodes.compensation_broadcaster import COMPENSATION_QOS
+
+    # T_bed is the rise above the first reading: exp(40 T) is 1e260 at the checked +15 K,
+    # inf at the +25 K the machine then meets.
+    fragile = ("{machine: kidani_hmc, effects: {warm: {expression: 'k * x * exp(40 * T_bed)', "
+               "parameters: [k], values: {k: 1.0e-300}}}}")
+    node = rclpy.create_node("peer")
+    diagnostics, compensation = [], []
+    node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 100)
+    node.create_subscription(VolumetricCompensation, "compensation", compensation.append,
+                             COMPENSATION_QOS)
+    scales = node.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
+    temperatures = node.create_publisher(TemperatureArray, "temperatures", SENSOR_QOS)
+    model = node.create_publisher(ModelVersion, "model", LATCHED_QOS)
+    broadcaster = start_node("compensation_broadcaster", {"input_delay_s": 0.0}, quiet=True)
+
+    def temperature(stamp_ns, value):
+        message = TemperatureArray(sensor_names=["bed"], temperatures=[value])
+        message.header.stamp = nanoseconds_to_stamp(stamp_ns)
+        temperatures.publish(message)
+
+    try:
+        assert spin_until(node, lambda: scales.get_subscription_count() > 0
+                          and node.count_subscribers("model") > 0
+                          and node.count_publishers("compensation") > 0, 30)
+        sent = {"index": 0, "at": 0.0}
+
+        def live(version):
+            # Best-effort batches: the first after discovery may be dropped - send on,
+            # one batch per 50 ms of waiting.
+            if time.monotonic() - sent["at"] > 0.05:
+                sent["index"] += 1
+                sent["at"] = time.monotonic()
+                stamp = 1_000_000_000 + sent["index"] * 10_000_000
+                temperature(stamp - 1, 20.0)
+                scales.publish(_batch(sent["index"] * 50, stamp, 0.001))
+            return any(c.model_version == version for c in compensation)
+        assert spin_until(node, lambda: live(1), 30), \
+            [s.message for array in diagnostics for s in array.status][-5:]
+        model.publish(ModelVersion(version=2, model_yaml=fragile, sequence=0))
+        assert spin_until(node, lambda: live(2), 30), "version 2 never went live"
+        # The warm reading first (another topic: it must be in before the data it precedes).
+        temperature(50_000_000_000, 45.0)
+        deadline = time.monotonic() + 1.0
+        spin_until(node, lambda: time.monotonic() > deadline, 5)
+        count = len(compensation)
+        scales.publish(_batch(99_000, 50_000_000_001, 0.001))
+        assert spin_until(node, lambda: len(compensation) > count, 20), \
+            [s.message for array in diagnostics for s in array.status
+             if s.message != "all streams complete"]
+        assert all(c.model_version == 1 for c in compensation[count:]), (
+            [c.model_version for c in compensation[count - 3:]],
+            [s.message for array in diagnostics for s in array.status][-4:])
+        assert all(math.isfinite(c.correction.x) for c in compensation[count:])
+        assert spin_until(node, lambda: any(
+            s.level == b"\x02" and "version 2 failed at the machine" in s.message
+            for array in diagnostics for s in array.status), 15)
+        assert broadcaster.popen.poll() is None
     finally:
         broadcaster.stop()
         node.destroy_node()

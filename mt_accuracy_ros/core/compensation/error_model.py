@@ -469,11 +469,80 @@ def _check_user_variables(name: str, declaration: dict, machine: MachineDescript
                              f"variables: {', '.join(sorted(known))}, T_<sensor>")
 
 
+#: Readings of the representative grid a user expression is evaluated on at load.
+_GRID_READINGS = 97
+
+
+def representative_variables(machine: MachineDescription, names, readings: int = _GRID_READINGS
+                             ) -> Variables:
+    """The variables a model may meet on this machine, at ``readings`` points: every axis
+    over its whole stroke (each in its own order, so the points spread over the work
+    volume), the temperatures ``names`` asks for over the controller's temperature range
+    about 20 degC, feeds, accelerations and directions of both signs up to the
+    controller's feed, spindle speeds up to its maximum, 8 h of time."""
+    from .limits import CorrectionLimits
+
+    limits = CorrectionLimits.of(machine)
+    rng = np.random.default_rng(0)
+    sweep = np.linspace(0.0, 1.0, readings)
+    positions = {}
+    for axis in machine.axis_order:
+        low, high = machine.axes[axis].stroke
+        positions[axis] = low + (high - low) * rng.permutation(sweep)
+    signed = np.linspace(-1.0, 1.0, readings)
+    sensors = {n[2:] for n in names if n.startswith("T_") and len(n) > 2}
+    temperatures = {sensor: 20.0 + limits.temperature_range_k * rng.permutation(signed)
+                    for sensor in sensors}
+    return Variables(positions, np.linspace(0.0, 8 * 3600.0, readings),
+                     {a: limits.max_feed_m_per_s * rng.permutation(signed)
+                      for a in machine.axis_order},
+                     {a: 10.0 * rng.permutation(signed) for a in machine.axis_order},
+                     {a: np.sign(rng.permutation(signed)) for a in machine.axis_order},
+                     temperatures, {sensor: 20.0 for sensor in sensors},
+                     limits.max_spindle_speed_rpm * 2 * np.pi / 60 * sweep)
+
+
+def _check_user_evaluates(name: str, declaration: dict, machine: MachineDescription) -> None:
+    """A user effect must evaluate - finite, linear in its parameters, at its fitted values
+    and at its bounds - on the machine's representative grid, or the model does not load:
+    a model that loads never fails mid-run (an overflow, a NaN)."""
+    from ..effects.expression import parse
+    from ..effects.user import UserExpression
+
+    where = f"user effect {name!r}"
+    names = parse(declaration["expression"], where).names
+    context = Context(machine, representative_variables(machine, names))
+    family = UserExpression(name, declaration)
+    try:
+        with np.errstate(all="ignore"):
+            design = family.design(context, name, {})
+            checks = []
+            parameters = family.parameter_names(name, {})
+            if "values" in declaration:
+                checks.append(("its fitted values", [declaration["values"][p]
+                                                     for p in parameters]))
+            bounds = family.parameter_limits(context, name, {})
+            if bounds:
+                checks.append(("its bounds", [bounds.get(p, (0.0, ""))[0] for p in parameters]))
+            for what, values in checks:
+                error = design @ np.asarray(values, dtype=np.float64)
+                if not np.all(np.isfinite(error)):
+                    raise ParameterError(f"{where}: not finite at {what} on {machine.name}'s "
+                                         "travel and temperature range")
+    except ParameterError:
+        raise
+    except (ArithmeticError, ValueError, TypeError, MemoryError) as exc:
+        raise ParameterError(f"{where}: cannot be evaluated on {machine.name}'s travel and "
+                             f"temperature range ({type(exc).__name__}: {str(exc)[:200]})"
+                             ) from exc
+
+
 def _checked_catalogue_entry(name: str, entry: dict, machine: MachineDescription) -> dict:
     """A fitted catalogue effect or a user effect, checked so that it will evaluate."""
     if "expression" in entry:
         declaration = user_declaration(name, entry)
         _check_user_variables(name, declaration, machine)
+        _check_user_evaluates(name, declaration, machine)
         return declaration
     allowed = {"family", "variant", "setting", "coefficients", "uncertainties"}
     unknown = set(entry) - allowed

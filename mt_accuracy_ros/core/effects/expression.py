@@ -108,6 +108,13 @@ def parse(text: str, where: str = "expression") -> Expression:
             if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
                 raise ExpressionError(f"{where}: only numbers may be written as constants, "
                                       f"not {node.value!r}")
+            try:
+                finite = np.isfinite(float(node.value))
+            except OverflowError:
+                finite = False
+            if not finite:
+                raise ExpressionError(f"{where}: a constant beyond the floating-point range "
+                                      f"({str(node.value)[:20]}...)")
             return None
         if isinstance(node, ast.Name):
             if node.id.startswith("_"):

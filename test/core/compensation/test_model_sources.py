@@ -114,3 +114,51 @@ def test_a_machine_name_cannot_leave_the_bundled_directory():
     for name in ("../../../../etc/passwd", "..", "kidani_hmc/../kidani_hmc", "nope"):
         with pytest.raises(MachineDescriptionError, match="no bundled machine"):
             load_machine(name)
+
+
+BIG = "1" + "0" * 1500
+
+
+@pytest.mark.parametrize("expression, reason", [
+    ("k * x * 9**9**9", "NaN/inf"),                 # loads in a parser, overflows in use
+    (f"k * x * {BIG}", "beyond the floating-point range"),
+    ("k * log(x)", "NaN/inf"),                      # x = 0 is in the travel
+    ("k * x / (y - y)", "NaN/inf"),
+    ("k * x * exp(60 * T_bed)", "NaN/inf"),         # overflows within the +-15 K range
+])
+def test_a_model_that_loads_is_a_model_that_evaluates(expression, reason):
+    """Issue 29: user expressions are evaluated at load over the machine's travel and
+    temperature range; what cannot be evaluated there does not load."""
+    for values in ("", ", values: {k: 1.0e-3}"):
+        text = (f"{{machine: kidani_hmc, effects: {{mine: {{expression: '{expression}', "
+                f"parameters: [k]{values}}}}}}}")
+        with pytest.raises(ParameterError, match=reason) as caught:
+            resolve_model(text)
+        assert "user effect 'mine'" in str(caught.value)
+
+
+def test_fitted_values_are_evaluated_too():
+    # Finite per unit parameter, not at the fitted value.
+    text = ("{machine: kidani_hmc, effects: {mine: {expression: 'k * x * exp(30 * T_bed)', "
+            "parameters: [k], values: {k: 1.0e+300}}}}")
+    with pytest.raises(ParameterError, match="not finite at its fitted values"):
+        resolve_model(text)
+    good = resolve_model(text.replace("1.0e+300", "1.0e-200"))
+    assert "mine" in good.effects
+
+
+def test_check_refuses_an_overflowing_model_in_one_line(tmp_path, capsys):
+    from mt_accuracy_ros.cli import main
+
+    model = tmp_path / "bigint_model.yaml"
+    model.write_text(f"machine: kidani_hmc\neffects:\n  mine:\n    expression: k * x * {BIG}\n"
+                     "    parameters: [k]\n    values: {k: 1.0e-3}\n")
+    survey = tmp_path / "s.csv"
+    survey.write_text("t_s,x_mm,y_mm,z_mm,ex_um\n" + "".join(
+        f"{i},{i % 300},{-(i % 200)},{i % 100},{0.1 * (i % 7)}\n" for i in range(60)))
+    status = main(["check", str(survey), "--col", "time=t_s:s", "--col", "pos.X=x_mm:mm",
+                   "--col", "pos.Y=y_mm:mm", "--col", "pos.Z=z_mm:mm", "--col",
+                   "err.x=ex_um:um", "--model", str(model)])
+    captured = capsys.readouterr()
+    assert status == 2 and "Traceback" not in captured.err
+    assert "beyond the floating-point range" in captured.err
