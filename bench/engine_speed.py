@@ -5,6 +5,9 @@ on surveys made by the independent foreign-machine generator
 (``studies.foreign_machine``: a ball-screw pitch error hidden in kidani_hmc
 surveys of 1k, 10k, 100k readings). Every run is printed, not the best.
 
+0. **diagnosis**: one diagnosis of the survey over the full catalogue (the engine:
+   selection, refinement, verdict, localisation), timed in a child process after the
+   survey is read; its peak memory.
 1. **check**: ``mt-accuracy check SURVEY.csv --columns MAP.yaml --auto 3`` as a
    user runs it (a subprocess): wall time and peak memory (the child's max RSS),
    what it named. **start-up**: the same command's imports alone.
@@ -86,6 +89,53 @@ def check_runs(readings: int, folder: Path, repeats: int) -> list[dict]:
         named = [line.split()[1] for line in output.splitlines() if line.startswith("named:")]
         runs.append({"readings": readings, "wall_s": round(wall, 3), "peak_rss_mb": round(rss),
                      "named": named[:1], "truth": truth})
+    return runs
+
+
+def diagnosis_child(csv: str, mapping: str) -> None:
+    """(In a child process) one diagnosis of the survey over the full catalogue - the
+    engine's figure, without the CLI's reading, second diagnosis and report: prints JSON."""
+    import resource
+
+    import yaml
+
+    from mt_accuracy_ros.core.compensation.error_model import resolve_model
+    from mt_accuracy_ros.core.workbench.diagnosis import Observations, diagnose
+    from mt_accuracy_ros.io.column_map import column_map_from_dict, read_mapped_csv
+
+    column_map = column_map_from_dict(yaml.safe_load(Path(mapping).read_text()))
+    survey = read_mapped_csv(Path(csv), column_map)
+    model = resolve_model("{machine: kidani_hmc}")
+    n = survey.time_s.size
+    measured, mask = np.zeros((n, 3)), np.zeros((n, 3), dtype=bool)
+    for c, component in enumerate("xyz"):
+        if component in survey.errors:
+            measured[:, c], mask[:, c] = survey.errors[component], True
+    obs = Observations(survey.positions, measured, mask, survey.time_s, survey.velocities,
+                       survey.temperatures, column_map.uncertainty_m,
+                       directions=survey.directions, accelerations=survey.accelerations,
+                       spindle_speed_rad_s=survey.spindle_speed_rad_s)
+    for sensor, values in obs.temperatures.items():
+        model.reference_temperatures_c.setdefault(sensor, float(values[0]))
+    started = time.perf_counter()
+    result = diagnose(model, obs)
+    wall = time.perf_counter() - started
+    print(json.dumps({"diagnose_s": round(wall, 3),
+                      "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+                                           / 1024),
+                      "named": [c.name for c in result.selected][:1]}))
+
+
+def diagnosis_runs(readings: int, folder: Path, repeats: int) -> list[dict]:
+    csv, mapping, truth = write_survey(readings, folder)
+    runs = []
+    for _ in range(repeats):
+        _, _, output = _timed_child([sys.executable, "-m", "bench.engine_speed",
+                                     "--diagnosis-child", str(csv), str(mapping)])
+        run = {"readings": readings, **json.loads(output.strip().splitlines()[-1]),
+               "truth": truth}
+        runs.append(run)
+        print(json.dumps(run), flush=True)
     return runs
 
 
@@ -220,14 +270,21 @@ def main(argv: list[str] | None = None) -> int:
                         help="largest survey scikit-learn runs on (it takes ~20 min at 1e5)")
     parser.add_argument("--skip-check", action="store_true")
     parser.add_argument("--skip-engine", action="store_true")
+    parser.add_argument("--diagnosis-child", nargs=2, metavar=("CSV", "MAP"),
+                        help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.diagnosis_child:
+        diagnosis_child(*args.diagnosis_child)
+        return 0
     _pin()
     report = {"machine": f"{platform.machine()}, {platform.python_version()}, 1 core",
-              "startup_s": [], "check": [], "engine": []}
+              "startup_s": [], "diagnosis": [], "check": [], "engine": []}
     if not args.skip_check:
         report["startup_s"] = startup_runs(args.repeats)
         print(json.dumps({"startup_s": report["startup_s"]}), flush=True)
         with tempfile.TemporaryDirectory() as folder:
+            for n in args.sizes:
+                report["diagnosis"] += diagnosis_runs(n, Path(folder), args.repeats)
             for n in args.sizes:
                 for run in check_runs(n, Path(folder), args.repeats):
                     print(json.dumps(run), flush=True)
