@@ -56,7 +56,8 @@ class DeliveryHealth:
                                      f"{self._node.get_fully_qualified_name()}: {topic}",
                                      message=message, hardware_id="", values=[])])
 
-    def sequence(self, stream: str, sequence: int, count: int = 1) -> int:
+    def sequence(self, stream: str, sequence: int, count: int = 1, *,
+                 restart: bool = False) -> int:
         """Check a stream's running ``sequence``; return how many were lost before it.
 
         ``count`` is how many items the message carries (samples of a batch).
@@ -66,7 +67,11 @@ class DeliveryHealth:
         sequence = int(sequence)
         expected = self._next_sequence.get(stream)
         lost = 0
-        if expected is None:
+        if restart and expected is not None:
+            # The stream was followed again from a new position (StreamHistory): the
+            # jump is not samples lost.
+            self.counts[stream]["out_of_order"] += 1
+        elif expected is None:
             # Where this node joined the stream: earlier items are not "lost" to it.
             self.counts[stream]["first_seen"] = sequence
         else:

@@ -35,6 +35,7 @@ from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompen
 
 from ..core.compensation.five_axis import five_axis_correction
 from ..core.compensation.limits import gate_problem
+from ..core.stream_history import StreamHistory
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.validation import sample_period
 from ._common import (COMPENSATION_QOS, TABLE_QOS, run_node, RESULT_QOS,  # noqa: F401
@@ -62,8 +63,14 @@ class CompensationBroadcaster(Node):
         self.declare_parameter("input_delay_s", 0.5, float_descriptor(
             "Use temperatures/profiles stamped this much before the data (deterministic "
             "replay) [s]", 0.0, 60.0, read_only=True))
+        self.declare_parameter("stream_horizon_s", 60.0, float_descriptor(
+            "Largest gap a scale batch may open in its stream, and the largest disagreement "
+            "of its stamp with the one its sample index predicts [s]; a batch beyond it is "
+            "refused (forged or corrupt) until 3 consistent batches confirm a new position",
+            0.001, 86400.0, read_only=True))
         self.add_on_set_parameters_callback(self._validate)
         self.health = DeliveryHealth(self)
+        self._history = StreamHistory(float(self.get_parameter("stream_horizon_s").value))
         self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
                                   follow_topic=bool(self.get_parameter("follow_model_topic").value),
                                   on_change=self._model_changed, health=self.health,
@@ -132,7 +139,10 @@ class CompensationBroadcaster(Node):
         if stamp <= self._last_stamp:
             raise InputDataError(f"stamp {stamp} ns not after the last one ({self._last_stamp} ns):"
                                  " out of order or repeated")
-        self.health.sequence("scales", message.first_sample_index, commands.shape[0])
+        restarts = self._history.restarts
+        self._history.check(message.first_sample_index, commands.shape[0], stamp, period)
+        self.health.sequence("scales", message.first_sample_index, commands.shape[0],
+                             restart=self._history.restarts != restarts)
         self.health.processed("scales", commands.shape[0])
         self._last_stamp = stamp
         self.inputs.advance(stamp)

@@ -37,6 +37,7 @@ from ..core.scales.deterioration import detect_deterioration
 from ..core.scales.dual_scale import (SQ57_EXPANSION_PER_K, YAW_COMPONENT, scale_expansion,
                                       thermal_yaw_error, thermocouple_positions,
                                       yaw_from_scales)
+from ..core.stream_history import StreamHistory
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.validation import sample_period
 from ..core.kinematics.machine import load_machine
@@ -104,6 +105,11 @@ class YawEstimator(Node):
         self.declare_parameter("input_delay_s", 0.5, float_descriptor(
             "Use temperatures stamped this much before the batch (deterministic replay) [s]",
             0.0, 60.0, read_only=True))
+        self.declare_parameter("stream_horizon_s", 60.0, float_descriptor(
+            "Largest gap a scale batch may open in its stream, and the largest disagreement "
+            "of its stamp with the one its sample index predicts [s]; a batch beyond it is "
+            "refused (forged or corrupt) until 3 consistent batches confirm a new position",
+            0.001, 86400.0, read_only=True))
         self.add_on_set_parameters_callback(self._validate)
 
         self.machine = load_machine(str(self.get_parameter("machine").value))
@@ -115,6 +121,7 @@ class YawEstimator(Node):
         self._rises: dict[str, float] = {}
         self._last_index: int | None = None
         self._last_stamp = -1
+        self._history = StreamHistory(float(self.get_parameter("stream_horizon_s").value))
         self._data_time_s = 0.0
         self._sample_period = 0.0
         self._next_profile_s = 0.0
@@ -217,15 +224,20 @@ class YawEstimator(Node):
         data = data.reshape(-1, len(channels))
         stamp = stamp_to_nanoseconds(message.header.stamp)
         if stamp <= self._last_stamp:
-            self._report(DiagnosticStatus.WARN, f"stamp went back or repeated "
-                                                f"({stamp} after {self._last_stamp} ns); batch "
-                                                "skipped")
-            return
-        if self._last_index is not None and message.first_sample_index != self._last_index:
+            # Counted as refused by the guard, and said on /diagnostics with the reason.
+            raise InputDataError(f"stamp went back or repeated ({stamp} after "
+                                 f"{self._last_stamp} ns); batch skipped")
+        restarts = self._history.restarts
+        self._history.check(message.first_sample_index, data.shape[0], stamp,
+                            float(message.sample_period))
+        restarted = self._history.restarts != restarts
+        if self._last_index is not None and message.first_sample_index != self._last_index \
+                and not restarted:
             lost = int(message.first_sample_index) - self._last_index
             self._report(DiagnosticStatus.WARN, f"{lost} samples lost before index "
                                                 f"{message.first_sample_index}")
-        self.health.sequence("scales", message.first_sample_index, data.shape[0])
+        self.health.sequence("scales", message.first_sample_index, data.shape[0],
+                             restart=restarted)
         self.health.processed("scales", data.shape[0])
         self._last_stamp = stamp
         self._apply_temperatures(stamp)

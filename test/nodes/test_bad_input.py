@@ -228,7 +228,7 @@ def test_a_live_model_that_fails_at_the_machine_gives_way_to_the_last_good_one(r
             if time.monotonic() - sent["at"] > 0.05:
                 sent["index"] += 1
                 sent["at"] = time.monotonic()
-                stamp = 1_000_000_000 + sent["index"] * 10_000_000
+                stamp = 1_000_000_000 + sent["index"] * 50_000_000   # 50 samples of 1 ms
                 temperature(stamp - 1, 20.0)
                 scales.publish(_batch(sent["index"] * 50, stamp, 0.001))
             return any(c.model_version == version for c in compensation)
@@ -237,11 +237,13 @@ def test_a_live_model_that_fails_at_the_machine_gives_way_to_the_last_good_one(r
         model.publish(ModelVersion(version=2, model_yaml=fragile, sequence=0))
         assert spin_until(node, lambda: live(2), 30), "version 2 never went live"
         # The warm reading first (another topic: it must be in before the data it precedes).
-        temperature(50_000_000_000, 45.0)
+        following = sent["index"] + 1
+        stamp = 1_000_000_000 + following * 50_000_000
+        temperature(stamp - 1, 45.0)
         deadline = time.monotonic() + 1.0
         spin_until(node, lambda: time.monotonic() > deadline, 5)
         count = len(compensation)
-        scales.publish(_batch(99_000, 50_000_000_001, 0.001))
+        scales.publish(_batch(following * 50, stamp, 0.001))
         assert spin_until(node, lambda: len(compensation) > count, 20), \
             [s.message for array in diagnostics for s in array.status
              if s.message != "all streams complete"]
@@ -255,4 +257,68 @@ def test_a_live_model_that_fails_at_the_machine_gives_way_to_the_last_good_one(r
         assert broadcaster.popen.poll() is None
     finally:
         broadcaster.stop()
+        node.destroy_node()
+
+
+def test_forged_indices_and_stamps_going_back_are_refused_and_counted(rclpy_context):
+    """Issue 29: a batch index of 2**64 - 1 and a stamp an hour ahead are refused by the
+    estimator and the broadcaster (counted, with the reason), the lost counters stay
+    true, and the estimator counts a stamp that went back as refused."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    from mt_accuracy_msgs.msg import ScaleBatch
+    from mt_accuracy_ros.nodes._common import SENSOR_QOS
+
+    node = rclpy.create_node("forger")
+    diagnostics = []
+    node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 100)
+    scales = node.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
+    nodes = [start_node("yaw_estimator", {"input_delay_s": 0.0}, quiet=True),
+             start_node("compensation_broadcaster", {"input_delay_s": 0.0}, quiet=True)]
+
+    def counters(name):
+        out = {}
+        for array in diagnostics:
+            for status in array.status:
+                if name in status.name and status.name.endswith("delivery"):
+                    out.update({v.key: v.value for v in status.values})
+        return out
+
+    try:
+        assert spin_until(node, lambda: scales.get_subscription_count() >= 2, 30)
+        sent = {"index": 0, "at": 0.0}
+
+        def genuine(count_needed):
+            if time.monotonic() - sent["at"] > 0.05:
+                sent["at"] = time.monotonic()
+                scales.publish(_batch(sent["index"] * 50, 10**9 + sent["index"] * 50_000_000,
+                                      0.001))
+                sent["index"] += 1
+            return all(int(counters(n).get("scales.processed", 0)) >= count_needed
+                       for n in ("yaw_estimator", "compensation_broadcaster"))
+        assert spin_until(node, lambda: genuine(100), 60)
+        last_index, last_stamp = sent["index"] * 50, 10**9 + sent["index"] * 50_000_000
+        scales.publish(_batch(2**64 - 1, last_stamp, 0.001))
+        scales.publish(_batch(last_index, last_stamp + 3600 * 10**9, 0.001))
+        scales.publish(_batch(last_index - 50, last_stamp - 50_000_000, 0.001))  # went back
+        assert spin_until(node, lambda: all(int(counters(n).get("scales.refused", 0)) >= 3
+                                            for n in ("yaw_estimator",
+                                                      "compensation_broadcaster")), 20), \
+            (counters("yaw_estimator"), counters("compensation_broadcaster"))
+        processed = int(counters("compensation_broadcaster")["scales.processed"])
+        assert spin_until(node, lambda: genuine(processed + 200), 60)
+        for name in ("yaw_estimator", "compensation_broadcaster"):
+            values = counters(name)
+            assert int(values["scales.lost"]) < 1000, values     # a few dropped batches at most
+            assert int(values["scales.refused"]) == 3, values
+        reasons = [s.message for array in diagnostics for s in array.status]
+        assert any("not a running count" in r for r in reasons)
+        assert any("beyond the 60 s horizon" in r for r in reasons)
+        assert any("yaw_estimator" in s.name and "went back" in s.message
+                   for array in diagnostics for s in array.status)
+        assert all(n.popen.poll() is None for n in nodes)
+    finally:
+        for n in nodes:
+            n.stop()
         node.destroy_node()
