@@ -151,6 +151,11 @@ def _export(args: argparse.Namespace) -> int:
     print(f"  round trip: tables read back and applied differ from the model by at most "
           f"{check.tcp_max_error_m * 1e6:.3f} um at the TCP (RMS {check.tcp_rms_error_m * 1e6:.3f}"
           f" um); interpolation bound {check.tcp_bound_m * 1e6:.3f} um")
+    from .core.compensation.user_tables import fitted_user_effects, table_axis
+
+    for name, entry in fitted_user_effects(model).items():
+        axis, why = table_axis(model, name, entry)
+        print(f"  user effect {name}: " + (f"in the {axis} tables" if axis else why))
     if args.report or args.json:
         from .report.rotary import export_section
 

@@ -74,7 +74,8 @@ def test_core_imports_no_ros_simulator_node_or_io():
 def test_core_is_split_by_domain_and_each_subpackage_says_what_it_holds():
     flat = sorted(p.name for p in (PACKAGE / "core").glob("*.py") if p.name != "__init__.py")
     assert flat == ["errors.py", "validation.py"]
-    for sub in ("scales", "kinematics", "thermal", "compensation", "effects", "workbench"):
+    for sub in ("scales", "kinematics", "thermal", "compensation", "effects", "workbench",
+                "inputs"):
         init = PACKAGE / "core" / sub / "__init__.py"
         doc = ast.get_docstring(ast.parse(init.read_text()))
         assert doc and len(doc.splitlines()) >= 3, f"{init} needs a docstring saying what it holds"

@@ -67,7 +67,7 @@ def test_check_with_a_bad_model_is_one_line(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("arguments,words", [
-    (["-p", "machine:=no_such_machine"], "machine description not found"),
+    (["-p", "machine:=no_such_machine"], "no bundled machine 'no_such_machine'"),
     (["-p", "window:=-5"], "window"),
 ])
 def test_bad_startup_parameters_of_a_node_are_one_line_and_exit_2(arguments, words):

@@ -35,7 +35,7 @@ from mt_accuracy_msgs.msg import CompensationTable, ScaleBatch, VolumetricCompen
 
 from ..core.compensation.five_axis import five_axis_correction
 from ..core.compensation.limits import gate_problem
-from ..core.stream_history import StreamHistory
+from ..core.inputs.stream_history import StreamHistory
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.validation import sample_period
 from ._common import (COMPENSATION_QOS, TABLE_QOS, run_node, RESULT_QOS,  # noqa: F401

@@ -37,7 +37,7 @@ from ..core.scales.deterioration import detect_deterioration
 from ..core.scales.dual_scale import (SQ57_EXPANSION_PER_K, YAW_COMPONENT, scale_expansion,
                                       thermal_yaw_error, thermocouple_positions,
                                       yaw_from_scales)
-from ..core.stream_history import StreamHistory
+from ..core.inputs.stream_history import StreamHistory
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.validation import sample_period
 from ..core.kinematics.machine import load_machine

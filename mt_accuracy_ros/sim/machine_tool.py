@@ -36,7 +36,8 @@ from ..core.kinematics.machine import motion_error_name
 from ..core.scales.dual_scale import YAW_COMPONENT
 from .effects import SineProfile, deterioration_bump, random_profiles
 from .programs import PROGRAMS
-from .scenario import Scenario
+from ..core.errors import ScenarioError
+from .scenario import MAX_WINDOW_SAMPLES, THERMAL_MOTION_RATE_HZ, Scenario
 from .thermal_state import ScaleTemperatureField, first_order_response, thermocouple_positions
 
 #: Default distance between the scales of a pair when the machine file has none [m].
@@ -298,7 +299,6 @@ def _direction_held(velocity: NDArray[np.float64]) -> NDArray[np.float64]:
 #: any window of a run (a live node's chunk) holds exactly the whole run's values.
 NOISE_BLOCK = 65536
 #: Rate at which the program is sampled to drive the thermal model [Hz].
-THERMAL_MOTION_RATE_HZ = 10.0
 
 
 def _axis_motion(scenario: Scenario, program, time_s: NDArray, masks: dict) -> tuple[dict, dict,
@@ -357,6 +357,12 @@ def simulate(scenario: Scenario, *, start_index: int = 0, stop_index: int | None
     rate = scenario.sample_rate_hz
     stop = total if stop_index is None else int(min(max(stop_index, 0), total))
     start = int(min(max(start_index, 0), stop))
+    if stop - start > MAX_WINDOW_SAMPLES:
+        raise ScenarioError(
+            f"{scenario.source}: {stop - start:,} samples at once (duration_s x sample_rate_hz "
+            f"= {scenario.duration_s:g} s x {rate:g} Hz) exceed the {MAX_WINDOW_SAMPLES:,} the "
+            "simulator holds in memory: simulate it in windows (start_index/stop_index, as "
+            "the nodes stream it), or shorten the run or lower the rate")
     program_args = {k: v for k, v in scenario.program.items() if k != "type"}
     program = PROGRAMS[scenario.program["type"]](machine, **program_args)
     # One sample of margin keeps np.gradient central at the window's edges; with

@@ -38,6 +38,14 @@ from ..core.kinematics.machine import MachineDescription, load_machine
 from .effects import DEFAULT_ON, EFFECTS
 from .programs import PROGRAMS
 
+#: Rate [Hz] at which the program's motion heats the structure (whole run).
+THERMAL_MOTION_RATE_HZ = 10.0
+#: Most thermal time steps of one run (duration x rate; ~30 arrays of 8 B each).
+MAX_THERMAL_STEPS = 4_000_000
+#: Most scale samples simulated at once (a whole-run `simulate`, or one window):
+#: ~40 arrays of 8 B each, ~6 GB at the limit.
+MAX_WINDOW_SAMPLES = 20_000_000
+
 TOP_KEYS = {"machine", "seed", "noise_seed", "duration_s", "sample_rate_hz", "temperature_rate_hz",
             "program", "spindle", "noise", "effects", "events", "start_time_s", "ambient",
             "description"}
@@ -172,6 +180,17 @@ def scenario_from_dict(data: dict, source: str = "<dict>") -> Scenario:
     scenario.duration_s = _number(data, "duration_s", source, 1e-3, 1e7, 60.0)
     scenario.sample_rate_hz = _number(data, "sample_rate_hz", source, 100.0, 20000.0, 1000.0)
     scenario.temperature_rate_hz = _number(data, "temperature_rate_hz", source, 1e-3, 100.0, 1.0)
+    # The thermal state is computed over the whole run (temperatures at their rate, the
+    # heat of motion on a 10 Hz grid): a run the simulator can hold, or a refusal now.
+    steps = scenario.duration_s * max(scenario.temperature_rate_hz, THERMAL_MOTION_RATE_HZ)
+    if steps > MAX_THERMAL_STEPS:
+        raise ScenarioError(
+            f"{_where(source, data, 'duration_s')}: duration_s {scenario.duration_s:g} s at "
+            f"temperature_rate_hz {scenario.temperature_rate_hz:g} (and the "
+            f"{THERMAL_MOTION_RATE_HZ:g} Hz motion-heat grid) is {steps:.3g} thermal steps; the "
+            f"simulator holds at most {MAX_THERMAL_STEPS:.0e} for a run (e.g. "
+            f"{MAX_THERMAL_STEPS / THERMAL_MOTION_RATE_HZ / 3600:.0f} h at up to "
+            f"{THERMAL_MOTION_RATE_HZ:g} Hz): shorten the run or lower temperature_rate_hz")
     scenario.start_time_s = _number(data, "start_time_s", source, 0.0, 4e9, 1.7e9)
     scenario.noise = _subsection(data, "noise", NOISE_KEYS, source)
     for key in NOISE_KEYS:

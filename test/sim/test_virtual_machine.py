@@ -272,3 +272,19 @@ def test_a_window_of_a_run_equals_the_whole_run_there():
         np.testing.assert_array_equal(part.scale_readings, whole.scale_readings[start:stop])
         np.testing.assert_array_equal(part.actual["X"], whole.actual["X"][start:stop])
         np.testing.assert_array_equal(part.temperatures_c, whole.temperatures_c)
+
+
+def test_a_scenario_at_its_limits_runs_or_is_refused_naming_the_limit():
+    """Issue 29: duration_s 1e7 at 20 kHz passed validation and then tried to allocate
+    1.46 TiB. Now the scenario names its limit at load, and a whole-run simulation too
+    large to hold is refused before anything is allocated - while the same run streamed
+    in windows (as the nodes do) still works."""
+    with pytest.raises(ScenarioError, match="thermal steps.*at most"):
+        scenario_from_yaml("machine: kidani_hmc\nduration_s: 1.0e7\nsample_rate_hz: 20000\n")
+    long_run = scenario_from_yaml("machine: kidani_hmc\nduration_s: 1.2e5\n"
+                                  "sample_rate_hz: 20000\n")
+    with pytest.raises(ScenarioError, match="samples at once.*simulate it in windows"):
+        simulate(long_run)
+    window = simulate(long_run, start_index=10**9, stop_index=10**9 + 2000)
+    assert window.time_s.size == 2000 and np.all(np.isfinite(window.time_s))
+    assert window.time_s[0] == pytest.approx(10**9 / 20000)

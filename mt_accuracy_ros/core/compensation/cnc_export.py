@@ -42,6 +42,7 @@ from ..kinematics.chain import KinematicModel
 from ..kinematics.machine import MachineDescription
 from .error_model import ErrorModel
 from .tables import CompensationTable, machine_with_table
+from .user_tables import refuse_untabled, user_tcp_error
 
 MM_PER_M = 1e3
 URAD_PER_RAD = 1e6
@@ -100,13 +101,14 @@ def bilateral_tables(model: ErrorModel, spacing_m: float) -> dict[str, Bilateral
     ParameterError
         A spacing that is not positive or exceeds an axis's stroke.
     """
+    refuse_untabled(model)
     machine = model.machine
     linear = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
     grids = {a: table_grid(machine.axes[a].stroke, spacing_m, a) for a in linear}
     out = {}
     for axis in linear:
         grid = grids[axis]
-        errors = model.component_errors(axis, grid)
+        errors = model.component_errors(axis, grid, strict=True)
         half = 0.5 * model.backlash_m(axis)
         positioning = f"E{axis}{axis}"
         forward = dict(errors)
@@ -182,6 +184,7 @@ def read_bilateral_csv(text: str) -> BilateralTable:
 # ------------------------------------------------------------ volumetric (ISG CSV)
 def write_isg_csv(model: ErrorModel, spacing_m: float) -> str:
     """The model's geometric parameters as an ISG-CSV-style volumetric parameter file."""
+    refuse_untabled(model)
     machine = model.machine
     linear = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
     grids = {a: table_grid(machine.axes[a].stroke, spacing_m, a) for a in linear}
@@ -196,7 +199,7 @@ def write_isg_csv(model: ErrorModel, spacing_m: float) -> str:
         text.write(" ".join(location) + "\n")
         text.write(" ".join(f"{float(_to_file(n, v)):.12g}" for n, v in location.items()) + "\n")
     for axis, grid in grids.items():
-        errors = model.component_errors(axis, grid)
+        errors = model.component_errors(axis, grid, strict=True)
         text.write("#\n")
         text.write(f"// component errors of the {axis} axis (direction-independent part)\n")
         text.write(" ".join([axis, *errors]) + "\n")
@@ -290,12 +293,15 @@ class RoundTrip:
 
 
 def _reference_machine(model: ErrorModel, dense: int = 4001) -> MachineDescription:
-    """The model's geometric part as a machine with very fine tables (the reference)."""
+    """The model's geometric part as a machine with very fine tables (the reference),
+    without its user effects: those are added at the TCP from their expressions
+    (:func:`user_tcp_error`), so that their conversion to error motions is checked."""
     machine = model.machine
     grids = {a: np.linspace(*machine.axes[a].stroke, dense) for a in machine.axis_order
              if not machine.axes[a].is_rotary}
     return machine_with_table(machine, CompensationTable(
-        machine.name, grids, {a: model.component_errors(a, g) for a, g in grids.items()},
+        machine.name, grids, {a: model.component_errors(a, g, include_user=False)
+                              for a, g in grids.items()},
         model.location_table()))
 
 
@@ -318,8 +324,8 @@ def round_trip(model: ErrorModel, spacing_m: float, *, points: int = 2000,
         stroke = machine.axes[axis].stroke
         at = rng.uniform(*stroke, points)
         dense = np.linspace(*stroke, 4001)
-        truth_at = model.component_errors(axis, at)
-        truth_dense = model.component_errors(axis, dense)
+        truth_at = model.component_errors(axis, at, strict=True)
+        truth_dense = model.component_errors(axis, dense, strict=True)
         half = 0.5 * model.backlash_m(axis)
         for direction in (1.0, -1.0):
             read = table.at(at, direction)
@@ -332,7 +338,7 @@ def round_trip(model: ErrorModel, spacing_m: float, *, points: int = 2000,
     parameters = machine_with_table(machine, read_isg_csv(write_isg_csv(model, spacing_m)))
     q = {a: rng.uniform(*machine.axes[a].stroke, points) for a in machine.axis_order}
     reference = KinematicModel(_reference_machine(model)).tcp_error(
-        q, check_stroke=False)["position"]
+        q, check_stroke=False)["position"] + user_tcp_error(model, q)
     applied = KinematicModel(parameters).tcp_error(
         q, check_stroke=False)["position"]
     gap = np.linalg.norm(applied - reference, axis=1)

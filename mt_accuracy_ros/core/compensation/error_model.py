@@ -49,7 +49,7 @@ from ..kinematics.error_functions import ErrorFunction
 from ..errors import InputDataError, MachineDescriptionError, ParameterError, reraise_as
 from ..kinematics.chain import ErrorOverrides, KinematicModel
 from ..kinematics.machine import MachineDescription, load_machine
-from ..safe_files import load_yaml, plain_name, read_description
+from ..inputs.safe_files import load_yaml, plain_name, read_description
 
 MODEL_EFFECTS = ("geometric", "squareness", "structural_thermal_drift",
                  "position_dependent_thermal", "spindle_thermal_growth", "abbe_offset",
@@ -353,7 +353,8 @@ class ErrorModel:
                 position = position + catalogue_error(name, entry, context)
         return position + drive, orientation
 
-    def table_motion_errors(self, axis: str, grid: ArrayLike) -> dict[str, NDArray[np.float64]]:
+    def table_motion_errors(self, axis: str, grid: ArrayLike, *, include_user: bool = True,
+                            strict: bool = False) -> dict[str, NDArray[np.float64]]:
         """Per-axis error motions of the fitted catalogue effects on ``grid`` (ISO name ->
         values [m or rad]), for a CNC's compensation table: a position-dependent error
         belongs in the table the CNC interpolates at its own command, not in a stream
@@ -371,9 +372,17 @@ class ErrorModel:
             values = family.motion_error(self.machine, variant, setting,
                                          [entry["coefficients"][n] for n in names], grid)
             out[variant] = out.get(variant, 0.0) + values
+        if include_user:
+            # Fitted user effects of this axis' position alone, as its error motions
+            # (user_tables); ``strict`` refuses one of its position that no table can hold.
+            from .user_tables import user_motion_errors
+
+            for name, values in user_motion_errors(self, axis, grid, strict=strict).items():
+                out[name] = out.get(name, 0.0) + values
         return out
 
-    def component_errors(self, axis: str, grid: ArrayLike) -> dict[str, NDArray[np.float64]]:
+    def component_errors(self, axis: str, grid: ArrayLike, *, include_user: bool = True,
+                         strict: bool = False) -> dict[str, NDArray[np.float64]]:
         """The six ISO 230-1 component errors of a linear ``axis`` on ``grid`` [m or rad].
 
         The live profile where the model uses measured geometry (``geometric``),
@@ -383,7 +392,7 @@ class ErrorModel:
         """
         spec = self.machine.axes[axis]
         grid = np.asarray(grid, dtype=np.float64)
-        fitted = self.table_motion_errors(axis, grid)
+        fitted = self.table_motion_errors(axis, grid, include_user=include_user, strict=strict)
         out = {}
         for component in "XYZABC":
             name = f"E{component}{axis}"
@@ -685,7 +694,7 @@ def resolve_model(text: str, *, from_network: bool = False, model_dir: str | Pat
         (a monitor publishes its versions naming the machine it was started with).
 
     Every file is read as a regular file of bounded size, and errors never quote
-    a file's content (:mod:`mt_accuracy_ros.core.safe_files`).
+    a file's content (:mod:`mt_accuracy_ros.core.inputs.safe_files`).
     """
     text = str(text).strip()
     directory = Path(model_dir) if model_dir else None

@@ -21,7 +21,7 @@ import numpy as np
 
 from .error_functions import ErrorFunction, parse_error_function
 from ..errors import MachineDescriptionError, reraise_as
-from ..safe_files import load_yaml, plain_name, read_description
+from ..inputs.safe_files import load_yaml, plain_name, read_description
 
 AXIS_LETTERS = "XYZABC"
 COMPONENTS = "XYZABC"  # error motion components: translations X, Y, Z; rotations A, B, C
@@ -284,7 +284,7 @@ def load_machine(path_or_name: str | Path) -> MachineDescription:
     (``kidani_hmc``, ``khan_chen_rpppr``): a name has no suffix.
 
     The file must be a regular file of at most
-    :data:`~mt_accuracy_ros.core.safe_files.MAX_DESCRIPTION_BYTES`; errors never quote it.
+    :data:`~mt_accuracy_ros.core.inputs.safe_files.MAX_DESCRIPTION_BYTES`; errors never quote it.
     """
     path = Path(path_or_name)
     if not path.suffix:

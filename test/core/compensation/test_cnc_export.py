@@ -109,3 +109,55 @@ def test_a_rotary_axis_location_error_reaches_the_cnc_through_the_volumetric_fil
     assert applied.axes["A"].location_errors == pytest.approx({"B": 20e-6})
     result = round_trip(model, 0.05, points=500)
     assert result.tcp_model_rms_m > 1e-6 and result.tcp_max_error_m < 1e-12
+
+
+def _user_model(expression: str, acts_on: str, k: float = 1e-3):
+    from mt_accuracy_ros.core.compensation.error_model import resolve_model
+
+    return resolve_model(f"{{machine: kidani_hmc, effects: {{mine: {{expression: '{expression}',"
+                         f" parameters: [k], acts_on: {acts_on}, values: {{k: {k:.6e}}}}}}}}}")
+
+
+@pytest.mark.parametrize("expression, acts_on, table, column, values", [
+    ("k * x", "x", "X", "EXX", lambda q: 1e-3 * q),
+    ("k * x", "X", "X", "EXX", lambda q: 1e-3 * q),
+    ("k * y * y", "z", "Y", "EZY", lambda q: 1e-3 * q * q),
+])
+def test_user_effects_of_one_position_go_into_the_tables(expression, acts_on, table, column,
+                                                         values):
+    """Issue 29: a user effect reaches the controller. The tables hold its error motion
+    (up to the sign the axis' branch gives), and the round trip - read back, applied
+    through the chain - matches the model *with* the user effect, computed from its
+    expression, not from the tables."""
+    from mt_accuracy_ros.core.compensation.cnc_export import round_trip
+
+    model = _user_model(expression, acts_on)
+    tables = bilateral_tables(model, 0.005)
+    written = tables[table].forward[column]
+    assert np.max(np.abs(written)) > 1e-5, "the user effect is not in the table"
+    expected = values(tables[table].positions_m)
+    sign = np.sign(written[np.argmax(np.abs(written))] * expected[np.argmax(np.abs(expected))])
+    np.testing.assert_allclose(written, sign * expected, rtol=1e-9, atol=1e-15)
+    others = [name for t in tables.values() for name, v in t.forward.items()
+              if np.any(v) and name != column]
+    assert others == []
+    check = round_trip(model, 0.005)
+    assert check.tcp_model_rms_m > 1e-5           # the reference holds the user effect
+    assert check.tcp_max_error_m < 1e-8
+    # Had the tables left it out, the round trip would see the whole effect.
+    bare = ErrorModel(model.machine, {})
+    applied = round_trip(bare, 0.005)
+    assert applied.tcp_model_rms_m < 1e-9
+
+
+def test_a_user_effect_no_table_can_hold_is_refused_and_a_thermal_one_stays_real_time():
+    from mt_accuracy_ros.core.compensation.cnc_export import write_isg_csv
+
+    twisted = _user_model("k * x * y", "x")
+    with pytest.raises(ParameterError, match="user effect 'mine' depends on 2 axes"):
+        bilateral_tables(twisted, 0.005)
+    with pytest.raises(ParameterError, match="export refused"):
+        write_isg_csv(twisted, 0.005)
+    thermal = _user_model("k * T_bed", "x", 1e-6)
+    tables = bilateral_tables(thermal, 0.005)
+    assert not any(np.any(v) for t in tables.values() for v in t.forward.values())

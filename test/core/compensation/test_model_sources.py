@@ -11,7 +11,7 @@ import pytest
 from mt_accuracy_ros.core.compensation.error_model import resolve_model
 from mt_accuracy_ros.core.errors import MachineDescriptionError, ParameterError
 from mt_accuracy_ros.core.kinematics.machine import BUNDLED_MACHINES, load_machine
-from mt_accuracy_ros.core.safe_files import MAX_DESCRIPTION_BYTES
+from mt_accuracy_ros.core.inputs.safe_files import MAX_DESCRIPTION_BYTES
 
 SECRET = "hunter2"
 

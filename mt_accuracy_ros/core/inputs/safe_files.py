@@ -15,7 +15,7 @@ import re
 import stat
 from pathlib import Path
 
-from .errors import MtAccuracyError
+from ..errors import MtAccuracyError
 
 #: The largest machine or model description read [bytes] (the bundled ones are < 10 kB).
 MAX_DESCRIPTION_BYTES = 1 << 20

@@ -15,7 +15,7 @@ previous one.
 """
 from __future__ import annotations
 
-from .errors import InputDataError
+from ..errors import InputDataError
 
 #: Indices above this cannot be a running count (and would overflow int64 arithmetic).
 MAX_INDEX = 2 ** 62

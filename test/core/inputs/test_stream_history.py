@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from mt_accuracy_ros.core.errors import InputDataError
-from mt_accuracy_ros.core.stream_history import StreamHistory
+from mt_accuracy_ros.core.inputs.stream_history import StreamHistory
 
 PERIOD = 1e-3          # 1 kHz
 BATCH = 50             # samples per batch: 50 ms
