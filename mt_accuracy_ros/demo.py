@@ -528,9 +528,16 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         return float(np.sqrt(np.mean([phase[kind][c]["rms_um"] ** 2 for c in "xyz"]))) \
             if phase else float("nan")
 
+    mode = story.get("compensation_mode", "hybrid")
+    closed = mode == "off" or int(controller.get("applied", 0)) > 0 or \
+        (mode == "table" and int(controller.get("tables_applied", 1)) > 0)
     summary = {
         # The headline is the instrument's measurement of the machine (the loop table).
-        "headline": "measured by the reference instrument on the compensated machine",
+        "headline": "measured by the reference instrument on the compensated machine"
+        if closed else "measured by the reference instrument; the loop did NOT close (the "
+        "CNC applied no real-time correction): 'compensated' is the machine with only what "
+        "reached it",
+        "loop_closed": bool(closed),
         "tcp_error_uncompensated_rms_um": pooled(whole, "without_compensation"),
         "tcp_error_compensated_rms_um": pooled(whole, "with_compensation"),
         "tcp_error_end_state_rms_um": pooled(end, "with_compensation"),

@@ -80,6 +80,19 @@ def test_bad_startup_parameters_of_a_node_are_one_line_and_exit_2(arguments, wor
     assert len([line for line in result.stderr.splitlines() if line.strip()]) == 1
 
 
+def test_a_batch_too_large_for_best_effort_delivery_is_refused_at_start(tmp_path):
+    """Issue 29: a ScaleBatch the best-effort scales topic would drop (measured: > ~0.5 MB)
+    is refused when the CNC starts, naming the limit - not lost in silence."""
+    scenario = tmp_path / "fast.yaml"
+    scenario.write_text("machine: kidani_hmc\nduration_s: 10\nsample_rate_hz: 20000\n")
+    result = subprocess.run([sys.executable, "-m", "mt_accuracy_ros.nodes.encoder_publisher",
+                             "--ros-args", "-p", f"scenario:={scenario}", "-p",
+                             "batch_period_s:=1.0"], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr
+    assert "best-effort 'scales' topic delivers batches up to 0.45 MB" in result.stderr
+
+
 def test_playing_nothing_is_an_error():
     result = subprocess.run([sys.executable, "-m", "mt_accuracy_ros.nodes.player", "--ros-args",
                              "-p", f"bag:={DATA / 'rosbag2_samples' / 'talker'}",

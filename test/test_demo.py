@@ -176,6 +176,10 @@ def test_demo_closes_the_loop_and_tells_the_end_state(demo_run):
 
     code, out, printed = demo_run
     summary = json.loads((out / "summary.json").read_text())
+    # The headline says whether the loop closed (issue 29: at --rate 10 it did not, and
+    # the "compensated" figure read as if it had).
+    assert summary["loop_closed"] is (summary["compensation_applied"] > 0)
+    assert ("did NOT close" in summary["headline"]) is (not summary["loop_closed"])
     phases = summary["closed_loop"]
     assert phases[0]["label"] == "whole run" and phases[-1]["label"] == "end state"
     for phase in phases:

@@ -31,6 +31,10 @@ class DeliveryHealth:
         self._next_sequence: dict[str, int] = {}
         self._reported: dict[str, Counter] = defaultdict(Counter)
         node.create_timer(period_s, self.publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
+        # rclpy refuses a value outside its descriptor (range, type, read-only) before any
+        # on-set callback runs: counted here, before that check, so that every refused
+        # parameter is on /diagnostics (a pre-set callback sees every request).
+        node.add_pre_set_parameters_callback(self._count_descriptor_refusals)
 
     # ------------------------------------------------------------------ counting
     def processed(self, stream: str, count: int = 1) -> None:
@@ -55,6 +59,13 @@ class DeliveryHealth:
         self._send([DiagnosticStatus(level=DiagnosticStatus.ERROR, name=
                                      f"{self._node.get_fully_qualified_name()}: {topic}",
                                      message=message, hardware_id="", values=[])])
+
+    def _count_descriptor_refusals(self, parameters):
+        for parameter in parameters:
+            problem = descriptor_problem(self._node, parameter)
+            if problem:
+                self.refused("parameters", problem)
+        return parameters
 
     def sequence(self, stream: str, sequence: int, count: int = 1, *,
                  restart: bool = False) -> int:
@@ -123,3 +134,29 @@ class DeliveryHealth:
         array = DiagnosticArray(status=statuses)
         array.header.stamp = self._node.get_clock().now().to_msg()
         self._publisher.publish(array)
+
+
+def descriptor_problem(node, parameter) -> str:
+    """Why rclpy will refuse ``parameter`` by its descriptor ("" if it will not)."""
+    from rclpy.parameter import Parameter
+
+    if not node.has_parameter(parameter.name):
+        return ""   # undeclared: rclpy raises to the caller; nothing of ours to count
+    descriptor = node.describe_parameter(parameter.name)
+    if descriptor.read_only:
+        return f"{parameter.name} is read-only"
+    if descriptor.dynamic_typing or parameter.type_ == Parameter.Type.NOT_SET:
+        return ""
+    if parameter.type_.value != descriptor.type:
+        return (f"{parameter.name}: wrong type {parameter.type_.name}, expected "
+                f"{Parameter.Type(descriptor.type).name}")
+    ranges = descriptor.integer_range if parameter.type_ == Parameter.Type.INTEGER else \
+        descriptor.floating_point_range if parameter.type_ == Parameter.Type.DOUBLE else []
+    if ranges:
+        low, high, value = ranges[0].from_value, ranges[0].to_value, parameter.value
+        # rclpy's own tolerance for doubles at the ends of a range
+        slack = 1e-9 * max(abs(low), abs(high), 1.0) if parameter.type_ == \
+            Parameter.Type.DOUBLE else 0
+        if not (low - slack <= value <= high + slack):
+            return f"{parameter.name}: {value} outside [{low}, {high}]"
+    return ""
