@@ -175,7 +175,9 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
 
     def on_model_status(message: DiagnosticArray) -> None:
         for status in message.status:
-            if status.name.endswith(": model") and status.level == DiagnosticStatus.ERROR:
+            # The model's alarms, and an input that stopped (its node died): ERRORs.
+            if status.name.endswith((": model", ": inputs")) and \
+                    status.level == DiagnosticStatus.ERROR:
                 diagnostics_text.append((now_s(), status.message))
 
     listener.create_subscription(DiagnosticArray, "/diagnostics", on_model_status, 50)
@@ -262,6 +264,12 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
             rclpy.spin_once(listener, timeout_sec=0.05)
             act()
     finally:
+        # A node that died during the run (killed, crashed) is named: its absence explains
+        # frozen profiles or a silent monitor, and the run cannot be called a success.
+        # (The virtual machine's publishers end by themselves, with 0, when the scenario
+        # is over: a clean end, not a death.)
+        dead_nodes = [f"{p.name} (exit {_exit_text(p.popen.returncode)})"
+                      for p in [encoder, *nodes] if p.popen.poll() not in (None, 0)]
         encoder.stop()
         for process in nodes:
             process.stop()
@@ -291,6 +299,12 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
                          references, losses, story, delivery, scenario,
                          [text for _, text in diagnostics_text])
+    summary["dead_nodes"] = dead_nodes
+    stale, messages = summary["compensation_stale"], max(summary["compensation_messages"], 1)
+    if stale > LATE_WARNING_SHARE * messages:
+        losses.append(f"{stale} of {messages} corrections ({stale / messages:.1%}) arrived too "
+                      f"late to apply (warning above {LATE_WARNING_SHARE:.0%}): the real-time "
+                      "path missed its deadline on this host")
     # The headline first: what the instrument measured on the compensated machine.
     for line in story["lines"]:
         print(line)
@@ -308,6 +322,10 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     for failure in failures:
         print(f"  FAILED: {failure}")
     return 1 if failures else 0
+
+
+#: Share of corrections arriving too late to apply above which the demo warns.
+LATE_WARNING_SHARE = 0.01
 
 
 def _recorded_references(bag: Path, start_ns: int) -> tuple[list[tuple], list[tuple]]:
@@ -339,10 +357,18 @@ def _take_reference(m, start_ns: int, references: list, orientations: list) -> N
             float(m.orientation_uncertainty)))
 
 
+def _exit_text(code: int | None) -> str:
+    if code is None:
+        return "running"
+    return f"signal {-code}" if code < 0 else str(code)
+
+
 def demo_failures(summary: dict, story: dict) -> list[str]:
     """Why the main job did not do its job (empty when it did): the command exits
     non-zero with these, whatever the host's speed."""
     out = []
+    if summary.get("dead_nodes"):
+        out.append(f"node(s) died during the run: {', '.join(summary['dead_nodes'])}")
     if not summary.get("model_checks"):
         out.append("the model monitor published no check")
     if not summary.get("bag_messages"):

@@ -26,6 +26,21 @@ def test_delivery_losses_are_plain_sentences():
     assert delivery_losses({"/n": {"scales.processed": "5", "scales.lost": "0"}}) == []
 
 
+def test_dead_nodes_are_named_and_fail_the_run():
+    """Issue 29: with the estimator and the monitor killed (-9) the demo exited 0 and named
+    nobody; now each dead node is a failure line (and the exit status 1)."""
+    from mt_accuracy_ros.demo import _exit_text, demo_failures
+
+    good = {"model_checks": 5, "bag_messages": 100, "compensation_applied": 10,
+            "dead_nodes": []}
+    assert demo_failures(good, {"end_state_within_band": True}) == []
+    dead = dict(good, dead_nodes=[f"yaw_estimator (exit {_exit_text(-9)})",
+                                  f"model_monitor (exit {_exit_text(1)})"])
+    failure, = demo_failures(dead, {"end_state_within_band": True})
+    assert failure == ("node(s) died during the run: yaw_estimator (exit signal 9), "
+                       "model_monitor (exit 1)")
+
+
 def test_a_failed_end_state_says_whether_the_host_or_the_model_failed():
     from mt_accuracy_ros.demo import demo_failures
 

@@ -18,7 +18,8 @@ from rclpy.clock import Clock, ClockType
 
 from mt_accuracy_msgs.msg import CompensationTable, VolumetricCompensation
 
-from ..core.compensation.controller import RealtimeOffset, TableCompensation
+from ..core.compensation.controller import (MAX_CORRECTION_M, RealtimeOffset,
+                                            TableCompensation)
 from ..core.errors import InputDataError
 from ..core.kinematics.machine import MachineDescription
 from ._common import COMPENSATION_QOS, TABLE_QOS, stamp_to_nanoseconds, unpack_float64
@@ -52,7 +53,7 @@ class CompensationInput:
 
     def __init__(self, node, mode: str, machine: MachineDescription, health, *,
                  now_stamp_ns: Callable[[], int | None], cycle_s: float, delay_s: float,
-                 max_age_s: float) -> None:
+                 max_age_s: float, max_correction_m: float = MAX_CORRECTION_M) -> None:
         if mode not in MODES:
             raise InputDataError(f"compensation_input {mode!r}: one of {', '.join(MODES)}")
         self.node = node
@@ -62,8 +63,9 @@ class CompensationInput:
         self._now = now_stamp_ns
         self.rotary_axes = [a for a in machine.axis_order if machine.axes[a].is_rotary]
         self.offset = RealtimeOffset(cycle_s, delay_s, max_age_s,
-                                     rotary_axes=len(self.rotary_axes))
-        self.tables = TableCompensation(machine)
+                                     rotary_axes=len(self.rotary_axes),
+                                     max_correction_m=max_correction_m)
+        self.tables = TableCompensation(machine, max_correction_m=max_correction_m)
         self._reported = (0, 0)
         self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", 10)
         if mode in ("realtime", "hybrid"):

@@ -91,6 +91,8 @@ class ModelInputs:
         self.health = health
         # The start-up model comes from the node's own command line or parameter file.
         self.model: ErrorModel = resolve_model(model_text, model_dir=self.model_dir)
+        #: Newest data stamp [ns] received per input stream (liveness: :meth:`silent`).
+        self.last_stamp: dict[str, int] = {}
         # Versions that evaluated at the machine, newest last, and those that failed there.
         self._evaluated: list[ErrorModel] = []
         self._failed: set[int] = set()
@@ -225,6 +227,7 @@ class ModelInputs:
         good = {name: float(v) for name, v in zip(message.sensor_names, values) if np.isfinite(v)}
         dead = {name for name, v in zip(message.sensor_names, values) if not np.isfinite(v)}
         stamp = stamp_to_nanoseconds(message.header.stamp)
+        self.last_stamp["temperatures"] = max(self.last_stamp.get("temperatures", stamp), stamp)
         if stamp <= self._applied_until:
             self.health.late("temperatures")
         self._pending_temperatures.append((stamp, good, dead))
@@ -241,6 +244,8 @@ class ModelInputs:
         stream = f"systematic/{message.axis or '?'}"
         self.health.sequence(stream, message.sequence)
         self.health.processed(stream)
+        stamp = stamp_to_nanoseconds(message.header.stamp)
+        self.last_stamp[stream] = max(self.last_stamp.get(stream, stamp), stamp)
         if stamp_to_nanoseconds(message.header.stamp) <= self._applied_until:
             self.health.late(stream)
         difference = unpack_float64(message.baseline_difference).copy()
@@ -274,6 +279,12 @@ class ModelInputs:
                 self.health.refused(f"systematic/{name}", f"profile ignored: {exc}")
         if changed and self.on_profiles is not None:
             self.on_profiles()
+
+    def silent(self, stamp_ns: int, horizon_s: float) -> dict[str, float]:
+        """Input streams seen before that sent nothing for more than ``horizon_s`` of data
+        time before ``stamp_ns``: stream -> seconds of silence."""
+        return {stream: (stamp_ns - last) * 1e-9 for stream, last in self.last_stamp.items()
+                if stamp_ns - last > horizon_s * 1e9}
 
     def model_yaml(self) -> str:
         return yaml.safe_dump(model_to_dict(self.model), sort_keys=False)

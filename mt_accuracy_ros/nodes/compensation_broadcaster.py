@@ -68,8 +68,13 @@ class CompensationBroadcaster(Node):
             "of its stamp with the one its sample index predicts [s]; a batch beyond it is "
             "refused (forged or corrupt) until 3 consistent batches confirm a new position",
             0.001, 86400.0, read_only=True))
+        self.declare_parameter("input_timeout_s", 10.0, float_descriptor(
+            "Data time after which a silent input (temperatures, a systematic profile) is "
+            "reported: WARN, and ERROR after 3x; meanwhile its last value is held [s]",
+            0.1, 3600.0, read_only=True))
         self.add_on_set_parameters_callback(self._validate)
         self.health = DeliveryHealth(self)
+        self._silent_level: dict[str, int] = {}   # stream -> 0 ok, 1 warned, 2 error
         self._history = StreamHistory(float(self.get_parameter("stream_horizon_s").value))
         self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
                                   follow_topic=bool(self.get_parameter("follow_model_topic").value),
@@ -146,6 +151,7 @@ class CompensationBroadcaster(Node):
         self.health.processed("scales", commands.shape[0])
         self._last_stamp = stamp
         self.inputs.advance(stamp)
+        self._check_liveness(stamp)
         if self.inputs.dead != self._reported_dead:
             self._reported_dead = set(self.inputs.dead)
             if self._reported_dead:
@@ -221,6 +227,31 @@ class CompensationBroadcaster(Node):
             self._compensation_sequence += 1
             self._compensation.publish(out)
 
+    def _check_liveness(self, stamp: int) -> None:
+        """An input that stopped (its node died, its link broke) is said on /diagnostics:
+        WARN after ``input_timeout_s`` of data time, ERROR after three times that. The safe
+        state meanwhile: its last value is held (the last profile, the last temperature),
+        the tables stay, compensation goes on - and the operator is told."""
+        horizon = float(self.get_parameter("input_timeout_s").value)
+        silent = self.inputs.silent(stamp, horizon)
+        for stream in list(self._silent_level):
+            if stream not in silent:
+                del self._silent_level[stream]
+                self._warn(f"{stream}: receiving again", level=DiagnosticStatus.OK)
+        for stream, seconds in silent.items():
+            level = 2 if seconds > 3 * horizon else 1
+            if self._silent_level.get(stream, 0) >= level:
+                continue
+            self._silent_level[stream] = level
+            source = "the yaw estimator" if stream.startswith("systematic") else \
+                "the temperature source"
+            text = (f"{stream}: nothing for {seconds:.1f} s of data ({source} stopped?); its "
+                    "last value is held and compensation goes on with it")
+            if level == 2:
+                self.health.alarm(text, topic="inputs")
+            else:
+                self._warn(text)
+
     def _evaluate(self, model, positions, velocities, directions, times, accelerations):
         """(error, orientation, linear correction, rotary correction) of ``model`` at the rows;
         a non-finite result is an evaluation failure (FloatingPointError)."""
@@ -279,8 +310,8 @@ class CompensationBroadcaster(Node):
             self._tables.publish(table)
         self._published_version = (model.version, model.profile_revision)
 
-    def _warn(self, text: str) -> None:
-        status = DiagnosticStatus(level=DiagnosticStatus.WARN,
+    def _warn(self, text: str, level=DiagnosticStatus.WARN) -> None:
+        status = DiagnosticStatus(level=level,
                                   name=f"{self.get_fully_qualified_name()}: model", message=text)
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()

@@ -92,6 +92,10 @@ class EncoderPublisher(Node):
         self.declare_parameter("compensation_delay_s", 0.02, float_descriptor(
             "Fixed delay from a correction's stamp to its application [s]", 0.0, 10.0,
             read_only=True))
+        self.declare_parameter("max_correction_m", 1e-3, float_descriptor(
+            "The controller's correction limit [m]: a real-time correction or a translational "
+            "table value beyond it is refused and counted, whatever the model says",
+            1e-9, 0.1, read_only=True))
         self.declare_parameter("max_compensation_age_s", 0.25, float_descriptor(
             "A correction arriving later than this after its stamp is stale [s]", 1e-3, 60.0,
             read_only=True))
@@ -136,7 +140,8 @@ class EncoderPublisher(Node):
             self, mode, self.scenario.machine, self.health, now_stamp_ns=self._now_stamp_ns,
             cycle_s=float(self.get_parameter("controller_cycle_s").value),
             delay_s=float(self.get_parameter("compensation_delay_s").value),
-            max_age_s=float(self.get_parameter("max_compensation_age_s").value))
+            max_age_s=float(self.get_parameter("max_compensation_age_s").value),
+            max_correction_m=float(self.get_parameter("max_correction_m").value))
         # Where a unit move of each linear axis takes the TCP (+-unit vectors): the
         # axes realise a TCP correction c by moving c . direction each.
         model = ErrorModel(self.scenario.machine)

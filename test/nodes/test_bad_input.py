@@ -322,3 +322,61 @@ def test_forged_indices_and_stamps_going_back_are_refused_and_counted(rclpy_cont
         for n in nodes:
             n.stop()
         node.destroy_node()
+
+
+def test_an_input_that_stops_is_reported_and_its_last_value_held(rclpy_context):
+    """Issue 29: when the temperature source (or the estimator) stops, the broadcaster says
+    so - WARN after input_timeout_s of data, ERROR after three times that - holds the last
+    value, keeps compensating, and says when the input is back."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    from mt_accuracy_msgs.msg import ScaleBatch, TemperatureArray, VolumetricCompensation
+    from mt_accuracy_ros.io.fields import nanoseconds_to_stamp
+    from mt_accuracy_ros.nodes._common import SENSOR_QOS
+    from mt_accuracy_ros.nodes.compensation_broadcaster import COMPENSATION_QOS
+
+    node = rclpy.create_node("cnc")
+    diagnostics, compensation = [], []
+    node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 100)
+    node.create_subscription(VolumetricCompensation, "compensation", compensation.append,
+                             COMPENSATION_QOS)
+    scales = node.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
+    temperatures = node.create_publisher(TemperatureArray, "temperatures", SENSOR_QOS)
+    broadcaster = start_node("compensation_broadcaster", {"input_delay_s": 0.0,
+                                                          "input_timeout_s": 1.0}, quiet=True)
+    sent = {"index": 0, "at": 0.0}
+
+    def run(with_temperatures):
+        # One 50 ms batch per 20 ms of waiting: data time runs 2.5x wall time.
+        if time.monotonic() - sent["at"] > 0.02:
+            sent["at"] = time.monotonic()
+            stamp = 10**9 + sent["index"] * 50_000_000
+            if with_temperatures:
+                message = TemperatureArray(sensor_names=["column"], temperatures=[20.0])
+                message.header.stamp = nanoseconds_to_stamp(stamp - 1)
+                temperatures.publish(message)
+            scales.publish(_batch(sent["index"] * 50, stamp, 0.001))
+            sent["index"] += 1
+
+    def said(level, words):
+        return any(s.level == level and words in s.message and "compensation_broadcaster"
+                   in s.name for array in diagnostics for s in array.status)
+
+    try:
+        assert spin_until(node, lambda: scales.get_subscription_count() > 0
+                          and temperatures.get_subscription_count() > 0, 30)
+        assert spin_until(node, lambda: run(True) or len(compensation) > 20, 30)
+        assert not said(b"\x01", "temperatures: nothing for")
+        assert spin_until(node, lambda: run(False) or said(b"\x01", "temperatures: nothing for"),
+                          30)
+        assert spin_until(node, lambda: run(False) or said(b"\x02", "temperatures: nothing for"),
+                          30)
+        count = len(compensation)
+        assert spin_until(node, lambda: run(False) or len(compensation) > count + 10, 30)
+        assert spin_until(node, lambda: run(True) or said(b"\x00", "temperatures: receiving "
+                                                                    "again"), 30)
+        assert broadcaster.popen.poll() is None
+    finally:
+        broadcaster.stop()
+        node.destroy_node()

@@ -37,6 +37,8 @@ from ..kinematics.machine import MachineDescription
 
 #: Largest correction a controller takes [m]: more is a unit mistake or a broken model.
 MAX_CORRECTION_M = 1e-3
+#: Largest table value by default: 10 mm, 10 mrad (the controller's parameter narrows it).
+TABLE_MAX_VALUE = 1e-2
 #: A rotary correction larger than this [rad] (0.5 deg) is refused as a unit mistake.
 MAX_CORRECTION_RAD = float(np.radians(0.5))
 #: Component letters of a table column, ISO 230-1: E<component><axis>.
@@ -82,15 +84,18 @@ class RealtimeOffset:
     """
 
     def __init__(self, cycle_s: float, delay_s: float, max_age_s: float,
-                 rotary_axes: int = 0) -> None:
+                 rotary_axes: int = 0, max_correction_m: float = MAX_CORRECTION_M) -> None:
         for name, value, low in (("cycle_s", cycle_s, 1e-6), ("delay_s", delay_s, 0.0),
-                                 ("max_age_s", max_age_s, 1e-6)):
+                                 ("max_age_s", max_age_s, 1e-6),
+                                 ("max_correction_m", max_correction_m, 1e-9)):
             if not (np.isfinite(value) and value >= low):
                 raise ParameterError(f"{name} = {value!r} s: must be finite and >= {low}")
         if max_age_s < delay_s:
             raise ParameterError(f"max_age_s ({max_age_s} s) must not be below delay_s "
                                  f"({delay_s} s): every correction would be stale")
         self.rotary_axes = int(rotary_axes)
+        #: The controller's own limit [m]: a larger correction is refused, whatever the model.
+        self.max_correction_m = float(max_correction_m)
         self.cycle_ns = int(round(cycle_s * 1e9))
         self.delay_ns = int(round(delay_s * 1e9))
         self.max_age_ns = int(round(max_age_s * 1e9))
@@ -127,9 +132,10 @@ class RealtimeOffset:
         if rotary.size not in (0, self.rotary_axes) or not np.all(np.isfinite(rotary)):
             return self._refuse(f"not finite: rotary correction with NaN/inf or not "
                                 f"{self.rotary_axes} components")
-        if np.max(np.abs(correction)) > MAX_CORRECTION_M:
+        if np.max(np.abs(correction)) > self.max_correction_m:
             return self._refuse(f"too large: |correction| {np.max(np.abs(correction)):.3g} m "
-                                f"> {MAX_CORRECTION_M} m (a unit mistake?)")
+                                f"> the controller's limit {self.max_correction_m:g} m (a unit "
+                                "mistake or a broken model?)")
         if rotary.size and np.max(np.abs(rotary)) > MAX_CORRECTION_RAD:
             return self._refuse(f"too large: |rotary correction| {np.max(np.abs(rotary)):.3g} rad"
                                 f" > {MAX_CORRECTION_RAD} rad (degrees sent as radians?)")
@@ -213,8 +219,11 @@ class TableCompensation:
         what a CNC's volumetric-compensation package is configured with.
     """
 
-    def __init__(self, machine: MachineDescription) -> None:
+    def __init__(self, machine: MachineDescription,
+                 max_correction_m: float = TABLE_MAX_VALUE) -> None:
         self.machine = machine
+        #: Largest translational table value the controller takes [m] (angles: 10 mrad).
+        self.max_correction_m = float(max_correction_m)
         self._kinematics = KinematicModel(machine)
         self.tables: dict[str, AxisTable] = {}
         self.squareness: dict[str, float] = {}
@@ -273,9 +282,12 @@ class TableCompensation:
         if grid[0] > low + 1e-3 or grid[-1] < high - 1e-3:
             return self._refuse(f"gap: the table covers {grid[0]:.3f}..{grid[-1]:.3f} m, the "
                                 f"stroke {low:.3f}..{high:.3f} m")
-        if np.any(np.abs(data[:, 1:]) > 1e-2):
-            return self._refuse("too large: a table value beyond 10 mm / 10 mrad "
-                                "(a unit mistake?)")
+        limits = np.array([TABLE_MAX_VALUE if str(c).endswith("_rad") else
+                           self.max_correction_m for c in columns[1:]])
+        if np.any(np.abs(data[:, 1:]) > limits):
+            return self._refuse(f"too large: a table value beyond the controller's limit "
+                                f"({self.max_correction_m:g} m, {TABLE_MAX_VALUE:g} rad; a "
+                                "unit mistake?)")
         names = [str(n) for n in squareness_names]
         square = np.asarray(squareness, dtype=np.float64).reshape(-1)
         if square.size != len(names) or not np.all(np.isfinite(square)) or \

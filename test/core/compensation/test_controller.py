@@ -48,6 +48,23 @@ def test_bad_corrections_are_refused_and_the_last_valid_one_stays(stamp, correct
     assert offset.statistics.refused == 1
 
 
+def test_the_correction_limit_is_the_controllers_own_parameter():
+    """Issue 29: the limit is the CNC's, not the model's: a controller set to 50 um refuses
+    a 60 um correction and a 60 um table value a looser one takes."""
+    strict = RealtimeOffset(cycle_s=0.001, delay_s=0.0, max_age_s=1.0, max_correction_m=50e-6)
+    loose = RealtimeOffset(cycle_s=0.001, delay_s=0.0, max_age_s=1.0)
+    assert "controller's limit 5e-05 m" in strict.offer(MS, MS, [60e-6, 0, 0], 1)
+    assert loose.offer(MS, MS, [60e-6, 0, 0], 1) is None
+    machine = load_machine("kidani_hmc")
+    grid = np.linspace(*machine.axes["X"].stroke, 11)
+    table = ("X", ["X_m", "EXX_m", "EBX_rad"],
+             np.column_stack([grid, np.full(11, 60e-6), np.full(11, 60e-6)]).ravel(), [], [], 1)
+    assert "controller's limit" in TableCompensation(machine, max_correction_m=50e-6).offer(*table)
+    assert TableCompensation(machine).offer(*table) is None
+    with pytest.raises(ParameterError, match="max_correction_m"):
+        RealtimeOffset(cycle_s=0.001, delay_s=0.0, max_age_s=1.0, max_correction_m=0.0)
+
+
 def test_bad_controller_parameters_are_refused():
     with pytest.raises(ParameterError):
         RealtimeOffset(cycle_s=0.0, delay_s=0.0, max_age_s=1.0)
