@@ -283,6 +283,10 @@ def references(draw):
     return message
 
 
+#: The DDS domain the fuzzing nodes run in (not 0, the default of every cell).
+FUZZ_DOMAIN_ID = 167
+
+
 class NodeHarness:
     """The model nodes, in this process, whose raw handlers the message targets call."""
 
@@ -294,8 +298,10 @@ class NodeHarness:
         from mt_accuracy_ros.nodes.yaw_estimator import YawEstimator
 
         self.context = rclpy.Context()
-        rclpy.init(context=self.context)
-        kwargs = {"context": self.context}
+        # Its own DDS domain and namespace: a fuzzing run must never talk to a real cell's
+        # graph (or a test's) on the default domain, nor be mistaken for its nodes.
+        rclpy.init(context=self.context, domain_id=FUZZ_DOMAIN_ID)
+        kwargs = {"context": self.context, "namespace": "fuzz"}
         self.estimator = YawEstimator(**kwargs)
         self.broadcaster = CompensationBroadcaster(**kwargs)
         self.monitor = ModelMonitor(**kwargs)
@@ -343,6 +349,96 @@ def message_targets(harness: NodeHarness) -> dict[str, tuple]:
     }
 
 
+#: What a hostile peer names as a model: paths of every kind, traversal, specials.
+NETWORK_PATHS = st.sampled_from([
+    "/etc/passwd", "/proc/self/environ", "/dev/zero", "/dev/stdin", "../models/demo.yaml",
+    "demo.yaml", "/tmp", "~/.ssh/id_rsa", "C:\\Windows\\win.ini", "file:///etc/passwd",
+    "kidani_hmc/../../etc/passwd", "models/../../x.yml", "\x00", " /etc/hosts ",
+    # Valid files by path: a network model must not reach them either.
+    str(Path(mt_accuracy_ros.__file__).parent / "machines" / "kidani_hmc.yaml"),
+    str(Path(mt_accuracy_ros.__file__).parent / "models" / "demo.yaml")])
+
+
+@st.composite
+def network_models(draw):
+    """A model string from the network: a path, or inline YAML whose machine is one."""
+    path = draw(NETWORK_PATHS | st.text(max_size=40))
+    kind = draw(st.sampled_from(["bare", "inline", "block"]))
+    if kind == "bare":
+        return path
+    machine = yaml.safe_dump(path).strip().removesuffix("...").strip()
+    return f"{{machine: {machine}}}" if kind == "inline" else f"machine: {machine}\n"
+
+
+def network_model(text: str) -> None:
+    """A network model opens no file outside the bundled directories: it is refused
+    (ParameterError) or it is inline YAML / a bundled name on a bundled machine."""
+    from mt_accuracy_ros.core.compensation.error_model import resolve_model
+    from mt_accuracy_ros.core.kinematics.machine import bundled_machine_names
+
+    try:
+        model = resolve_model(text, from_network=True)
+    except MtAccuracyError:
+        return
+    except Exception as exc:  # noqa: BLE001 - the property
+        raise AssertionError(f"{type(exc).__name__} escaped for {text!r}: {exc}") from exc
+    source = model.machine_source or model.machine.name
+    assert source in bundled_machine_names(), f"{text!r} reached machine {source!r}"
+
+
+def stream_batches(draw_list):
+    from mt_accuracy_ros.core.errors import InputDataError
+    from mt_accuracy_ros.core.inputs.stream_history import StreamHistory
+
+    history = StreamHistory(60.0)
+    for index, count, stamp, period in draw_list:
+        try:
+            lost = history.check(index, count, stamp, period)
+        except InputDataError:
+            continue
+        # Whatever came before, a loss is never more than the horizon's worth of samples.
+        assert -1 <= lost <= 60.0 / period + 1, (index, count, stamp, period, lost)
+
+
+BATCH_HISTORIES = st.lists(st.tuples(
+    st.integers(0, 2**64 - 1) | st.integers(0, 10**6), st.integers(1, 2000),
+    st.integers(0, 2**63 - 1) | st.integers(10**9, 10**9 + 10**11),
+    st.sampled_from([1e-3, 5e-5, 0.01, 1.0])), max_size=30)
+
+#: Terms that overflow, are not finite or not defined somewhere in a machine's travel.
+HOSTILE_TERMS = st.sampled_from([
+    "9**9**9", "1" + "0" * 400, "1" + "0" * 1500, "exp(1000 * x)", "exp(40 * T_bed)",
+    "log(x)", "1 / (y - y)", "sqrt(-1 - x)", "x ** -2", "10 ** 400", "cosh(1e4 * z)",
+    "arcsin(2 + x)", "x", "x * y", "sin(x / 0.01)", "T_bed", "lag(T_bed, 600)"])
+
+
+@st.composite
+def hostile_expressions(draw):
+    terms = draw(st.lists(HOSTILE_TERMS, min_size=1, max_size=3))
+    value = draw(st.sampled_from(["1.0e-3", "1.0e+300", "1.0e-300", "-2.5e-6"]))
+    return ("{machine: kidani_hmc, effects: {mine: {expression: 'k * " + " * ".join(terms) +
+            "', parameters: [k], values: {k: " + value + "}}}}")
+
+
+def expression_model(text: str) -> None:
+    """A model with a user expression either is refused when it loads, or evaluates to
+    finite values over the machine's travel and temperature range."""
+    import numpy as np
+
+    from mt_accuracy_ros.core.compensation.error_model import (representative_variables,
+                                                               resolve_model)
+
+    try:
+        model = resolve_model(text)
+    except MtAccuracyError:
+        return
+    variables = representative_variables(model.machine, {"T_bed"})
+    model.reference_temperatures_c["bed"] = 20.0    # the load-time check's reference
+    position, _ = model.tcp_error(variables.positions, {"bed": variables.temperatures["bed"]},
+                                  time_s=variables.time_s)
+    assert np.all(np.isfinite(position)), f"{text!r} loaded and evaluates to NaN/inf"
+
+
 @dataclass(frozen=True)
 class Target:
     name: str
@@ -364,4 +460,7 @@ def loader_targets() -> list[Target]:
         Target("csv.table", csv_texts(), file_bytes("csv")),
         Target("csv.bytes", st.binary(max_size=300), file_bytes("csv")),
         Target("mcap.damaged", damaged_bags(), mcap_file),
+        Target("model.network", network_models(), network_model),
+        Target("stream.history", BATCH_HISTORIES, stream_batches),
+        Target("model.expression", hostile_expressions(), expression_model),
     ]
