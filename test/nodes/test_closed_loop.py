@@ -213,10 +213,16 @@ def test_the_cnc_refuses_bad_compensation_and_keeps_the_last_valid(rclpy_context
 
         from mt_accuracy_ros.core.kinematics.machine import load_machine
 
-        low, high = load_machine("kidani_hmc").axes["X"].stroke
+        hmc = load_machine("kidani_hmc")
+        low, high = hmc.axes["X"].stroke
         grid = np.linspace(low, high, 11)
         good = np.column_stack([grid, np.full(11, 4e-6)]).ravel()
         tables.publish(table("x", good, 3))
+        # A version goes live whole (every linear axis' table): Y and Z of version 3 too.
+        for axis in "YZ":
+            other = np.linspace(*hmc.axes[axis].stroke, 11)
+            tables.publish(table(axis.lower(), np.column_stack([other, np.zeros(11)]).ravel(),
+                                 3, (f"{axis}_m", f"E{axis}{axis}_m")))
         gap = np.column_stack([np.delete(grid, 5), np.full(10, 9e-6)]).ravel()
         for bad in (table("w", good, 3), table("x", gap, 3), table("x", good, 2)):
             tables.publish(bad)

@@ -228,6 +228,9 @@ class TableCompensation:
         self.tables: dict[str, AxisTable] = {}
         self.squareness: dict[str, float] = {}
         self.version = 0
+        self.linear_axes = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
+        # Tables of a version not yet live, per version: (axis -> table, squareness).
+        self._staged: dict[int, tuple[dict[str, AxisTable], dict[str, float]]] = {}
         self.refusals: dict[str, int] = {}
 
     def _refuse(self, reason: str) -> str:
@@ -294,11 +297,28 @@ class TableCompensation:
                 np.any(np.abs(square) > 1e-2):
             return self._refuse("bad squareness: names and values differ in number, are "
                                 "not finite or beyond 10 mrad")
-        self.tables[axis] = AxisTable(axis, grid.copy(),
-                                      {name: data[:, col].copy() for name, col in parsed.items()},
-                                      int(version))
-        self.squareness = dict(zip(names, (float(v) for v in square)))
-        self.version = int(version)
+        table = AxisTable(axis, grid.copy(),
+                          {name: data[:, col].copy() for name, col in parsed.items()},
+                          int(version))
+        squareness = dict(zip(names, (float(v) for v in square)))
+        version = int(version)
+        if version == self.version:
+            # A refinement of the live version (a new measured profile): per axis, at once.
+            self.tables[axis] = table
+            self.squareness = squareness
+            return None
+        # A new version goes live as a whole: once every linear axis' table of it is in.
+        # Switched axis by axis, the CNC would apply X's new table with Y's old one (or
+        # none) for as long as the other messages take - under load, long enough for a
+        # test's readings to see an uncompensated Y.
+        staged = self._staged.setdefault(version, ({}, {}))
+        staged[0][axis] = table
+        staged[1].update(squareness)
+        if set(staged[0]) >= set(self.linear_axes):
+            self.tables.update(staged[0])
+            self.squareness = dict(staged[1])
+            self.version = version
+            self._staged = {v: t for v, t in self._staged.items() if v > version}
         return None
 
     def error(self, positions: dict[str, ArrayLike]) -> NDArray[np.float64]:

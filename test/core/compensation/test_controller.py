@@ -122,6 +122,16 @@ def _linear(slope: float, stroke):
     return ErrorFunction(kind="profile", positions=x, values=slope * (x - x.mean()))
 
 
+def _offer_other_axes(tables, machine, version, skip="X"):
+    """Zero tables of every linear axis but ``skip`` (a version goes live whole)."""
+    for axis in machine.axis_order:
+        if axis != skip and not machine.axes[axis].is_rotary:
+            grid = np.linspace(*machine.axes[axis].stroke, 11)
+            values = np.column_stack([grid, np.zeros(11)]).ravel()
+            assert tables.offer(axis, [f"{axis}_m", f"E{axis}{axis}_m"], values, [], [],
+                                version) is None
+
+
 def test_a_constant_positioning_error_is_corrected_along_its_axis():
     machine = load_machine("kidani_hmc")
     tables = TableCompensation(machine)
@@ -129,6 +139,7 @@ def test_a_constant_positioning_error_is_corrected_along_its_axis():
     grid = np.linspace(low, high, 11)
     values = np.column_stack([grid, np.full(11, 5e-6)]).ravel()
     assert tables.offer("x", ["X_m", "EXX_m"], values, [], [], 2) is None
+    _offer_other_axes(tables, machine, 2)
     correction = tables.correction({a: np.zeros(1) + 0.5 * sum(machine.axes[a].stroke)
                                     for a in machine.axis_order})
     direction = ErrorModel(machine).axis_direction("X", {a: np.zeros(1) for a in
@@ -149,10 +160,38 @@ def test_bad_tables_are_refused_and_the_axis_keeps_its_table(change, word):
     grid = np.linspace(*machine.axes["X"].stroke, 11)
     good = ("X", ["X_m", "EXX_m"], np.column_stack([grid, np.full(11, 5e-6)]).ravel())
     assert tables.offer(*good, [], [], 1) is None
+    _offer_other_axes(tables, machine, 1)
     axis, columns, values, version = change(good)
     reason = tables.offer(axis, columns, values, [], [], version)
     assert reason is not None and word in reason, reason
     assert tables.tables["X"].components["EXX"][0] == 5e-6 and tables.version == 1
+
+
+def test_a_new_version_of_the_tables_goes_live_whole():
+    """Issue 29 (loaded runs): X's new table with Y's old one (or none) is a machine no
+    model describes. A version switches only when every linear axis' table of it is in;
+    until then the previous version stays applied, all of it."""
+    machine = load_machine("kidani_hmc")
+    tables = TableCompensation(machine)
+    middle = {a: np.array([0.5 * sum(machine.axes[a].stroke)]) for a in machine.axis_order}
+    grid = np.linspace(*machine.axes["X"].stroke, 11)
+
+    def x_table(value):
+        return "X", ["X_m", "EXX_m"], np.column_stack([grid, np.full(11, value)]).ravel()
+    assert tables.offer(*x_table(5e-6), [], [], 1) is None
+    assert tables.version == 0 and not np.any(tables.correction(middle))   # X alone: not yet
+    _offer_other_axes(tables, machine, 1)
+    assert tables.version == 1
+    before = tables.correction(middle)
+    assert tables.offer(*x_table(9e-6), [], [], 2) is None                  # v2 begins
+    assert tables.version == 1
+    np.testing.assert_array_equal(tables.correction(middle), before)      # v1 whole, still
+    _offer_other_axes(tables, machine, 2)
+    assert tables.version == 2
+    np.testing.assert_allclose(tables.correction(middle), before * 9 / 5, atol=1e-15)
+    # A refinement of the live version (a new profile) applies per axis at once.
+    assert tables.offer(*x_table(7e-6), [], [], 2) is None
+    np.testing.assert_allclose(tables.correction(middle), before * 7 / 5, atol=1e-15)
 
 
 def test_loop_phases_split_a_run_and_judge_the_end_state():
