@@ -93,11 +93,11 @@ class ModelInputs:
         self.model: ErrorModel = resolve_model(model_text, model_dir=self.model_dir)
         #: Newest data stamp [ns] received per input stream (liveness: :meth:`silent`).
         self.last_stamp: dict[str, int] = {}
-        # Versions that evaluated at the machine, newest last, and those that failed there.
+        # The last versions that evaluated at the machine, newest last (a version that
+        # fails there is taken out: never a fallback).
         self._evaluated: list[ErrorModel] = []
-        self._failed: set[int] = set()
         #: The start-up machine, as models name it: network models may name it too.
-        self.trusted_machines = tuple({self.model.machine_source or self.model.machine.name})
+        self.trusted_machines = (self.model.machine_source or self.model.machine.name,)
         self.temperatures: dict[str, float] = {}
         self.dead: set[str] = set()
         self.on_change = on_change
@@ -146,11 +146,10 @@ class ModelInputs:
         """Make the newest other version that evaluated live again after the live one
         failed (counted, ERROR on /diagnostics); False when there is none."""
         failing = self.model
-        self._failed.add(id(failing))
-        good = next((m for m in reversed(self._evaluated)
-                     if m is not failing and id(m) not in self._failed), None)
-        if good is None:
+        self._evaluated = [m for m in self._evaluated if m is not failing]
+        if not self._evaluated:
             return False
+        good = self._evaluated[-1]
         self.health.refused("model", f"{reason}; version {good.version}, the last that "
                             "evaluated, is live again")
         self.health.alarm(f"model version {failing.version} failed at the machine: "
@@ -246,7 +245,7 @@ class ModelInputs:
         self.health.processed(stream)
         stamp = stamp_to_nanoseconds(message.header.stamp)
         self.last_stamp[stream] = max(self.last_stamp.get(stream, stamp), stamp)
-        if stamp_to_nanoseconds(message.header.stamp) <= self._applied_until:
+        if stamp <= self._applied_until:
             self.health.late(stream)
         difference = unpack_float64(message.baseline_difference).copy()
         self._pending_profiles.append((stamp_to_nanoseconds(message.header.stamp),

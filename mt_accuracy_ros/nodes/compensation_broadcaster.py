@@ -51,7 +51,8 @@ class CompensationBroadcaster(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("compensation_broadcaster", **kwargs)
         self.declare_parameter("model", "demo", plain_descriptor(
-            "Error model: bundled name, path to a model YAML, or inline YAML"))
+            "Error model: bundled name, path to a model YAML, or inline YAML (set at run "
+            "time: inline YAML, a bundled name or a file in model_dir - never a path)"))
         self.declare_parameter("model_dir", "", plain_descriptor(MODEL_DIR_DESCRIPTION,
                                                                 read_only=True))
         self.declare_parameter("follow_model_topic", True, plain_descriptor(
@@ -75,6 +76,7 @@ class CompensationBroadcaster(Node):
         self.add_on_set_parameters_callback(self._validate)
         self.health = DeliveryHealth(self)
         self._silent_level: dict[str, int] = {}   # stream -> 0 ok, 1 warned, 2 error
+        self._input_timeout_s = float(self.get_parameter("input_timeout_s").value)
         self._history = StreamHistory(float(self.get_parameter("stream_horizon_s").value))
         self.inputs = ModelInputs(self, str(self.get_parameter("model").value),
                                   follow_topic=bool(self.get_parameter("follow_model_topic").value),
@@ -232,7 +234,7 @@ class CompensationBroadcaster(Node):
         WARN after ``input_timeout_s`` of data time, ERROR after three times that. The safe
         state meanwhile: its last value is held (the last profile, the last temperature),
         the tables stay, compensation goes on - and the operator is told."""
-        horizon = float(self.get_parameter("input_timeout_s").value)
+        horizon = self._input_timeout_s     # read-only: not looked up on the hot path
         silent = self.inputs.silent(stamp, horizon)
         for stream in list(self._silent_level):
             if stream not in silent:

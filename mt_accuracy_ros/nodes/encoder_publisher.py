@@ -55,7 +55,8 @@ ORIENTATION_UNCERTAINTY_RAD = 2e-6
 
 
 #: Largest ScaleBatch [bytes] the best-effort ``scales`` topic delivered every time
-#: (cross-process, Fast DDS, this machine: 0.48 MB 3 of 3, 0.96 MB 1 of 3, 3 MB never).
+#: (cross-process, Fast DDS, this machine, two runs: 0.48 MB 3 of 3; 0.96-4.8 MB 0 or 1 of 3;
+#: `python -m bench.scale_batch_delivery`).
 MAX_SCALE_BATCH_BYTES = 450_000
 
 

@@ -68,7 +68,8 @@ class ModelMonitor(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("model_monitor", **kwargs)
         self.declare_parameter("model", "demo", plain_descriptor(
-            "Error model: bundled name, path or inline YAML (setting it starts a new version)"))
+            "Error model: bundled name, path or inline YAML (setting it starts a new version; "
+            "at run time: inline YAML, a bundled name or a file in model_dir, never a path)"))
         self.declare_parameter("model_dir", "", plain_descriptor(MODEL_DIR_DESCRIPTION,
                                                                 read_only=True))
         self.declare_parameter("window", 200, int_descriptor(

@@ -43,7 +43,10 @@ def _refusals(diagnostics, stream):
             if s.name.endswith("delivery") and s.message.startswith(f"{stream}: refused")]
 
 
-def test_broadcaster_survives_bad_batches_and_models_and_says_why(rclpy_context):
+def _broadcaster_and_peer(name: str):
+    """A broadcaster process (input_delay_s 0: temperatures and profiles need not come
+    first) and a peer node that hears its /diagnostics and compensation and publishes
+    scales and models: (node, diagnostics, compensation, scales, model, broadcaster)."""
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
 
@@ -51,15 +54,22 @@ def test_broadcaster_survives_bad_batches_and_models_and_says_why(rclpy_context)
     from mt_accuracy_ros.nodes._common import LATCHED_QOS, SENSOR_QOS
     from mt_accuracy_ros.nodes.compensation_broadcaster import COMPENSATION_QOS
 
-    node = rclpy.create_node("fuzzer")
+    node = rclpy.create_node(name)
     diagnostics, compensation = [], []
     node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 100)
     node.create_subscription(VolumetricCompensation, "compensation", compensation.append,
                              COMPENSATION_QOS)
     scales = node.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
     model = node.create_publisher(ModelVersion, "model", LATCHED_QOS)
-    # input_delay_s 0: temperatures/profiles need not arrive first for this test.
     broadcaster = start_node("compensation_broadcaster", {"input_delay_s": 0.0}, quiet=True)
+    return node, diagnostics, compensation, scales, model, broadcaster
+
+
+def test_broadcaster_survives_bad_batches_and_models_and_says_why(rclpy_context):
+    from mt_accuracy_msgs.msg import ModelVersion
+
+    node, diagnostics, compensation, scales, model, broadcaster = \
+        _broadcaster_and_peer("fuzzer")
     try:
         assert spin_until(node, lambda: scales.get_subscription_count() > 0
                           and node.count_publishers("compensation") > 0, 30)
@@ -132,12 +142,7 @@ def test_a_network_model_opens_no_file_and_quotes_none(rclpy_context, tmp_path):
     """Issue 29: paths on the model topic and in a run-time model parameter are refused
     before anything is opened (a FIFO, /dev/zero, a secret, a valid model elsewhere);
     no refusal quotes a file; the broadcaster keeps compensating with its model."""
-    import rclpy
-    from diagnostic_msgs.msg import DiagnosticArray
-
-    from mt_accuracy_msgs.msg import ModelVersion, ScaleBatch, VolumetricCompensation
-    from mt_accuracy_ros.nodes._common import LATCHED_QOS, SENSOR_QOS
-    from mt_accuracy_ros.nodes.compensation_broadcaster import COMPENSATION_QOS
+    from mt_accuracy_msgs.msg import ModelVersion
 
     secret = tmp_path / "secret.yaml"
     secret.write_text('user: root\npassword: "hunter2\n')
@@ -148,14 +153,7 @@ def test_a_network_model_opens_no_file_and_quotes_none(rclpy_context, tmp_path):
     os.mkfifo(fifo)
     probes = ["/etc/passwd", "/proc/self/environ", "/dev/zero", str(fifo), str(elsewhere),
               str(secret), f"{{machine: {secret}}}", "{machine: ../../../../etc/passwd}"]
-    node = rclpy.create_node("peer")
-    diagnostics, compensation = [], []
-    node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 100)
-    node.create_subscription(VolumetricCompensation, "compensation", compensation.append,
-                             COMPENSATION_QOS)
-    scales = node.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
-    model = node.create_publisher(ModelVersion, "model", LATCHED_QOS)
-    broadcaster = start_node("compensation_broadcaster", {"input_delay_s": 0.0}, quiet=True)
+    node, diagnostics, compensation, scales, model, broadcaster = _broadcaster_and_peer("peer")
     try:
         assert spin_until(node, lambda: node.count_subscribers("model") > 0
                           and node.count_publishers("compensation") > 0, 30)
@@ -188,28 +186,16 @@ def test_a_live_model_that_fails_at_the_machine_gives_way_to_the_last_good_one(r
     travel and temperature range) but overflows on what the machine then meets - a
     temperature beyond the checked range - does not stop compensation: the last version
     that evaluated is live again, counted, with an ERROR on /diagnostics."""
-    import rclpy
-    from diagnostic_msgs.msg import DiagnosticArray
-
-    from mt_accuracy_msgs.msg import (ModelVersion, ScaleBatch, TemperatureArray,
-                                      VolumetricCompensation)
+    from mt_accuracy_msgs.msg import ModelVersion, TemperatureArray
     from mt_accuracy_ros.io.fields import nanoseconds_to_stamp
-    from mt_accuracy_ros.nodes._common import LATCHED_QOS, SENSOR_QOS
-    from mt_accuracy_ros.nodes.compensation_broadcaster import COMPENSATION_QOS
+    from mt_accuracy_ros.nodes._common import SENSOR_QOS
 
     # T_bed is the rise above the first reading: exp(40 T) is 1e260 at the checked +15 K,
     # inf at the +25 K the machine then meets.
     fragile = ("{machine: kidani_hmc, effects: {warm: {expression: 'k * x * exp(40 * T_bed)', "
                "parameters: [k], values: {k: 1.0e-300}}}}")
-    node = rclpy.create_node("peer")
-    diagnostics, compensation = [], []
-    node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 100)
-    node.create_subscription(VolumetricCompensation, "compensation", compensation.append,
-                             COMPENSATION_QOS)
-    scales = node.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
+    node, diagnostics, compensation, scales, model, broadcaster = _broadcaster_and_peer("peer")
     temperatures = node.create_publisher(TemperatureArray, "temperatures", SENSOR_QOS)
-    model = node.create_publisher(ModelVersion, "model", LATCHED_QOS)
-    broadcaster = start_node("compensation_broadcaster", {"input_delay_s": 0.0}, quiet=True)
 
     def temperature(stamp_ns, value):
         message = TemperatureArray(sensor_names=["bed"], temperatures=[value])

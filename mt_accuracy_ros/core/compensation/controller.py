@@ -37,6 +37,8 @@ from ..kinematics.machine import MachineDescription
 
 #: Largest correction a controller takes [m]: more is a unit mistake or a broken model.
 MAX_CORRECTION_M = 1e-3
+#: Incomplete table versions a controller holds at most while their axes arrive.
+MAX_STAGED_VERSIONS = 4
 #: Largest table value by default: 10 mm, 10 mrad (the controller's parameter narrows it).
 TABLE_MAX_VALUE = 1e-2
 #: A rotary correction larger than this [rad] (0.5 deg) is refused as a unit mistake.
@@ -312,6 +314,10 @@ class TableCompensation:
         # none) for as long as the other messages take - under load, long enough for a
         # test's readings to see an uncompensated Y.
         staged = self._staged.setdefault(version, ({}, {}))
+        # Versions that never complete (a peer sending one axis with ever newer versions)
+        # must not pile up: the newest few are kept.
+        for old in sorted(self._staged)[:-MAX_STAGED_VERSIONS]:
+            del self._staged[old]
         staged[0][axis] = table
         staged[1].update(squareness)
         if set(staged[0]) >= set(self.linear_axes):

@@ -32,15 +32,20 @@ def fitted_user_effects(model) -> dict[str, dict]:
             if isinstance(entry, dict) and "expression" in entry and "values" in entry}
 
 
-def table_axis(model, name: str, entry: dict) -> tuple[str | None, str]:
-    """(axis, "") when the user effect is a function of one linear axis' position alone,
-    else (None, why it is not a per-axis table effect)."""
+def _variables(model, name: str, entry: dict) -> tuple[list[str], list[str]]:
+    """(linear axes whose positions the effect uses, its other variables)."""
     variables = parse(entry["expression"], f"user effect {name!r}").names - \
         set(entry["parameters"])
     linear = {a.lower(): a for a in model.machine.axis_order
               if not model.machine.axes[a].is_rotary}
-    positions = [linear[v] for v in variables if v in linear]
-    others = sorted(v for v in variables if v not in linear)
+    return ([linear[v] for v in variables if v in linear],
+            sorted(v for v in variables if v not in linear))
+
+
+def table_axis(model, name: str, entry: dict) -> tuple[str | None, str]:
+    """(axis, "") when the user effect is a function of one linear axis' position alone,
+    else (None, why it is not a per-axis table effect)."""
+    positions, others = _variables(model, name, entry)
     if others:
         return None, (f"depends on {', '.join(others)}: not a position error, it stays in the "
                       "real-time stream")
@@ -59,7 +64,7 @@ def refuse_untabled(model) -> None:
     problems = []
     for name, entry in fitted_user_effects(model).items():
         axis, why = table_axis(model, name, entry)
-        if axis is None and "real-time" not in why:
+        if axis is None and not _variables(model, name, entry)[1]:   # positions alone
             problems.append(f"user effect {name!r} {why}")
     if problems:
         raise ParameterError("; ".join(problems) + " - export refused (a controller's tables "

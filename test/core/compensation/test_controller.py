@@ -192,6 +192,10 @@ def test_a_new_version_of_the_tables_goes_live_whole():
     # A refinement of the live version (a new profile) applies per axis at once.
     assert tables.offer(*x_table(7e-6), [], [], 2) is None
     np.testing.assert_allclose(tables.correction(middle), before * 7 / 5, atol=1e-15)
+    # Versions that never complete do not pile up.
+    for version in range(3, 103):
+        assert tables.offer(*x_table(1e-6), [], [], version) is None
+    assert len(tables._staged) <= 4 and tables.version == 2
 
 
 def test_loop_phases_split_a_run_and_judge_the_end_state():
