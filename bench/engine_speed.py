@@ -99,10 +99,12 @@ def diagnosis_child(csv: str, mapping: str) -> None:
 
     import yaml
 
+    from mt_accuracy_ros.allocator import keep_freed_arrays
     from mt_accuracy_ros.core.compensation.error_model import resolve_model
     from mt_accuracy_ros.core.workbench.diagnosis import Observations, diagnose
     from mt_accuracy_ros.io.column_map import column_map_from_dict, read_mapped_csv
 
+    keep_freed_arrays()     # as the command line and the monitor's worker do
     column_map = column_map_from_dict(yaml.safe_load(Path(mapping).read_text()))
     survey = read_mapped_csv(Path(csv), column_map)
     model = resolve_model("{machine: kidani_hmc}")

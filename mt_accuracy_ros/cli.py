@@ -313,8 +313,12 @@ def main(argv: list[str] | None = None) -> int:
     """Run a command; every user error is one line on stderr and exit status 2."""
     from .core.errors import MtAccuracyError
 
+    from .allocator import keep_freed_arrays
+
     parser = build_parser()
     args = parser.parse_args(argv)
+    # The commands' numerics allocate and free arrays of megabytes: from the heap.
+    keep_freed_arrays()
     try:
         return int(args.handler(args) or 0)
     except (MtAccuracyError, OSError, ValueError, KeyError) as exc:

@@ -84,6 +84,10 @@ def _search_worker(idle_s: float, niceness: int) -> None:
     import os
 
     global _WORKER_SCHEDULING
+    from ..allocator import keep_freed_arrays
+
+    # Searches allocate and free arrays of megabytes: from the heap, not fresh pages.
+    keep_freed_arrays()
     # Import the engine now (at the caller's priority), not at the first check.
     from ..core.workbench import diagnosis  # noqa: F401
 

@@ -173,6 +173,14 @@ class EffectFamily:
         """(N, 3, P) TCP error per unit parameter [m per parameter unit]."""
         raise NotImplementedError
 
+    def separable_design(self, ctx: Context, variant: str, setting: dict
+                         ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        """(sensitivity (N, 3), basis (N, P)) when :meth:`design` is
+        ``along(sensitivity, basis)`` - one direction at the TCP times scalar columns, as
+        an error motion acting through the kinematic chain is - else None. The workbench
+        then scores the candidate on N values per column instead of 3N."""
+        return None
+
     def explanation(self, variant: str, setting: dict) -> str:
         return self.summary
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from .base import Context, EffectFamily, along
-from .spectral import frequency_grid, grid_periodogram
+from .spectral import frequency_grid, grid_periodogram, weight_sums
 
 #: ISO 230-1 component letters of a linear axis' errors, by kind.
 _KIND_COMPONENTS = {"positioning": "self", "straightness": "XYZ", "angular": "ABC"}
@@ -119,6 +119,9 @@ class ComponentError(EffectFamily):
         return _legendre_columns(u, first, setting["order"])
 
     def design(self, ctx: Context, variant: str, setting: dict):
+        return along(*self.separable_design(ctx, variant, setting))
+
+    def separable_design(self, ctx: Context, variant: str, setting: dict):
         axis = variant[2]
         if self.periodic or setting["order"] > _LARGEST_ORDER:
             basis = self._basis(ctx.variables.positions[axis], ctx.normalised_position(axis),
@@ -131,7 +134,7 @@ class ComponentError(EffectFamily):
                                                    _LARGEST_ORDER)
             first = 2 if self.kind == "straightness" else 1
             basis = ctx.cache[key][:, first:setting["order"] + 1]
-        return along(ctx.jacobian(variant), basis)
+        return ctx.jacobian(variant), basis
 
     def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
         """The error motion itself, E(q) [m or rad] at axis positions q: what a CNC's
@@ -153,15 +156,22 @@ class ComponentError(EffectFamily):
         if not self.periodic:
             return [None] * len(trains)
         jac = ctx.jacobian(variant)
-        # Readings outside a training set get zero weight.
-        weight = np.sum(np.where(mask, jac ** 2, 0.0), axis=1)
-        weights = np.where(trains, weight[None, :], 0.0)
-        targets = np.where(trains, np.sum(np.where(mask, jac * residuals, 0.0), axis=2), 0.0)
+        trains = np.asarray(trains, dtype=bool)
+        targets = np.einsum("fnc,nc->fn", residuals, np.where(mask, jac, 0.0)) * trains
         q = ctx.variables.positions[variant[2]]
         frequencies = np.array([1.0 / s["period_m"] for s in settings])
+        # The weights' sums depend on the readings, mask and training sets alone, not on
+        # the residual: a selection's later steps reuse them.
+        key = ("periodogram_weights", variant, trains.shape, hash(trains.tobytes()),
+               hash(mask.tobytes()), hash(frequencies.tobytes()))
+        if key not in ctx.cache:
+            # Readings outside a training set get zero weight.
+            weight = np.sum(np.where(mask, jac ** 2, 0.0), axis=1)
+            ctx.cache[key] = weight_sums(q, np.where(trains, weight[None, :], 0.0).T,
+                                         frequencies)
         # The period is chosen by the fundamental alone: with its harmonic too, readings
         # taken on the fly (positions on a near-lattice) let aliases fit as well.
-        explained, _ = grid_periodogram(q, targets.T, weights.T, frequencies)
+        explained, _ = grid_periodogram(q, targets.T, None, frequencies, weights=ctx.cache[key])
         return [settings[int(i)] for i in np.argmax(explained, axis=0)]
 
     def explanation(self, variant: str, setting: dict) -> str:
@@ -239,10 +249,13 @@ class RotaryError(EffectFamily):
         return [f"{f}{h}" for h in range(2, setting["harmonics"] + 2) for f in ("cos", "sin")]
 
     def design(self, ctx, variant, setting):
+        return along(*self.separable_design(ctx, variant, setting))
+
+    def separable_design(self, ctx, variant, setting):
         angle = ctx.variables.positions[variant[2]]
         columns = np.column_stack([f(h * angle) for h in range(2, setting["harmonics"] + 2)
                                    for f in (np.cos, np.sin)])
-        return along(ctx.jacobian(variant), columns)
+        return ctx.jacobian(variant), columns
 
     def explanation(self, variant, setting):
         what = {"X": "radial/axial runout", "Y": "radial/axial runout", "Z": "radial/axial runout",

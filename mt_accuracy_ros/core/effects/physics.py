@@ -74,22 +74,40 @@ def limit_problems(names: list[str], values: NDArray[np.float64],
     return out
 
 
-def consistency_problems(contribution: NDArray[np.float64], residual: NDArray[np.float64],
-                         mask: NDArray[np.bool_], noise_sigma: float) -> list[str]:
-    """Components where an effect's own spread (N, 3) is larger than the residual allows."""
-    out = []
+def consistency_allowances(residual: NDArray[np.float64], mask: NDArray[np.bool_],
+                           noise_sigma: float) -> dict[str, float]:
+    """Per measured component, the largest spread [m] an effect may have at the readings:
+    :data:`CONSISTENCY_FACTOR` x the residual's spread + 2 sigma of noise."""
+    out = {}
     for c, component in enumerate("xyz"):
         rows = mask[:, c]
-        if not rows.any():
-            continue
-        own = contribution[rows, c]
-        spread = float(np.sqrt(np.mean((own - own.mean()) ** 2)))
+        if rows.any():
+            r = residual[rows, c]
+            out[component] = CONSISTENCY_FACTOR * float(np.sqrt(np.mean((r - r.mean()) ** 2))) \
+                + 2.0 * noise_sigma
+    return out
+
+
+def spread_problems(spreads: dict[str, float], allowances: dict[str, float]) -> list[str]:
+    """Components where an effect's own spread [m] exceeds its allowance
+    (:func:`consistency_allowances`)."""
+    out = []
+    for component, allowed in allowances.items():
+        spread = spreads.get(component, 0.0)
         if spread == 0.0:
             continue
-        r = residual[rows, c]
-        allowed = CONSISTENCY_FACTOR * float(np.sqrt(np.mean((r - r.mean()) ** 2))) + \
-            2.0 * noise_sigma
         if not np.isfinite(spread) or spread > allowed:
             out.append(f"it would move {component} by {spread * 1e6:.3g} um RMS at the readings, "
                        f"more than the {allowed * 1e6:.3g} um the residual there allows")
     return out
+
+
+def consistency_problems(contribution: NDArray[np.float64], residual: NDArray[np.float64],
+                         mask: NDArray[np.bool_], noise_sigma: float) -> list[str]:
+    """Components where an effect's own spread (N, 3) is larger than the residual allows."""
+    spreads = {}
+    for c, component in enumerate("xyz"):
+        own = contribution[mask[:, c], c]
+        if own.size:
+            spreads[component] = float(np.sqrt(np.mean((own - own.mean()) ** 2)))
+    return spread_problems(spreads, consistency_allowances(residual, mask, noise_sigma))

@@ -129,7 +129,37 @@ def grid_transform(q, values, step: float, count: int):
     return spectrum / (np.sinc(k / length) ** 2)[:, None]
 
 
-def grid_periodogram(q, target, weight, frequencies):
+def _grid(frequencies) -> tuple[float, NDArray[np.intp], int]:
+    """(step, k, count) of a frequency grid f = k step: the transform needs bins 0 .. count-1
+    (up to 2 f_max, for the weights' second harmonic)."""
+    step = float(frequencies[1] - frequencies[0]) if frequencies.size > 1 else \
+        float(frequencies[0])
+    k = np.rint(frequencies / step).astype(np.intp)
+    return step, k, 2 * int(k[-1]) + 1
+
+
+def _sums_at(q, values, frequencies, harmonic: bool):
+    """Z_v(f) (P, M) - and Z_v(2f) when ``harmonic`` - for every column of ``values`` (N, M):
+    directly for few readings, else by :func:`grid_transform` (same lattice either way)."""
+    step, k, count = _grid(frequencies)
+    if q.size * k.size <= _DIRECT_MAX_PRODUCT:
+        # Few readings: the sums directly (fewer operations than the lattice's FFT).
+        e1 = np.exp(-2j * np.pi * frequencies[:, None] * q[None, :])
+        return (e1 @ values, (e1 * e1) @ values) if harmonic else (e1 @ values,)
+    spectra = grid_transform(q, values, step, count)
+    return (spectra[k], spectra[2 * k]) if harmonic else (spectra[k],)
+
+
+def weight_sums(q, weight, frequencies) -> tuple[NDArray, NDArray, NDArray]:
+    """What :func:`grid_periodogram` needs of the weights alone - sum w (M,), Z_w(f) and
+    Z_w(2f) (P, M) - to reuse while only the target changes (a selection's later steps)."""
+    q = np.asarray(q, float)
+    weight2 = np.asarray(weight, float).reshape(q.size, -1)
+    zw1, zw2 = _sums_at(q, weight2, frequencies, harmonic=True)
+    return weight2.sum(axis=0), zw1, zw2
+
+
+def grid_periodogram(q, target, weight, frequencies, *, weights=None):
     """The weighted periodogram at ``frequencies`` = k * step (a :func:`frequency_grid`),
     for every column of ``target`` and ``weight`` at once.
 
@@ -139,35 +169,26 @@ def grid_periodogram(q, target, weight, frequencies):
     target, weight : array_like, shape (N,) or (N, M)
     frequencies : ndarray, shape (P,)
         Multiples of one step [1/m], ascending.
+    weights : tuple, optional
+        :func:`weight_sums` of ``weight`` at these readings and frequencies (then
+        ``weight`` is not read again).
 
     Returns
     -------
     explained, amplitude : ndarray, shape (P,) or (P, M)
     """
     target = np.asarray(target, float)
-    weight = np.asarray(weight, float)
     single = target.ndim == 1
-    target2, weight2 = target.reshape(target.shape[0], -1), weight.reshape(weight.shape[0], -1)
-    step = float(frequencies[1] - frequencies[0]) if frequencies.size > 1 else \
-        float(frequencies[0])
-    k = np.rint(frequencies / step).astype(np.intp)
-    count = 2 * int(k[-1]) + 1
-    m = weight2.shape[1]
     q = np.asarray(q, float)
-    if q.size * k.size <= _DIRECT_MAX_PRODUCT:
-        # Few readings: the sums directly (fewer operations than the lattice's FFT).
-        zw1, zw2, zt1 = _direct_sums(q, frequencies, weight2, target2)
-        zw = np.zeros((count, m), complex)
-        zt = np.zeros((count, m), complex)
-        zw[k], zt[k], zw[2 * k] = zw1, zt1, zw2
-    else:
-        spectra = grid_transform(q, np.column_stack([weight2, target2]), step, count)
-        zw, zt = spectra[:, :m], spectra[:, m:]
-    out_e = np.empty((k.size, m))
-    out_a = np.empty((k.size, m))
+    target2 = target.reshape(target.shape[0], -1)
+    sum_w, zw1, zw2 = weights if weights is not None else weight_sums(q, weight, frequencies)
+    (zt1,) = _sums_at(q, target2, frequencies, harmonic=False)
+    m = target2.shape[1]
+    out_e = np.empty((frequencies.size, m))
+    out_a = np.empty((frequencies.size, m))
     for j in range(m):
-        out_e[:, j], out_a[:, j] = _solve(float(weight2[:, j].sum()), zw[k, j], zw[2 * k, j],
-                                          float(target2[:, j].sum()), zt[k, j])
+        out_e[:, j], out_a[:, j] = _solve(float(sum_w[j]), zw1[:, j], zw2[:, j],
+                                          float(target2[:, j].sum()), zt1[:, j])
     if single:
         return out_e[:, 0], out_a[:, 0]
     return out_e, out_a

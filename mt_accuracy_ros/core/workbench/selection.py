@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from ..errors import InsufficientDataError
 from ..effects.base import Context, EffectFamily
-from ..effects.physics import consistency_problems, limit_problems
+from ..effects.physics import consistency_allowances, limit_problems, spread_problems
 from .distributions import chi2_sf, t_sf
 from .line_search import minimise_bounded
 
@@ -143,6 +143,9 @@ class _BaseStatistics:
     with_y: NDArray[np.float64]     # (rows, q + 1): [base, y]
     #: Per-fold products of each candidate (term, setting) with these columns.
     candidates: dict = field(default_factory=dict)
+    #: (training sets (folds, N), each fold's residual after its base fit (folds, N, 3)):
+    #: what every preselecting candidate's in-fold search starts from.
+    after_base: tuple | None = None
 
 
 #: Designs kept for reuse (every candidate's columns at every setting would hold GBs for
@@ -204,12 +207,24 @@ class Selector:
         offsets[np.arange(mask.size), np.tile(np.arange(3), n)] = 1.0
         self.offsets = offsets[self.rows]
         self.residual = residual
+        self.component_of_row = self.rows % 3
+        self._ones = np.ones(n)
+        self.allowances = consistency_allowances(residual, mask, noise_sigma)
         self.fold_of_sample = time_blocks(n, folds)
         self.fold_of_row = self.fold_of_sample[self.sample_of_row]
         self.folds = folds
         # Rows are in time order and folds contiguous: each fold is one slice of rows.
         edges = np.searchsorted(self.fold_of_row, np.arange(folds + 1))
         self.fold_bounds = [(int(edges[f]), int(edges[f + 1])) for f in range(folds)]
+        # Separable designs (one sensitivity x scalar columns) live on the readings that
+        # measured anything, one value each, instead of on the rows.
+        self.present = np.unique(self.sample_of_row)
+        self.present_of_row = np.searchsorted(self.present, self.sample_of_row)
+        self.row_starts = np.searchsorted(self.sample_of_row, self.present)
+        self.all_rows = self.rows.size == mask.size
+        self.present_bounds = [(int(self.present_of_row[a]), int(self.present_of_row[b - 1]) + 1)
+                               for a, b in self.fold_bounds]
+        self._sensitivities: dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
         self.block_of_sample = time_blocks(n, max(4, min(n_blocks, n // 6)))
         self.noise_sigma = float(noise_sigma)
         self.alpha, self.min_reduction, self.min_share = alpha, min_reduction, min_share
@@ -235,6 +250,46 @@ class Selector:
             self._designs.put(key, design)
         return design
 
+    def basis_rows(self, term: Term, setting: dict) -> NDArray[np.float64] | None:
+        """The scalar columns (S, P) of a separable design at the readings that measured
+        anything (None when the family's design is not separable)."""
+        key = ("basis", term.name, tuple(sorted(setting.items())))
+        basis = self._designs.get(key)
+        if basis is None:
+            if term.family.nested_settings and setting != term.settings[-1]:
+                size = len(term.family.parameter_names(term.variant, setting))
+                largest = self.basis_rows(term, term.settings[-1])
+                return None if largest is None else largest[:, :size]
+            separable = term.family.separable_design(self.ctx, term.variant, setting)
+            if separable is None:
+                return None
+            sensitivity, basis = separable
+            if term.variant not in self._sensitivities:
+                self._sensitivities[term.variant] = self._sensitivity_rows(sensitivity)
+            basis = np.ascontiguousarray(basis if self.all_rows else basis[self.present])
+            self._designs.put(key, basis)
+        return basis
+
+    def _sensitivity_rows(self, sensitivity: NDArray[np.float64]):
+        """(the sensitivity at each measured row (R,), its square summed per reading (S,))."""
+        flat = sensitivity.reshape(-1)[self.rows]
+        if self.all_rows:
+            return flat, np.einsum("nc,nc->n", sensitivity, sensitivity)
+        return flat, np.add.reduceat(flat * flat, self.row_starts)
+
+    def _separable_prediction(self, term: Term, basis: NDArray[np.float64],
+                              coefficients: NDArray[np.float64], a: int = 0,
+                              b: int | None = None) -> NDArray[np.float64]:
+        """X @ coefficients over rows a:b of a separable design."""
+        b = self.y.size if b is None else b
+        along_rows = self._sensitivities[term.variant][0][a:b]
+        start, stop = (self.present_of_row[a], self.present_of_row[b - 1] + 1) if b > a \
+            else (0, 0)
+        values = basis[start:stop] @ coefficients
+        if self.all_rows:
+            return along_rows * np.repeat(values, 3)
+        return along_rows * values[self.present_of_row[a:b] - start]
+
     def full_design(self, term: Term, setting: dict) -> NDArray[np.float64]:
         return term.family.design(self.ctx, term.variant, setting)
 
@@ -248,10 +303,26 @@ class Selector:
         names = term.family.parameter_names(term.variant, setting)
         problems = limit_problems(names, coefficients,
                                   term.family.parameter_limits(self.ctx, term.variant, setting))
-        flat = np.zeros(self.mask.size)
-        flat[self.rows] = self.design_rows(term, setting) @ np.asarray(coefficients, float)
-        problems += consistency_problems(flat.reshape(-1, 3), self.residual, self.mask,
-                                         self.noise_sigma)
+        coefficients = np.asarray(coefficients, float)
+        basis = self.basis_rows(term, setting)
+        own = self.design_rows(term, setting) @ coefficients if basis is None else \
+            self._separable_prediction(term, basis, coefficients)
+        # Each component's spread about its mean, from the rows that measured it.
+        if self.rows.size == self.mask.size:
+            # (Column reductions by products: numpy's strided std is several times slower.)
+            per_sample = own.reshape(-1, 3)
+            centred = per_sample - (self._ones @ per_sample) / per_sample.shape[0]
+            spread = np.sqrt(np.einsum("ij,ij->j", centred, centred) / per_sample.shape[0])
+        else:
+            count = np.bincount(self.component_of_row, minlength=3)
+            mean = np.bincount(self.component_of_row, weights=own, minlength=3) / \
+                np.maximum(count, 1)
+            spread = np.sqrt(np.bincount(self.component_of_row,
+                                         weights=(own - mean[self.component_of_row]) ** 2,
+                                         minlength=3) / np.maximum(count, 1))
+        spreads = {component: float(spread[c]) for c, component in enumerate("xyz")
+                   if component in self.allowances}
+        problems += spread_problems(spreads, self.allowances)
         return "; ".join(problems)
 
     # ------------------------------------------------------------ scoring
@@ -280,8 +351,12 @@ class Selector:
         q = stats.base.shape[1]
         with_base = self._block_products(design, stats.with_y)     # (folds, p, q + 1)
         own = self._block_products(design, design)                 # (folds, p, p)
+        return self._assemble_products(stats, q, with_base, own)
+
+    def _assemble_products(self, stats: _BaseStatistics, q: int, with_base, own):
+        """[base, design]'s per-fold products from the design's with [base, y] and itself."""
         products = stats.products
-        size = q + design.shape[1]
+        size = q + own.shape[1]
         gram = np.empty((self.folds, size, size))
         gram[:, :q, :q] = products[:, :q, :q]
         gram[:, q:, :q] = with_base[:, :, :q]
@@ -289,6 +364,25 @@ class Selector:
         gram[:, :q, q:] = np.swapaxes(with_base[:, :, :q], 1, 2)
         rhs = np.concatenate([products[:, :q, q], with_base[:, :, q]], axis=1)
         return gram, rhs, products[:, q, q]
+
+    def _separable_products(self, stats: _BaseStatistics, term: Term,
+                            basis: NDArray[np.float64]):
+        """:meth:`_candidate_products` of a separable design, on one value per reading: X'W
+        = B'(sum over components of sensitivity x W) and X'X = B' diag(|sensitivity|^2) B."""
+        key = ("contracted", term.variant)
+        if key not in stats.candidates:
+            along_rows, squared = self._sensitivities[term.variant]
+            weighted = along_rows[:, None] * stats.with_y
+            contracted = weighted.reshape(-1, 3, weighted.shape[1]).sum(axis=1) \
+                if self.all_rows else np.add.reduceat(weighted, self.row_starts, axis=0)
+            stats.candidates[key] = contracted
+        contracted = stats.candidates[key]
+        squared = self._sensitivities[term.variant][1]
+        q = stats.base.shape[1]
+        with_base = np.stack([basis[a:b].T @ contracted[a:b] for a, b in self.present_bounds])
+        own = np.stack([basis[a:b].T @ (squared[a:b, None] * basis[a:b])
+                        for a, b in self.present_bounds])
+        return self._assemble_products(stats, q, with_base, own)
 
     def _products_of(self, stats: _BaseStatistics, term: Term, setting: dict):
         """:meth:`_candidate_products` of ``term`` at ``setting``, kept with ``stats`` (the
@@ -302,7 +396,9 @@ class Selector:
                                                                              setting))
                 cache[key] = (gram[:, :size, :size], rhs[:, :size], yy)
             else:
-                cache[key] = self._candidate_products(stats, self.design_rows(term, setting))
+                basis = self.basis_rows(term, setting)
+                cache[key] = self._candidate_products(stats, self.design_rows(term, setting)) \
+                    if basis is None else self._separable_products(stats, term, basis)
         return cache[key]
 
     def _held_out_errors(self, x: NDArray[np.float64], coefficients: NDArray[np.float64]
@@ -325,13 +421,16 @@ class Selector:
         q = stats.base.shape[1]
         for key in {tuple(sorted(s.items())) for s in settings}:
             setting = dict(key)
-            design = self.design_rows(term, setting)
+            basis = self.basis_rows(term, setting)
+            design = self.design_rows(term, setting) if basis is None else None
             gram, rhs, _ = self._products_of(stats, term, setting)
             coefficients = solve_normal(_train(gram), _train(rhs))
             for fold, (a, b) in enumerate(self.fold_bounds):
                 if settings[fold] == setting:
-                    squared[a:b] = (stats.base[a:b] @ coefficients[fold, :q] +
-                                    design[a:b] @ coefficients[fold, q:] - self.y[a:b]) ** 2
+                    own = design[a:b] @ coefficients[fold, q:] if basis is None else \
+                        self._separable_prediction(term, basis, coefficients[fold, q:], a, b)
+                    squared[a:b] = (stats.base[a:b] @ coefficients[fold, :q] + own -
+                                    self.y[a:b]) ** 2
         return self._per_sample(squared), dict(enumerate(settings))
 
     def choose_settings(self, term: Term, stats: _BaseStatistics) -> list[dict]:
@@ -340,17 +439,19 @@ class Selector:
             return [term.settings[0]] * self.folds
         chosen: list[dict | None] = [None] * self.folds
         if term.family.preselects:
-            q = stats.base.shape[1]
-            base_coefficients = solve_normal(_train(stats.products[:, :q, :q]),
-                                             _train(stats.products[:, :q, q]))
-            trains = np.ones((self.folds, self.n), dtype=bool)
-            after_base = np.zeros((self.folds, self.mask.size))
-            for fold, (a, b) in enumerate(self.fold_bounds):
-                trains[fold, self.sample_of_row[a:b]] = False
-                after_base[fold, self.rows] = self.y - stats.base @ base_coefficients[fold]
-            chosen = term.family.preselect_folds(
-                self.ctx, term.variant, term.settings, after_base.reshape(self.folds, -1, 3),
-                self.mask, trains)
+            if stats.after_base is None:
+                q = stats.base.shape[1]
+                base_coefficients = solve_normal(_train(stats.products[:, :q, :q]),
+                                                 _train(stats.products[:, :q, q]))
+                trains = np.ones((self.folds, self.n), dtype=bool)
+                after_base = np.zeros((self.folds, self.mask.size))
+                for fold, (a, b) in enumerate(self.fold_bounds):
+                    trains[fold, self.sample_of_row[a:b]] = False
+                    after_base[fold, self.rows] = self.y - stats.base @ base_coefficients[fold]
+                stats.after_base = (trains, after_base.reshape(self.folds, -1, 3))
+            trains, after_base = stats.after_base
+            chosen = term.family.preselect_folds(self.ctx, term.variant, term.settings,
+                                                 after_base, self.mask, trains)
         if all(c is not None for c in chosen):
             return chosen
         counts = np.array([self.y.size - (b - a) for a, b in self.fold_bounds], float)

@@ -6,6 +6,7 @@ import pytest
 
 from mt_accuracy_ros.core.compensation.error_model import ErrorModel
 from mt_accuracy_ros.core.effects import Context
+from mt_accuracy_ros.core.effects.physics import consistency_problems, limit_problems
 from mt_accuracy_ros.core.kinematics.machine import load_machine
 from mt_accuracy_ros.core.workbench import selection
 from mt_accuracy_ros.core.workbench.diagnosis import Observations, candidate_terms, residuals
@@ -13,7 +14,7 @@ from mt_accuracy_ros.core.workbench.diagnosis import Observations, candidate_ter
 MACHINE = load_machine("kidani_hmc")
 
 
-def _selector():
+def _selector(mask=None):
     rng = np.random.default_rng(7)
     n = 300
     positions = {a: rng.uniform(*MACHINE.axes[a].stroke, n) for a in "XYZ"}
@@ -21,7 +22,8 @@ def _selector():
     truth[:, 0] = 3e-6 * np.sin(2 * np.pi * positions["X"] / 0.01)
     truth[:, 1] = 2e-5 * (positions["Y"] - positions["Y"].mean()) ** 2
     obs = Observations(positions, truth + rng.normal(0, 0.5e-6, truth.shape),
-                       np.ones((n, 3), bool), np.arange(n) * 10.0, uncertainty_m=1e-6)
+                       np.ones((n, 3), bool) if mask is None else mask, np.arange(n) * 10.0,
+                       uncertainty_m=1e-6)
     model = ErrorModel(MACHINE, {})
     ctx = Context(MACHINE, obs.variables(model.reference_temperatures_c), model._kinematics,
                   model.tcp_error(obs.positions, fresh=True)[1])
@@ -58,3 +60,50 @@ def test_a_design_cache_that_evicts_everything_gives_the_same_steps(monkeypatch)
         assert [s.cv_rmse for s in a.ranking] == pytest.approx([s.cv_rmse for s in b.ranking],
                                                                rel=1e-12)
     assert len(small._designs._items) == 1 and len(selector._designs._items) > 1
+
+
+def _partial_mask():
+    """Some readings measure one or two components, some none (a laser on one axis, a
+    dropped reading)."""
+    mask = np.ones((300, 3), bool)
+    mask[::7, 2] = False
+    mask[3::11, :2] = False
+    mask[5::13] = False
+    return mask
+
+
+@pytest.mark.parametrize("mask", [None, "partial"])
+def test_separable_designs_score_as_their_rows_do(mask):
+    """A candidate whose design is sensitivity x columns is scored on one value per
+    reading; its fold products, held-out predictions and physics check must equal those
+    of its materialised (rows, P) design."""
+    selector, terms = _selector(None if mask is None else _partial_mask())
+    stats = selector.base_statistics(selector.base_columns())
+    q = stats.base.shape[1]
+    separable = [t for t in terms if selector.basis_rows(t, t.settings[-1]) is not None]
+    assert {t.family.name for t in separable} >= {"positioning", "straightness", "angular",
+                                                  "positioning_periodic"}
+    for term in separable:
+        for setting in (term.settings[0], term.settings[-1]):
+            gram, rhs, yy = selector._products_of(stats, term, setting)
+            design = selector.design_rows(term, setting)
+            e_gram, e_rhs, e_yy = selector._candidate_products(stats, design)
+            scale = np.abs(e_gram).max()
+            np.testing.assert_allclose(gram, e_gram, rtol=0, atol=1e-12 * scale)
+            np.testing.assert_allclose(rhs, e_rhs, rtol=0, atol=1e-12 * np.abs(e_rhs).max())
+            assert yy == pytest.approx(e_yy, rel=1e-14)
+            c = np.linspace(-1.0, 1.0, design.shape[1])
+            basis = selector.basis_rows(term, setting)
+            for a, b in selector.fold_bounds + [(0, selector.y.size)]:
+                np.testing.assert_allclose(
+                    selector._separable_prediction(term, basis, c, a, b), design[a:b] @ c,
+                    rtol=0, atol=1e-13 * np.abs(design).max())
+            coefficients = selector._fit_products(gram, rhs, yy)[0][q:]
+            flat = np.zeros(selector.mask.size)
+            flat[selector.rows] = design @ coefficients
+            expected = limit_problems(term.family.parameter_names(term.variant, setting),
+                                      coefficients, term.family.parameter_limits(
+                                          selector.ctx, term.variant, setting))
+            expected += consistency_problems(flat.reshape(-1, 3), selector.residual,
+                                             selector.mask, selector.noise_sigma)
+            assert selector.physics_refusal(term, setting, coefficients) == "; ".join(expected)
