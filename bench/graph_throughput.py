@@ -50,6 +50,11 @@ ESTIMATOR: dict = {}
 #: 600 readings: the next search starts as soon as one ends.
 MONITOR = {"model": "demo", "window": 600, "check_every": 1, "min_readings": 30}
 REFERENCE = {"period_s": 0.1}
+#: ``--niceness``: what the compensation path's nodes (encoder/CNC, estimator,
+#: broadcaster) are given.
+PATH: dict = {}
+#: ``--burners``: CPU-burning processes alongside (a loaded host).
+BURNERS = {"count": 0}
 
 JOINT_STATE_PUBLISHER = textwrap.dedent("""
     import time, rclpy
@@ -137,8 +142,9 @@ def bench_graph(seconds: float, batch_period_s: float = 0.05, monitor: bool = Fa
     node.create_subscription(ModelCheck, "model_check", lambda m: checks.append(
         int(m.sample_count)), RESULT_QOS)
     monitor_process = start_node("model_monitor", MONITOR, quiet=True) if monitor else None
-    estimator = start_node("yaw_estimator", {"thermal_correction": False, **ESTIMATOR}, quiet=True)
-    compensator = start_node("compensation_broadcaster", {"model": "demo"}, quiet=True)
+    estimator = start_node("yaw_estimator", {"thermal_correction": False, **ESTIMATOR, **PATH},
+                           quiet=True)
+    compensator = start_node("compensation_broadcaster", {"model": "demo", **PATH}, quiet=True)
     while node.count_subscribers("/scales") < 2 or node.count_publishers("/compensation") < 1 \
             or (monitor and node.count_subscribers("reference/tcp_error") < 1):
         rclpy.spin_once(node, timeout_sec=0.05)
@@ -150,8 +156,10 @@ def bench_graph(seconds: float, batch_period_s: float = 0.05, monitor: bool = Fa
                                                "controller_cycle_s": 0.001,
                                                "max_compensation_age_s": 1.0,
                                                "reference_period_s":
-                                               REFERENCE["period_s"]},
+                                               REFERENCE["period_s"], **PATH},
                          quiet=True)
+    burners = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+               for _ in range(BURNERS["count"])]
     processes = {"encoder_publisher": encoder, "yaw_estimator": estimator,
                  "compensation_broadcaster": compensator}
     if monitor_process is not None:
@@ -169,6 +177,9 @@ def bench_graph(seconds: float, batch_period_s: float = 0.05, monitor: bool = Fa
     end = time.monotonic() + 2.0
     while time.monotonic() < end:
         rclpy.spin_once(node, timeout_sec=0.01)
+    for burner in burners:
+        burner.kill()
+        burner.wait()
     for process in (estimator, compensator, monitor_process):
         if process is not None:
             process.stop()
@@ -182,6 +193,7 @@ def bench_graph(seconds: float, batch_period_s: float = 0.05, monitor: bool = Fa
     return {"samples_per_s": 20000, "channels": 6, "seconds": seconds,
             "stages_ms": stages,
             "batch_period_s": batch_period_s,
+            "path_niceness": PATH.get("niceness", 0), "burners": len(burners),
             "cpu_percent": {name: round(100 * (cpu_after[name] - cpu_before[name]) / elapsed, 1)
                             for name in processes},
             "batches_expected": batches, "yaw_batches_received": len(yaw_indices),
@@ -280,6 +292,10 @@ def main() -> int:
     parser.add_argument("--reference-period", type=float, default=None, metavar="S",
                         help="reference reading period of the virtual instrument [s] "
                              "(default 0.1 with --monitor, else 0.5)")
+    parser.add_argument("--niceness", type=int, default=0, metavar="N",
+                        help="niceness of the path's nodes (e.g. -15; 0: as started)")
+    parser.add_argument("--burners", type=int, default=0, metavar="K",
+                        help="CPU-burning processes alongside during the run")
     parser.add_argument("--reselect-every", type=int, default=0, metavar="N",
                         help="the estimator's reselect_every [samples] (0: its default)")
     args = parser.parse_args()
@@ -287,6 +303,9 @@ def main() -> int:
         (0.1 if args.monitor else 0.5)
     if args.reselect_every:
         ESTIMATOR["reselect_every"] = args.reselect_every
+    if args.niceness:
+        PATH["niceness"] = args.niceness
+    BURNERS["count"] = args.burners
     if len(args.batch_periods) > 1:
         sweep = [bench_graph(args.seconds, period, args.monitor) for period in args.batch_periods]
         print(json.dumps({"sweep": sweep}, indent=2))

@@ -49,10 +49,12 @@ def _set_parameter(node, target: str, name: str, value) -> tuple[bool, str]:
     return set_remote_parameter(node, target, name, value)
 
 
-#: The CNC's controller: interpolation cycle, fixed input delay, staleness limit [s]
-#: (data time). The delay covers the graph's stamp-to-arrival latency at the
-#: demo's batch period (docs/benchmarks.md).
-CONTROLLER = {"controller_cycle_s": 0.001, "compensation_delay_s": 0.05,
+#: The CNC's controller at rate 1: interpolation cycle, fixed input delay, staleness
+#: limit [s of data]. The delay covers the graph's stamp-to-arrival latency at the
+#: demo's batch period (docs/benchmarks.md). At ``rate_factor`` r the delay and the
+#: limit are r times these in data time - the same in wall time, which is what the
+#: host's processes keep (:func:`paced`).
+CONTROLLER = {"controller_cycle_s": 0.001, "compensation_delay_s": 0.02,
               "max_compensation_age_s": 0.5}
 #: A model reaching the machine less than this before the run's end [s of data] came
 #: too late for the end state to show it.
@@ -63,16 +65,32 @@ GRAPH_READY_TIMEOUT_S = 60.0
 START_LEAD_S = 1.0
 #: Data time [s] after which the scripted user acts on the first check naming effects.
 USER_LOOKS_AFTER_S = 30.0
-#: Scale batch period of the demo's machine [s].
-BATCH_PERIOD_S = 0.05
+#: Niceness of the compensation path's nodes (CNC, estimator, broadcaster): the CPU
+#: first while the monitor searches or the host is loaded (nodes/_priority.py).
+PATH_NICENESS = -15
+#: Scale batch period of the demo's machine at rate 1 [s]: 100 batches a second, as a
+#: CNC's position stream comes (times the rate in data time, :func:`paced`).
+BATCH_PERIOD_S = 0.01
+
+
+def paced(rate_factor: float) -> dict:
+    """The machine's batch period and the controller's delays at ``rate_factor`` [s of
+    data]: the same wall-clock cadence and deadlines at every rate (at rate 3 the graph
+    has a third of the wall time per data second, so its data-time latency triples)."""
+    scale = max(1.0, float(rate_factor))
+    return {"batch_period_s": BATCH_PERIOD_S * scale,
+            "controller_cycle_s": CONTROLLER["controller_cycle_s"],
+            "compensation_delay_s": CONTROLLER["compensation_delay_s"] * scale,
+            "max_compensation_age_s": CONTROLLER["max_compensation_age_s"] * scale}
 #: The reference instrument's reading period [s]: not a divisor of the program's
 #: 5.85 s cycle, so that the readings land on new positions every cycle (at 0.5 s
 #: they would revisit 24 positions, too few to resolve a 10 mm screw pitch).
 REFERENCE_PERIOD_S = 0.37
 
 
-def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
-             scenario: str = "demo", compensation_mode: str = "hybrid") -> int:
+def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
+             scenario: str = "demo", compensation_mode: str = "hybrid",
+             path_niceness: int = PATH_NICENESS) -> int:
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
     from mt_accuracy_msgs.msg import (ModelCheck, ModelVersion, ReferenceMeasurement,
@@ -106,9 +124,10 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
     # is subscribed, so the bag holds the run from its first sample: scales go to the
     # estimator, broadcaster and recorder; temperatures also to the monitor.
     scales_consumers, temperature_consumers = 3, 4
+    path = {"niceness": int(path_niceness)}
     nodes = [start_node("recorder", {"output": str(bag), "discovery_period_s": 0.2}, quiet=True),
-             start_node("yaw_estimator", {"baseline_after_s": 40.0}, quiet=True),
-             start_node("compensation_broadcaster", {"model": str(model)}, quiet=True),
+             start_node("yaw_estimator", {"baseline_after_s": 40.0, **path}, quiet=True),
+             start_node("compensation_broadcaster", {"model": str(model), **path}, quiet=True),
              # 300 readings = the whole run; a check every 30 readings (each names
              # effects from ~150 candidates, ~1-2 s of CPU) leaves the CPU to the loop.
              start_node("model_monitor", {"model": str(model), "window": 300,
@@ -117,8 +136,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
                         {**machine, "min_subscribers": temperature_consumers}, quiet=True)]
     encoder = start_node("encoder_publisher", {
         **machine, "min_subscribers": scales_consumers, "compensation_input": compensation_mode,
-        "batch_period_s": BATCH_PERIOD_S, "reference_period_s": REFERENCE_PERIOD_S,
-        **CONTROLLER}, quiet=True)
+        "reference_period_s": REFERENCE_PERIOD_S, **paced(rate_factor), **path}, quiet=True)
     rclpy.init()
     listener = rclpy.create_node("demo_user")
     checks: list[tuple[float, ModelCheck]] = []
@@ -312,6 +330,8 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 2.0,
         if not isinstance(value, (list, dict)):
             print(f"  {key:42s} {value:.4g}" if isinstance(value, float) else
                   f"  {key:42s} {value}")
+    print(f"  {'path_scheduling':42s} " + ("; ".join(
+        f"{node}: {text}" for node, text in summary["path_scheduling"].items()) or "unknown"))
     for line in losses:
         # Overload is loud: a graph that could not keep up says so.
         print(f"  WARNING {line}")
@@ -587,6 +607,10 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "compensation_applied": int(controller.get("applied", 0)),
         "compensation_stale": int(controller.get("stale", 0)),
         "compensation_latency_p99_ms": float(controller.get("latency_p99_ms", "nan")),
+        # What each node on the compensation path ran at (its niceness, or why not).
+        "path_scheduling": {node.lstrip("/"): values["scheduling"]
+                            for node, values in sorted(delivery.items())
+                            if "scheduling" in values},
         "max_model_tcp_error_um": max((e for _, e in compensation), default=0.0) * 1e6,
         "bag_messages": int(info["message_count"]),
         "bag_topics": len(info["topics"]),

@@ -30,6 +30,8 @@ class DeliveryHealth:
         self.last_reason: dict[str, str] = {}
         self._next_sequence: dict[str, int] = {}
         self._reported: dict[str, Counter] = defaultdict(Counter)
+        #: Facts about the node sent with every status (e.g. ``scheduling``).
+        self.notes: dict[str, str] = {}
         node.create_timer(period_s, self.publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
         # rclpy refuses a value outside its descriptor (range, type, read-only) before any
         # on-set callback runs: counted here, before that check, so that every refused
@@ -52,6 +54,14 @@ class DeliveryHealth:
         self._node.get_logger().warning(f"{stream}: refused: {reason}")
         self._send([self._status(DiagnosticStatus.WARN, f"{stream}: refused: {reason}",
                                  self._values(stream))])
+
+    def warn(self, message: str) -> None:
+        """A WARN on /diagnostics now (and in the log): a condition the node runs on with."""
+        self._node.get_logger().warning(message)
+        self._send([self._status(DiagnosticStatus.WARN, message, self._note_values())])
+
+    def _note_values(self) -> list[KeyValue]:
+        return [KeyValue(key=key, value=value) for key, value in sorted(self.notes.items())]
 
     def alarm(self, message: str, topic: str = "model") -> None:
         """An ERROR on /diagnostics (``<node>: <topic>``): something the operator must act on."""
@@ -128,7 +138,8 @@ class DeliveryHealth:
                     news.append(f"{stream}: {new} {name}")
             self._reported[stream] = Counter(self.counts[stream])
         level = DiagnosticStatus.WARN if news else DiagnosticStatus.OK
-        self._send([self._status(level, "; ".join(news) or "all streams complete", values)])
+        self._send([self._status(level, "; ".join(news) or "all streams complete",
+                                 values + self._note_values())])
 
     def _send(self, statuses: list[DiagnosticStatus]) -> None:
         array = DiagnosticArray(status=statuses)

@@ -31,6 +31,7 @@ from ..io.cnc import connect, load_node_map
 from ._common import (COMPENSATION_QOS, SENSOR_QOS, float_descriptor, nanoseconds_to_stamp,
                       pack_float64, plain_descriptor, run_node, stamp_to_nanoseconds)
 from ._health import DeliveryHealth
+from ._priority import declare_niceness
 
 
 class CncBridge(Node):
@@ -54,6 +55,7 @@ class CncBridge(Node):
         node_map = load_node_map(str(self.get_parameter("node_map").value))
         self.cnc = connect(str(self.get_parameter("url").value), node_map)
         self.health = DeliveryHealth(self)
+        declare_niceness(self, self.health)
         self._period = float(self.get_parameter("poll_period_s").value)
         self._temperature_every = max(1, int(round(
             float(self.get_parameter("temperature_period_s").value) / self._period)))

@@ -43,6 +43,7 @@ from ._common import (COMPENSATION_QOS, TABLE_QOS, run_node, RESULT_QOS,  # noqa
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse,
                       stamp_to_nanoseconds, unpack_float64)
 from ._health import DeliveryHealth
+from ._priority import declare_niceness
 from ._model_inputs import MODEL_DIR_DESCRIPTION, ModelInputs, network_model
 
 class CompensationBroadcaster(Node):
@@ -75,6 +76,7 @@ class CompensationBroadcaster(Node):
             0.1, 3600.0, read_only=True))
         self.add_on_set_parameters_callback(self._validate)
         self.health = DeliveryHealth(self)
+        declare_niceness(self, self.health)
         self._silent_level: dict[str, int] = {}   # stream -> 0 ok, 1 warned, 2 error
         self._input_timeout_s = float(self.get_parameter("input_timeout_s").value)
         self._history = StreamHistory(float(self.get_parameter("stream_horizon_s").value))

@@ -43,6 +43,7 @@ from ..core.errors import MtAccuracyError
 from ..sim.machine_tool import SimulationResult, simulate
 from ._cnc_input import MODES, CompensationInput
 from ._health import DeliveryHealth
+from ._priority import declare_niceness
 from ._common import (MATCH_SETTLE_S, RESULT_QOS, SENSOR_QOS, accept, float_descriptor,
                       int_descriptor, nanoseconds_to_stamp, pack_float64, plain_descriptor,
                       refuse, run_node)
@@ -137,6 +138,7 @@ class EncoderPublisher(Node):
         if mode not in MODES:
             raise MtAccuracyError(f"compensation_input {mode!r}: one of {', '.join(MODES)}")
         self.health = DeliveryHealth(self)
+        declare_niceness(self, self.health)
         self.compensation = CompensationInput(
             self, mode, self.scenario.machine, self.health, now_stamp_ns=self._now_stamp_ns,
             cycle_s=float(self.get_parameter("controller_cycle_s").value),

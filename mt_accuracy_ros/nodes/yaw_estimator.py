@@ -43,6 +43,7 @@ from ..core.validation import sample_period
 from ..core.kinematics.machine import load_machine
 from ..core.scales.streaming import StreamingSystematic
 from ._health import DeliveryHealth
+from ._priority import declare_niceness
 from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       pack_float64, plain_descriptor, refuse, stamp_to_nanoseconds,
                       unpack_float64)
@@ -130,6 +131,7 @@ class YawEstimator(Node):
         self._temperatures_applied_until = -1  # data time [ns]
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.health = DeliveryHealth(self)
+        declare_niceness(self, self.health)
         self._profile_sequence: dict[str, int] = {}  # per systematic/<axis> topic
         # Publishers up front, so that recorders and listeners match before data flows.
         for axis in self._wanted or [a for a in self.machine.axis_order
