@@ -316,13 +316,17 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     print("  the run is over; writing the report", flush=True)
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
                          references, losses, story, delivery, scenario,
-                         [text for _, text in diagnostics_text])
+                         [text for _, text in diagnostics_text], start_ns=start_ns)
     summary["dead_nodes"] = dead_nodes
     stale, messages = summary["compensation_stale"], max(summary["compensation_messages"], 1)
     if stale > LATE_WARNING_SHARE * messages:
+        window = summary["stale_between_s"]
         losses.append(f"{stale} of {messages} corrections ({stale / messages:.1%}) arrived too "
                       f"late to apply (warning above {LATE_WARNING_SHARE:.0%}): the real-time "
-                      "path missed its deadline on this host")
+                      "path missed its deadline on this host" + (
+                          f", between {window[0]:.1f} s and {window[1]:.1f} s of data (the "
+                          f"oldest {summary['worst_stale_age_ms']:.0f} ms late)" if window
+                          else ""))
     # The headline first: what the instrument measured on the compensated machine.
     for line in story["lines"]:
         print(line)
@@ -558,7 +562,8 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
 
 def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
                references, losses: list[str], story: dict, delivery: dict,
-               scenario: str = "demo", model_alarms: list[str] | None = None) -> dict:
+               scenario: str = "demo", model_alarms: list[str] | None = None,
+               start_ns: int = 0) -> dict:
     from .io.bag_reader import bag_info
 
     info = bag_info(out / "bag")
@@ -607,6 +612,11 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "compensation_applied": int(controller.get("applied", 0)),
         "compensation_stale": int(controller.get("stale", 0)),
         "compensation_latency_p99_ms": float(controller.get("latency_p99_ms", "nan")),
+        # When the path missed its deadline (data time) and by how much.
+        "stale_between_s": [round((int(controller[key]) - start_ns) / 1e9, 2)
+                            for key in ("first_stale_stamp_ns", "last_stale_stamp_ns")]
+        if int(controller.get("first_stale_stamp_ns", -1)) >= 0 else [],
+        "worst_stale_age_ms": float(controller.get("worst_stale_age_ms", 0.0)),
         # What each node on the compensation path ran at (its niceness, or why not).
         "path_scheduling": {node.lstrip("/"): values["scheduling"]
                             for node, values in sorted(delivery.items())

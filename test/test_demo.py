@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 
@@ -24,6 +25,21 @@ def test_delivery_losses_are_plain_sentences():
         "/yaw_estimator lost 500 of 910 samples of 'scales' (55 %) and refused 0 messages: it "
         "could not keep up or the input was bad; the results above miss them"]
     assert delivery_losses({"/n": {"scales.processed": "5", "scales.lost": "0"}}) == []
+
+
+def test_the_machine_and_controller_keep_their_wall_clock_pace_at_any_rate():
+    from mt_accuracy_ros.demo import paced
+
+    real_time = paced(1.0)
+    assert real_time == {"batch_period_s": 0.01, "controller_cycle_s": 0.001,
+                         "compensation_delay_s": 0.02, "max_compensation_age_s": 0.5}
+    fast = paced(3.0)
+    assert fast["batch_period_s"] == pytest.approx(0.03)
+    assert fast["compensation_delay_s"] == pytest.approx(0.06)
+    assert fast["max_compensation_age_s"] == pytest.approx(1.5)
+    assert fast["controller_cycle_s"] == 0.001
+    # Slower than real time: never shorter deadlines than at rate 1.
+    assert paced(0.5) == real_time
 
 
 def test_dead_nodes_are_named_and_fail_the_run():
@@ -121,6 +137,14 @@ def test_demo_records_from_the_first_sample_and_accounts_for_every_stream(demo_r
     # counts what the bag holds.
     checks = sum(1 for _ in read_messages(out / "bag", ["/model_check"]))
     assert 1 <= summary["model_checks"] <= checks
+    # The compensation path's nodes say what they ran at: the demo's niceness, or why not.
+    from mt_accuracy_ros.demo import PATH_NICENESS
+
+    scheduling = summary["path_scheduling"]
+    assert set(scheduling) == {"encoder_publisher", "yaw_estimator", "compensation_broadcaster"}
+    expected = f"niceness {PATH_NICENESS} (" if os.geteuid() == 0 else "not permitted"
+    assert all(expected in text for text in scheduling.values()), scheduling
+    assert "path_scheduling" in printed
 
 
 REPORT_SECTIONS = ["Machine, data and instruments", "Headline: TCP error per component",

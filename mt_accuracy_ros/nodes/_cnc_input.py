@@ -164,6 +164,9 @@ class CompensationInput:
                   ("refused", stats.refused + table_refusals),
                   ("latency_p50_ms", f"{p50 * 1e3:.2f}"), ("latency_p99_ms", f"{p99 * 1e3:.2f}"),
                   ("latency_max_ms", f"{worst * 1e3:.2f}"),
+                  ("first_stale_stamp_ns", stats.first_stale_ns),
+                  ("last_stale_stamp_ns", stats.last_stale_ns),
+                  ("worst_stale_age_ms", f"{stats.worst_stale_age_s * 1e3:.1f}"),
                   ("table_version", self.tables.version),
                   ("tables", ",".join(sorted(self.tables.tables)))]
         values += [(f"reason.{k}", n) for k, n in sorted({**stats.reasons,

@@ -41,6 +41,11 @@ def gate_model_text(text: str, gate, model_dir: str | None = None,
 
 
 def _warm_worker() -> None:
+    from ._priority import leave_path_priority
+
+    # A node on the compensation path may run at a negative niceness (its ``niceness``
+    # parameter); its gate has no deadline and must not take the path's CPU.
+    leave_path_priority()
     from ..core.compensation import limits  # noqa: F401 - imported once, at start
 
 

@@ -47,6 +47,26 @@ def take_niceness(niceness: int) -> tuple[bool, str]:
     if niceness == 0:
         return False, f"niceness {os.getpriority(os.PRIO_PROCESS, 0)} (niceness parameter 0)"
     try:
+        done = _set_every_thread(niceness)
+    except PermissionError as exc:
+        return False, (f"asked for niceness {niceness}, not permitted ({exc.strerror}: needs "
+                       "CAP_SYS_NICE or an RLIMIT_NICE); running at niceness "
+                       f"{os.getpriority(os.PRIO_PROCESS, 0)}")
+    return True, f"niceness {niceness} ({done} threads)"
+
+
+def leave_path_priority() -> None:
+    """In a worker process a path node started (it inherits the node's niceness): back to
+    niceness 0 on every thread - its work has no deadline and must not take the path's
+    CPU. Raising a niceness needs no privilege."""
+    if os.getpriority(os.PRIO_PROCESS, 0) < 0:
+        _set_every_thread(0)
+
+
+def _set_every_thread(niceness: int) -> int:
+    """Set ``niceness`` on every thread of this process (Linux: a niceness is per thread,
+    and ``PRIO_PROCESS`` with a thread id sets that thread's); how many were set."""
+    try:
         threads = [int(tid) for tid in os.listdir("/proc/self/task")]
     except OSError:
         threads = [0]
@@ -57,11 +77,7 @@ def take_niceness(niceness: int) -> tuple[bool, str]:
             done += 1
         except ProcessLookupError:
             continue        # a thread that ended meanwhile
-        except PermissionError as exc:
-            return False, (f"asked for niceness {niceness}, not permitted ({exc.strerror}: needs "
-                           "CAP_SYS_NICE or an RLIMIT_NICE); running at niceness "
-                           f"{os.getpriority(os.PRIO_PROCESS, 0)}")
-    return True, f"niceness {niceness} ({done} threads)"
+    return done
 
 
 def declare_niceness(node, health) -> None:

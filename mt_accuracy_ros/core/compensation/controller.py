@@ -58,6 +58,11 @@ class OffsetStatistics:
     refused: int = 0          # malformed: not finite, too large, stamp not increasing
     reasons: dict[str, int] = field(default_factory=dict)
     latencies_s: deque = field(default_factory=lambda: deque(maxlen=20000))
+    #: Stamps [ns] of the first and the last stale correction (-1: none), and the oldest
+    #: age one arrived with [s]: when the path missed its deadline, and by how much.
+    first_stale_ns: int = -1
+    last_stale_ns: int = -1
+    worst_stale_age_s: float = 0.0
 
     def latency_percentiles(self) -> tuple[float, float, float]:
         """(p50, p99, max) of stamp -> applied latency [s]; NaN before the first."""
@@ -148,6 +153,10 @@ class RealtimeOffset:
                                 f"accepted {self._last_stamp} ns")
         age = arrival_ns - stamp_ns
         if age > self.max_age_ns:
+            stats = self.statistics
+            stats.first_stale_ns = stamp_ns if stats.first_stale_ns < 0 else stats.first_stale_ns
+            stats.last_stale_ns = stamp_ns
+            stats.worst_stale_age_s = max(stats.worst_stale_age_s, age * 1e-9)
             return self._refuse(f"stale: arrived {age / 1e6:.1f} ms after its stamp, allowed "
                                 f"{self.max_age_ns / 1e6:.1f} ms; the last valid one stays",
                                 stale=True)

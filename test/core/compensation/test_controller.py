@@ -34,6 +34,11 @@ def test_a_late_correction_applies_at_arrival_and_a_stale_one_never():
     # The last valid correction stays after the stale one.
     np.testing.assert_array_equal(values[:, 0], [1e-6, 1e-6, 2e-6, 2e-6])
     assert offset.statistics.stale == 1 and offset.statistics.refused == 0
+    # When the path missed its deadline, and by how much: kept for the operator.
+    assert offset.offer(30 * MS, 400 * MS, [9e-6, 0, 0], 1).startswith("stale")   # 370 ms
+    stats = offset.statistics
+    assert (stats.first_stale_ns, stats.last_stale_ns) == (20 * MS, 30 * MS)
+    assert stats.worst_stale_age_s == pytest.approx(0.37)
 
 
 @pytest.mark.parametrize("stamp, correction, version, word", [
