@@ -146,11 +146,14 @@ class _BaseStatistics:
     #: (training sets (folds, N), each fold's residual after its base fit (folds, N, 3)):
     #: what every preselecting candidate's in-fold search starts from.
     after_base: tuple | None = None
+    #: Unique per statistics a selector computed: the key of what is cached against them.
+    serial: int = 0
 
 
 #: Designs kept for reuse (every candidate's columns at every setting would hold GBs for
 #: 1e5 readings); the least recently used beyond this are computed again when needed.
-DESIGN_CACHE_BYTES = 128 * 2 ** 20
+#: (96 MB holds every design at 1e4 readings; at 1e5 it keeps the peak under 500 MB.)
+DESIGN_CACHE_BYTES = 96 * 2 ** 20
 
 
 class _DesignCache:
@@ -230,6 +233,7 @@ class Selector:
         self.alpha, self.min_reduction, self.min_share = alpha, min_reduction, min_share
         self.tie = tie
         self._designs = _DesignCache(DESIGN_CACHE_BYTES)
+        self._serial = 0
         #: How many of a step's best candidates keep their per-reading errors.
         self.keep_errors = 3
         self.selected: list[tuple[Term, dict]] = []
@@ -272,9 +276,10 @@ class Selector:
 
     def _sensitivity_rows(self, sensitivity: NDArray[np.float64]):
         """(the sensitivity at each measured row (R,), its square summed per reading (S,))."""
-        flat = sensitivity.reshape(-1)[self.rows]
         if self.all_rows:
-            return flat, np.einsum("nc,nc->n", sensitivity, sensitivity)
+            # A view of the context's sensitivity: no copy per variant.
+            return sensitivity.reshape(-1), np.einsum("nc,nc->n", sensitivity, sensitivity)
+        flat = sensitivity.reshape(-1)[self.rows]
         return flat, np.add.reduceat(flat * flat, self.row_starts)
 
     def _separable_prediction(self, term: Term, basis: NDArray[np.float64],
@@ -342,7 +347,8 @@ class Selector:
         """The selected model's per-fold products (its columns with themselves and y)."""
         with_y = np.column_stack([base, self.y])
         products = self._block_products(with_y, with_y)
-        return _BaseStatistics(base, products, with_y)
+        self._serial += 1
+        return _BaseStatistics(base, products, with_y, serial=self._serial)
 
     def _candidate_products(self, stats: _BaseStatistics, design: NDArray[np.float64]):
         """Per-fold normal equations of base + ``design``: X_f'X_f (folds, q+p, q+p), X_f'y_f
@@ -369,14 +375,15 @@ class Selector:
                             basis: NDArray[np.float64]):
         """:meth:`_candidate_products` of a separable design, on one value per reading: X'W
         = B'(sum over components of sensitivity x W) and X'X = B' diag(|sensitivity|^2) B."""
-        key = ("contracted", term.variant)
-        if key not in stats.candidates:
+        # Kept in the design cache (bounded: at 1e5 readings one is megabytes per variant).
+        key = ("contracted", term.variant, stats.serial)
+        contracted = self._designs.get(key)
+        if contracted is None:
             along_rows, squared = self._sensitivities[term.variant]
             weighted = along_rows[:, None] * stats.with_y
             contracted = weighted.reshape(-1, 3, weighted.shape[1]).sum(axis=1) \
                 if self.all_rows else np.add.reduceat(weighted, self.row_starts, axis=0)
-            stats.candidates[key] = contracted
-        contracted = stats.candidates[key]
+            self._designs.put(key, contracted)
         squared = self._sensitivities[term.variant][1]
         q = stats.base.shape[1]
         with_base = np.stack([basis[a:b].T @ contracted[a:b] for a, b in self.present_bounds])
