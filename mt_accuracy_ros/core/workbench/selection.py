@@ -380,9 +380,13 @@ class Selector:
         contracted = self._designs.get(key)
         if contracted is None:
             along_rows, squared = self._sensitivities[term.variant]
-            weighted = along_rows[:, None] * stats.with_y
-            contracted = weighted.reshape(-1, 3, weighted.shape[1]).sum(axis=1) \
-                if self.all_rows else np.add.reduceat(weighted, self.row_starts, axis=0)
+            if self.all_rows:
+                width = stats.with_y.shape[1]
+                contracted = np.einsum("nc,ncm->nm", along_rows.reshape(-1, 3),
+                                       stats.with_y.reshape(-1, 3, width))
+            else:
+                contracted = np.add.reduceat(along_rows[:, None] * stats.with_y,
+                                             self.row_starts, axis=0)
             self._designs.put(key, contracted)
         squared = self._sensitivities[term.variant][1]
         q = stats.base.shape[1]
