@@ -123,17 +123,26 @@ def bench_graph(seconds: float, batch_period_s: float = 0.05, monitor: bool = Fa
         corrections.append((stamp, int(info["source_timestamp"]),
                             int(info["received_timestamp"])))
 
+    # Deep enough that this listener (not on the path, normal priority) never drops
+    # batches itself when a loaded host delays it: "lost" is then the path's loss.
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+
     node.create_subscription(YawBatch, "yaw/x", lambda m: yaw_indices.append(
-        int(m.first_sample_index)), RESULT_QOS)
+        int(m.first_sample_index)), QoSProfile(depth=5000,
+                                               reliability=ReliabilityPolicy.RELIABLE))
     node.create_subscription(VolumetricCompensation, "compensation", on_compensation, RESULT_QOS)
     from mt_accuracy_msgs.msg import ScaleBatch
     from mt_accuracy_ros.nodes._common import SENSOR_QOS
 
     node.create_subscription(ScaleBatch, "scales", on_scales, SENSOR_QOS, raw=True)
     controller: dict[str, str] = {}
+    estimator_counts: dict[str, str] = {}
 
     def on_diagnostics(message: DiagnosticArray) -> None:
         for status in message.status:
+            if status.name.endswith("yaw_estimator: delivery"):
+                # The estimator's own count of scale samples lost between it and the CNC.
+                estimator_counts.update({v.key: v.value for v in status.values})
             if status.name.endswith("encoder_publisher: compensation"):
                 controller.update({v.key: v.value for v in status.values})
 
@@ -198,6 +207,7 @@ def bench_graph(seconds: float, batch_period_s: float = 0.05, monitor: bool = Fa
                             for name in processes},
             "batches_expected": batches, "yaw_batches_received": len(yaw_indices),
             "lost_samples": (len(expected_indices) - len(set(yaw_indices))) * per_batch,
+            "estimator_scales_lost": int(estimator_counts.get("scales.lost", -1)),
             "compensation_expected": int(seconds * 100),
             "compensation_received": counts["compensation"],
             "applied_latency_ms_p50": float(controller.get("latency_p50_ms", "nan")),
