@@ -40,6 +40,11 @@ def run_once(out: Path, rate: float | None, machine: str) -> dict:
             "end_um": [end.get(c, {}).get("rms_um", float("nan")) for c in "xyz"],
             "within": summary.get("end_state_within_band"),
             "stale": summary.get("compensation_stale"),
+            # When (data time) the stale ones were stamped, and the oldest one's age.
+            "stale_window": (f" (at {summary['stale_between_s'][0]:.1f}-"
+                             f"{summary['stale_between_s'][1]:.1f} s, up to "
+                             f"{summary.get('worst_stale_age_ms', 0):.0f} ms late)"
+                             if summary.get("stale_between_s") else ""),
             "applied": summary.get("compensation_applied"),
             "p99_ms": summary.get("compensation_latency_p99_ms"),
             "rolled_back": sum("rolled back" in a for a in summary.get("model_alarms", [])),
@@ -64,7 +69,8 @@ def main(argv: list[str] | None = None) -> int:
                 rows.append(result)
                 print(f"run {k + 1}/{args.runs}: exit {result['code']}, end state "
                       + "/".join(f"{v:.2f}" for v in result["end_um"])
-                      + f" um, stale {result['stale']}, {result['wall_s']:.0f} s",
+                      + f" um, stale {result['stale']}{result['stale_window']}, "
+                      f"{result['wall_s']:.0f} s",
                       file=sys.stderr, flush=True)
     finally:
         for process in burners:
@@ -80,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"| {k} | {r['code']} | {r['added']} | "
               + " / ".join(f"{v:.2f}" for v in r["end_um"])
               + f" | {'yes' if r['within'] else 'no'} | {r['rolled_back']} | {r['applied']} / "
-              f"{r['stale']} | {r['p99_ms']:.0f} | {r['wall_s']:.0f} | "
+              f"{r['stale']}{r['stale_window']} | {r['p99_ms']:.0f} | {r['wall_s']:.0f} | "
               f"{'; '.join(r['failed']) or '-'} |")
     return 0
 
