@@ -97,7 +97,7 @@ def bench_recorder(seconds: float, workdir: Path) -> dict:
     from mt_accuracy_msgs.msg import ScaleBatch
     from mt_accuracy_ros.io.bag_reader import bag_info
     from mt_accuracy_ros.nodes._common import SENSOR_QOS
-    from mt_accuracy_ros.processes import start_node
+    from mt_accuracy_ros.commands.processes import start_node
 
     rclpy.init()
     node = rclpy.create_node("bench_publisher")

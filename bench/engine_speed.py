@@ -142,7 +142,7 @@ def diagnosis_runs(readings: int, folder: Path, repeats: int) -> list[dict]:
 
 
 def startup_runs(repeats: int) -> list[float]:
-    code = ("import mt_accuracy_ros.cli, mt_accuracy_ros.check, "
+    code = ("import mt_accuracy_ros.cli, mt_accuracy_ros.commands.check, "
             "mt_accuracy_ros.core.workbench.diagnosis, mt_accuracy_ros.io.column_map")
     return [round(_timed_child([sys.executable, "-c", code])[0], 3) for _ in range(repeats)]
 

@@ -95,7 +95,7 @@ def bench_graph(seconds: float, batch_period_s: float = 0.05, monitor: bool = Fa
     from diagnostic_msgs.msg import DiagnosticArray
     from mt_accuracy_msgs.msg import ModelCheck, VolumetricCompensation, YawBatch
     from mt_accuracy_ros.nodes._common import RESULT_QOS, stamp_to_nanoseconds
-    from mt_accuracy_ros.processes import start_node
+    from mt_accuracy_ros.commands.processes import start_node
 
     workdir = Path(tempfile.mkdtemp(prefix="graph_bench_"))
     (workdir / "s.yaml").write_text(SCENARIO.format(seconds=seconds))

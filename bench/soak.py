@@ -48,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
 
-    from mt_accuracy_ros.processes import start_node
+    from mt_accuracy_ros.commands.processes import start_node
 
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--minutes", type=float, default=30.0)

@@ -8,6 +8,7 @@ sim/        the virtual machine tool (ROS-free); only its own nodes import it.
 io/         MCAP bag reading and writing, message-field conversions.
 nodes/      thin rclpy nodes: convert -> call core -> publish.
 report.py   every HTML report (templates/report.html.j2).
-cli.py      the ``mt-accuracy`` command; demo.py the main job; check.py the workbench CLI.
+cli.py      the ``mt-accuracy`` command; commands/ what it runs (demo.py the main job,
+            check.py the workbench, processes.py nodes as processes, ...).
 """
 __version__ = "0.1.0"

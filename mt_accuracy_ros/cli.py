@@ -12,7 +12,7 @@ DEMO_RATES = {"kidani_hmc": 1.0, "khan_chen_rpppr": 1.0}
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from .demo import run_demo
+    from .commands.demo import run_demo
 
     rate = args.rate if args.rate is not None else DEMO_RATES[args.machine]
     return run_demo(out_dir=args.out, rate_factor=rate,
@@ -64,7 +64,7 @@ def _recover(args: argparse.Namespace) -> int:
 
 
 def _ros_args(parameters: dict, remaps: list[str]) -> list[str]:
-    from .processes import ros_arguments
+    from .commands.processes import ros_arguments
 
     pairs = {}
     for remap in remaps:
@@ -139,7 +139,7 @@ def _simulate(args: argparse.Namespace) -> int:
 def _check(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from .check import check_bag, check_csv, write_outputs
+    from .commands.check import check_bag, check_csv, write_outputs
     from .core.errors import MtAccuracyError
 
     data = Path(args.data)
@@ -147,7 +147,7 @@ def _check(args: argparse.Namespace) -> int:
         if data.suffix.lower() == ".csv" and (args.columns or args.col):
             import yaml
 
-            from .check import check_mapped_csv
+            from .commands.check import check_mapped_csv
             from .io.column_map import ColumnMap, column_map_from_dict, parse_col_flags
 
             column_map = ColumnMap()
@@ -167,25 +167,39 @@ def _check(args: argparse.Namespace) -> int:
             if args.row_period is not None:
                 column_map.row_period_s = args.row_period
             result = check_mapped_csv(data, column_map, args.model, args.add or [], args.auto,
-                                      args.min_reduction)
+                                      args.min_reduction, machine=args.machine)
         elif data.suffix.lower() == ".csv":
             if not args.target:
                 print("mt-accuracy check: a CSV needs --target COLUMN (a thermal log) or a "
                       "column map (--columns FILE.yaml or --col ROLE=COLUMN[:UNIT]) for a "
                       "reference survey", file=sys.stderr)
                 return 2
+            if args.machine is not None:
+                print("mt-accuracy check: --machine is for surveys (a column map); a thermal "
+                      "log (--target) has no machine", file=sys.stderr)
+                return 2
+            if args.row_period is not None and not args.row_period > 0:
+                print("mt-accuracy check: --row-period must be > 0 [s]", file=sys.stderr)
+                return 2
             result = check_csv(data, args.target, args.time_column, args.inputs or ["*"],
                                args.driver or [], args.add or [], args.auto, args.train_fraction,
-                               args.min_reduction, args.term or [])
+                               args.min_reduction, args.term or [], row_period_s=args.row_period)
         else:
-            result = check_bag(data, args.model, args.add or [], args.auto, args.namespace,
-                               args.min_reduction)
+            if args.machine is not None:
+                print("mt-accuracy check: --machine is for surveys (a CSV with a column map); "
+                      "a bag's model names its machine (--model)", file=sys.stderr)
+                return 2
+            result = check_bag(data, args.model or "demo", args.add or [], args.auto,
+                               args.namespace, args.min_reduction)
     except (MtAccuracyError, OSError) as exc:
         print(f"mt-accuracy check: {exc}", file=sys.stderr)
         return 2
     write_outputs(result, args.json, args.report)
     if result.get("rows_note"):
         print(result["rows_note"])
+    for key in ("machine_note", "travel_warning"):
+        if result.get(key):
+            print(result[key])
     unit = "m" if result["kind"] == "bag" else result.get("target", "")
     print(f"baseline RMSE {result['baseline_rmse']:.4g} {unit}")
     for entry in result["ranking"][:5]:
@@ -264,7 +278,13 @@ def build_parser() -> argparse.ArgumentParser:
     sim.set_defaults(handler=_simulate)
     check = commands.add_parser("check", help="model vs measurement: rank missing effects, add them")
     check.add_argument("data", help="bag (this package's topics) or CSV file")
-    check.add_argument("--model", default="demo", help="model: bundled name, path or inline YAML")
+    check.add_argument("--model", default=None,
+                       help="model: bundled name, path or inline YAML (default: 'demo' for a "
+                            "bag; for a survey, none - see --machine)")
+    check.add_argument("--machine", default=None,
+                       help="survey CSV: the machine it was taken on, a bundled name or a "
+                            "machine YAML (default: a generic Cartesian machine over the "
+                            "surveyed travel); readings outside its travel are warned about")
     check.add_argument("--add", action="append", metavar="EFFECT", help="add this effect (repeat)")
     check.add_argument("--auto", type=int, default=0, metavar="N",
                        help="add up to N top significant candidates by themselves")
@@ -303,9 +323,9 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--wait-for-subscribers", type=float, default=0.0, metavar="S",
                       help="wait up to S seconds for subscribers before playing")
     play.set_defaults(handler=_play)
-    from .model_tools import add_parser as add_model_parser
-    from .rotary_tools import add_parser as add_rotary_parser
-    from .topic_tools import add_parser as add_topic_parser
+    from .commands.model_tools import add_parser as add_model_parser
+    from .commands.rotary_tools import add_parser as add_rotary_parser
+    from .commands.topic_tools import add_parser as add_topic_parser
 
     add_topic_parser(commands)
     add_model_parser(commands)

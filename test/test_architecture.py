@@ -66,9 +66,22 @@ def test_import_resolution_sees_relative_imports():
 
 def test_core_imports_no_ros_simulator_node_or_io():
     forbidden = ROS_ROOTS + ("mt_accuracy_ros.sim", "mt_accuracy_ros.nodes", "mt_accuracy_ros.io",
-                             "mt_accuracy_ros.check", "mt_accuracy_ros.demo", "mt_accuracy_ros.cli",
+                             "mt_accuracy_ros.commands", "mt_accuracy_ros.cli",
                              "mt_accuracy_ros.report", "studies", "bench")
     assert _offending(_sources("core"), forbidden) == {}
+
+
+def test_the_command_floor_is_one_room():
+    """What ``mt-accuracy`` runs lives in commands/; the top level holds the command line,
+    the allocator setting and the package's rooms (issue 28)."""
+    top = sorted(p.name for p in PACKAGE.glob("*.py"))
+    assert top == ["__init__.py", "allocator.py", "cli.py"]
+    commands = sorted(p.stem for p in (PACKAGE / "commands").glob("*.py"))
+    assert commands == ["__init__", "check", "demo", "model_tools", "processes",
+                        "rotary_tools", "topic_tools"]
+    # Nodes run on real machines: none of them imports a command.
+    assert _offending(_sources("nodes"), ("mt_accuracy_ros.commands", "mt_accuracy_ros.cli")) \
+        == {}
 
 
 def test_core_is_split_by_domain_and_each_subpackage_says_what_it_holds():

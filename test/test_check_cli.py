@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+
 import pytest
 
 
@@ -58,7 +60,7 @@ def test_bag_path_finds_the_hidden_effect(tmp_path, hidden):
     from rclpy.serialization import serialize_message
 
     from mt_accuracy_msgs.msg import ReferenceMeasurement, TemperatureArray
-    from mt_accuracy_ros.check import check_bag
+    from mt_accuracy_ros.commands.check import check_bag
     from mt_accuracy_ros.io.bag_writer import BagWriter
     from mt_accuracy_ros.io.fields import nanoseconds_to_stamp, pack_float64
     from studies.hidden_effects import HIDDEN, calibrated_model, survey
@@ -150,3 +152,75 @@ def test_survey_csv_errors_are_one_line(tmp_path, capsys, args, message):
                  *args]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and "\n" not in err
+
+
+def _other_machine_survey(path, n=500, seed=11):
+    """A survey of a Cartesian machine with X 0-600, Y 0-500, Z 0-400 mm (not a bundled
+    one), in a logger's mm and um: a 10 mm ball-screw pitch of X (3 um) in the x
+    readings, 0.3 um of noise on all three. Made here, from the closed form alone."""
+    rng = np.random.default_rng(seed)
+    x, y, z = rng.uniform(0, 600, n), rng.uniform(0, 500, n), rng.uniform(0, 400, n)
+    dx = 3.0 * np.sin(2 * np.pi * x / 10.0) + rng.normal(0, 0.3, n)
+    dy, dz = rng.normal(0, 0.3, n), rng.normal(0, 0.3, n)
+    rows = "\n".join(f"{a:.4f},{b:.4f},{c:.4f},{d:.4f},{e:.4f},{f:.4f}"
+                     for a, b, c, d, e, f in zip(x, y, z, dx, dy, dz))
+    path.write_text("X_mm,Y_mm,Z_mm,dx_um,dy_um,dz_um\n" + rows + "\n")
+    return ["--col", "pos.X=X_mm:mm", "--col", "pos.Y=Y_mm:mm", "--col", "pos.Z=Z_mm:mm",
+            "--col", "err.x=dx_um:um", "--col", "err.y=dy_um:um", "--col", "err.z=dz_um:um",
+            "--uncertainty-um", "0.6"]
+
+
+def test_a_survey_without_a_machine_is_checked_on_a_generic_one_over_its_travel(
+        tmp_path, capsys):
+    from mt_accuracy_ros.cli import main
+
+    flags = _other_machine_survey(tmp_path / "s.csv")
+    code = main(["check", str(tmp_path / "s.csv"), *flags, "--auto", "1",
+                 "--json", str(tmp_path / "s.json")])
+    out = capsys.readouterr().out
+    assert code == 0
+    summary = json.loads((tmp_path / "s.json").read_text())
+    assert summary["machine"] == "generic_cartesian" and not summary["travel_warning"]
+    assert "a generic Cartesian machine over the surveyed travel" in out
+    assert "X 1.3..599.3 mm" in summary["machine_note"]
+    assert "outside" not in out
+    assert summary["named"][0]["name"] == "positioning_periodic:EXX"
+
+
+def test_readings_outside_the_given_machine_are_warned_about_in_one_line(tmp_path, capsys):
+    from mt_accuracy_ros.cli import main
+
+    flags = _other_machine_survey(tmp_path / "s.csv")
+    assert main(["check", str(tmp_path / "s.csv"), *flags, "--machine", "kidani_hmc"]) == 0
+    out = capsys.readouterr().out
+    (warning,) = [line for line in out.splitlines() if line.startswith("warning:")]
+    # kidani_hmc: X 0-390, Y -440-0, Z 0-495 mm: every reading has Y > 0.
+    assert "500 of 500 readings lie outside kidani_hmc's travel" in warning
+    assert "X 1.295..599.3 mm against its 0..390" in warning
+    assert "Y 3.053..499.1 mm against its -440..0" in warning and "Z " not in warning
+    # A model names its machine: both at once is refused in one line.
+    assert main(["check", str(tmp_path / "s.csv"), *flags, "--machine", "kidani_hmc",
+                 "--model", "{machine: kidani_hmc}"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "not both" in err and "\n" not in err
+
+
+def test_a_thermal_log_without_a_time_column_takes_a_row_period(tmp_path, capsys):
+    from mt_accuracy_ros.cli import main
+
+    rng = np.random.default_rng(5)
+    t1 = 20 + np.cumsum(rng.normal(0, 0.05, 240))
+    t2 = 21 + np.cumsum(rng.normal(0, 0.05, 240))
+    growth = 3.0 * (t1 - t1[0]) + rng.normal(0, 0.05, 240)        # um
+    rows = "\n".join(f"{a:.4f},{b:.4f},{c:.4f}" for a, b, c in zip(t1, t2, growth))
+    (tmp_path / "log.csv").write_text("t1_C,t2_C,growth_um\n" + rows + "\n")
+    args = ["check", str(tmp_path / "log.csv"), "--target", "growth_um", "--inputs", "t*_C"]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert "no time column 'time_s'" in err and "--row-period" in err and "\n" not in err
+    assert main(args + ["--row-period", "60", "--auto", "1", "--json",
+                        str(tmp_path / "s.json")]) == 0
+    summary = json.loads((tmp_path / "s.json").read_text())
+    assert summary["added"] and "t1_C" in summary["added"][0]
+    assert main(args + ["--row-period", "0"]) == 2
+    assert "--row-period must be > 0" in capsys.readouterr().err

@@ -8,7 +8,7 @@ import numpy as np
 
 import pytest
 
-from mt_accuracy_ros.demo import delivery_losses
+from mt_accuracy_ros.commands.demo import delivery_losses
 
 
 def test_delivery_losses_are_plain_sentences():
@@ -28,7 +28,7 @@ def test_delivery_losses_are_plain_sentences():
 
 
 def test_the_machine_and_controller_keep_their_wall_clock_pace_at_any_rate():
-    from mt_accuracy_ros.demo import paced
+    from mt_accuracy_ros.commands.demo import paced
 
     real_time = paced(1.0)
     assert real_time == {"batch_period_s": 0.01, "controller_cycle_s": 0.001,
@@ -45,7 +45,7 @@ def test_the_machine_and_controller_keep_their_wall_clock_pace_at_any_rate():
 def test_dead_nodes_are_named_and_fail_the_run():
     """Issue 29: with the estimator and the monitor killed (-9) the demo exited 0 and named
     nobody; now each dead node is a failure line (and the exit status 1)."""
-    from mt_accuracy_ros.demo import _exit_text, demo_failures
+    from mt_accuracy_ros.commands.demo import _exit_text, demo_failures
 
     good = {"model_checks": 5, "bag_messages": 100, "compensation_applied": 10,
             "dead_nodes": []}
@@ -58,7 +58,7 @@ def test_dead_nodes_are_named_and_fail_the_run():
 
 
 def test_a_failed_end_state_says_whether_the_host_or_the_model_failed():
-    from mt_accuracy_ros.demo import demo_failures
+    from mt_accuracy_ros.commands.demo import demo_failures
 
     base = {"model_checks": 5, "bag_messages": 10, "compensation_applied": 3383,
             "compensation_messages": 9000}
@@ -89,7 +89,7 @@ def demo_run(tmp_path_factory):
     import contextlib
     import io
 
-    from mt_accuracy_ros.demo import run_demo
+    from mt_accuracy_ros.commands.demo import run_demo
 
     out = tmp_path_factory.mktemp("demo") / "out"
     printed = io.StringIO()
@@ -105,7 +105,7 @@ def test_demo_records_from_the_first_sample_and_accounts_for_every_stream(demo_r
     summary = json.loads((out / "summary.json").read_text())
     # The exit code tells the truth (issue 26): 0 only when the loop closed and the end
     # state is within the band; otherwise the summary says why.
-    from mt_accuracy_ros.demo import demo_failures
+    from mt_accuracy_ros.commands.demo import demo_failures
 
     failures = demo_failures(summary, {"end_state_within_band":
                                        summary["end_state_within_band"]})
@@ -123,7 +123,7 @@ def test_demo_records_from_the_first_sample_and_accounts_for_every_stream(demo_r
     assert decode(first_temperatures).sequence == 0
     # Losses, if the machine was too loaded to keep up, are said in words - never silent;
     # so is a share of corrections too late to apply above the warning threshold.
-    from mt_accuracy_ros.demo import LATE_WARNING_SHARE
+    from mt_accuracy_ros.commands.demo import LATE_WARNING_SHARE
 
     late = summary["compensation_stale"] > \
         LATE_WARNING_SHARE * max(summary["compensation_messages"], 1)
@@ -138,7 +138,7 @@ def test_demo_records_from_the_first_sample_and_accounts_for_every_stream(demo_r
     checks = sum(1 for _ in read_messages(out / "bag", ["/model_check"]))
     assert 1 <= summary["model_checks"] <= checks
     # The compensation path's nodes say what they ran at: the demo's niceness, or why not.
-    from mt_accuracy_ros.demo import PATH_NICENESS
+    from mt_accuracy_ros.commands.demo import PATH_NICENESS
 
     scheduling = summary["path_scheduling"]
     assert set(scheduling) == {"encoder_publisher", "yaw_estimator", "compensation_broadcaster"}

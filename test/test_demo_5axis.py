@@ -17,7 +17,7 @@ import yaml
 
 @pytest.fixture(scope="module")
 def five_axis_run(tmp_path_factory):
-    from mt_accuracy_ros.demo import run_demo
+    from mt_accuracy_ros.commands.demo import run_demo
     from mt_accuracy_ros.nodes._scenario import BUNDLED
 
     base = tmp_path_factory.mktemp("demo5")
@@ -34,7 +34,7 @@ def five_axis_run(tmp_path_factory):
 def test_the_five_axis_graph_streams_encoders_and_compensates_the_tool_direction(five_axis_run):
     from mt_accuracy_ros.io.bag_reader import decode, read_messages
 
-    from mt_accuracy_ros.demo import demo_failures
+    from mt_accuracy_ros.commands.demo import demo_failures
 
     code, out, printed = five_axis_run
     summary = json.loads((out / "summary.json").read_text())

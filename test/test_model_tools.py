@@ -4,7 +4,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.processes import start_node
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess:

@@ -69,7 +69,7 @@ def test_console_script_targets_exist_and_are_installed(name, target):
     assert callable(getattr(module, function))
     script = Path(sys.prefix, "bin", name)
     assert script.is_file(), f"console script {name} not installed in {script.parent}"
-    from mt_accuracy_ros.processes import NODE_MODULES
+    from mt_accuracy_ros.commands.processes import NODE_MODULES
 
     assert NODE_MODULES[name] == module_name
 

@@ -8,7 +8,7 @@ import pytest
 
 from conftest import DATA
 from mt_accuracy_ros.cli import main
-from mt_accuracy_ros.topic_tools import rate_statistics
+from mt_accuracy_ros.commands.topic_tools import rate_statistics
 
 TALKER = DATA / "rosbag2_samples" / "talker"
 
@@ -52,8 +52,8 @@ def test_hz_of_a_bag_is_exact(tmp_path, capsys):
 
 
 def test_on_the_live_graph(tmp_path):
-    from mt_accuracy_ros.processes import start_node
-    from mt_accuracy_ros.topic_tools import cmd_echo, cmd_hz, cmd_info, cmd_list
+    from mt_accuracy_ros.commands.processes import start_node
+    from mt_accuracy_ros.commands.topic_tools import cmd_echo, cmd_hz, cmd_info, cmd_list
 
     scenario = tmp_path / "s.yaml"
     scenario.write_text("machine: kidani_hmc\nduration_s: 600\nsample_rate_hz: 100\n"

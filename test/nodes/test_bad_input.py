@@ -9,7 +9,7 @@ import time
 import pytest
 
 from graph_helpers import set_parameter_again_until_answered, spin_until
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.processes import start_node
 
 BAD_MODELS = [
     "machine: kidani_hmc\neffects: [squareness]\n",       # effects a list

@@ -15,7 +15,7 @@ import numpy as np
 import yaml
 
 from graph_helpers import spin_until
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.processes import start_node
 
 GEOMETRIC = """machine: kidani_hmc
 seed: 5

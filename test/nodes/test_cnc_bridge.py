@@ -20,7 +20,7 @@ import pytest
 import yaml
 
 from graph_helpers import spin_until
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.processes import start_node
 
 BETA = np.array([2.0e-6, -4.0e-6, 6.0e-6])  # m/K
 

@@ -8,7 +8,7 @@ import struct
 import time
 
 from conftest import REPO_ROOT
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.processes import start_node
 
 #: What the foxglove-sdk server speaks (the protocol's current name; v1 is the legacy one).
 SUBPROTOCOLS = ["foxglove.sdk.v1", "foxglove.websocket.v1"]

@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from graph_helpers import call_service, spin_for, spin_until
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.processes import start_node
 
 SCENARIO = """machine: kidani_hmc
 seed: {seed}
@@ -29,7 +29,7 @@ def _scenario(tmp_path, seed=1, duration=4.0, name="s.yaml"):
 
 
 def _set(node, target, name, value):
-    from mt_accuracy_ros.demo import _set_parameter
+    from mt_accuracy_ros.commands.demo import _set_parameter
 
     return _set_parameter(node, target, name, value)
 

@@ -14,8 +14,8 @@ import pytest
 import yaml
 
 from graph_helpers import set_parameter_again_until_answered, spin_until
-from mt_accuracy_ros.model_tools import set_remote_parameter
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.model_tools import set_remote_parameter
+from mt_accuracy_ros.commands.processes import start_node
 
 SCENARIO = """machine: kidani_hmc
 seed: 5

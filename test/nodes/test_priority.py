@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 from graph_helpers import spin_until
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.processes import start_node
 
 CHILD = """
 import os, sys, threading

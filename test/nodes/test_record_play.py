@@ -15,7 +15,7 @@ from graph_helpers import call_service, spin_for, spin_until
 from mt_accuracy_ros.core.errors import BagError
 from mt_accuracy_ros.io.bag_reader import bag_info, decode, read_messages, recover
 from mt_accuracy_ros.io.bag_writer import BagWriter, qos_dict
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.processes import start_node
 
 
 SCENARIO = """machine: kidani_hmc

@@ -6,7 +6,7 @@ from __future__ import annotations
 import time
 
 from graph_helpers import set_parameter_again_until_answered, spin_for, spin_until
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.processes import start_node
 
 
 def test_streams_wait_for_the_start_stamp_and_begin_at_sample_zero(rclpy_context):

@@ -6,7 +6,7 @@ import time
 import numpy as np
 
 from graph_helpers import spin_until
-from mt_accuracy_ros.processes import start_node
+from mt_accuracy_ros.commands.processes import start_node
 
 SCENARIO = """machine: kidani_hmc
 seed: 8

@@ -264,6 +264,38 @@ def _cnc_section(spec, where: str) -> dict:
 BUNDLED_MACHINES = Path(__file__).resolve().parents[2] / "machines"
 
 
+def generic_cartesian(strokes: dict[str, tuple[float, float]], tool_length_m: float = 0.0,
+                      name: str = "generic_cartesian") -> MachineDescription:
+    """A Cartesian machine known only from its survey: linear axes ``strokes`` (axis ->
+    (low, high) [m], e.g. the travel the readings cover), chain ``[w b X Y Z t]``.
+
+    Nothing of the real machine's geometry is assumed: every axis stacks on the tool
+    side with zero offsets, so an angular error of an axis reaches the TCP through the
+    positions of the axes after it (and the tool length) - the part of an Abbe arm
+    that varies over the survey. A constant arm the real machine has adds an angular
+    error times a constant: a straightness of the same axis, which the catalogue
+    names as such.
+    """
+    axes = [a for a in "XYZ" if a in strokes]
+    if not axes:
+        raise MachineDescriptionError("a generic Cartesian machine needs at least one of the "
+                                      "axes X, Y, Z")
+    spec = {}
+    for axis in axes:
+        low, high = (float(v) for v in strokes[axis])
+        if not (np.isfinite(low) and np.isfinite(high)):
+            raise MachineDescriptionError(f"axis {axis}: travel [{low}, {high}] is not finite")
+        if not high > low:
+            # An axis that stood still: a nominal 1 mm of travel keeps the description valid.
+            low, high = low - 5e-4, low + 5e-4
+        spec[axis] = {"stroke": [low, high], "offset": [0.0, 0.0, 0.0]}
+    return machine_from_dict({
+        "name": name, "chain": f"[w b {' '.join(axes)} t]",
+        "description": "generic Cartesian machine from the survey's travel (no --machine)",
+        "tool": [0.0, 0.0, float(tool_length_m)], "workpiece": [0.0, 0.0, 0.0],
+        "axes": spec}, name)
+
+
 def bundled_machine_names() -> list[str]:
     return sorted(p.stem for p in BUNDLED_MACHINES.glob("*.yaml"))
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from .core.errors import ParameterError
+from ..core.errors import ParameterError
 
 
 def set_remote_parameter(node, target: str, name: str, value, timeout_s: float = 30.0,
@@ -78,7 +78,7 @@ def _show(args: argparse.Namespace) -> int:
 
     from mt_accuracy_msgs.msg import ModelVersion
 
-    from .nodes._common import LATCHED_QOS
+    from ..nodes._common import LATCHED_QOS
 
     rclpy.init()
     node = rclpy.create_node("mt_accuracy_model_tool")

@@ -81,13 +81,13 @@ def rate_statistics(times_ns: Iterable[int]) -> RateStatistics | None:
 
 # ----------------------------------------------------------------------- bags
 def bag_topics(bag) -> dict[str, str]:
-    from .io.bag_reader import topics
+    from ..io.bag_reader import topics
 
     return {name: info.type for name, info in topics(bag).items()}
 
 
 def _bag_messages(bag, topic: str):
-    from .io.bag_reader import read_messages
+    from ..io.bag_reader import read_messages
 
     found = bag_topics(bag)
     if topic not in found:
@@ -138,7 +138,7 @@ def _subscribe(node, topic: str, type_name: str, callback):
     """Subscribe with QoS that matches any publisher: best effort, volatile."""
     from rclpy.qos import qos_profile_sensor_data
 
-    from .io.bag_reader import message_class
+    from ..io.bag_reader import message_class
 
     return node.create_subscription(message_class(type_name), topic, callback,
                                     qos_profile_sensor_data)
@@ -163,7 +163,7 @@ def cmd_list(args, out=None) -> int:
 def cmd_info(args, out=None) -> int:
     out = out or sys.stdout
     if args.bag:
-        from .io.bag_reader import bag_info
+        from ..io.bag_reader import bag_info
 
         found = bag_topics(args.bag)
         if args.topic not in found:
@@ -186,7 +186,7 @@ def cmd_echo(args, out=None) -> int:
     options = {"no_arrays": args.no_arr, "truncate": args.truncate_length}
     limit = 1 if args.once else args.count
     if args.bag:
-        from .io.bag_reader import decode
+        from ..io.bag_reader import decode
 
         for shown, message in enumerate(_bag_messages(args.bag, args.topic)):
             if limit and shown >= limit:
@@ -218,8 +218,8 @@ def cmd_echo(args, out=None) -> int:
 def cmd_hz(args, out=None) -> int:
     out = out or sys.stdout
     if args.bag:
-        from .io.bag_reader import decode
-        from .io.fields import stamp_to_nanoseconds
+        from ..io.bag_reader import decode
+        from ..io.fields import stamp_to_nanoseconds
 
         times = []
         for message in _bag_messages(args.bag, args.topic):

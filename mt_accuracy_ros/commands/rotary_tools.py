@@ -23,8 +23,8 @@ import numpy as np
 
 def _finish(sections, title: str, subtitle: str, report: str | None, summary: dict,
             json_path: str | None) -> None:
-    from .io.rotary_csv import atomic_write_text
-    from .report import Report, render
+    from ..io.rotary_csv import atomic_write_text
+    from ..report import Report, render
 
     if report:
         render(Report(title, subtitle, sections), Path(report))
@@ -41,15 +41,15 @@ def _report_dir(report: str) -> tuple[Path, str]:
 
 
 def _ballbar(args: argparse.Namespace) -> int:
-    from .core.rotary.ballbar import ARCSEC, calibrate
-    from .io.rotary_csv import atomic_write_text, ballbar_csv_text, read_ballbar_csv
-    from .sim.rotary_instruments import BallBarPlan, RotaryTableTruth, ballbar_test
+    from ..core.rotary.ballbar import ARCSEC, calibrate
+    from ..io.rotary_csv import atomic_write_text, ballbar_csv_text, read_ballbar_csv
+    from ..sim.rotary_instruments import BallBarPlan, RotaryTableTruth, ballbar_test
 
     if args.simulate is not None and args.scenario:
         from dataclasses import replace
 
-        from .nodes._scenario import resolve_scenario
-        from .sim.rotary_instruments import table_truth
+        from ..nodes._scenario import resolve_scenario
+        from ..sim.rotary_instruments import table_truth
 
         truth = replace(table_truth(resolve_scenario(args.scenario), args.axis),
                         reversal_lost_motion_rad=1e-4 if args.backlash else 0.0)
@@ -71,7 +71,7 @@ def _ballbar(args: argparse.Namespace) -> int:
     result = calibrate(short, long)
     print(result.text())
     if args.report or args.json:
-        from .report.rotary import ballbar_sections
+        from ..report.rotary import ballbar_sections
 
         sections = ballbar_sections(result, *_report_dir(args.report)) if args.report else []
         _finish(sections, "mt-accuracy ballbar", f"Rotary-table calibration from {args.file} "
@@ -80,15 +80,15 @@ def _ballbar(args: argparse.Namespace) -> int:
 
 
 def _probe(args: argparse.Namespace) -> int:
-    from .core.kinematics.machine import load_machine
-    from .core.rotary.probing import fit_sphere, identify_location_errors
-    from .io.rotary_csv import atomic_write_text, probing_csv_text, read_probing_csv
-    from .sim.rotary_instruments import ProbingPlan, probe_sphere
+    from ..core.kinematics.machine import load_machine
+    from ..core.rotary.probing import fit_sphere, identify_location_errors
+    from ..io.rotary_csv import atomic_write_text, probing_csv_text, read_probing_csv
+    from ..sim.rotary_instruments import ProbingPlan, probe_sphere
 
     scenario_truth = None
     if args.scenario:
-        from .nodes._scenario import resolve_scenario
-        from .sim.rotary_instruments import location_errors_of
+        from ..nodes._scenario import resolve_scenario
+        from ..sim.rotary_instruments import location_errors_of
 
         scenario = resolve_scenario(args.scenario)
         machine, scenario_truth = scenario.machine, location_errors_of(scenario)
@@ -123,7 +123,7 @@ def _probe(args: argparse.Namespace) -> int:
                                       sphere_nominal_m=sphere)
     print(result.text())
     if args.report or args.json:
-        from .report.rotary import probing_section
+        from ..report.rotary import probing_section
 
         _finish([probing_section(result)], "mt-accuracy probe",
                 f"Rotary-axis location errors of {machine.name} from {args.file}", args.report,
@@ -132,10 +132,10 @@ def _probe(args: argparse.Namespace) -> int:
 
 
 def _export(args: argparse.Namespace) -> int:
-    from .core.compensation.cnc_export import (bilateral_tables, round_trip, write_bilateral_csv,
+    from ..core.compensation.cnc_export import (bilateral_tables, round_trip, write_bilateral_csv,
                                                write_isg_csv)
-    from .core.compensation.error_model import resolve_model
-    from .io.rotary_csv import atomic_write_text
+    from ..core.compensation.error_model import resolve_model
+    from ..io.rotary_csv import atomic_write_text
 
     model = resolve_model(args.model)
     spacing = args.spacing_mm * 1e-3
@@ -151,13 +151,13 @@ def _export(args: argparse.Namespace) -> int:
     print(f"  round trip: tables read back and applied differ from the model by at most "
           f"{check.tcp_max_error_m * 1e6:.3f} um at the TCP (RMS {check.tcp_rms_error_m * 1e6:.3f}"
           f" um); interpolation bound {check.tcp_bound_m * 1e6:.3f} um")
-    from .core.compensation.user_tables import fitted_user_effects, table_axis
+    from ..core.compensation.user_tables import fitted_user_effects, table_axis
 
     for name, entry in fitted_user_effects(model).items():
         axis, why = table_axis(model, name, entry)
         print(f"  user effect {name}: " + (f"in the {axis} tables" if axis else why))
     if args.report or args.json:
-        from .report.rotary import export_section
+        from ..report.rotary import export_section
 
         _finish([export_section(check, list(texts))], "mt-accuracy export",
                 f"CNC compensation tables of {args.model}", args.report,

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .core.errors import InputDataError, MtAccuracyError
+from ..core.errors import InputDataError, MtAccuracyError
 
 
 def error_figures(residual: np.ndarray, unit_scale: float = 1.0) -> dict:
@@ -36,9 +36,9 @@ def error_figures(residual: np.ndarray, unit_scale: float = 1.0) -> dict:
 # ------------------------------------------------------------------ bag path
 def observations_from_bag(bag: Path, namespace: str = ""):
     """Readings, temperatures at their stamps, and the profile history of a bag."""
-    from .core.workbench.diagnosis import Observations
-    from .io.bag_reader import decode, read_messages, topics
-    from .io.fields import machine_error, stamp_to_nanoseconds, unpack_float64
+    from ..core.workbench.diagnosis import Observations
+    from ..io.bag_reader import decode, read_messages, topics
+    from ..io.fields import machine_error, stamp_to_nanoseconds, unpack_float64
 
     prefix = namespace.rstrip("/")
     available = topics(bag)
@@ -49,7 +49,7 @@ def observations_from_bag(bag: Path, namespace: str = ""):
                              f"{', '.join(sorted(available))}")
     from tqdm import tqdm
 
-    from .io.bag_reader import bag_info
+    from ..io.bag_reader import bag_info
 
     readings, temps, profiles = [], [], []
     chosen = sorted(wanted & set(available))
@@ -142,7 +142,7 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     adds up to N of the effects the forward selection names (jointly fitted),
     ``add`` the named ones first.
     """
-    from .core.workbench.diagnosis import (add_effect, add_effects, diagnose, pick_candidate,
+    from ..core.workbench.diagnosis import (add_effect, add_effects, diagnose, pick_candidate,
                                            residuals)
 
     for sensor, values in obs.temperatures.items():
@@ -213,14 +213,14 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
 def _model_yaml(model) -> str:
     import yaml
 
-    from .core.compensation.error_model import model_to_dict
+    from ..core.compensation.error_model import model_to_dict
 
     return yaml.safe_dump(model_to_dict(model), sort_keys=False)
 
 
 def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: str,
               min_reduction: float) -> dict:
-    from .core.compensation.error_model import resolve_model
+    from ..core.compensation.error_model import resolve_model
 
     model = resolve_model(model_text)  # a bad model is refused before a long bag is read
     obs, stamps, profiles = observations_from_bag(bag, namespace)
@@ -230,15 +230,62 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
     return {"data": str(bag), "kind": "bag", "namespace": namespace, **result}
 
 
-def check_mapped_csv(path: Path, column_map, model_text: str, add: list[str], auto: int,
-                     min_reduction: float) -> dict:
-    """A data logger's CSV of reference readings (column map) against a model."""
-    from .core.compensation.error_model import resolve_model
-    from .core.workbench.diagnosis import Observations
-    from .io.column_map import read_mapped_csv
+def survey_model(survey, model_text: str | None, machine: str | None):
+    """The model a survey is checked against, and a note on the machine it assumes.
 
-    model = resolve_model(model_text)
+    ``model_text`` (a model names its machine), else ``machine`` (a bundled name or a
+    machine YAML) with no effects, else a generic Cartesian machine whose strokes are
+    the travel the readings cover (:func:`generic_cartesian`).
+    """
+    from ..core.compensation.error_model import ErrorModel, resolve_model
+    from ..core.kinematics.machine import generic_cartesian, load_machine
+
+    if model_text is not None and machine is not None:
+        raise InputDataError("give --model or --machine, not both: a model names its machine")
+    if model_text is not None:
+        return resolve_model(model_text), ""
+    if machine is not None:
+        return ErrorModel(load_machine(machine), {}), ""
+    travel = {axis: (float(np.min(q)), float(np.max(q))) for axis, q in survey.positions.items()
+              if axis in "XYZ" and q.size}
+    model = ErrorModel(generic_cartesian(travel), {})
+    spans = ", ".join(f"{a} {low * 1e3:.1f}..{high * 1e3:.1f} mm" for a, (low, high) in
+                      travel.items())
+    return model, (f"machine: none given (--machine): a generic Cartesian machine over the "
+                   f"surveyed travel ({spans}); angular errors act through the other axes' "
+                   "positions, a constant Abbe arm shows as straightness")
+
+
+def outside_travel(machine, positions: dict, tolerance_m: float = 1e-6) -> str:
+    """One warning line when readings lie outside ``machine``'s strokes ("" if none do)."""
+    parts, outside = [], np.zeros(0, dtype=bool)
+    for axis, q in positions.items():
+        if axis not in machine.axes or not np.size(q):
+            continue
+        low, high = machine.axes[axis].stroke
+        beyond = (q < low - tolerance_m) | (q > high + tolerance_m)
+        outside = beyond if outside.size == 0 else (outside | beyond)
+        if beyond.any():
+            scale = 1.0 if machine.axes[axis].is_rotary else 1e3
+            unit = "rad" if machine.axes[axis].is_rotary else "mm"
+            parts.append(f"{axis} {np.min(q) * scale:.4g}..{np.max(q) * scale:.4g} {unit} "
+                         f"against its {low * scale:.4g}..{high * scale:.4g}")
+    if not parts:
+        return ""
+    return (f"warning: {int(outside.sum())} of {outside.size} readings lie outside "
+            f"{machine.name}'s travel ({'; '.join(parts)}): its strokes and Abbe arms may not "
+            "be this machine's - give --machine, or none for a generic one from the data")
+
+
+def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[str],
+                     auto: int, min_reduction: float, machine: str | None = None) -> dict:
+    """A data logger's CSV of reference readings (column map) against a model (or a
+    machine, or a generic Cartesian machine from the survey: :func:`survey_model`)."""
+    from ..core.workbench.diagnosis import Observations
+    from ..io.column_map import read_mapped_csv
+
     survey = read_mapped_csv(path, column_map)
+    model, machine_note = survey_model(survey, model_text, machine)
     n = survey.time_s.size
     missing = [a for a in model.machine.axis_order if a not in survey.positions]
     if missing:
@@ -255,29 +302,39 @@ def check_mapped_csv(path: Path, column_map, model_text: str, add: list[str], au
                        survey.temperatures, column_map.uncertainty_m,
                        directions=survey.directions, accelerations=survey.accelerations,
                        spindle_speed_rad_s=survey.spindle_speed_rad_s)
+    warning = outside_travel(model.machine, survey.positions)
     result = check_observations(model, obs, add, auto, min_reduction)
     return {"data": str(path), "kind": "survey_csv", "rows_read": survey.rows_read,
             "rows_dropped": survey.rows_dropped, "rows_note": survey.summary(Path(path).name),
-            "namespace": "", **result}
+            "machine": model.machine.name, "machine_note": machine_note,
+            "travel_warning": warning, "namespace": "", **result}
 
 
 # ------------------------------------------------------------------ CSV path
 def check_csv(path: Path, target: str, time_column: str, inputs: list[str], drivers: list[str],
               add: list[str], auto: int, train_fraction: float, min_reduction: float,
-              model_terms: list[str]) -> dict:
-    from .core.workbench.tabular import table_workbench
+              model_terms: list[str], row_period_s: float | None = None) -> dict:
+    """A thermal log (one target column, temperature inputs). Its time is the time
+    column, or - without one - the row order at ``row_period_s`` seconds a row."""
+    from ..core.workbench.tabular import table_workbench
 
-    from .io.csv_table import read_csv_table
+    from ..io.csv_table import read_csv_table
 
     table = read_csv_table(path)
     names = table.names
-    if time_column not in names:
-        raise InputDataError(f"{path}: no time column {time_column!r}; columns: {', '.join(names)}")
+    columns = table.columns
+    if time_column in names:
+        time_s = columns[time_column]
+    elif row_period_s is not None:
+        time_s = np.arange(len(columns[names[0]]), dtype=np.float64) * float(row_period_s)
+    else:
+        raise InputDataError(f"{path}: no time column {time_column!r} (give --time-column, or "
+                             f"--row-period SECONDS for one row every SECONDS); columns: "
+                             f"{', '.join(names)}")
     selected = [n for n in names if any(fnmatch.fnmatch(n, p) for p in inputs)]
     if not selected:
         raise InputDataError(f"{path}: no input column matches {inputs}")
-    columns = table.columns
-    bench = table_workbench(columns, columns[time_column], target, selected, drivers,
+    bench = table_workbench(columns, time_s, target, selected, drivers,
                             train_fraction, included=model_terms)
     first = bench.rank(min_reduction)
     baseline = bench.judged_rmse(bench.included)
@@ -320,7 +377,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
             "final_rmse": steps[-1]["held_out_rmse"], "steps": steps,
             "judged_on": "held-out rows after the training rows",
             "all_inputs_least_squares_held_out_rmse": all_inputs_held_out,
-            "_plot": {"time": np.asarray(columns[time_column])[:bench.target.size],
+            "_plot": {"time": np.asarray(time_s)[:bench.target.size],
                       "target": bench.target, "before": prediction_before,
                       "after": prediction_after, "train": bench.train}}
 
@@ -329,7 +386,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
 def write_outputs(result: dict, json_path: str | None, report_path: str | None) -> None:
     plot = result.pop("_plot")
     if report_path:
-        from .report import write_check_report
+        from ..report import write_check_report
 
         # The JSON summary carries the report's content too (same sections, tables).
         result["report"] = write_check_report(result, plot, Path(report_path)).as_dict()

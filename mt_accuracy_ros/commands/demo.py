@@ -29,9 +29,9 @@ import yaml
 
 
 def _prepare(out: Path, scenario_name: str) -> Path:
-    from .nodes._scenario import resolve_scenario
-    from .sim.instruments import calibrate_machine
-    from .sim.machine_tool import simulate
+    from ..nodes._scenario import resolve_scenario
+    from ..sim.instruments import calibrate_machine
+    from ..sim.machine_tool import simulate
 
     scenario = resolve_scenario(scenario_name)
     calibration = calibrate_machine(simulate(scenario, start_index=0, stop_index=1))
@@ -96,7 +96,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     from mt_accuracy_msgs.msg import (ModelCheck, ModelVersion, ReferenceMeasurement,
                                       SystematicProfile, VolumetricCompensation)
 
-    from .nodes._common import COMPENSATION_QOS, LATCHED_QOS, RESULT_QOS, stamp_to_nanoseconds
+    from ..nodes._common import COMPENSATION_QOS, LATCHED_QOS, RESULT_QOS, stamp_to_nanoseconds
     from .model_tools import set_remote_parameter
     from .processes import start_node
 
@@ -108,7 +108,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
 
         shutil.rmtree(bag)
     started = time.monotonic()
-    from .nodes._scenario import resolve_scenario
+    from ..nodes._scenario import resolve_scenario
 
     chosen = resolve_scenario(scenario)
     print(f"mt_accuracy_ros demo - virtual {chosen.machine.name}, scenario '{scenario}' "
@@ -356,7 +356,7 @@ def _recorded_references(bag: Path, start_ns: int) -> tuple[list[tuple], list[tu
     """The reference readings of the bag as the demo's listener holds them: (data time
     [s], measured (3,), applied (3,), version, uncertainty) and, where the tool's
     direction was measured, (measured (3,), applied (3,), uncertainty) [rad]."""
-    from .io.bag_reader import decode, read_messages
+    from ..io.bag_reader import decode, read_messages
 
     references, orientations = [], []
     for m in (decode(m) for m in read_messages(bag, ["/reference/tcp_error"])):
@@ -366,7 +366,7 @@ def _recorded_references(bag: Path, start_ns: int) -> tuple[list[tuple], list[tu
 
 def _take_reference(m, start_ns: int, references: list, orientations: list) -> None:
     """Append a ReferenceMeasurement as the demo holds it (see _recorded_references)."""
-    from .nodes._common import stamp_to_nanoseconds
+    from ..nodes._common import stamp_to_nanoseconds
 
     references.append(((stamp_to_nanoseconds(m.header.stamp) - start_ns) / 1e9,
                        np.array([m.error.x, m.error.y, m.error.z]),
@@ -470,8 +470,8 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
     (five-axis: one (measured (3,), applied (3,), uncertainty) [rad] per
     reading) adds the tool-direction error per phase.
     """
-    from .core.workbench.closed_loop import COMPONENTS, loop_phases
-    from .core.workbench.statistics import format_with_uncertainty
+    from ..core.workbench.closed_loop import COMPONENTS, loop_phases
+    from ..core.workbench.statistics import format_with_uncertainty
 
     if len(references) < 10:
         return {"phases": [], "lines": ["  too few reference readings to tell the loop's story"],
@@ -564,7 +564,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
                references, losses: list[str], story: dict, delivery: dict,
                scenario: str = "demo", model_alarms: list[str] | None = None,
                start_ns: int = 0) -> dict:
-    from .io.bag_reader import bag_info
+    from ..io.bag_reader import bag_info
 
     info = bag_info(out / "bag")
     before = [c.rmse for t, c in checks if not actions or t < actions[0]["time_s"]]
@@ -637,7 +637,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         summary["added_version_live_at_s"] = next(
             (round(t, 1) for t, _, _, version, _ in references
              if t > actions[0]["time_s"] and version > 1), None)
-        from .nodes._scenario import resolve_scenario
+        from ..nodes._scenario import resolve_scenario
 
         summary["run_data_s"] = float(resolve_scenario(scenario).duration_s)
     report = _write_report(out, checks, actions, alarms, losses, story, scenario)
@@ -650,8 +650,8 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: 
                   scenario: str = "demo"):
     """The bag's full report, with the run as the demo's user saw it live."""
     from .check import check_bag
-    from .core.errors import MtAccuracyError
-    from .report import Section, pyplot, save_figure, write_bag_report
+    from ..core.errors import MtAccuracyError
+    from ..report import Section, pyplot, save_figure, write_bag_report
 
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(10, 3.6))
@@ -668,7 +668,7 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: 
     figure = save_figure(fig, out, "report_run", "The model monitor's checks as the user saw "
                          "them, at wall-clock time x rate (behind the data when the graph "
                          "lags): the residual RMSE, the effect the user added, the alarm.")
-    from .nodes._scenario import resolve_scenario
+    from ..nodes._scenario import resolve_scenario
 
     chosen = resolve_scenario(scenario)
     run = Section("The run", figures=[figure], paragraphs=[
