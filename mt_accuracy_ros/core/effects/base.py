@@ -178,7 +178,8 @@ class EffectFamily:
         """(sensitivity (N, 3), basis (N, P)) when :meth:`design` is
         ``along(sensitivity, basis)`` - one direction at the TCP times scalar columns, as
         an error motion acting through the kinematic chain is - else None. The workbench
-        then scores the candidate on N values per column instead of 3N."""
+        then scores the candidate on N values per column instead of 3N (it keeps the
+        sensitivity per candidate, so families may differ for the same variant)."""
         return None
 
     def explanation(self, variant: str, setting: dict) -> str:

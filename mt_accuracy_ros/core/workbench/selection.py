@@ -268,8 +268,8 @@ class Selector:
             if separable is None:
                 return None
             sensitivity, basis = separable
-            if term.variant not in self._sensitivities:
-                self._sensitivities[term.variant] = self._sensitivity_rows(sensitivity)
+            if term.name not in self._sensitivities:
+                self._sensitivities[term.name] = self._sensitivity_rows(sensitivity)
             basis = np.ascontiguousarray(basis if self.all_rows else basis[self.present])
             self._designs.put(key, basis)
         return basis
@@ -287,7 +287,7 @@ class Selector:
                               b: int | None = None) -> NDArray[np.float64]:
         """X @ coefficients over rows a:b of a separable design."""
         b = self.y.size if b is None else b
-        along_rows = self._sensitivities[term.variant][0][a:b]
+        along_rows = self._sensitivities[term.name][0][a:b]
         start, stop = (self.present_of_row[a], self.present_of_row[b - 1] + 1) if b > a \
             else (0, 0)
         values = basis[start:stop] @ coefficients
@@ -376,10 +376,11 @@ class Selector:
         """:meth:`_candidate_products` of a separable design, on one value per reading: X'W
         = B'(sum over components of sensitivity x W) and X'X = B' diag(|sensitivity|^2) B."""
         # Kept in the design cache (bounded: at 1e5 readings one is megabytes per variant).
-        key = ("contracted", term.variant, stats.serial)
+        # Per candidate (family and variant): a family's sensitivity is its own to say.
+        key = ("contracted", term.name, stats.serial)
         contracted = self._designs.get(key)
         if contracted is None:
-            along_rows, squared = self._sensitivities[term.variant]
+            along_rows, squared = self._sensitivities[term.name]
             if self.all_rows:
                 width = stats.with_y.shape[1]
                 contracted = np.einsum("nc,ncm->nm", along_rows.reshape(-1, 3),
@@ -388,7 +389,7 @@ class Selector:
                 contracted = np.add.reduceat(along_rows[:, None] * stats.with_y,
                                              self.row_starts, axis=0)
             self._designs.put(key, contracted)
-        squared = self._sensitivities[term.variant][1]
+        squared = self._sensitivities[term.name][1]
         q = stats.base.shape[1]
         with_base = np.stack([basis[a:b].T @ contracted[a:b] for a, b in self.present_bounds])
         own = np.stack([basis[a:b].T @ (squared[a:b, None] * basis[a:b])
