@@ -327,14 +327,16 @@ def test_parameters_load_from_the_config_yaml(rclpy_context):
     try:
         client = probe.create_client(GetParameters, "/yaw_estimator/get_parameters")
         response = call_service(probe, client, GetParameters.Request(
-            names=["tolerance_rad", "baseline_after_s"]))
-        values = [v.double_value for v in response.values]
+            names=["tolerance_rad", "baseline_after_s", "niceness"]))
+        values = [v.double_value for v in response.values[:2]]
+        niceness = response.values[2].integer_value
     finally:
         estimator.stop()
         probe.destroy_node()
     expected = yaml.safe_load((REPO_ROOT / "config" / "demo.yaml").read_text())
     parameters = expected["yaw_estimator"]["ros__parameters"]
     assert values == [parameters["tolerance_rad"], parameters["baseline_after_s"]]
+    assert niceness == parameters["niceness"] == -15
 
 
 def test_the_high_rate_config_reaches_the_estimator(rclpy_context):
