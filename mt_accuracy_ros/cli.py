@@ -200,6 +200,8 @@ def _check(args: argparse.Namespace) -> int:
     for key in ("machine_note", "travel_warning"):
         if result.get(key):
             print(result[key])
+    for line in result.get("warnings", []):
+        print(line)
     unit = "m" if result["kind"] == "bag" else result.get("target", "")
     print(f"baseline RMSE {result['baseline_rmse']:.4g} {unit}")
     for entry in result["ranking"][:5]:

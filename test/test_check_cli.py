@@ -224,3 +224,37 @@ def test_a_thermal_log_without_a_time_column_takes_a_row_period(tmp_path, capsys
     assert summary["added"] and "t1_C" in summary["added"][0]
     assert main(args + ["--row-period", "0"]) == 2
     assert "--row-period must be > 0" in capsys.readouterr().err
+
+
+def test_a_term_that_makes_the_later_rows_worse_is_not_added_and_the_output_says_so(
+        tmp_path, capsys):
+    """A log whose second half leaves the first half's temperature range: the growth
+    follows t1 while it warms, then stops while t1 goes on rising. Cross-validation on
+    the earlier rows picks t1; on the later rows it is worse than a constant."""
+    from mt_accuracy_ros.cli import main
+
+    rng = np.random.default_rng(8)
+    n = 400
+    t1 = np.concatenate([np.linspace(20.0, 21.0, n // 2), np.linspace(21.0, 25.0, n // 2)])
+    t1 += rng.normal(0, 0.01, n)
+    growth = 4.0 * (np.minimum(t1, 21.0) - 20.0) + rng.normal(0, 0.05, n)   # um
+    rows = "\n".join(f"{k * 30.0},{a:.4f},{b:.4f}" for k, (a, b) in enumerate(zip(t1, growth)))
+    (tmp_path / "log.csv").write_text("time_s,t1_C,growth_um\n" + rows + "\n")
+    assert main(["check", str(tmp_path / "log.csv"), "--target", "growth_um", "--inputs",
+                 "t1_C", "--auto", "1", "--json", str(tmp_path / "s.json")]) == 0
+    out = capsys.readouterr().out
+    summary = json.loads((tmp_path / "s.json").read_text())
+    (refused,) = summary["not_added"]
+    assert refused["held_out_after"] > refused["held_out_before"]
+    assert summary["added"] == [] and summary["final_rmse"] == refused["held_out_before"]
+    assert f"not added: {refused['name']} - the held-out RMSE would rise from " \
+        f"{refused['held_out_before']:.4g} to {refused['held_out_after']:.4g}" in out
+    assert summary["final_rmse"] <= summary["constant_held_out_rmse"] + 1e-12
+    assert "no longer a blind judge" in summary["judged_on"]
+    # Asked for by name, it is added - and the output says it made things worse than a
+    # constant, with both numbers.
+    assert main(["check", str(tmp_path / "log.csv"), "--target", "growth_um", "--inputs",
+                 "t1_C", "--add", refused["name"]]) == 0
+    out = capsys.readouterr().out
+    assert f"warning: {refused['name']} (asked for) raised the held-out RMSE" in out
+    assert "is worse than a constant's" in out

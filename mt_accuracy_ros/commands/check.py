@@ -342,7 +342,9 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
               "cv_rmse": bench.cv_rmse(bench.included)}]
     queue = list(add)
     ranking = first
+    warnings, not_added = [], []
     while True:
+        asked = bool(queue)
         if queue:
             name = queue.pop(0)
             if name not in bench.candidates:
@@ -352,11 +354,29 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
             name = ranking[0].name
         else:
             break
+        before = steps[-1]["held_out_rmse"]
         bench.included.append(name)
+        held_out = bench.judged_rmse(bench.included)
+        if held_out > before:
+            if not asked:
+                # Cross-validation on the earlier rows liked it; the later rows do not.
+                bench.included.pop()
+                not_added.append({"name": name, "held_out_before": before,
+                                  "held_out_after": held_out})
+                warnings.append(f"not added: {name} - the held-out RMSE would rise from "
+                                f"{before:.4g} to {held_out:.4g} {target}")
+                break
+            warnings.append(f"warning: {name} (asked for) raised the held-out RMSE from "
+                            f"{before:.4g} to {held_out:.4g} {target}")
         ranking = bench.rank(min_reduction)
         steps.append({"terms": list(bench.included), "added": name,
-                      "held_out_rmse": bench.judged_rmse(bench.included),
+                      "held_out_rmse": held_out,
                       "cv_rmse": bench.cv_rmse(bench.included)})
+    # Never silently worse than a constant on the held-out rows.
+    constant = bench.judged_rmse([])
+    if steps[-1]["held_out_rmse"] > constant:
+        warnings.append(f"warning: the model's held-out RMSE {steps[-1]['held_out_rmse']:.4g} "
+                        f"{target} is worse than a constant's ({constant:.4g} {target})")
     # The plain baseline a user would try first: least squares on every input at once.
     every = [f"sensor:{n}" for n in selected if f"sensor:{n}" in bench.candidates]
     all_inputs_held_out = bench.judged_rmse(every) if every else float("nan")
@@ -375,7 +395,10 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                          "explanation": s.explanation} for s in first[:20]],
             "added": [s["added"] for s in steps if "added" in s],
             "final_rmse": steps[-1]["held_out_rmse"], "steps": steps,
-            "judged_on": "held-out rows after the training rows",
+            "not_added": not_added, "constant_held_out_rmse": constant, "warnings": warnings,
+            "judged_on": "held-out rows after the training rows" + (
+                "; they also refused a term whose error they would have raised, so the final "
+                "figure is no longer a blind judge" if not_added else ""),
             "all_inputs_least_squares_held_out_rmse": all_inputs_held_out,
             "_plot": {"time": np.asarray(time_s)[:bench.target.size],
                       "target": bench.target, "before": prediction_before,
