@@ -32,6 +32,7 @@ setup(
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE_NAME}"]),
         (f"share/{PACKAGE_NAME}", ["package.xml"]),
         (f"share/{PACKAGE_NAME}/config", glob("config/*.yaml")),
+        (f"share/{PACKAGE_NAME}/launch", glob("launch/*.launch.xml")),
         (f"share/{PACKAGE_NAME}/foxglove", glob("foxglove/*.json")),
     ],
     install_requires=["setuptools"],
