@@ -100,8 +100,15 @@ def periodogram(q, target, weight, periods, *, block: int = 64):
 
 def _direct_sums(q, frequencies, weight, target):
     """Z_w(f), Z_w(2f), Z_t(f) by explicit exponentials (P x N of them)."""
+    zw1, zw2 = _exponential_sums(q, frequencies, weight, harmonic=True)
+    (zt1,) = _exponential_sums(q, frequencies, target, harmonic=False)
+    return zw1, zw2, zt1
+
+
+def _exponential_sums(q, frequencies, values, harmonic: bool):
+    """Z_v(f) - and Z_v(2f) when ``harmonic`` - by explicit exponentials (P x N)."""
     e1 = np.exp(-2j * np.pi * frequencies[:, None] * q[None, :])
-    return e1 @ weight, (e1 * e1) @ weight, e1 @ target
+    return (e1 @ values, (e1 * e1) @ values) if harmonic else (e1 @ values,)
 
 
 def grid_transform(q, values, step: float, count: int):
@@ -144,8 +151,7 @@ def _sums_at(q, values, frequencies, harmonic: bool):
     step, k, count = _grid(frequencies)
     if q.size * k.size <= _DIRECT_MAX_PRODUCT:
         # Few readings: the sums directly (fewer operations than the lattice's FFT).
-        e1 = np.exp(-2j * np.pi * frequencies[:, None] * q[None, :])
-        return (e1 @ values, (e1 * e1) @ values) if harmonic else (e1 @ values,)
+        return _exponential_sums(q, frequencies, values, harmonic)
     spectra = grid_transform(q, values, step, count)
     return (spectra[k], spectra[2 * k]) if harmonic else (spectra[k],)
 

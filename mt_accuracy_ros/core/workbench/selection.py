@@ -313,7 +313,7 @@ class Selector:
         own = self.design_rows(term, setting) @ coefficients if basis is None else \
             self._separable_prediction(term, basis, coefficients)
         # Each component's spread about its mean, from the rows that measured it.
-        if self.rows.size == self.mask.size:
+        if self.all_rows:
             # (Column reductions by products: numpy's strided std is several times slower.)
             per_sample = own.reshape(-1, 3)
             centred = per_sample - (self._ones @ per_sample) / per_sample.shape[0]
@@ -378,9 +378,9 @@ class Selector:
         # Kept in the design cache (bounded: at 1e5 readings one is megabytes per variant).
         # Per candidate (family and variant): a family's sensitivity is its own to say.
         key = ("contracted", term.name, stats.serial)
+        along_rows, squared = self._sensitivities[term.name]
         contracted = self._designs.get(key)
         if contracted is None:
-            along_rows, squared = self._sensitivities[term.name]
             if self.all_rows:
                 width = stats.with_y.shape[1]
                 contracted = np.einsum("nc,ncm->nm", along_rows.reshape(-1, 3),
@@ -389,7 +389,6 @@ class Selector:
                 contracted = np.add.reduceat(along_rows[:, None] * stats.with_y,
                                              self.row_starts, axis=0)
             self._designs.put(key, contracted)
-        squared = self._sensitivities[term.name][1]
         q = stats.base.shape[1]
         with_base = np.stack([basis[a:b].T @ contracted[a:b] for a, b in self.present_bounds])
         own = np.stack([basis[a:b].T @ (squared[a:b, None] * basis[a:b])
