@@ -46,6 +46,7 @@ def run_once(out: Path, rate: float | None, machine: str) -> dict:
                              f"{summary.get('worst_stale_age_ms', 0):.0f} ms late)"
                              if summary.get("stale_between_s") else ""),
             "applied": summary.get("compensation_applied"),
+            "lost": summary.get("compensation_lost"),
             "p99_ms": summary.get("compensation_latency_p99_ms"),
             "rolled_back": sum("rolled back" in a for a in summary.get("model_alarms", [])),
             "failed": [line.strip()[len("FAILED: "):] for line in done.stdout.splitlines()
@@ -69,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
                 rows.append(result)
                 print(f"run {k + 1}/{args.runs}: exit {result['code']}, end state "
                       + "/".join(f"{v:.2f}" for v in result["end_um"])
-                      + f" um, stale {result['stale']}{result['stale_window']}, "
+                      + f" um, stale {result['stale']}{result['stale_window']}, lost {result['lost']}, "
                       f"{result['wall_s']:.0f} s",
                       file=sys.stderr, flush=True)
     finally:
@@ -80,13 +81,13 @@ def main(argv: list[str] | None = None) -> int:
           + (f" --rate {args.rate}" if args.rate is not None else "") + "`"
           f" ({args.machine}, rate {rate}, {args.burners} CPU burners)\n")
     print("| run | exit | effects the user added | end state e_x / e_y / e_z [um] | within "
-          "band | roll-backs | corrections applied / stale | p99 [ms] | wall [s] | why not 0 |")
+          "band | roll-backs | corrections applied / stale / lost | p99 [ms] | wall [s] | why not 0 |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for k, r in enumerate(rows, 1):
         print(f"| {k} | {r['code']} | {r['added']} | "
               + " / ".join(f"{v:.2f}" for v in r["end_um"])
               + f" | {'yes' if r['within'] else 'no'} | {r['rolled_back']} | {r['applied']} / "
-              f"{r['stale']}{r['stale_window']} | {r['p99_ms']:.0f} | {r['wall_s']:.0f} | "
+              f"{r['stale']}{r['stale_window']} / {r['lost']} | {r['p99_ms']:.0f} | {r['wall_s']:.0f} | "
               f"{'; '.join(r['failed']) or '-'} |")
     return 0
 

@@ -181,9 +181,16 @@ def _check(args: argparse.Namespace) -> int:
             if args.row_period is not None and not args.row_period > 0:
                 print("mt-accuracy check: --row-period must be > 0 [s]", file=sys.stderr)
                 return 2
+            if args.uncertainty_um is not None and not args.uncertainty_um > 0:
+                print("mt-accuracy check: --uncertainty-um must be > 0", file=sys.stderr)
+                return 2
             result = check_csv(data, args.target, args.time_column, args.inputs or ["*"],
                                args.driver or [], args.add or [], args.auto, args.train_fraction,
-                               args.min_reduction, args.term or [], row_period_s=args.row_period)
+                               args.min_reduction, args.term or [], row_period_s=args.row_period,
+                               component=args.component,
+                               uncertainty_m=None if args.uncertainty_um is None
+                               else args.uncertainty_um * 1e-6,
+                               structure_length_m=args.structure_length)
         else:
             if args.machine is not None:
                 print("mt-accuracy check: --machine is for surveys (a CSV with a column map); "
@@ -202,12 +209,21 @@ def _check(args: argparse.Namespace) -> int:
             print(result[key])
     for line in result.get("warnings", []):
         print(line)
-    unit = "m" if result["kind"] == "bag" else result.get("target", "")
-    print(f"baseline RMSE {result['baseline_rmse']:.4g} {unit}")
+    # A thermal log speaks its target's unit; the JSON stays SI.
+    log = result["kind"] == "thermal_log"
+    unit = result["target_unit"] if log else "m"
+    scale = result["target_unit_per_m"] if log else 1.0
+    if log:
+        print(f"held-out RMSE (rows after the first {result['train_rows']}) "
+              f"{result['held_out_baseline_rmse'] * scale:.4g} {unit}; a constant's "
+              f"{result['constant_held_out_rmse'] * scale:.4g} {unit}; least squares on every "
+              f"input {result['all_inputs_least_squares_held_out_rmse'] * scale:.4g} {unit}")
+    print(f"baseline RMSE {result['baseline_rmse'] * scale:.4g} {unit}")
     for entry in result["ranking"][:5]:
         flag = "*" if entry["significant"] else " "
-        print(f" {flag} {entry.get('name', entry['effect']):40s} CV RMSE after "
-              f"{entry['cv_rmse_after']:.4g} ({100 * entry['error_reduction']:.1f} %)")
+        print(f" {flag} {entry.get('name', entry['effect'])[:60]:60s} CV RMSE after "
+              f"{entry['cv_rmse_after'] * scale:.4g} {unit} "
+              f"({100 * entry['error_reduction']:.1f} %)")
     for entry in result.get("named", []):
         print(f"named: {entry['name']} (confidence {100 * entry['confidence']:.0f} %): "
               f"{entry['explanation']}")
@@ -215,8 +231,12 @@ def _check(args: argparse.Namespace) -> int:
         print(f"where: {result['localisation']['sentence']}")
     if result.get("verdict"):
         print(f"verdict: {result['verdict']}")
-    print(f"added: {', '.join(result['added']) or 'nothing'}; final RMSE "
-          f"{result['final_rmse']:.4g} {unit}")
+    if result.get("sensors_carrying_weight"):
+        print("the all-sensor model leans on: " + ", ".join(
+            f"{sensor} {100 * share:.0f} %" for sensor, share in
+            result["sensors_carrying_weight"].items()))
+    print(f"added: {', '.join(result['added']) or 'nothing'}; final "
+          f"{'held-out ' if log else ''}RMSE {result['final_rmse'] * scale:.4g} {unit}")
     return 0
 
 
@@ -306,10 +326,20 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--row-period", type=float, default=None,
                        help="CSV survey without a time column: seconds between rows")
     check.add_argument("--time-column", default="time_s", help="CSV: time column [s]")
-    check.add_argument("--target", help="CSV: the measured error column")
-    check.add_argument("--inputs", nargs="+", help="CSV: temperature columns (names or patterns)")
-    check.add_argument("--driver", nargs="+", help="CSV: operating inputs for lag terms")
-    check.add_argument("--term", action="append", help="CSV: terms the starting model holds")
+    check.add_argument("--target", metavar="COLUMN[:UNIT]",
+                       help="CSV log: the measured displacement column (unit from the flag or "
+                            "the name's suffix, e.g. ch5_um)")
+    check.add_argument("--inputs", nargs="+", help="CSV log: temperature columns [degC] "
+                       "(names or patterns)")
+    check.add_argument("--driver", nargs="+", metavar="COLUMN[:UNIT]",
+                       help="CSV log: the spindle speed (rpm, rad/s, Hz), a heat source")
+    check.add_argument("--term", action="append",
+                       help="CSV log: effects the starting model holds (fitted first)")
+    check.add_argument("--component", default="z", choices=["x", "y", "z"],
+                       help="CSV log: the direction the target displacement is measured in")
+    check.add_argument("--structure-length", type=float, default=None, metavar="METRES",
+                       help="CSV log: structure between the sensors and the tool (bounds a "
+                            "physical thermal gain; default 1 m)")
     check.add_argument("--train-fraction", type=float, default=0.5,
                        help="CSV: fit on this leading fraction, judge on the rest")
     check.set_defaults(handler=_check)

@@ -247,8 +247,13 @@ def test_a_term_that_makes_the_later_rows_worse_is_not_added_and_the_output_says
     (refused,) = summary["not_added"]
     assert refused["held_out_after"] > refused["held_out_before"]
     assert summary["added"] == [] and summary["final_rmse"] == refused["held_out_before"]
+    # The JSON is SI; the printed line speaks the target's unit (um).
     assert f"not added: {refused['name']} - the held-out RMSE would rise from " \
-        f"{refused['held_out_before']:.4g} to {refused['held_out_after']:.4g}" in out
+        f"{refused['held_out_before'] * 1e6:.4g} to {refused['held_out_after'] * 1e6:.4g} um" \
+        in out
+    # The same engine as a survey's named it on the earlier rows (forward validation).
+    assert refused["name"] == "structural_thermal_drift:t1_C"
+    assert summary["kind"] == "thermal_log" and summary["validation"].startswith("forward")
     assert summary["final_rmse"] <= summary["constant_held_out_rmse"] + 1e-12
     assert "no longer a blind judge" in summary["judged_on"]
     # Asked for by name, it is added - and the output says it made things worse than a

@@ -310,19 +310,59 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
             "travel_warning": warning, "namespace": "", **result}
 
 
-# ------------------------------------------------------------------ CSV path
+# ------------------------------------------------------------------ thermal log path
+def _column_and_unit(flag: str, names: list[str], quantity: str, what: str,
+                     default: str | None = None) -> tuple[str, float]:
+    """``COLUMN[:UNIT]`` -> (column, SI scale); the unit from the flag, else the column's
+    suffix (``ch5_um``, ``spindle_rpm``), else ``default``."""
+    from ..io.column_map import UNITS
+
+    column, unit = (flag.rsplit(":", 1) + [""])[:2] if ":" in flag else (flag, "")
+    column, unit = column.strip(), unit.strip()
+    if column not in names:
+        raise InputDataError(f"no {what} column {column!r}; have {', '.join(names)}")
+    table = UNITS[quantity]
+    if not unit:
+        suffix = column.rsplit("_", 1)[-1] if "_" in column else ""
+        unit = suffix if suffix in table else (default or "")
+    if unit not in table or not unit:
+        raise InputDataError(f"{what} {column!r}: give its unit as {column}:UNIT (one of "
+                             f"{', '.join(u for u in table if u)}); none could be read off "
+                             "its name")
+    return column, float(table[unit])
+
+
 def check_csv(path: Path, target: str, time_column: str, inputs: list[str], drivers: list[str],
               add: list[str], auto: int, train_fraction: float, min_reduction: float,
-              model_terms: list[str], row_period_s: float | None = None) -> dict:
-    """A thermal log (one target column, temperature inputs). Its time is the time
-    column, or - without one - the row order at ``row_period_s`` seconds a row."""
-    from ..core.workbench.tabular import table_workbench
+              model_terms: list[str], row_period_s: float | None = None,
+              component: str = "z", uncertainty_m: float | None = None,
+              structure_length_m: float | None = None) -> dict:
+    """A thermal log (one displacement column, temperature inputs, a spindle speed) on the
+    survey engine (:mod:`~mt_accuracy_ros.core.workbench.thermal_log`).
 
+    Its time is the time column, or - without one - the row order at ``row_period_s``
+    seconds a row. The selection sees the first ``train_fraction`` of the rows only
+    (validated forward: fit on earlier blocks, judged on later ones); every model
+    version is judged on the rows after them, and an automatically chosen term that
+    raises that error is not added (both numbers said). Everything is SI in the JSON
+    (metres); the printed lines are in the target column's unit.
+    """
+    from ..core.effects.thermal import sensor_weights
+    from ..core.workbench.diagnosis import add_effect, diagnose, pick_candidate
+    from ..core.workbench.thermal_log import (DEFAULT_STRUCTURE_LENGTH_M,
+                                              all_inputs_least_squares, held_out_residual,
+                                              held_out_rmse, log_model, log_observations)
     from ..io.csv_table import read_csv_table
 
+    if not 0.2 <= train_fraction <= 0.9:
+        raise InputDataError(f"--train-fraction {train_fraction}: between 0.2 and 0.9 (the "
+                             "rows after it judge the model)")
     table = read_csv_table(path)
     names = table.names
     columns = table.columns
+    target_column, target_scale = _column_and_unit(target, names, "length", "target")
+    unit = target.rsplit(":", 1)[1].strip() if ":" in target else \
+        target_column.rsplit("_", 1)[-1]
     if time_column in names:
         time_s = columns[time_column]
     elif row_period_s is not None:
@@ -331,78 +371,127 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         raise InputDataError(f"{path}: no time column {time_column!r} (give --time-column, or "
                              f"--row-period SECONDS for one row every SECONDS); columns: "
                              f"{', '.join(names)}")
-    selected = [n for n in names if any(fnmatch.fnmatch(n, p) for p in inputs)]
+    selected = [n for n in names if any(fnmatch.fnmatch(n, p) for p in inputs)
+                and n not in (target_column, time_column)]
     if not selected:
         raise InputDataError(f"{path}: no input column matches {inputs}")
-    bench = table_workbench(columns, time_s, target, selected, drivers,
-                            train_fraction, included=model_terms)
-    first = bench.rank(min_reduction)
-    baseline = bench.judged_rmse(bench.included)
-    steps = [{"terms": list(bench.included), "held_out_rmse": baseline,
-              "cv_rmse": bench.cv_rmse(bench.included)}]
+    speed = None
+    for driver in drivers:
+        column, scale = _column_and_unit(driver, names, "speed", "driver")
+        if speed is not None:
+            raise InputDataError("one --driver: the spindle speed (the heat source the "
+                                 "catalogue models, heat_source:spindle_speed)")
+        speed = columns[column] * scale
+    obs = log_observations(time_s, columns[target_column] * target_scale,
+                           {n: columns[n] for n in selected}, spindle_speed_rad_s=speed,
+                           component=component, uncertainty_m=uncertainty_m)
+    train = np.arange(obs.n) < int(train_fraction * obs.n)
+    training = obs.subset(np.flatnonzero(train))
+    model = log_model(obs, structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
+    to_unit = 1.0 / target_scale
+
+    def diagnosis_of(current):
+        return diagnose(current, training, min_reduction=min_reduction, forward=True)
+
+    def candidate_named(diagnosis, name: str, why: str):
+        candidate = pick_candidate(diagnosis, name)
+        if candidate is None:
+            raise InputDataError(f"cannot {why} {name}: not a candidate here (in the model "
+                                 "already, unknown, or no regressors in this log)")
+        if candidate.refusal:
+            raise InputDataError(f"cannot {why} {candidate.name}: physics refuses its fit "
+                                 f"({candidate.refusal})")
+        return candidate
+
+    for name in model_terms:   # the starting model's terms, fitted on the training rows
+        model = add_effect(model, candidate_named(diagnosis_of(model), name, "start with"),
+                           training)
+    start_model = model
+    diagnosis = diagnosis_of(model)
+    first = diagnosis
+    baseline = held_out_rmse(model, obs, train)
+    steps = [{"model_version": model.version, "effects": sorted(model.effects),
+              "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text(),
+              "held_out_rmse": baseline, "cv_rmse": diagnosis.baseline_cv_rmse}]
     queue = list(add)
-    ranking = first
     warnings, not_added = [], []
     while True:
         asked = bool(queue)
         if queue:
-            name = queue.pop(0)
-            if name not in bench.candidates:
-                raise InputDataError(f"no candidate {name!r}")
-        elif auto and len(bench.included) - len(model_terms) < auto and ranking and \
-                ranking[0].significant:
-            name = ranking[0].name
+            candidate = candidate_named(diagnosis, queue.pop(0), "add")
+        elif auto and len(steps) - 1 < auto and diagnosis.selected:
+            candidate = diagnosis.selected[0]
         else:
             break
-        before = steps[-1]["held_out_rmse"]
-        bench.included.append(name)
-        held_out = bench.judged_rmse(bench.included)
-        if held_out > before:
+        new = add_effect(model, candidate, training)
+        before, after = steps[-1]["held_out_rmse"], held_out_rmse(new, obs, train)
+        if after > before:
             if not asked:
-                # Cross-validation on the earlier rows liked it; the later rows do not.
-                bench.included.pop()
-                not_added.append({"name": name, "held_out_before": before,
-                                  "held_out_after": held_out})
-                warnings.append(f"not added: {name} - the held-out RMSE would rise from "
-                                f"{before:.4g} to {held_out:.4g} {target}")
+                # The earlier rows named it; the later rows do not want it.
+                not_added.append({"name": candidate.name, "held_out_before": before,
+                                  "held_out_after": after})
+                warnings.append(f"not added: {candidate.name} - the held-out RMSE would rise "
+                                f"from {before * to_unit:.4g} to {after * to_unit:.4g} {unit}")
                 break
-            warnings.append(f"warning: {name} (asked for) raised the held-out RMSE from "
-                            f"{before:.4g} to {held_out:.4g} {target}")
-        ranking = bench.rank(min_reduction)
-        steps.append({"terms": list(bench.included), "added": name,
-                      "held_out_rmse": held_out,
-                      "cv_rmse": bench.cv_rmse(bench.included)})
+            warnings.append(f"warning: {candidate.name} (asked for) raised the held-out RMSE "
+                            f"from {before * to_unit:.4g} to {after * to_unit:.4g} {unit}")
+        model = new
+        diagnosis = diagnosis_of(model)
+        steps[-1]["added"] = [candidate.name]
+        steps[-1]["parameters"] = {candidate.name: candidate.parameters}
+        steps[-1]["parameter_uncertainties"] = {candidate.name:
+                                                candidate.parameter_uncertainties}
+        steps.append({"model_version": model.version, "effects": sorted(model.effects),
+                      "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text(),
+                      "held_out_rmse": after, "cv_rmse": diagnosis.baseline_cv_rmse})
     # Never silently worse than a constant on the held-out rows.
-    constant = bench.judged_rmse([])
+    empty = log_model(obs, structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
+    constant = held_out_rmse(empty, obs, train)
     if steps[-1]["held_out_rmse"] > constant:
-        warnings.append(f"warning: the model's held-out RMSE {steps[-1]['held_out_rmse']:.4g} "
-                        f"{target} is worse than a constant's ({constant:.4g} {target})")
-    # The plain baseline a user would try first: least squares on every input at once.
-    every = [f"sensor:{n}" for n in selected if f"sensor:{n}" in bench.candidates]
-    all_inputs_held_out = bench.judged_rmse(every) if every else float("nan")
-    prediction_before = bench.fit_predict(model_terms)
-    prediction_after = bench.fit_predict(bench.included)
-    judge = ~bench.train
-    return {"data": str(path), "kind": "csv", "target": target, "rows": int(bench.target.size),
+        warnings.append(f"warning: the model's held-out RMSE "
+                        f"{steps[-1]['held_out_rmse'] * to_unit:.4g} {unit} is worse than a "
+                        f"constant's ({constant * to_unit:.4g} {unit})")
+    # Which sensors an all-sensor model leans on (the added one, else the candidate's).
+    ridge = [(name, step["parameters"][name]) for step in steps for name in step.get("added", [])
+             if name.startswith("all_sensors_ridge")] + \
+        [(c_.name, c_.parameters) for c_ in first.ranking if c_.effect == "all_sensors_ridge"]
+    carried = dict(sensor_weights(ridge[0][1], obs.temperatures)[:6]) if ridge else {}
+    judge = ~train
+    before_residual = held_out_residual(start_model, obs, train)
+    after_residual = held_out_residual(model, obs, train)
+    c = "xyz".index(component)
+    return {"data": str(path), "kind": "thermal_log", "target": target_column,
+            "target_unit": unit, "target_unit_per_m": to_unit, "component": component, "rows": obs.n,
             "rows_read": table.rows_read, "rows_dropped": table.rows_dropped,
-            "rows_note": table.summary(),
-            "figures_before_held_out": error_figures((bench.target - prediction_before)[judge]),
-            "figures_after_held_out": error_figures((bench.target - prediction_after)[judge]),
-            "train_rows": int(bench.train.sum()),
-            "baseline_rmse": baseline,
-            "ranking": [{"effect": s.name, "cv_rmse_after": s.cv_rmse_after,
-                         "error_reduction": s.error_reduction, "significant": s.significant,
-                         "explanation": s.explanation} for s in first[:20]],
-            "added": [s["added"] for s in steps if "added" in s],
+            "rows_note": table.summary(), "readings": obs.n,
+            "train_rows": int(train.sum()), "band": obs.uncertainty_m,
+            "machine": model.machine.name,
+            "validation": "forward: each block predicted by a fit on the blocks before it",
+            "figures_before_held_out_m": error_figures(before_residual[judge]),
+            "figures_after_held_out_m": error_figures(after_residual[judge]),
+            "baseline_rmse": first.baseline_rmse, "baseline_cv_rmse": first.baseline_cv_rmse,
+            "held_out_baseline_rmse": baseline,
+            "ranking": [c_.as_dict() for c_ in first.ranking[:30]],
+            "named": [c_.as_dict() for c_ in first.selected],
+            "verdict": first.verdict(),
+            "localisation": first.localisation.as_dict() if first.localisation else {},
+            "added": [name for s in steps for name in s.get("added", [])],
             "final_rmse": steps[-1]["held_out_rmse"], "steps": steps,
+            "final_diagnosis": diagnosis.text(), "final_verdict": diagnosis.verdict(),
             "not_added": not_added, "constant_held_out_rmse": constant, "warnings": warnings,
             "judged_on": "held-out rows after the training rows" + (
                 "; they also refused a term whose error they would have raised, so the final "
                 "figure is no longer a blind judge" if not_added else ""),
-            "all_inputs_least_squares_held_out_rmse": all_inputs_held_out,
-            "_plot": {"time": np.asarray(time_s)[:bench.target.size],
-                      "target": bench.target, "before": prediction_before,
-                      "after": prediction_after, "train": bench.train}}
+            "all_inputs_least_squares_held_out_rmse": all_inputs_least_squares(obs, train),
+            "sensors_carrying_weight": carried,
+            "model_yaml": _model_yaml(model),
+            "_plot": {"time": obs.time_s, "target": obs.measured_m[:, c],
+                      "before": obs.measured_m[:, c] - before_residual,
+                      "after": obs.measured_m[:, c] - after_residual, "train": train,
+                      "unit_scale": to_unit, "unit": unit,
+                      "positions": obs.positions, "residual_after": np.column_stack(
+                          [after_residual if k == c else np.zeros(obs.n) for k in range(3)]),
+                      "mask": obs.measured_mask, "temperatures": obs.temperatures}}
 
 
 # ------------------------------------------------------------------ report

@@ -611,6 +611,10 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "compensation_messages": len(compensation),
         "compensation_applied": int(controller.get("applied", 0)),
         "compensation_stale": int(controller.get("stale", 0)),
+        # Corrections the CNC never received (a gap in ``sequence``): it subscribes best
+        # effort, so a correction lost in transport is skipped, not waited for.
+        "compensation_lost": int(delivery.get("/encoder_publisher", {}).get(
+            "compensation.lost", "0")),
         "compensation_latency_p99_ms": float(controller.get("latency_p99_ms", "nan")),
         # When the path missed its deadline (data time) and by how much.
         "stale_between_s": [round((int(controller[key]) - start_ns) / 1e9, 2)

@@ -22,7 +22,7 @@ from ..core.compensation.controller import (MAX_CORRECTION_M, RealtimeOffset,
                                             TableCompensation)
 from ..core.errors import InputDataError
 from ..core.kinematics.machine import MachineDescription
-from ._common import COMPENSATION_QOS, TABLE_QOS, stamp_to_nanoseconds, unpack_float64
+from ._common import CONTROL_QOS, TABLE_QOS, stamp_to_nanoseconds, unpack_float64
 
 #: How a controller can take the compensation. ``hybrid``: the tables for the
 #: position-dependent part, evaluated at the current command every cycle (no
@@ -71,7 +71,7 @@ class CompensationInput:
         if mode in ("realtime", "hybrid"):
             node.create_subscription(VolumetricCompensation, "compensation",
                                      health.guard("compensation", self._on_compensation),
-                                     COMPENSATION_QOS)
+                                     CONTROL_QOS)
         if mode in ("table", "hybrid"):
             node.create_subscription(CompensationTable, "compensation_table",
                                      health.guard("compensation_table", self._on_table),

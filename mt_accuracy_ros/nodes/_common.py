@@ -43,6 +43,19 @@ COMPENSATION_QOS = QoSProfile(depth=2000, reliability=ReliabilityPolicy.RELIABLE
                               durability=DurabilityPolicy.VOLATILE,
                               history=HistoryPolicy.KEEP_LAST)
 
+#: What a controller subscribes the real-time compensation with: best effort,
+#: keep last 100. A correction is worth something only until its deadline (tens of
+#: ms), so it must never wait: on a reliable subscription one sample lost in
+#: transport holds every later one until the writer's heartbeat repairs the gap
+#: (Fast DDS's default period is 3 s), and the CNC then refuses ~2-3 s of
+#: corrections as stale in one burst (issue 27). Best effort delivers the next
+#: correction at once; a lost one is counted from ``sequence`` (``compensation.lost``
+#: on ``/diagnostics``) and the CNC holds the last valid correction for 10 ms.
+#: The publisher stays reliable (COMPENSATION_QOS), so recorders and listeners
+#: that want every correction still get them; the two are compatible.
+CONTROL_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT,
+                         durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
+
 
 def float_descriptor(description: str, low: float, high: float,
                      read_only: bool = False) -> ParameterDescriptor:

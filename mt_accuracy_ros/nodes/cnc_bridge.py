@@ -28,7 +28,7 @@ from mt_accuracy_msgs.msg import ScaleBatch, TemperatureArray, VolumetricCompens
 
 from ..core.errors import InputDataError
 from ..io.cnc import connect, load_node_map
-from ._common import (COMPENSATION_QOS, SENSOR_QOS, float_descriptor, nanoseconds_to_stamp,
+from ._common import (CONTROL_QOS, SENSOR_QOS, float_descriptor, nanoseconds_to_stamp,
                       pack_float64, plain_descriptor, run_node, stamp_to_nanoseconds)
 from ._health import DeliveryHealth
 from ._priority import declare_niceness
@@ -66,7 +66,7 @@ class CncBridge(Node):
         self._temperatures = self.create_publisher(TemperatureArray, "temperatures", SENSOR_QOS)
         self.create_subscription(VolumetricCompensation, "compensation",
                                  self.health.guard("compensation", self._on_compensation),
-                                 COMPENSATION_QOS)
+                                 CONTROL_QOS)
         poll = self.health.guard("cnc_read", self._poll)  # a failed read: counted, not fatal
         self.create_timer(self._period, lambda: poll(None))
 

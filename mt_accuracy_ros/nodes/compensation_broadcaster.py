@@ -99,6 +99,24 @@ class CompensationBroadcaster(Node):
         self.create_subscription(ScaleBatch, "scales", self.health.guard("scales", self._on_batch),
                                  SENSOR_QOS)
         self._publish_tables()
+        self._warm_up()
+
+    def _warm_up(self) -> None:
+        """Evaluate a copy of the model once before the first batch: the first call's
+        lazy imports and first-use costs would otherwise fall on the first batches, whose
+        corrections then reach a running CNC too late (a start-up burst of stale ones on
+        a loaded host, issue 27). A copy, so the live model's lag states stay untouched."""
+        import copy
+
+        try:
+            model = copy.deepcopy(self.inputs.model)
+            machine = model.machine
+            positions = {a: np.full(2, 0.5 * sum(machine.axes[a].stroke))
+                         for a in machine.axis_order}
+            zeros = {a: np.zeros(2) for a in machine.axis_order}
+            self._evaluate(model, positions, zeros, zeros, np.array([0.0, 0.01]), zeros)
+        except Exception as exc:  # noqa: BLE001 - a warm-up never stops the node
+            self.get_logger().debug(f"warm-up skipped: {type(exc).__name__}: {exc}")
 
     def destroy_node(self) -> None:
         self.inputs.shutdown()

@@ -609,43 +609,56 @@ def _table_section(data: BagData, directory: Path, stem: str) -> Section:
     return section
 
 
-# ----------------------------------------------------------------------- CSV tables
+# ----------------------------------------------------------------------- thermal logs
 def csv_report_sections(result: dict, plot: dict, directory: Path, stem: str) -> list[Section]:
+    """A thermal log on the survey engine: the same sections as a survey's, the headline
+    judged on the rows after training (in the target column's unit)."""
     plt = pyplot()
+    scale, unit = plot["unit_scale"], plot["unit"]
+    check = {**result, "_plot": plot}
     source = Section("Data", paragraphs=[
         f"Data: {result['data']} - {result.get('rows_note', '')}.",
-        f"Target: {result['target']}; trained on the first {result['train_rows']} rows, judged "
-        f"on the {result['rows'] - result['train_rows']} rows after them."])
+        f"Target: {result['target']} (e_{result['component']}); the selection saw the first "
+        f"{result['train_rows']} rows ({result['validation']}); every model version is judged "
+        f"on the {result['rows'] - result['train_rows']} rows after them. Noise band ± "
+        f"{result['band'] * scale:.3g} {unit} (k = 2)."])
     hours = (plot["time"] - plot["time"][0]) / 3600
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
-    top.plot(hours, plot["target"], "k-", lw=0.8, label="measured")
-    top.plot(hours, plot["before"], "b-", lw=0.8, label="model before")
-    top.plot(hours, plot["after"], "r-", lw=0.8, label="model after")
+    top.plot(hours, plot["target"] * scale, "k-", lw=0.8, label="measured")
+    top.plot(hours, plot["before"] * scale, "b-", lw=0.8, label="model before")
+    top.plot(hours, plot["after"] * scale, "r-", lw=0.8, label="model after")
     split = hours[np.argmin(plot["train"])] if not plot["train"].all() else hours[-1]
     for ax in (top, bottom):
         ax.axvline(split, color="0.5", ls="--", label="end of training" if ax is top else None)
-    bottom.plot(hours, plot["target"] - plot["before"], "b-", lw=0.8, label="residual before")
-    bottom.plot(hours, plot["target"] - plot["after"], "r-", lw=0.8, label="residual after")
-    top.set(ylabel=result["target"])
-    bottom.set(xlabel="time since start [h]", ylabel=f"residual [{result['target']}]")
+    bottom.plot(hours, (plot["target"] - plot["before"]) * scale, "b-", lw=0.8,
+                label="residual before")
+    bottom.plot(hours, (plot["target"] - plot["after"]) * scale, "r-", lw=0.8,
+                label="residual after")
+    top.set(ylabel=f"{result['target']} [{unit}]")
+    bottom.set(xlabel="time since start [h]", ylabel=f"residual [{unit}]")
     _legend(top)
     _legend(bottom)
     figure = save_figure(fig, directory, f"{stem}_fit",
                          "Measured against the model before and after (top) and the residual "
-                         "(bottom); trained left of the dashed line, judged right of it.")
+                         "(bottom); the selection saw the rows left of the dashed line, the "
+                         "rows right of it judge.")
     headline = Section("Headline", figures=[figure], paragraphs=[
-        f"Held-out RMSE {result['baseline_rmse']:.4g} before, {result['final_rmse']:.4g} after "
-        f"adding {', '.join(result['added']) or 'nothing'} ({result['judged_on']})."])
-    ranking = Table(["candidate", "status", "CV RMSE after", "reduction", "physical reading"])
-    for entry in result["ranking"][:15]:
-        accepted = entry["significant"]
-        ranking.add(entry["effect"], "accepted" if accepted else "rejected",
-                    entry["cv_rmse_after"], f"{100 * entry['error_reduction']:.1f} %",
-                    entry["explanation"] if accepted else f"(rejected) {entry['explanation']}",
-                    css_class="accepted" if accepted else "rejected")
-    steps = Table(["terms", "held-out RMSE", "CV RMSE", "added"])
+        f"Held-out RMSE {result['held_out_baseline_rmse'] * scale:.4g} {unit} before, "
+        f"{result['final_rmse'] * scale:.4g} {unit} after adding "
+        f"{', '.join(result['added']) or 'nothing'} ({result['judged_on']}). A constant "
+        f"leaves {result['constant_held_out_rmse'] * scale:.4g} {unit}; least squares on "
+        f"every input {result['all_inputs_least_squares_held_out_rmse'] * scale:.4g} {unit}."])
+    for line in result.get("warnings", []):
+        headline.paragraphs.append(line[0].upper() + line[1:] + ".")
+    if result.get("sensors_carrying_weight"):
+        headline.paragraphs.append("The all-sensor model leans on " + ", ".join(
+            f"{sensor} ({100 * share:.0f} %)" for sensor, share in
+            result["sensors_carrying_weight"].items()) + " (share of its spread).")
+    versions = Table(["model version", "effects", f"held-out RMSE [{unit}]",
+                      f"CV RMSE, training rows [{unit}]", "added"])
     for step in result["steps"]:
-        steps.add(", ".join(step.get("terms", [])), step.get("held_out_rmse", float("nan")),
-                  step.get("cv_rmse", float("nan")), step.get("added", ""))
-    return [source, headline, Section("The effect found and its evidence", tables=[ranking]),
-            Section("Model versions", tables=[steps])]
+        versions.add(step["model_version"], ", ".join(step["effects"]) or "-",
+                     step["held_out_rmse"] * scale, step["cv_rmse"] * scale,
+                     ", ".join(step.get("added", [])))
+    return [source, headline, localisation_section(check, directory, stem),
+            _evidence_section(check), Section("Model versions", tables=[versions])]

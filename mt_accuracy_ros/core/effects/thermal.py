@@ -266,6 +266,79 @@ class ThermalSquareness(EffectFamily):
                 "warms unevenly (a thermal link's slope, Zhu eq. 4.2)")
 
 
+#: Ridge strengths searched, relative to each column's own sum of squares (so the
+#: choice does not depend on units): from nearly least squares to heavy shrinkage.
+RIDGE_STRENGTHS = (1e-3, 1e-2, 1e-1, 1.0, 10.0)
+
+#: Fewest structure sensors for which an all-sensor model is a candidate (with two, a
+#: sensor and a difference already say everything).
+MIN_RIDGE_SENSORS = 4
+
+
+class AllSensorsRidge(EffectFamily):
+    """Every structure sensor at once, shrunk by ridge regression (Zhu eq. 3.12 with all
+    sensors as regressors; Tikhonov regularisation against their collinearity).
+
+    Many weak sensors can carry a thermal drift together that none carries alone (the
+    heat spreads through the structure). Least squares on all of them overfits their
+    collinearity; ridge shrinks it with a strength lambda that the workbench chooses
+    **inside each fold** by validation on the training blocks alone
+    (:attr:`penalty_setting`), so the held-out test stays honest. The variant lists the
+    sensors (``t1_C+t2_C+...``): the model evaluates the same columns later.
+    """
+
+    name = "all_sensors_ridge"
+    group = "thermal"
+    complexity = 3
+    summary = "many structure sensors together, shrunk by ridge regression"
+    reference = "Zhu eq. 3.12 (sensor terms), all sensors with a ridge penalty"
+    #: The setting that is a penalty, not a different design: the workbench adds
+    #: setting["ridge"] x each column's own sum of squares to its normal equations.
+    penalty_setting = "ridge"
+
+    def variants(self, ctx):
+        sensors = ctx.structure_sensors()
+        return ["+".join(sensors)] if len(sensors) >= MIN_RIDGE_SENSORS else []
+
+    def settings(self, ctx, variant):
+        return [{"ridge": value} for value in RIDGE_STRENGTHS]
+
+    def parameter_names(self, variant, setting):
+        return [f"b{c}_{sensor}" for sensor in variant.split("+") for c in "xyz"]
+
+    def design(self, ctx, variant, setting):
+        return np.concatenate([per_component(ctx.variables.rise(sensor))
+                               for sensor in variant.split("+")], axis=2)
+
+    def parameter_limits(self, ctx, variant, setting):
+        return _free_expansion_limits(ctx, self.parameter_names(variant, setting))
+
+    def describe_setting(self, setting):
+        return f"ridge {setting['ridge']:g}"
+
+    def explanation(self, variant, setting):
+        sensors = variant.split("+")
+        return (f"the residual follows the {len(sensors)} structure sensors together (ridge "
+                f"strength {setting.get('ridge', float('nan')):g}, chosen inside each fold) - "
+                "heat spread through the structure that no one sensor carries alone "
+                "(Zhu eq. 3.12 with every sensor)")
+
+
+def sensor_weights(parameters: dict[str, float], temperatures: dict[str, np.ndarray]
+                   ) -> list[tuple[str, float]]:
+    """Which sensors carry an all-sensor model: (sensor, share of the model's spread), the
+    largest first - each sensor's |coefficient| x its temperature range, all components."""
+    contribution: dict[str, float] = {}
+    for name, value in parameters.items():
+        sensor = name[3:]
+        values = temperatures.get(sensor)
+        if values is None or not np.isfinite(value):
+            continue
+        contribution[sensor] = contribution.get(sensor, 0.0) + abs(value) * float(np.ptp(values))
+    total = sum(contribution.values()) or 1.0
+    return sorted(((s, v / total) for s, v in contribution.items()), key=lambda p: -p[1])
+
+
 def families() -> list[EffectFamily]:
     return [StructuralDrift(), ThermalLag(), ThermalGradient(), HeatSource(),
-            PositionDependentThermal(), ThermalSquareness()]
+            PositionDependentThermal(), ThermalSquareness(), AllSensorsRidge()]

@@ -305,8 +305,11 @@ def _candidate(scored, explanation_of, significant: bool) -> Candidate:
 def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.05,
              folds: int = 5, max_effects: int = 4, alpha: float = 0.05,
              min_share: float = 0.25, family_list: list[EffectFamily] | None = None,
-             localise_residual: bool = True) -> Diagnosis:
-    """Localise the residual and select the missing effects (see the module docstring)."""
+             localise_residual: bool = True, forward: bool = False) -> Diagnosis:
+    """Localise the residual and select the missing effects (see the module docstring).
+
+    ``forward``: validate as the model will be used on a log - each block predicted by
+    a fit on the earlier blocks only (:class:`~.selection.Selector`)."""
     if obs.n < 4 * folds:
         raise InsufficientDataError(f"{obs.n} reference readings; need >= {4 * folds}")
     residual = residuals(model, obs)
@@ -318,7 +321,7 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
         orientation = model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[1]
     ctx = Context(model.machine, variables, model._kinematics, orientation)
     selector = Selector(ctx, residual, mask, noise_sigma, folds=folds, alpha=alpha,
-                        min_reduction=min_reduction, min_share=min_share)
+                        min_reduction=min_reduction, min_share=min_share, forward=forward)
     terms = candidate_terms(model, ctx, family_list)
     _check_user_terms(terms, selector, model, ctx)
     steps = selector.run(terms, max_terms=max_effects)

@@ -71,7 +71,8 @@ class Scored:
     adjusted_p: float
     share_of_excess: float
     setting: dict
-    #: Held-out squared error per reading (kept for the best few candidates only).
+    #: Held-out squared error per reading and component, (N, 3) (kept for the best few
+    #: candidates only).
     per_sample_sq: NDArray[np.float64] | None = field(repr=False)
     significant: bool = False
     coefficients: NDArray[np.float64] | None = None
@@ -79,6 +80,8 @@ class Scored:
     parameter_names: list[str] = field(default_factory=list)
     #: Why physics refuses its full-data fit ("" if it does not).
     refusal: str = ""
+    #: The measured components its design moves (it is tested on these alone).
+    components: str = "xyz"
 
 
 @dataclass
@@ -132,6 +135,38 @@ def normal_inverse(gram: NDArray[np.float64]) -> NDArray[np.float64]:
     unit variance); directions it drops get zero variance."""
     scale, vectors, inverse = _equilibrated_eigen(gram)
     return scale[:, None] * ((vectors * inverse) @ vectors.T) * scale[None, :]
+
+
+def penalty_of(term: "Term", setting: dict) -> float:
+    """The ridge strength ``setting`` gives ``term`` (0 for a family without one)."""
+    key = getattr(term.family, "penalty_setting", None)
+    return float(setting.get(key, 0.0)) if key else 0.0
+
+
+def design_setting(term: "Term", setting: dict) -> tuple:
+    """The part of ``setting`` that makes the design (a penalty does not): a cache key."""
+    key = getattr(term.family, "penalty_setting", None)
+    return tuple(sorted((k, v) for k, v in setting.items() if k != key))
+
+
+def penalise(gram: NDArray[np.float64], start: int, stop: int, strength: float
+             ) -> NDArray[np.float64]:
+    """X'X with ``strength`` x each column's own sum of squares added to the diagonal of
+    columns start:stop (ridge, scale-free: lambda is relative to the column). Batched."""
+    if strength <= 0:
+        return gram
+    out = np.array(gram, dtype=np.float64, copy=True)
+    index = np.arange(start, stop)
+    out[..., index, index] *= 1.0 + strength
+    return out
+
+
+def ridge_standard_errors(gram: NDArray[np.float64], penalised: NDArray[np.float64],
+                          sigma2: float) -> NDArray[np.float64]:
+    """Standard errors of (A^-1 X'y) with A = the penalised X'X: sqrt(sigma^2 diag(A^-1 X'X
+    A^-1)) (the sandwich; equal to least squares' when nothing is penalised)."""
+    inverse = normal_inverse(penalised)
+    return np.sqrt(sigma2 * np.clip(np.einsum("ij,jk,ki->i", inverse, gram, inverse), 0.0, None))
 
 
 @dataclass
@@ -196,10 +231,15 @@ class Selector:
     def __init__(self, ctx: Context, residual: NDArray[np.float64], mask: NDArray[np.bool_],
                  noise_sigma: float, *, folds: int = 5, n_blocks: int = 20,
                  alpha: float = 0.05, min_reduction: float = 0.05, min_share: float = 0.25,
-                 tie: float = 0.02) -> None:
+                 tie: float = 0.02, forward: bool = False) -> None:
         n = residual.shape[0]
         if n < 4 * folds:
             raise InsufficientDataError(f"{n} reference readings; need >= {4 * folds}")
+        #: Forward chaining (a log whose model will predict the future): the record is cut
+        #: into folds + 1 blocks, each block is predicted by a fit on the blocks *before*
+        #: it only, and the first block is never judged (nothing precedes it).
+        self.forward = bool(forward)
+        folds = folds + 1 if self.forward else folds
         self.ctx = ctx
         self.mask = mask
         self.rows = np.flatnonzero(mask.ravel())
@@ -228,7 +268,17 @@ class Selector:
         self.present_bounds = [(int(self.present_of_row[a]), int(self.present_of_row[b - 1]) + 1)
                                for a, b in self.fold_bounds]
         self._sensitivities: dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
-        self.block_of_sample = time_blocks(n, max(4, min(n_blocks, n // 6)))
+        # Rows judged: all, or (forward) those after the first block.
+        first_judged = self.fold_bounds[1][0] if self.forward else 0
+        self.judged_row = np.arange(self.rows.size) >= first_judged
+        judged_sample = np.zeros(n, dtype=bool)
+        judged_sample[self.sample_of_row[self.judged_row]] = True
+        self.judged_mask = mask & judged_sample[:, None]
+        self.n_test_blocks = max(4, min(n_blocks, int(judged_sample.sum()) // 6))
+        # Unjudged readings go to one extra block the test leaves out.
+        self.block_of_sample = np.full(n, self.n_test_blocks)
+        self.block_of_sample[judged_sample] = time_blocks(int(judged_sample.sum()),
+                                                          self.n_test_blocks)
         self.noise_sigma = float(noise_sigma)
         self.alpha, self.min_reduction, self.min_share = alpha, min_reduction, min_share
         self.tie = tie
@@ -240,7 +290,7 @@ class Selector:
 
     # ------------------------------------------------------------ designs
     def design_rows(self, term: Term, setting: dict) -> NDArray[np.float64]:
-        key = (term.name, tuple(sorted(setting.items())))
+        key = (term.name, design_setting(term, setting))
         design = self._designs.get(key)
         if design is None:
             if term.family.nested_settings and setting != term.settings[-1]:
@@ -257,7 +307,7 @@ class Selector:
     def basis_rows(self, term: Term, setting: dict) -> NDArray[np.float64] | None:
         """The scalar columns (S, P) of a separable design at the readings that measured
         anything (None when the family's design is not separable)."""
-        key = ("basis", term.name, tuple(sorted(setting.items())))
+        key = ("basis", term.name, design_setting(term, setting))
         basis = self._designs.get(key)
         if basis is None:
             if term.family.nested_settings and setting != term.settings[-1]:
@@ -335,8 +385,44 @@ class Selector:
     # are the whole record's minus the held-out block's, and each block's products are
     # computed once per design (the selected model's once per step). A candidate then
     # costs one pass over its own columns instead of a refit per fold and setting.
+    def _train(self, per_fold: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Per-fold sums -> each fold's training sums: every other fold's, or (forward)
+        the earlier folds' only."""
+        if self.forward:
+            return np.cumsum(per_fold, axis=0) - per_fold
+        return _train(per_fold)
+
     def _per_sample(self, squared_rows: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.bincount(self.sample_of_row, weights=squared_rows, minlength=self.n)
+        """Squared errors of the judged rows -> (N, 3) per reading and component."""
+        if self.forward:
+            squared_rows = np.where(self.judged_row, squared_rows, 0.0)
+        return np.bincount(self.rows, weights=squared_rows,
+                           minlength=self.mask.size).reshape(self.n, 3)
+
+    def components_of(self, term: Term) -> NDArray[np.bool_]:
+        """(3,) the measured components ``term``'s design moves (its largest setting's).
+
+        A candidate changes the held-out prediction only where its columns are non-zero,
+        so its error there is the base model's: pooling those components into its test
+        dilutes an effect that lives in one component (issue 28) - it is judged on the
+        components it moves."""
+        key = ("components", term.name)
+        known = self._designs.get(key)
+        if known is None:
+            setting = term.settings[-1]
+            if self.basis_rows(term, setting) is not None:
+                size = np.abs(self._sensitivities[term.name][0])
+            else:
+                size = np.max(np.abs(self.design_rows(term, setting)), axis=1)
+            # Rounding (a lever's cross product) is not a component the effect moves.
+            size = size / max(float(np.max(size, initial=0.0)), 1e-300)
+            moved = np.array([float(np.max(size[self.component_of_row == c], initial=0.0))
+                              for c in range(3)]) > 1e-9
+            known = moved & self.mask.any(axis=0)
+            if not known.any():
+                known = self.mask.any(axis=0)
+            self._designs.put(key, known)
+        return known
 
     def _block_products(self, left: NDArray[np.float64], right: NDArray[np.float64]
                         ) -> NDArray[np.float64]:
@@ -398,7 +484,7 @@ class Selector:
     def _products_of(self, stats: _BaseStatistics, term: Term, setting: dict):
         """:meth:`_candidate_products` of ``term`` at ``setting``, kept with ``stats`` (the
         full-data fit of the candidate reuses them)."""
-        key = (term.name, tuple(sorted(setting.items())))
+        key = (term.name, design_setting(term, setting))
         cache = stats.candidates
         if key not in cache:
             if term.family.nested_settings and setting != term.settings[-1]:
@@ -424,8 +510,8 @@ class Selector:
         """Per-sample out-of-fold squared errors of base (+ term, setting chosen in-fold)."""
         if term is None:
             q = stats.base.shape[1]
-            coefficients = solve_normal(_train(stats.products[:, :q, :q]),
-                                        _train(stats.products[:, :q, q]))
+            coefficients = solve_normal(self._train(stats.products[:, :q, :q]),
+                                        self._train(stats.products[:, :q, q]))
             return self._per_sample(self._held_out_errors(stats.base, coefficients)), {}
         settings = self.choose_settings(term, stats)
         squared = np.empty(self.y.size)
@@ -435,7 +521,8 @@ class Selector:
             basis = self.basis_rows(term, setting)
             design = self.design_rows(term, setting) if basis is None else None
             gram, rhs, _ = self._products_of(stats, term, setting)
-            coefficients = solve_normal(_train(gram), _train(rhs))
+            coefficients = solve_normal(penalise(self._train(gram), q, gram.shape[1],
+                                                 penalty_of(term, setting)), self._train(rhs))
             for fold, (a, b) in enumerate(self.fold_bounds):
                 if settings[fold] == setting:
                     own = design[a:b] @ coefficients[fold, q:] if basis is None else \
@@ -448,15 +535,24 @@ class Selector:
         """The setting each fold's training blocks choose (preselection or BIC)."""
         if len(term.settings) == 1:
             return [term.settings[0]] * self.folds
+        if getattr(term.family, "penalty_setting", None):
+            return self._choose_penalty(term, stats)
         chosen: list[dict | None] = [None] * self.folds
         if term.family.preselects:
             if stats.after_base is None:
                 q = stats.base.shape[1]
-                base_coefficients = solve_normal(_train(stats.products[:, :q, :q]),
-                                                 _train(stats.products[:, :q, q]))
+                base_coefficients = solve_normal(self._train(stats.products[:, :q, :q]),
+                                                 self._train(stats.products[:, :q, q]))
                 trains = np.ones((self.folds, self.n), dtype=bool)
                 after_base = np.zeros((self.folds, self.mask.size))
                 for fold, (a, b) in enumerate(self.fold_bounds):
+                    if self.forward:
+                        # The readings before the fold; the first (never judged) fold
+                        # chooses on itself.
+                        first = self.sample_of_row[a]
+                        trains[fold] = np.arange(self.n) < first if first > 0 else \
+                            np.isin(np.arange(self.n), self.sample_of_row[a:b])
+                        continue
                     trains[fold, self.sample_of_row[a:b]] = False
                     after_base[fold, self.rows] = self.y - stats.base @ base_coefficients[fold]
                 stats.after_base = (trains, after_base.reshape(self.folds, -1, 3))
@@ -465,11 +561,12 @@ class Selector:
                                                  after_base, self.mask, trains)
         if all(c is not None for c in chosen):
             return chosen
-        counts = np.array([self.y.size - (b - a) for a, b in self.fold_bounds], float)
+        counts = np.array([max(a, 1) if self.forward else self.y.size - (b - a)
+                           for a, b in self.fold_bounds], float)
         best_bic = np.full(self.folds, np.inf)
         best = [term.settings[0]] * self.folds
         for setting in term.settings:
-            gram, rhs, yy = (_train(a) for a in self._products_of(stats, term, setting))
+            gram, rhs, yy = (self._train(a) for a in self._products_of(stats, term, setting))
             coefficients = solve_normal(gram, rhs)
             rss = np.maximum(yy - np.einsum("fi,fi->f", coefficients, rhs), 1e-300)
             bic = counts * np.log(rss / counts) + gram.shape[1] * np.log(counts)
@@ -477,10 +574,70 @@ class Selector:
                 best_bic[fold], best[fold] = bic[fold], setting
         return [c if c is not None else b for c, b in zip(chosen, best)]
 
+    def _validation_errors(self, term: Term, stats: _BaseStatistics,
+                           pairs: list[tuple[int, int, NDArray[np.float64]]]
+                           ) -> NDArray[np.float64]:
+        """(pairs, settings) squared error on block g of a fit on the blocks ``weights`` (each
+        pair (f, g, weights over folds)), from the per-fold products alone."""
+        q = stats.base.shape[1]
+        weights = np.array([w for _, _, w in pairs], dtype=np.float64)
+        target = np.array([g for _, g, _ in pairs])
+        out = np.empty((len(pairs), len(term.settings)))
+        for k, setting in enumerate(term.settings):
+            gram, rhs, yy = self._products_of(stats, term, setting)
+            train_gram = np.einsum("pf,fij->pij", weights, gram)
+            coefficients = solve_normal(penalise(train_gram, q, gram.shape[1],
+                                                 penalty_of(term, setting)), weights @ rhs)
+            out[:, k] = yy[target] - 2.0 * np.einsum("pi,pi->p", coefficients, rhs[target]) + \
+                np.einsum("pi,pij,pj->p", coefficients, gram[target], coefficients)
+        return out
+
+    def _choose_penalty(self, term: Term, stats: _BaseStatistics) -> list[dict]:
+        """A penalised family's strength per fold, chosen **inside** the fold: validated on
+        each other training block by a fit on the remaining training blocks (forward: each
+        earlier block by a fit on the blocks before it). Never on the held-out block."""
+        folds = self.folds
+        pairs = []
+        for f in range(folds):
+            for g in range(folds):
+                if g == f or (self.forward and (g >= f or g == 0)):
+                    continue
+                weights = np.ones(folds)
+                if self.forward:
+                    weights = (np.arange(folds) < g).astype(float)
+                else:
+                    weights[[f, g]] = 0.0
+                pairs.append((f, g, weights))
+        middle = term.settings[len(term.settings) // 2]
+        if not pairs:
+            return [middle] * folds
+        errors = self._validation_errors(term, stats, pairs)
+        per_fold = np.zeros((folds, len(term.settings)))
+        seen = np.zeros(folds, dtype=bool)
+        for (f, _, _), row in zip(pairs, errors):
+            per_fold[f] += row
+            seen[f] = True
+        return [term.settings[int(np.argmin(per_fold[f]))] if seen[f] else middle
+                for f in range(folds)]
+
+    def _choose_penalty_all(self, term: Term) -> dict:
+        """A penalised family's strength on all readings: the least out-of-fold error."""
+        stats = self.base_statistics(self.base_columns())
+        folds = self.folds
+        pairs = []
+        for g in range(1 if self.forward else 0, folds):
+            weights = (np.arange(folds) < g).astype(float) if self.forward else \
+                (np.arange(folds) != g).astype(float)
+            pairs.append((g, g, weights))
+        errors = self._validation_errors(term, stats, pairs)
+        return term.settings[int(np.argmin(errors.sum(axis=0)))]
+
     def choose_setting_all(self, term: Term, base: NDArray[np.float64]) -> dict:
         """The setting all readings choose (preselection or BIC), refined continuously
         where the family has a continuous setting (a period, a time constant)."""
         setting = term.settings[0]
+        if getattr(term.family, "penalty_setting", None) and len(term.settings) > 1:
+            return self._choose_penalty_all(term)
         if len(term.settings) > 1:
             after_base = np.zeros(self.mask.size)
             coefficients, *_ = np.linalg.lstsq(base, self.y, rcond=None)
@@ -534,11 +691,17 @@ class Selector:
         blocks = [self.design_rows(t, s) for t, s in terms]
         x = np.column_stack([self.offsets] + blocks)
         gram = x.T @ x
-        coefficients = solve_normal(gram, x.T @ self.y)
+        penalised, start = gram, 3
+        for (term, setting), block in zip(terms, blocks):
+            penalised = penalise(penalised, start, start + block.shape[1],
+                                 penalty_of(term, setting))
+            start += block.shape[1]
+        coefficients = solve_normal(penalised, x.T @ self.y)
         residual = self.y - x @ coefficients
         dof = max(1, self.y.size - x.shape[1])
         sigma2 = float(residual @ residual) / dof
-        standard = np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
+        standard = ridge_standard_errors(gram, penalised, sigma2) if penalised is not gram \
+            else np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
         out_c, out_s, start = [], [], 3
         for block in blocks:
             out_c.append(coefficients[start:start + block.shape[1]])
@@ -546,14 +709,19 @@ class Selector:
             start += block.shape[1]
         return out_c, out_s, residual
 
-    def _fit_products(self, gram, rhs, yy):
+    def _fit_products(self, gram, rhs, yy, penalty: tuple[int, float] = (0, 0.0)):
         """Coefficients and standard errors of the whole record's fit from per-fold
-        products (what :meth:`fit_full` computes from the columns)."""
+        products (what :meth:`fit_full` computes from the columns); ``penalty`` (first
+        penalised column, strength) for a ridge candidate."""
         gram, rhs, yy = gram.sum(axis=0), rhs.sum(axis=0), float(yy.sum())
-        coefficients = solve_normal(gram, rhs)
+        penalised = penalise(gram, penalty[0], gram.shape[0], penalty[1])
+        coefficients = solve_normal(penalised, rhs)
         dof = max(1, self.y.size - gram.shape[0])
-        sigma2 = max(yy - float(coefficients @ rhs), 0.0) / dof
-        standard = np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
+        # yy - 2 c'r + c'Gc: the residual sum of squares of any coefficients.
+        rss = yy - 2.0 * float(coefficients @ rhs) + float(coefficients @ gram @ coefficients)
+        sigma2 = max(rss, 0.0) / dof
+        standard = ridge_standard_errors(gram, penalised, sigma2) if penalised is not gram \
+            else np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
         return coefficients, standard
 
     def _baseline(self):
@@ -561,30 +729,42 @@ class Selector:
         of measured components, their mean square, and what of it stands above noise."""
         stats = self.base_statistics(self.base_columns())
         base_sq, _ = self.out_of_fold(stats, None)
-        count = int(np.sum(self.mask))
+        count = int(np.sum(self.judged_mask))
         base_mse = float(base_sq.sum() / count)
         return stats, base_sq, count, base_mse, base_mse - self.noise_sigma ** 2
 
     def step(self, terms: list[Term]) -> Step:
-        stats, base_sq, count, base_mse, excess = self._baseline()
+        stats, base_sq, count, base_mse, _ = self._baseline()
         base = stats.base
         q = base.shape[1]
         scored = []
+        measured_per_component = self.judged_mask.sum(axis=0)
+        base_per_component = base_sq.sum(axis=0)
         for term in terms:
             per_sample, chosen = self.out_of_fold(stats, term)
             mse = float(per_sample.sum() / count)
-            p_value = self._block_test(base_sq, per_sample)
-            share = (base_mse - mse) / excess if excess > 0 else (1.0 if mse < base_mse else 0.0)
+            # Tested on the components it moves (the others' errors are the base's).
+            moved = self.components_of(term)
+            own_count = int(measured_per_component[moved].sum())
+            own_base = float(base_per_component[moved].sum()) / own_count
+            own_mse = float(per_sample[:, moved].sum()) / own_count
+            own_excess = own_base - self.noise_sigma ** 2
+            p_value = self._block_test(base_sq[:, moved].sum(axis=1),
+                                       per_sample[:, moved].sum(axis=1))
+            share = (own_base - own_mse) / own_excess if own_excess > 0 else \
+                (1.0 if own_mse < own_base else 0.0)
             # The setting reported is the most frequent in-fold choice.
             settings = [tuple(sorted(s.items())) for s in chosen.values()]
             setting = dict(max(set(settings), key=settings.count))
             candidate = Scored(term, float(np.sqrt(mse)),
-                               1.0 - np.sqrt(mse / base_mse) if base_mse > 0 else 0.0,
-                               p_value, 1.0, float(share), setting, per_sample)
+                               1.0 - np.sqrt(own_mse / own_base) if own_base > 0 else 0.0,
+                               p_value, 1.0, float(share), setting, per_sample,
+                               components="".join(c for c, m in zip("xyz", moved) if m))
             # Every candidate carries its full-data fit, so that a user may add any of them
             # (judged by physics now, while its design is at hand).
             candidate.coefficients, candidate.standard_errors = (
-                a[q:] for a in self._fit_products(*self._products_of(stats, term, setting)))
+                a[q:] for a in self._fit_products(*self._products_of(stats, term, setting),
+                                                  penalty=(q, penalty_of(term, setting))))
             candidate.parameter_names = term.family.parameter_names(term.variant, setting)
             candidate.refusal = self.physics_refusal(term, setting, candidate.coefficients)
             scored.append(candidate)
@@ -632,9 +812,11 @@ class Selector:
         """One-sided p-value that ``per_sample`` errors are below ``base_sq``: per block, the
         fraction of its held-out error removed - scale-free, so a trend whose error sits in
         the end blocks counts as much as a uniform one."""
-        base_blocks = np.bincount(self.block_of_sample, weights=base_sq)
-        gain = 1.0 - np.bincount(self.block_of_sample, weights=per_sample) / \
+        blocks = self.n_test_blocks + 1
+        base_blocks = np.bincount(self.block_of_sample, weights=base_sq, minlength=blocks)
+        gain = 1.0 - np.bincount(self.block_of_sample, weights=per_sample, minlength=blocks) / \
             np.maximum(base_blocks, 1e-300)
+        gain = gain[:self.n_test_blocks]
         spread = float(np.std(gain, ddof=1))
         if spread == 0:
             return 0.0 if np.mean(gain) > 0 else 1.0
@@ -669,7 +851,8 @@ class Selector:
             if second is None:
                 continue
             mse = float(second.per_sample_sq.sum() / count)
-            adjusted = min(1.0, self._block_test(base_sq, second.per_sample_sq) *
+            adjusted = min(1.0, self._block_test(base_sq.sum(axis=1),
+                                                 second.per_sample_sq.sum(axis=1)) *
                            beam * max(1, len(remaining)))
             share = (base_mse - mse) / excess if excess > 0 else 1.0
             coefficients, standard, _ = self.fit_full(self.selected + [(first.term, setting),
@@ -708,7 +891,8 @@ class Selector:
                     step.added = pair[0]
                     self.selected.append((pair[0].term, pair[0].setting))
                     remaining = [t for t in remaining if t.name != pair[0].term.name]
-                    step = Step(float(np.sqrt(pair[0].per_sample_sq.sum() / np.sum(self.mask))),
+                    step = Step(float(np.sqrt(pair[0].per_sample_sq.sum() /
+                                              np.sum(self.judged_mask))),
                                 [pair[1]],
                                 pair[1])
                     steps.append(step)

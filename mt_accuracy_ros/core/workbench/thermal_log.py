@@ -1,0 +1,158 @@
+"""A thermal log on the survey engine: one displacement column, temperatures, a spindle.
+
+A thermal log (a displacement sensor at the spindle nose against time, the
+structure's thermocouples, the spindle speed - e.g. the FL_THERMAL data) is
+a reference survey of a machine that does not move: its readings become
+:class:`~.diagnosis.Observations` of one measured component at a standing
+position, and the catalogue's thermal families - ``structural_thermal_drift``
+(a sensor, Zhu eq. 3.12), ``thermal_gradient`` (a difference, Zhu Table 4.2),
+``thermal_lag`` (a sensor through a time constant, Zhu eqs. 3.9-3.10),
+``heat_source`` (the spindle through a lag) and ``all_sensors_ridge`` (many weak
+sensors at once) - are selected, tested, tie-broken and judged as for any survey
+(:func:`~.diagnosis.diagnose`), with **forward validation**: each block is
+predicted by a fit on the blocks before it only, the way the model will be used.
+
+The log's later rows (after ``train_fraction``) are never seen by the selection:
+each model version is judged on them (:func:`held_out_rmse`), and a term that
+raises that error is not added (:func:`~mt_accuracy_ros.commands.check`).
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..compensation.error_model import ErrorModel
+from ..errors import InputDataError, InsufficientDataError
+from ..kinematics.machine import generic_cartesian
+from .diagnosis import Observations
+
+#: Structure between a log's sensors and its displacement sensor when the user does
+#: not say [m]: a machine tool's column and spindle head. It bounds what physics
+#: allows a thermal gain (:mod:`..effects.physics`: 30 um/m/K over it).
+DEFAULT_STRUCTURE_LENGTH_M = 1.0
+
+#: Fewest rows a log needs (forward validation cuts the training rows in 6 blocks).
+MIN_LOG_ROWS = 30
+
+
+def log_machine(structure_length_m: float = DEFAULT_STRUCTURE_LENGTH_M):
+    """The machine of a thermal log: three standing axes, ``structure_length_m`` of
+    structure for the physics bounds."""
+    if not (np.isfinite(structure_length_m) and structure_length_m > 0):
+        raise InputDataError(f"structure length {structure_length_m!r} m: give a length > 0")
+    machine = generic_cartesian({a: (0.0, 0.0) for a in "XYZ"}, name="thermal_log")
+    return dataclasses.replace(machine, structure_length_m=float(structure_length_m))
+
+
+def noise_from_differences(values: NDArray[np.float64]) -> float:
+    """The white-noise sigma of a smooth signal from its successive differences (von
+    Neumann): the median absolute difference / (0.6745 sqrt 2), robust to steps."""
+    steps = np.diff(np.asarray(values, dtype=np.float64))
+    if steps.size < 2:
+        return 0.0
+    return float(np.median(np.abs(steps - np.median(steps))) / 0.6745 / np.sqrt(2.0))
+
+
+def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
+                     temperatures: dict[str, NDArray[np.float64]], *,
+                     spindle_speed_rad_s: NDArray[np.float64] | None = None,
+                     component: str = "z", uncertainty_m: float | None = None
+                     ) -> Observations:
+    """A thermal log as reference readings of one component at a standing position.
+
+    Parameters
+    ----------
+    time_s : ndarray, shape (N,)
+        Strictly increasing [s].
+    target_m : ndarray, shape (N,)
+        The measured displacement [m].
+    temperatures : dict of str to ndarray, shape (N,)
+        Structure temperatures [degC].
+    spindle_speed_rad_s : ndarray, shape (N,), optional
+        The spindle speed [rad/s] (the heat source's driver).
+    component : {"x", "y", "z"}
+        The direction the displacement sensor measures.
+    uncertainty_m : float, optional
+        The sensor's k = 2 uncertainty [m]; default twice the noise read off the
+        target's successive differences (:func:`noise_from_differences`).
+
+    Rows with a non-finite time, target, temperature or speed are left out (the
+    caller counts them); fewer than :data:`MIN_LOG_ROWS` left is an error.
+    """
+    if component not in ("x", "y", "z"):
+        raise InputDataError(f"component {component!r}: one of x, y, z")
+    t = np.asarray(time_s, dtype=np.float64)
+    y = np.asarray(target_m, dtype=np.float64)
+    good = np.isfinite(t) & np.isfinite(y)
+    for values in list(temperatures.values()) + ([spindle_speed_rad_s]
+                                                  if spindle_speed_rad_s is not None else []):
+        good &= np.isfinite(np.asarray(values, dtype=np.float64))
+    if int(good.sum()) < MIN_LOG_ROWS:
+        raise InsufficientDataError(f"only {int(good.sum())} complete rows; a thermal log "
+                                    f"needs >= {MIN_LOG_ROWS}")
+    t, y = t[good], y[good]
+    if not np.all(np.diff(t) > 0):
+        raise InputDataError("the time column must increase (sort the file or fix the stamps)")
+    n = t.size
+    measured = np.zeros((n, 3))
+    mask = np.zeros((n, 3), dtype=bool)
+    c = "xyz".index(component)
+    measured[:, c] = y
+    mask[:, c] = True
+    if uncertainty_m is None:
+        uncertainty_m = 2.0 * noise_from_differences(y)
+    if not (np.isfinite(uncertainty_m) and uncertainty_m > 0):
+        # A quantised, perfectly smooth target: one part in 1e6 of its range.
+        uncertainty_m = max(float(np.ptp(y)) * 1e-6, 1e-12)
+    return Observations(
+        positions={a: np.zeros(n) for a in "XYZ"}, measured_m=measured, measured_mask=mask,
+        time_s=t - t[0], velocities={a: np.zeros(n) for a in "XYZ"},
+        temperatures={k: np.asarray(v, dtype=np.float64)[good] for k, v in temperatures.items()},
+        uncertainty_m=float(uncertainty_m),
+        spindle_speed_rad_s=None if spindle_speed_rad_s is None else
+        np.asarray(spindle_speed_rad_s, dtype=np.float64)[good])
+
+
+def log_model(obs: Observations, structure_length_m: float = DEFAULT_STRUCTURE_LENGTH_M
+              ) -> ErrorModel:
+    """The empty model of a log: its machine, every temperature referenced to its first row."""
+    model = ErrorModel(log_machine(structure_length_m), {})
+    for sensor, values in obs.temperatures.items():
+        model.reference_temperatures_c[sensor] = float(values[0])
+    return model
+
+
+def log_prediction(model: ErrorModel, obs: Observations) -> NDArray[np.float64]:
+    """The model's displacement (N,) [m] in the measured component at every row (lags run
+    from the first row)."""
+    c = int(np.flatnonzero(obs.measured_mask[0])[0])
+    return model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[0][:, c]
+
+
+def held_out_residual(model: ErrorModel, obs: Observations, train: NDArray[np.bool_]
+                      ) -> NDArray[np.float64]:
+    """measured - model (N,) [m], its zero (a displacement sensor's own) set on the
+    training rows only: the later rows judge the model as it would have predicted them."""
+    c = int(np.flatnonzero(obs.measured_mask[0])[0])
+    residual = obs.measured_m[:, c] - log_prediction(model, obs)
+    return residual - float(np.mean(residual[train]))
+
+
+def held_out_rmse(model: ErrorModel, obs: Observations, train: NDArray[np.bool_]) -> float:
+    """RMS of :func:`held_out_residual` over the rows after training [m]."""
+    residual = held_out_residual(model, obs, train)[~train]
+    return float(np.sqrt(np.mean(residual ** 2)))
+
+
+def all_inputs_least_squares(obs: Observations, train: NDArray[np.bool_]) -> float:
+    """The plain baseline a user tries first: least squares on every temperature at once,
+    fitted on the training rows, its held-out RMSE [m] (nan without temperatures)."""
+    if not obs.temperatures:
+        return float("nan")
+    c = int(np.flatnonzero(obs.measured_mask[0])[0])
+    x = np.column_stack([np.ones(obs.n)] + [v - v[0] for v in obs.temperatures.values()])
+    coefficients, *_ = np.linalg.lstsq(x[train], obs.measured_m[train, c], rcond=None)
+    rest = obs.measured_m[~train, c] - x[~train] @ coefficients
+    return float(np.sqrt(np.mean(rest ** 2)))
