@@ -3,7 +3,7 @@
 DATA is a bag of this package's topics (``reference/tcp_error`` readings,
 ``temperatures``, ``systematic/<axis>`` profiles) checked against an
 :class:`~mt_accuracy_ros.core.compensation.error_model.ErrorModel`, or a CSV table checked
-with the thermal-regression workbench (:mod:`~mt_accuracy_ros.core.workbench.tabular`).
+as a thermal log on the same engine (:mod:`~mt_accuracy_ros.core.workbench.thermal_log`).
 Effects are ranked by time-blocked cross-validation; ``--add`` adds named ones,
 ``--auto`` keeps adding the top significant candidate. The JSON holds
 ``baseline_rmse``, ``ranking`` [{effect, cv_rmse_after, explanation}], ``added``
@@ -230,12 +230,14 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
     return {"data": str(bag), "kind": "bag", "namespace": namespace, **result}
 
 
-def survey_model(survey, model_text: str | None, machine: str | None):
+def survey_model(survey, model_text: str | None, machine: str | None,
+                 tool_offset_m: float | None = None, work_axes: tuple[str, ...] = ()):
     """The model a survey is checked against, and a note on the machine it assumes.
 
     ``model_text`` (a model names its machine), else ``machine`` (a bundled name or a
     machine YAML) with no effects, else a generic Cartesian machine whose strokes are
-    the travel the readings cover (:func:`generic_cartesian`).
+    the travel the readings cover and whose tool is ``tool_offset_m`` long (the column
+    map's ``tool_offset``: the Abbe arm of angular errors; :func:`generic_cartesian`).
     """
     from ..core.compensation.error_model import ErrorModel, resolve_model
     from ..core.kinematics.machine import generic_cartesian, load_machine
@@ -248,12 +250,18 @@ def survey_model(survey, model_text: str | None, machine: str | None):
         return ErrorModel(load_machine(machine), {}), ""
     travel = {axis: (float(np.min(q)), float(np.max(q))) for axis, q in survey.positions.items()
               if axis in "XYZ" and q.size}
-    model = ErrorModel(generic_cartesian(travel), {})
+    model = ErrorModel(generic_cartesian(travel, tool_length_m=tool_offset_m or 0.0,
+                                         work_axes=work_axes), {})
     spans = ", ".join(f"{a} {low * 1e3:.1f}..{high * 1e3:.1f} mm" for a, (low, high) in
                       travel.items())
+    arm = (f"the tool {tool_offset_m * 1e3:.1f} mm long (the map's tool_offset)"
+           if tool_offset_m else "a constant Abbe arm shows as straightness or positioning "
+           "(give the map's tool_offset)")
+    layout = (f"the workpiece on {', '.join(work_axes)} (bed outwards), the tool on the rest"
+              if work_axes else "every axis on the tool side (give the map's work_axes)")
     return model, (f"machine: none given (--machine): a generic Cartesian machine over the "
-                   f"surveyed travel ({spans}); angular errors act through the other axes' "
-                   "positions, a constant Abbe arm shows as straightness")
+                   f"surveyed travel ({spans}), {layout}; angular errors act through the "
+                   f"other axes' positions and {arm}")
 
 
 def outside_travel(machine, positions: dict, tolerance_m: float = 1e-6) -> str:
@@ -285,7 +293,8 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
     from ..io.column_map import read_mapped_csv
 
     survey = read_mapped_csv(path, column_map)
-    model, machine_note = survey_model(survey, model_text, machine)
+    model, machine_note = survey_model(survey, model_text, machine, column_map.tool_offset_m,
+                                       column_map.work_axes)
     n = survey.time_s.size
     missing = [a for a in model.machine.axis_order if a not in survey.positions]
     if missing:

@@ -12,6 +12,10 @@ A **column map** (YAML, or ``--col ROLE=COLUMN[:UNIT]`` flags) says::
     directions: {X: {column: dir_x}}                       # optional, +-1
     spindle_speed: {column: S, unit: rpm}                  # optional
     uncertainty: {value: 1.4, unit: um}                    # the instrument's k = 2 figure
+    tool_offset: {value: -150, unit: mm}                   # optional: z of the tool tip
+                                                           #   from the last axis (Abbe arm)
+    work_axes: [Y, X]                                      # optional: the axes carrying the
+                                                           #   workpiece, bed outwards
 
 Flags: ``time``, ``pos.X``, ``err.x``, ``temp.<sensor>``, ``vel.X``, ``acc.X``,
 ``dir.X``, ``spindle`` as ROLE, e.g. ``--col pos.X=x_mm:mm --col err.x=dev_x:um``.
@@ -61,6 +65,12 @@ class ColumnMap:
     roles: dict[str, tuple[str, str]] = field(default_factory=dict)
     row_period_s: float = 1.0
     uncertainty_m: float = 1e-6
+    #: z of the tool tip relative to the last linear axis' reference point [m], negative
+    #: when it points down (None: not given): without a machine, the generic machine's
+    #: tool, so angular errors act through the real arm.
+    tool_offset_m: float | None = None
+    #: The axes that carry the workpiece, from the bed outwards (the rest carry the tool).
+    work_axes: tuple[str, ...] = ()
 
     def quantity(self, role: str) -> str:
         kind, _, axis = role.partition(".")
@@ -87,7 +97,8 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
     if not isinstance(data, dict):
         raise ParameterError(f"{source}: expected a mapping (time, positions, errors, ...)")
     known = {"time", "row_period_s", "positions", "errors", "temperatures", "velocities",
-             "accelerations", "directions", "spindle_speed", "uncertainty", "machine"}
+             "accelerations", "directions", "spindle_speed", "uncertainty", "machine",
+             "tool_offset", "work_axes"}
     unknown = set(data) - known
     if unknown:
         raise ParameterError(f"{source}: unknown key(s) {', '.join(sorted(unknown))}; known: "
@@ -120,6 +131,21 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
         u = data["uncertainty"]
         value, unit = (u.get("value"), u.get("unit", "m")) if isinstance(u, dict) else (u, "m")
         out.uncertainty_m = _convert_scalar(value, unit, "length", f"{source}: uncertainty")
+    if "work_axes" in data:
+        work = data["work_axes"]
+        if not isinstance(work, list) or not all(isinstance(a, str) and a.upper() in "XYZ"
+                                                 and len(a) == 1 for a in work):
+            raise ParameterError(f"{source}: work_axes must list axis letters (X, Y, Z) from "
+                                 "the bed outwards, e.g. [Y, X]")
+        out.work_axes = tuple(a.upper() for a in work)
+    if "tool_offset" in data:
+        t = data["tool_offset"]
+        value, unit = (t.get("value"), t.get("unit", "m")) if isinstance(t, dict) else (t, "m")
+        # Signed: the magnitude is checked like any length, the sign kept.
+        sign = -1.0 if isinstance(value, (int, float)) and not isinstance(value, bool) and \
+            value < 0 else 1.0
+        out.tool_offset_m = 0.0 if value == 0 else sign * _convert_scalar(
+            abs(value) if sign < 0 else value, unit, "length", f"{source}: tool_offset")
     return out
 
 

@@ -199,24 +199,56 @@ class Squareness(EffectFamily):
     summary = "two axes out of square: the error grows linearly with another axis' position"
     reference = "ISO 230-1 location errors; Khan & Chen eps_xy, eps_zx, eps_zy"
 
+    #: The same pair out of square with the *other* axis as the reference: the first
+    #: form tilts the later axis (EC0Y: e_x ~ y), this one the earlier axis' travel -
+    #: a straightness slope of it (EYX: e_y ~ x). The two differ by a rigid rotation of
+    #: the instrument's frame, which a survey aligned to the machine does not remove,
+    #: so both are candidates; by ISO 230-1 convention a straightness has no slope, so
+    #: no other family holds this one. A CNC table holds it as that axis' motion error.
+    OTHER_REFERENCE = {"EYX": "EC0Y", "EZX": "EB0Z", "EZY": "EA0Z"}
+    PAIRS = {"EC0Y": "X and Y", "EB0Z": "X and Z", "EA0Z": "Y and Z", "EYX": "X and Y",
+             "EZX": "X and Z", "EZY": "Y and Z"}
+
     def variants(self, ctx: Context) -> list[str]:
+        moving = ctx.linear_axes(moving=True)
         axes = ctx.linear_axes()
         # The error grows with the last letter's axis: it must have moved.
-        return [name for name in ("EC0Y", "EB0Z", "EA0Z") if name[-1] in
-                ctx.linear_axes(moving=True) and {"C": "X", "B": "X", "A": "Y"}[name[1]] in axes]
+        first = [name for name in ("EC0Y", "EB0Z", "EA0Z") if name[-1] in moving and
+                 {"C": "X", "B": "X", "A": "Y"}[name[1]] in axes]
+        # The other reference: the slope along the earlier axis; both must have moved.
+        return first + [name for name, base in self.OTHER_REFERENCE.items()
+                        if name[2] in moving and name[1] in moving and base[-1] in axes]
 
     def parameter_names(self, variant, setting):
         return ["angle_rad"]
 
     def design(self, ctx, variant, setting):
+        if variant in self.OTHER_REFERENCE:
+            position = ctx.variables.positions[variant[2]]
+            return (ctx.jacobian(variant) * position[:, None])[:, :, None]
         return ctx.jacobian(variant)[:, :, None]
 
     def location_error(self, variant: str, coefficients) -> dict[str, float]:
-        """The location error it stands for (a CNC table's squareness entry) [rad]."""
+        """The location error it stands for (a CNC table's squareness entry) [rad]; the
+        other-reference form is a motion error (:meth:`motion_error`), not one."""
+        if variant in self.OTHER_REFERENCE:
+            return {}
         return {variant: float(coefficients[0])}
 
+    def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
+        """The other-reference form as its axis' error motion: angle x position [m]
+        (the first form has none: it is a location error)."""
+        q = np.asarray(q, dtype=np.float64)
+        if variant not in self.OTHER_REFERENCE:
+            return np.zeros_like(q)
+        return float(np.asarray(coefficients, dtype=np.float64)[0]) * q
+
     def explanation(self, variant, setting):
-        pair = {"EC0Y": "X and Y", "EB0Z": "X and Z", "EA0Z": "Y and Z"}[variant]
+        pair = self.PAIRS[variant]
+        if variant in self.OTHER_REFERENCE:
+            return (f"the residual in {variant[1].lower()} grows linearly with the "
+                    f"{variant[2]} position - {pair} are out of square, {variant[2]}'s travel "
+                    f"tilted (a straightness slope {variant})")
         return (f"the residual grows linearly with the other axes' positions - {pair} are out "
                 f"of square (location error {variant})")
 

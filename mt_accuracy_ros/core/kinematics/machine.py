@@ -265,9 +265,14 @@ BUNDLED_MACHINES = Path(__file__).resolve().parents[2] / "machines"
 
 
 def generic_cartesian(strokes: dict[str, tuple[float, float]], tool_length_m: float = 0.0,
-                      name: str = "generic_cartesian") -> MachineDescription:
+                      name: str = "generic_cartesian", work_axes: tuple[str, ...] = ()
+                      ) -> MachineDescription:
     """A Cartesian machine known only from its survey: linear axes ``strokes`` (axis ->
-    (low, high) [m], e.g. the travel the readings cover), chain ``[w b X Y Z t]``.
+    (low, high) [m], e.g. the travel the readings cover), chain ``[w b X Y Z t]`` - or,
+    with ``work_axes`` (the axes that carry the workpiece, from the bed outwards, e.g.
+    ``("Y", "X")`` for a table on a saddle), those on the workpiece side and the rest on
+    the tool side (``[w X Y b Z t]``), so that an angular error of a table axis acts
+    through the positions of the axes it carries.
 
     Nothing of the real machine's geometry is assumed: every axis stacks on the tool
     side with zero offsets, so an angular error of an axis reaches the TCP through the
@@ -280,6 +285,12 @@ def generic_cartesian(strokes: dict[str, tuple[float, float]], tool_length_m: fl
     if not axes:
         raise MachineDescriptionError("a generic Cartesian machine needs at least one of the "
                                       "axes X, Y, Z")
+    work = [str(a).upper() for a in work_axes]
+    unknown = [a for a in work if a not in axes]
+    if unknown or len(set(work)) != len(work):
+        raise MachineDescriptionError(f"work axes {work}: each one of the surveyed axes "
+                                      f"({', '.join(axes)}) at most once")
+    tool = [a for a in axes if a not in work]
     spec = {}
     for axis in axes:
         low, high = (float(v) for v in strokes[axis])
@@ -290,7 +301,7 @@ def generic_cartesian(strokes: dict[str, tuple[float, float]], tool_length_m: fl
             low, high = low - 5e-4, low + 5e-4
         spec[axis] = {"stroke": [low, high], "offset": [0.0, 0.0, 0.0]}
     return machine_from_dict({
-        "name": name, "chain": f"[w b {' '.join(axes)} t]",
+        "name": name, "chain": "[" + " ".join(["w", *reversed(work), "b", *tool, "t"]) + "]",
         "description": "generic Cartesian machine from the survey's travel (no --machine)",
         "tool": [0.0, 0.0, float(tool_length_m)], "workpiece": [0.0, 0.0, 0.0],
         "axes": spec}, name)

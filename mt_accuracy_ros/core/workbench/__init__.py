@@ -4,9 +4,10 @@
                  against the error model: residuals, the verdict, adding what
                  was named.
 * ``selection``  forward selection over the effect catalogue, time-blocked CV
-                 with in-fold hyperparameters, a held-out stop rule.
+                 (or forward validation for logs) with in-fold hyperparameters and
+                 ridge strengths, a held-out test per component the effect moves.
 * ``localisation`` where the residual lives: variance shares per variable,
                  periodograms, the plain sentence.
-* ``tabular``    the same loop on tabular logs (CSV): a linear thermal model of
-                 named inputs (Zhu eq. 3.12).
+* ``thermal_log`` a thermal log (CSV: one displacement, temperatures, a spindle)
+                 as a survey of a standing machine, on the same engine.
 """
