@@ -134,9 +134,10 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
     if "work_axes" in data:
         work = data["work_axes"]
         if not isinstance(work, list) or not all(isinstance(a, str) and a.upper() in "XYZ"
-                                                 and len(a) == 1 for a in work):
-            raise ParameterError(f"{source}: work_axes must list axis letters (X, Y, Z) from "
-                                 "the bed outwards, e.g. [Y, X]")
+                                                 and len(a) == 1 for a in work) or \
+                len({a.upper() for a in work}) != len(work):
+            raise ParameterError(f"{source}: work_axes must list axis letters (X, Y, Z), each "
+                                 "once, from the bed outwards, e.g. [Y, X]")
         out.work_axes = tuple(a.upper() for a in work)
     if "tool_offset" in data:
         t = data["tool_offset"]

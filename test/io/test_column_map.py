@@ -94,3 +94,53 @@ def test_bad_files_are_one_line_errors(tmp_path):
         read_mapped_csv(_write(tmp_path / "back.csv", back), column_map)
     with pytest.raises(ParameterError, match="--col 'pos.X': expected ROLE=COLUMN"):
         parse_col_flags(["pos.X"], ColumnMap())
+
+
+def test_the_machine_facts_a_map_may_give_tool_offset_and_work_axes(tmp_path):
+    """Issue 28: without a machine YAML, the map's tool offset (signed z of the tip) and the
+    axes that carry the workpiece make the generic machine's chain and Abbe arms."""
+    from mt_accuracy_ros.core.errors import ParameterError
+    from mt_accuracy_ros.core.kinematics.machine import generic_cartesian
+    from mt_accuracy_ros.io.column_map import column_map_from_dict
+
+    column_map = column_map_from_dict({"tool_offset": {"value": -150, "unit": "mm"},
+                                       "work_axes": ["y", "X"]})
+    assert column_map.tool_offset_m == pytest.approx(-0.15, abs=1e-15)
+    assert column_map.work_axes == ("Y", "X")
+    assert column_map_from_dict({"tool_offset": 0}).tool_offset_m == 0.0
+    machine = generic_cartesian({"X": (0, 0.5), "Y": (0, 0.4), "Z": (-0.3, 0)},
+                                tool_length_m=column_map.tool_offset_m,
+                                work_axes=column_map.work_axes)
+    # Bed outwards: Y on the bed carries X, which carries the workpiece; Z carries the tool.
+    assert tuple(machine.workpiece_branch) == ("Y", "X")
+    assert tuple(machine.tool_branch) == ("Z",) and machine.tool[2] == pytest.approx(-0.15)
+    for bad in ({"work_axes": ["X", "X"]}, {"work_axes": "XY"}, {"work_axes": ["W"]},
+                {"tool_offset": {"value": "long", "unit": "mm"}},
+                {"tool_offset": {"value": 5, "unit": "furlong"}}):
+        with pytest.raises(ParameterError):
+            column_map_from_dict(bad)
+    from mt_accuracy_ros.core.errors import MachineDescriptionError
+
+    with pytest.raises(MachineDescriptionError, match="work axes"):
+        generic_cartesian({"X": (0, 0.5), "Z": (0, 0.3)}, work_axes=("Y",))
+
+
+def test_the_tool_offset_is_the_abbe_arm_of_an_angular_error_on_the_generic_machine():
+    """The map's tool offset reaches the TCP through an angular error: e = eps x (tip -
+    origin), first order, by hand."""
+    import numpy as np
+
+    from mt_accuracy_ros.core.effects import Context
+    from mt_accuracy_ros.core.effects.variables import Variables
+    from mt_accuracy_ros.core.kinematics.machine import generic_cartesian
+
+    machine = generic_cartesian({"X": (0, 0.5), "Y": (0, 0.4), "Z": (-0.3, 0)},
+                                tool_length_m=-0.1)
+    rng = np.random.default_rng(2)
+    q = {a: rng.uniform(*machine.axes[a].stroke, 6) for a in "XYZ"}
+    ctx = Context(machine, Variables(q))
+    # All on the tool side: X's pitch EBX turns Y, Z and the tool about y through X's
+    # origin: lever (0, y, z + t) from it, so e = eps y x (0, y, z + t) = (z + t, 0, 0).
+    np.testing.assert_allclose(ctx.jacobian("EBX"),
+                               np.column_stack([q["Z"] - 0.1, 0 * q["X"], 0 * q["X"]]),
+                               atol=1e-15)
