@@ -240,6 +240,23 @@ def _check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _iso230_2(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .commands.iso230 import evaluate_run, print_run, write_run_outputs
+    from .core.errors import MtAccuracyError
+
+    try:
+        expansion = None if args.expansion is None else args.expansion * 1e-6
+        result = evaluate_run(Path(args.run), args.col or [], args.axis.upper(), expansion)
+    except (MtAccuracyError, OSError) as exc:
+        print(f"mt-accuracy iso230-2: {exc}", file=sys.stderr)
+        return 2
+    print_run(result)
+    write_run_outputs(result, args.json, args.report)
+    return 0
+
+
 class _Parser(argparse.ArgumentParser):
     """No abbreviated options anywhere (``--rat 2`` is an error, not ``--rate 2``);
     subcommands' parsers are of this class too (argparse makes them with type(parent))."""
@@ -343,6 +360,19 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--train-fraction", type=float, default=0.5,
                        help="CSV: fit on this leading fraction, judge on the rest")
     check.set_defaults(handler=_check)
+    iso = commands.add_parser("iso230-2", help="ISO 230-2 figures of a laser interferometer's "
+                              "positioning runs (CSV)")
+    iso.add_argument("run", help="CSV: one reading per row, in the order measured")
+    iso.add_argument("--col", action="append", metavar="ROLE=COLUMN[:UNIT]",
+                     help="target, measured or deviation, direction, run, temperature "
+                          "(default: read off the header, e.g. target_mm, deviation_um)")
+    iso.add_argument("--axis", default="X", help="the axis' name in the outputs")
+    iso.add_argument("--expansion", type=float, default=None, metavar="UM_PER_M_K",
+                     help="the material's expansion coefficient [um/m/K] (steel 11.5): with "
+                          "a temperature column, deviations are referred to 20 degC")
+    iso.add_argument("--json", help="JSON summary path")
+    iso.add_argument("--report", help="HTML report path")
+    iso.set_defaults(handler=_iso230_2)
     play = commands.add_parser("play", help="publish a bag's messages in recorded time, with /clock")
     play.add_argument("bag", help="bag directory or .mcap file")
     play.add_argument("--topics", nargs="+", help="topics to play (default all)")

@@ -554,18 +554,62 @@ def _iso_section(data: BagData, directory: Path, stem: str) -> Section:
             "This data has no positioning runs (repeated approaches to the same targets from "
             "both directions, ISO 230-2), so no A, E, R, B, M figures are given.")
         return section
-    table = Table(["axis", "A", "A↑", "A↓", "E", "E↑", "E↓", "R", "R↑", "R↓", "B", "M"],
-                  caption="ISO 230-2 figures of the reference readings [µm]")
+    return iso230_2_section(found, directory, stem)
+
+
+#: ISO 230-2 figures in the order the standard lists them: (attribute, symbol).
+ISO_FIGURES = (("accuracy", "A"), ("accuracy_up", "A↑"), ("accuracy_down", "A↓"),
+               ("systematic_deviation", "E"), ("systematic_deviation_up", "E↑"),
+               ("systematic_deviation_down", "E↓"), ("mean_deviation_range", "M"),
+               ("repeatability", "R"), ("repeatability_up_axis", "R↑"),
+               ("repeatability_down_axis", "R↓"), ("reversal_value", "B"),
+               ("mean_reversal", "B̄"))
+
+
+def iso230_2_section(found: list, directory: Path, stem: str, notes: list[str] = ()
+                     ) -> Section:
+    """The ISO 230-2 section for ``found`` [(axis, Iso2302Result in metres)]: the axis
+    figures, a per-target table and the standard's plot (mean deviation +- 2s per
+    direction against target) - the same for ``mt-accuracy iso230-2`` and a bag's report."""
+    plt = pyplot()
+    section = Section("ISO 230-2 positioning")
+    table = Table(["axis"] + [symbol for _, symbol in ISO_FIGURES],
+                  caption="ISO 230-2 figures [µm]")
     for axis, result in found:
-        table.add(axis, *(getattr(result, name) * UM for name in (
-            "accuracy", "accuracy_up", "accuracy_down", "systematic_deviation",
-            "systematic_deviation_up", "systematic_deviation_down", "repeatability",
-            "repeatability_up_axis", "repeatability_down_axis", "reversal_value",
-            "mean_deviation_range")))
+        table.add(axis, *(getattr(result, name) * UM for name, _ in ISO_FIGURES))
     section.tables.append(table)
+    fig, axes = plt.subplots(len(found), 1, figsize=(9, 3.6 * len(found)), squeeze=False)
+    for (axis, result), ax in zip(found, axes[:, 0]):
+        targets_mm = result.targets * 1e3
+        per_target = Table(["target [mm]", "x̄↑ [µm]", "x̄↓ [µm]", "x̄ [µm]", "s↑ [µm]",
+                            "s↓ [µm]", "B_i [µm]", "R_i [µm]"],
+                           caption=f"Axis {axis}: per target position")
+        for i, target in enumerate(targets_mm):
+            per_target.add(target, result.mean_up[i] * UM, result.mean_down[i] * UM,
+                           result.mean_bidirectional[i] * UM, result.s_up[i] * UM,
+                           result.s_down[i] * UM, result.reversal[i] * UM,
+                           result.repeatability_bidirectional[i] * UM)
+        section.tables.append(per_target)
+        for mean, s, colour, label in ((result.mean_up, result.s_up, "tab:red", "↑"),
+                                       (result.mean_down, result.s_down, "tab:blue", "↓")):
+            ax.plot(targets_mm, mean * UM, "-o", ms=3, color=colour, label=f"x̄{label}")
+            ax.plot(targets_mm, (mean + 2 * s) * UM, "--", lw=0.8, color=colour,
+                    label=f"x̄{label} ± 2s{label}")
+            ax.plot(targets_mm, (mean - 2 * s) * UM, "--", lw=0.8, color=colour)
+        ax.axhline(0, color="0.6", lw=0.6)
+        ax.set(xlabel=f"{axis} target position [mm]", ylabel="positional deviation [µm]",
+               title=f"Axis {axis}: A = {result.accuracy * UM:.2f} µm, "
+                     f"R = {result.repeatability * UM:.2f} µm, "
+                     f"B = {result.reversal_value * UM:.2f} µm")
+        _legend(ax)
+    section.figures.append(save_figure(
+        fig, directory, f"{stem}_iso230_2",
+        "Mean positional deviation per direction of approach with its ± 2s band against the "
+        "target position (the ISO 230-2 plot)."))
     section.paragraphs.append(
-        "A accuracy, E systematic deviation, R repeatability, B reversal value, M mean "
-        "deviation range; ↑ / ↓ the approaches from below / above.")
+        "A accuracy, E systematic deviation, M mean deviation range, R repeatability, B "
+        "reversal value, B̄ mean reversal value; ↑ / ↓ the approaches from below / above.")
+    section.paragraphs.extend(notes)
     return section
 
 

@@ -270,9 +270,11 @@ class ThermalSquareness(EffectFamily):
 #: choice does not depend on units): from nearly least squares to heavy shrinkage.
 RIDGE_STRENGTHS = (1e-3, 1e-2, 1e-1, 1.0, 10.0)
 
-#: Fewest structure sensors for which an all-sensor model is a candidate (with two, a
-#: sensor and a difference already say everything).
-MIN_RIDGE_SENSORS = 4
+#: Fewest structure sensors for which an all-sensor model is a candidate: "many weak
+#: sensors". With a handful, single sensors, their differences and lags span what the
+#: structure can do and name it; a shrunk blend of four would out-fit two named
+#: physical effects at once (a drift and a thermal squareness of the catalogue trials).
+MIN_RIDGE_SENSORS = 6
 
 
 class AllSensorsRidge(EffectFamily):

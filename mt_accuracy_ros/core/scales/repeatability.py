@@ -187,3 +187,76 @@ def positioning_runs(positions: ArrayLike, deviations: ArrayLike, directions: Ar
     runs = min(min(a.size for a in up), min(a.size for a in down))
     return (np.asarray(targets), np.array([a[:runs] for a in up]),
             np.array([a[:runs] for a in down]))
+
+
+#: ISO 230-2's reference temperature [degC].
+REFERENCE_TEMPERATURE_C = 20.0
+#: Runs of the standard test (linear axes up to 2 m); fewer still give figures, flagged.
+STANDARD_RUNS = 5
+
+
+def corrected_to_20c(target_m: ArrayLike, deviation_m: ArrayLike, temperature_c: ArrayLike,
+                     expansion_per_k: float) -> NDArray[np.float64]:
+    """Deviations referred to 20 degC (ISO 230-2, the temperature clause: the nominal
+    differential expansion of the axis' scale or the part, alpha (T - 20) P, taken out).
+
+    Parameters
+    ----------
+    target_m, deviation_m, temperature_c : array_like, shape (N,)
+        Target P [m] (from the axis' zero), deviation [m], material temperature [degC].
+    expansion_per_k : float
+        The material's expansion coefficient alpha [1/K].
+    """
+    p = finite_array(target_m, "targets", ndim=1)
+    x = finite_array(deviation_m, "deviations", ndim=1)
+    t = finite_array(temperature_c, "temperatures", ndim=1)
+    same_length("targets", p, "deviations", x)
+    same_length("targets", p, "temperatures", t)
+    if not (np.isfinite(expansion_per_k) and 0 < expansion_per_k < 1e-3):
+        raise InputDataError(f"expansion coefficient {expansion_per_k!r} /K: give alpha as a "
+                             "positive number below 1e-3 (steel 11.5e-6)")
+    return x - expansion_per_k * (t - REFERENCE_TEMPERATURE_C) * p
+
+
+def runs_by_target(target_m: ArrayLike, deviation_m: ArrayLike, direction: ArrayLike,
+                   run: ArrayLike, resolution_m: float = 1e-6
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """(targets (m,), up (m, n), down (m, n)) for :func:`iso230_2` from one reading per row.
+
+    Every target must be read once per run in each direction; a target missing from a
+    run, a run read twice, or fewer than 2 runs is an :class:`InputDataError` naming it.
+    """
+    p = finite_array(target_m, "targets", ndim=1)
+    x = finite_array(deviation_m, "deviations", ndim=1)
+    d = finite_array(direction, "directions", ndim=1)
+    r = np.asarray(run, dtype=np.int64)
+    same_length("targets", p, "deviations", x)
+    same_length("targets", p, "directions", d)
+    if r.shape != p.shape:
+        raise InputDataError(f"runs has {r.size} values but targets has {p.size}")
+    keys = np.round(p / resolution_m).astype(np.int64)
+    targets = np.unique(keys)
+    runs = np.unique(r)
+    if runs.size < 2:
+        raise InsufficientDataError(f"too few runs: {runs.size}; ISO 230-2 needs at least 2 "
+                                    f"to give a repeatability ({STANDARD_RUNS} in the standard "
+                                    "test)")
+    tables = {}
+    for sign, name in ((1.0, "up"), (-1.0, "down")):
+        table = np.full((targets.size, runs.size), np.nan)
+        for k in np.flatnonzero(np.sign(d) == sign):
+            i = int(np.searchsorted(targets, keys[k]))
+            j = int(np.searchsorted(runs, r[k]))
+            if np.isfinite(table[i, j]):
+                raise InputDataError(f"target {keys[k] * resolution_m * 1e3:.4g} mm is read "
+                                     f"twice in run {r[k]} going {name}")
+            table[i, j] = x[k]
+        missing = np.argwhere(~np.isfinite(table))
+        if missing.size:
+            i, j = missing[0]
+            raise InputDataError(
+                f"unequal target sets: target {targets[i] * resolution_m * 1e3:.4g} mm has no "
+                f"reading going {name} in run {runs[j]} ({len(missing)} such gaps); every run "
+                "must visit every target from both sides")
+        tables[name] = table
+    return targets * resolution_m, tables["up"], tables["down"]

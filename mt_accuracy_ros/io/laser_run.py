@@ -1,0 +1,178 @@
+"""A laser interferometer's positioning run (ISO 230-2) from a CSV file.
+
+One row per reading, in the order measured. Which column is what, and in which
+unit, comes from ``ROLE=COLUMN[:UNIT]`` (as ``mt-accuracy check --col``) or is read
+off the header (``target_mm``, ``deviation_um``, ``actual_mm``, ``direction``,
+``run``, ``temperature_C``):
+
+======================  ==============================================  ==========
+role                    meaning                                         default unit
+======================  ==============================================  ==========
+``target``              target position P_i                             mm
+``measured``            actual position (deviation = measured - target) mm
+``deviation``           positional deviation x_ij (instead of measured) um
+``direction``           approach: +1 / -1                               -
+``run``                 run number j                                    -
+``temperature``         the material (scale) temperature                degC
+======================  ==============================================  ==========
+
+Without a direction column, each reading's approach is the sign of the move that
+brought the axis to its target (a target read twice in a row at a turnaround: the
+second reading is the way back). Without a run column, a run is one sweep each way (a new
+one starts where the approach turns from down to up). Everything is converted to SI.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import InputDataError
+from .column_map import TEMPERATURE, UNITS
+from .csv_table import read_csv_table
+
+ROLES = ("target", "measured", "deviation", "direction", "run", "temperature")
+DEFAULT_UNIT = {"target": "mm", "measured": "mm", "deviation": "um", "temperature": "degC"}
+#: Header names tried for a role when no flag names its column (lower case, unit
+#: suffix allowed: ``target_mm``, ``deviation_um``).
+GUESSES = {"target": ("target", "nominal", "position"),
+           "measured": ("measured", "actual"),
+           "deviation": ("deviation", "error", "dev"),
+           "direction": ("direction", "dir"), "run": ("run", "cycle"),
+           "temperature": ("temperature", "temp", "material_temperature")}
+
+
+@dataclass
+class LaserRun:
+    """The readings of one axis' runs, SI, in measured order."""
+
+    target_m: np.ndarray
+    deviation_m: np.ndarray
+    direction: np.ndarray          # +1 / -1
+    run: np.ndarray                # 0, 1, ...
+    temperature_c: np.ndarray | None
+    columns: dict[str, str] = field(default_factory=dict)
+    rows_note: str = ""
+
+
+def _split_flag(flag: str) -> tuple[str, str, str]:
+    role, sep, rest = flag.partition("=")
+    if not sep or not rest or role.strip() not in ROLES:
+        raise InputDataError(f"--col {flag!r}: expected ROLE=COLUMN[:UNIT] with ROLE one of "
+                             f"{', '.join(ROLES)}")
+    column, _, unit = rest.rpartition(":") if ":" in rest else (rest, "", "")
+    return role.strip(), column.strip(), unit.strip()
+
+
+def _guess(role: str, names: list[str]) -> tuple[str, str] | None:
+    for name in names:
+        base, _, suffix = name.rpartition("_") if "_" in name else (name, "", "")
+        for candidate in GUESSES[role]:
+            if name.lower() == candidate:
+                return name, ""
+            if base.lower() == candidate:
+                return name, suffix
+    return None
+
+
+def _scale(role: str, unit: str, column: str) -> tuple[float, float]:
+    if role == "temperature":
+        unit = unit or "degC"
+        if unit not in TEMPERATURE:
+            raise InputDataError(f"temperature column {column!r}: unknown unit {unit!r}; "
+                                 f"known: {', '.join(TEMPERATURE)}")
+        return TEMPERATURE[unit]
+    unit = unit or DEFAULT_UNIT[role]
+    if unit not in UNITS["length"]:
+        raise InputDataError(f"{role} column {column!r}: unknown length unit {unit!r}; known: "
+                             f"{', '.join(UNITS['length'])}")
+    return UNITS["length"][unit], 0.0
+
+
+def infer_directions(target: np.ndarray) -> np.ndarray:
+    """The approach of each reading: the sign of the move that brought the axis there;
+    a target read twice in a row is a turnaround (the second reading is the way back)."""
+    steps = np.sign(np.diff(target))
+    direction = np.empty(target.size)
+    if target.size == 0:
+        return direction
+    nonzero = steps[steps != 0]
+    direction[0] = nonzero[0] if nonzero.size else 1.0
+    for k in range(1, target.size):
+        direction[k] = steps[k - 1] if steps[k - 1] != 0 else -direction[k - 1]
+    return direction
+
+
+def infer_runs(direction: np.ndarray) -> np.ndarray:
+    """Run j of each reading: a run is one sweep each way, so a new one starts whenever
+    the approach turns from down to up (a reading missing from a sweep then stays a gap
+    of that run, not a shift of every later one)."""
+    turns = np.concatenate(([0], (direction[1:] > 0) & (direction[:-1] < 0)))
+    return np.cumsum(turns).astype(np.int64)
+
+
+def read_laser_run(path: str | Path, flags: list[str] | None = None, *,
+                   resolution_m: float = 1e-6) -> LaserRun:
+    """Read ``path`` (see the module docstring); raises :class:`InputDataError` naming
+    the column or role at fault."""
+    table = read_csv_table(path)
+    names = table.names
+    roles: dict[str, tuple[str, str]] = {}
+    for flag in flags or []:
+        role, column, unit = _split_flag(flag)
+        roles[role] = (column, unit)
+    for role in ROLES:
+        if role not in roles and not (role == "deviation" and "measured" in roles) and \
+                not (role == "measured" and "deviation" in roles):
+            guess = _guess(role, names)
+            if guess is not None:
+                roles[role] = guess
+    if "measured" in roles and "deviation" in roles:
+        # The header had both: the deviation column is the one read.
+        if not any(f.startswith("measured=") for f in flags or []):
+            del roles["measured"]
+    for role, (column, _) in roles.items():
+        if column not in names:
+            raise InputDataError(f"{role}: no column {column!r}; columns: {', '.join(names)}")
+    if "target" not in roles or not ({"measured", "deviation"} & set(roles)):
+        raise InputDataError(f"{Path(path).name}: need a target column and a measured-position "
+                             f"or deviation column (--col target=COLUMN:mm --col "
+                             f"deviation=COLUMN:um); columns: {', '.join(names)}")
+
+    def values(role):
+        column, unit = roles[role]
+        scale, offset = _scale(role, unit, column)
+        return np.asarray(table.columns[column], dtype=np.float64) * scale + offset
+
+    target = values("target")
+    if "deviation" in roles:
+        deviation = values("deviation")
+    else:
+        deviation = values("measured") - target
+    # Mixed units: deviations comparable to the target spacing are a unit slip (e.g. the
+    # measured position in um against targets in mm), never a positioning error.
+    spacing = np.median(np.diff(np.unique(np.round(target / resolution_m)))) * resolution_m \
+        if np.unique(np.round(target / resolution_m)).size > 1 else 0.0
+    if spacing > 0 and np.median(np.abs(deviation)) > 0.1 * spacing:
+        which = "deviation" if "deviation" in roles else "measured"
+        raise InputDataError(
+            f"mixed units: the median |deviation| {np.median(np.abs(deviation)) * 1e3:.4g} mm "
+            f"is over a tenth of the target spacing {spacing * 1e3:.4g} mm - check the units "
+            f"of {roles['target'][0]!r} and {roles[which][0]!r} (COLUMN:UNIT)")
+    if "direction" in roles:
+        raw = table.columns[roles["direction"][0]]
+        direction = np.sign(np.asarray(raw, dtype=np.float64))
+        if np.any(direction == 0):
+            raise InputDataError(f"direction column {roles['direction'][0]!r}: +1 or -1 "
+                                 "on every row")
+    else:
+        direction = infer_directions(target)
+    if "run" in roles:
+        run_values = np.asarray(table.columns[roles["run"][0]], dtype=np.float64)
+        _, run = np.unique(run_values, return_inverse=True)
+    else:
+        run = infer_runs(direction)
+    temperature = values("temperature") if "temperature" in roles else None
+    return LaserRun(target, deviation, direction, np.asarray(run, dtype=np.int64), temperature,
+                    {role: column for role, (column, _) in roles.items()}, table.summary())
