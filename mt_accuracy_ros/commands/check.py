@@ -399,8 +399,15 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     model = log_model(obs, structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
     to_unit = 1.0 / target_scale
 
+    # Forward validation needs 4 readings a fold; a short log gets fewer folds.
+    folds = min(5, training.n // 4)
+    if folds < 2:
+        raise InputDataError(f"{training.n} training rows (--train-fraction {train_fraction:g} "
+                             f"of {obs.n}): the selection needs at least 8")
+
     def diagnosis_of(current):
-        return diagnose(current, training, min_reduction=min_reduction, forward=True)
+        return diagnose(current, training, min_reduction=min_reduction, forward=True,
+                        folds=folds)
 
     def candidate_named(diagnosis, name: str, why: str):
         candidate = pick_candidate(diagnosis, name)
