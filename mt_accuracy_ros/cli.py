@@ -227,6 +227,10 @@ def _check(args: argparse.Namespace) -> int:
     for entry in result.get("named", []):
         print(f"named: {entry['name']} (confidence {100 * entry['confidence']:.0f} %): "
               f"{entry['explanation']}")
+        readings = "; ".join(f"{k} = {v}" for k, v in entry.get("display", {}).items())
+        if readings:
+            setting = entry.get("setting_display", "")
+            print(f"       {readings} (U, k = 2){'; ' + setting if setting else ''}")
     if result.get("localisation", {}).get("sentence"):
         print(f"where: {result['localisation']['sentence']}")
     if result.get("verdict"):

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from ..core.effects.display import display_parameters
 from ..core.scales.repeatability import iso230_2, positioning_runs
 from ..core.workbench.statistics import format_with_uncertainty, rms_with_uncertainty
 from . import Figure, Section, Table, pyplot, save_figure
@@ -318,10 +319,13 @@ def localisation_section(check: dict, directory: Path, stem: str) -> Section:
     plt = pyplot()
     where = check.get("localisation") or {}
     section = Section("Where the residual lives")
-    shares = [s for s in where.get("shares", []) if s["share"] > 0][:12]
+    # Per component the variables that differ; temperatures that explain alike are one bar.
+    shares = where.get("chart") or [{"label": s["variable"], "component": s["component"],
+                                     "share": s["share"]}
+                                    for s in where.get("shares", []) if s["share"] > 0][:12]
     if shares:
         fig, ax = plt.subplots(figsize=(7.5, 0.32 * len(shares) + 1.2))
-        labels = [f"{s['variable']}  (e_{s['component']})" for s in shares][::-1]
+        labels = [f"{s['label']}  (e_{s['component']})" for s in shares][::-1]
         values = [100 * s["share"] for s in shares][::-1]
         ax.barh(labels, values, color="tab:blue")
         ax.set_xlabel("share of the component's residual variance explained, cross-validated [%]")
@@ -346,12 +350,12 @@ def localisation_section(check: dict, directory: Path, stem: str) -> Section:
         table = Table(["effect named", "setting", "confidence", "share of the excess removed",
                        "parameters (± U, k = 2)", "physical reading"])
         for entry in named:
-            table.add(entry["name"], ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else
-                                               f"{k} {v}" for k, v in entry["setting"].items()),
+            table.add(entry["name"], entry.get("setting_display") or ", ".join(
+                f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
+                for k, v in entry["setting"].items()),
                       f"{100 * entry['confidence']:.0f} %",
                       f"{100 * entry['share_of_excess']:.0f} %",
-                      "; ".join(f"{n} = {v:.4g} ± {2 * entry['parameter_uncertainties'][n]:.2g}"
-                                for n, v in entry["parameters"].items()),
+                      "; ".join(f"{n} = {v}" for n, v in _displayed(entry).items()),
                       entry["explanation"], css_class="accepted")
         section.tables.append(table)
     verdict = check.get("verdict")
@@ -375,6 +379,15 @@ def survey_report_sections(result: dict, plot: dict, directory: Path, stem: str
             _versions_section(check)]
 
 
+def _displayed(entry: dict) -> dict[str, str]:
+    """A candidate's parameters as read (value ± U, k = 2, in um/K, urad, ...)."""
+    if entry.get("display"):
+        return entry["display"]
+    return display_parameters(entry.get("effect", ""), entry.get("variant", ""),
+                              entry.get("parameters", {}),
+                              entry.get("parameter_uncertainties", {}))
+
+
 def _evidence_section(check: dict) -> Section:
     section = Section("The effect found and its evidence")
     baseline = check.get("baseline_cv_rmse", check["baseline_rmse"])
@@ -390,12 +403,10 @@ def _evidence_section(check: dict) -> Section:
         "standard errors; then the search repeats with it in the model. "
         "Confidence = 1 - that adjusted p-value.")
     table = Table(["candidate", "status", "CV error after [µm]", "reduction", "confidence",
-                   "parameters (± u, k = 1)", "physical reading"])
+                   "parameters (± U, k = 2)", "physical reading"])
     for entry in check["ranking"][:12]:
         accepted = entry["significant"]
-        parameters = "; ".join(
-            f"{name} = {value:.3g} ± {entry.get('parameter_uncertainties', {}).get(name, np.nan):.2g}"
-            for name, value in entry.get("parameters", {}).items())
+        parameters = "; ".join(f"{name} = {text}" for name, text in _displayed(entry).items())
         refusal = entry.get("refusal", "")
         status = "accepted" if accepted else ("refused by physics" if refusal else "rejected")
         table.add(entry.get("name", entry["effect"]), status, entry["cv_rmse_after"] * UM,
@@ -411,10 +422,12 @@ def _evidence_section(check: dict) -> Section:
     for step in added:
         for effect in step["added"]:
             uncertainties = step.get("parameter_uncertainties", {}).get(effect, {})
+            family, _, variant = effect.partition(":")
+            shown = display_parameters(family, variant, step["parameters"][effect],
+                                       uncertainties)
             section.paragraphs.append(
-                f"Added {effect}: " + ", ".join(
-                    f"{name} = {value:.4g} ± {2 * uncertainties.get(name, np.nan):.2g} (k = 2)"
-                    for name, value in step["parameters"][effect].items()) + ".")
+                f"Added {effect}: " + ", ".join(f"{name} = {text}" for name, text in
+                                                shown.items()) + " (U, k = 2).")
     if not added:
         section.paragraphs.append("No effect was added.")
     return section

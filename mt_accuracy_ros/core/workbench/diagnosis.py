@@ -135,8 +135,15 @@ class Candidate:
         return f"{self.effect}:{self.variant}" if self.variant else self.effect
 
     def as_dict(self) -> dict:
+        """SI values (``parameters``, ``parameter_uncertainties`` k = 1, ``setting``) and
+        their engineering reading (``display``: value ± U (k = 2) in um/K, urad, ...)."""
+        from ..effects.display import display_parameters, display_setting
+
         return {"effect": self.effect, "variant": self.variant, "name": self.name,
                 "group": self.group, "setting": self.setting,
+                "setting_display": display_setting(self.setting),
+                "display": display_parameters(self.effect, self.variant, self.parameters,
+                                              self.parameter_uncertainties),
                 "cv_rmse_after": self.cv_rmse_after, "error_reduction": self.error_reduction,
                 "significant": self.significant, "confidence": self.confidence,
                 "share_of_excess": self.share_of_excess, "explanation": self.explanation,

@@ -115,10 +115,36 @@ class Localisation:
                 f"variance, {best.explained_rms * 1e6:.1f} um RMS{equally})"
                 f"{': ' + hint if hint else ''}")
 
+    def chart(self, per_component: int = 4, alike: float = 0.05) -> list[dict]:
+        """What a chart of where the residual lives should show: per component, the few
+        variables that differ. Temperatures that explain about the same (within ``alike``
+        of the best of them - a warm-up seen by every sensor) are one bar, "all N
+        temperatures alike", not a dozen bars of 92 % that tell the reader nothing."""
+        rows = []
+        for component in COMPONENTS:
+            mine = [s for s in self.shares if s.component == component and s.share > 0]
+            temperatures = [s for s in mine if s.variable.startswith("T_")]
+            alike_group = [s for s in temperatures
+                           if temperatures and s.share >= temperatures[0].share - alike]
+            entries = []
+            for share in mine:
+                if len(alike_group) >= 3 and share in alike_group:
+                    if share is alike_group[0]:
+                        entries.append({"label": f"all {len(alike_group)} temperatures alike "
+                                                 f"(best {share.variable})",
+                                        "component": component, "share": share.share,
+                                        "variables": [s.variable for s in alike_group]})
+                    continue
+                entries.append({"label": share.variable, "component": component,
+                                "share": share.share, "variables": [share.variable]})
+            rows += entries[:per_component]
+        return sorted(rows, key=lambda r: -r["share"])
+
     def as_dict(self, top: int = 12) -> dict:
         return {"shares": [{"variable": s.variable, "component": s.component,
                             "share": s.share, "explained_rms_m": s.explained_rms}
                            for s in self.shares[:top]],
+                "chart": self.chart(),
                 "peaks": [{"axis": p.axis, "component": p.component, "period_m": p.period_m,
                            "amplitude_m": p.amplitude, "share": p.share} for p in self.peaks[:6]],
                 "top_group": [s.variable for s in self.top_group()],
