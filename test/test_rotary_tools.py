@@ -146,3 +146,36 @@ def test_the_instruments_measure_the_five_axis_scenarios_own_machine(tmp_path, c
     l2 = result["l2"]
     assert abs(l2["tilt_x_rad"] - truth["EB0A"]) < 0.5 * ARCSEC
     assert abs(l2["tilt_y_rad"] - truth["EC0A"]) < 0.5 * ARCSEC
+
+
+def test_export_writes_what_a_control_loads_and_refuses_what_cannot_hold_the_model(
+        tmp_path, capsys):
+    """Issue 30: the default spacing holds a 10 mm pitch (8 points a period, within the
+    band); a spacing that cannot is refused with one that can; a typo's 100 MB is refused;
+    the SINUMERIK and FANUC files say what the control's point limit leaves."""
+    from mt_accuracy_ros.cli import main
+
+    model = tmp_path / "model.yaml"
+    model.write_text(
+        "machine: kidani_hmc\neffects:\n  positioning_periodic:EXX:\n"
+        "    family: positioning_periodic\n    variant: EXX\n    setting: {period_m: 0.01}\n"
+        "    coefficients: {cos1: 2.0e-06, sin1: 1.0e-06, cos2: 0.0, sin2: 0.0}\n")
+    assert main(["export", str(model), "--out", str(tmp_path / "t")]) == 0
+    out = capsys.readouterr().out
+    assert "spacing 1.25 mm, chosen for a band of 1 um" in out
+    tcp = float(out.split("at most ")[1].split(" um")[0])
+    assert tcp <= 1.0
+    for flags, words in ((["--spacing-mm", "5"], "a spacing that holds it: 1.25 mm"),
+                         (["--spacing-mm", "0.001"], "refused above 100000")):
+        assert main(["export", str(model), "--out", str(tmp_path / "u"), *flags]) == 2
+        err = capsys.readouterr().err.strip()
+        assert words in err and "\n" not in err
+    assert not (tmp_path / "u").exists()
+    assert main(["export", str(model), "--out", str(tmp_path / "s"), "--controller",
+                 "siemens", "--json", str(tmp_path / "s.json")]) == 0
+    out = capsys.readouterr().out
+    assert (tmp_path / "s" / "AX_EEC.INI").read_text().startswith("%_N_AX_EEC_INI")
+    assert "the control holds 200 points per axis" in out
+    assert main(["export", str(model), "--out", str(tmp_path / "f"), "--controller",
+                 "fanuc"]) == 0
+    assert (tmp_path / "f" / "PITCH_ERROR.TXT").read_text().splitlines()[2].startswith("N3620")

@@ -131,38 +131,143 @@ def _probe(args: argparse.Namespace) -> int:
     return 0
 
 
+#: Points per axis above which a table is refused (a typo such as --spacing-mm 0.001
+#: would write hundreds of MB that no control loads).
+MAX_TABLE_POINTS = 100_000
+
+
 def _export(args: argparse.Namespace) -> int:
     from ..core.compensation.cnc_export import (bilateral_tables, round_trip, write_bilateral_csv,
                                                write_isg_csv)
+    from ..core.compensation.controller_tables import (CONTROLLERS,
+                                                       POINTS_PER_PERIOD, fanuc_pitch,
+                                                       periodic_periods, siemens_eec,
+                                                       spacing_for, table_points,
+                                                       uncovered_effects)
     from ..core.compensation.error_model import resolve_model
+    from ..core.errors import ParameterError
     from ..io.rotary_csv import atomic_write_text
 
     model = resolve_model(args.model)
-    spacing = args.spacing_mm * 1e-3
-    # Everything is computed before anything is written: a bad spacing writes nothing.
-    texts = {f"{axis}_bilateral.csv": write_bilateral_csv(table, model.machine.name)
-             for axis, table in bilateral_tables(model, spacing).items()}
-    texts["volumetric_isg.csv"] = write_isg_csv(model, spacing)
-    check = round_trip(model, spacing)
+    band = args.band_um * 1e-6
+    machine = model.machine
+    linear = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
+    controller = CONTROLLERS.get(args.controller or "", {})
+    max_points = args.max_points or controller.get("max_points")
+    asked = None if args.spacing_mm is None else args.spacing_mm * 1e-3
+    if asked is not None and asked > 0:
+        points = max(table_points(machine.axes[a].stroke, asked).size for a in linear)
+        if points > MAX_TABLE_POINTS:
+            raise ParameterError(f"spacing {args.spacing_mm:g} mm needs {points} points per "
+                                 f"axis (about {points * 6 * 2 * 20 / 1e6:.0f} MB of bilateral "
+                                 f"tables): refused above {MAX_TABLE_POINTS}")
+        if max_points and points > max_points:
+            raise ParameterError(f"spacing {args.spacing_mm:g} mm needs {points} points per "
+                                 f"axis; {controller.get('name', 'the control')} holds "
+                                 f"{max_points} (--max-points)")
+    texts, notes = {}, []
+    if args.controller:
+        choice = spacing_for(model, band, asked_m=asked, max_points=max_points)
+        spacing = choice.spacing_m
+        if args.controller == "siemens":
+            text, shifts = siemens_eec(model, spacing)
+            texts["AX_EEC.INI"] = text
+            moved = {a: v for a, v in shifts.items() if abs(v) > 0}
+            if moved:
+                notes.append("the value at each reference point is zero (SINUMERIK's rule): "
+                             "shifted by " + ", ".join(f"{a} {v * 1e6:.3g} um"
+                                                       for a, v in moved.items()))
+        else:
+            text, _ = fanuc_pitch(model, spacing, step_limit=int(
+                args.fanuc_step_limit or controller["step_limit"]),
+                detection_unit_m=args.detection_unit_um * 1e-6)
+            texts["PITCH_ERROR.TXT"] = text
+        uncovered = uncovered_effects(model)
+        if uncovered:
+            notes.append(f"positioning tables do not hold {', '.join(uncovered)}: the "
+                         "control's cross/volumetric compensation (volumetric_isg.csv) or the "
+                         "real-time offset carries them")
+        if choice.limited_by:
+            notes.append(choice.limited_by)
+        summary = {"controller": args.controller, "spacing_m": spacing,
+                   "max_error_m": choice.max_error_m, "errors_m": choice.errors_m,
+                   "periods_m": choice.periods_m, "limited_by": choice.limited_by,
+                   "band_m": band}
+        check = None
+    else:
+        if asked is None:
+            spacing = _volumetric_spacing(model, band, periodic_periods(model))
+        else:
+            spacing = asked
+            periods = periodic_periods(model)
+            short = {n: p for n, p in periods.items() if p / spacing < POINTS_PER_PERIOD}
+            if short:
+                good = _volumetric_spacing(model, band, periods)
+                raise ParameterError(
+                    f"spacing {args.spacing_mm:g} mm cannot hold this model: " + "; ".join(
+                        f"{n} has a {p * 1e3:.4g} mm period ({POINTS_PER_PERIOD} points a period"
+                        f" need <= {p / POINTS_PER_PERIOD * 1e3:.4g} mm)"
+                        for n, p in short.items()) + f"; a spacing that holds it: {good * 1e3:g}"
+                    " mm")
+        # Everything is computed before anything is written: a bad spacing writes nothing.
+        texts = {f"{axis}_bilateral.csv": write_bilateral_csv(table, machine.name)
+                 for axis, table in bilateral_tables(model, spacing).items()}
+        texts["volumetric_isg.csv"] = write_isg_csv(model, spacing)
+        check = round_trip(model, spacing)
+        if check.tcp_max_error_m > band and asked is not None:
+            notes.append(f"warning: at {spacing * 1e3:g} mm the tables leave up to "
+                         f"{check.tcp_max_error_m * 1e6:.3g} um at the TCP, over the band "
+                         f"{args.band_um:g} um")
+        summary = {"files": list(texts), **check.as_dict(), "band_m": band}
     out = Path(args.out)
     for name, text in texts.items():
         atomic_write_text(out / name, text)
-    print(f"wrote {', '.join(texts)} to {out} (spacing {args.spacing_mm:g} mm)")
-    print(f"  round trip: tables read back and applied differ from the model by at most "
-          f"{check.tcp_max_error_m * 1e6:.3f} um at the TCP (RMS {check.tcp_rms_error_m * 1e6:.3f}"
-          f" um); interpolation bound {check.tcp_bound_m * 1e6:.3f} um")
+    print(f"wrote {', '.join(texts)} to {out} (spacing {spacing * 1e3:g} mm"
+          f"{'' if asked is not None else ', chosen for a band of ' + format(args.band_um, 'g') + ' um'})")
+    if check is not None:
+        print(f"  round trip: tables read back and applied differ from the model by at most "
+              f"{check.tcp_max_error_m * 1e6:.3f} um at the TCP (RMS "
+              f"{check.tcp_rms_error_m * 1e6:.3f} um); interpolation bound "
+              f"{check.tcp_bound_m * 1e6:.3f} um")
+    else:
+        print(f"  the table leaves at most {summary['max_error_m'] * 1e6:.3f} um of positioning "
+              f"error between its points (band {args.band_um:g} um)")
+    for note in notes:
+        print(f"  {note}")
     from ..core.compensation.user_tables import fitted_user_effects, table_axis
 
     for name, entry in fitted_user_effects(model).items():
         axis, why = table_axis(model, name, entry)
         print(f"  user effect {name}: " + (f"in the {axis} tables" if axis else why))
-    if args.report or args.json:
+    if (args.report or args.json) and check is not None:
         from ..report.rotary import export_section
 
         _finish([export_section(check, list(texts))], "mt-accuracy export",
-                f"CNC compensation tables of {args.model}", args.report,
-                {"files": list(texts), **check.as_dict()}, args.json)
+                f"CNC compensation tables of {args.model}", args.report, summary, args.json)
+    elif args.json:
+        import json
+
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps({**summary, "files": list(texts),
+                                               "notes": notes}, indent=2, default=float))
     return 0
+
+
+def _volumetric_spacing(model, band: float, periods: dict) -> float:
+    """The coarsest round spacing whose bilateral/volumetric tables, read back and applied,
+    keep the TCP within ``band`` and sample every period at 8 points or more."""
+    from ..core.compensation.cnc_export import round_trip
+    from ..core.compensation.controller_tables import NICE_SPACINGS_M, POINTS_PER_PERIOD
+
+    strokes = [model.machine.axes[a].stroke for a in model.machine.axis_order
+               if not model.machine.axes[a].is_rotary]
+    shortest = min((h - l for l, h in strokes), default=1.0)
+    for spacing in NICE_SPACINGS_M:
+        if spacing > shortest or any(p / spacing < POINTS_PER_PERIOD for p in periods.values()):
+            continue
+        if round_trip(model, spacing, points=500).tcp_max_error_m <= band:
+            return spacing
+    return NICE_SPACINGS_M[-1]
 
 
 def add_parser(commands) -> None:
@@ -205,7 +310,22 @@ def add_parser(commands) -> None:
     export = commands.add_parser("export", help="CNC compensation tables of a model "
                                  "(per-axis bilateral CSV, volumetric ISG-CSV style)")
     export.add_argument("model", help="error model: bundled name, YAML path")
-    export.add_argument("--spacing-mm", type=float, default=5.0)
+    export.add_argument("--spacing-mm", type=float, default=None,
+                        help="table spacing (default: the coarsest that keeps the round trip "
+                             "within --band-um and samples every period at 8 points)")
+    export.add_argument("--band-um", type=float, default=1.0,
+                        help="the instrument's band the tables must hold the model within")
+    export.add_argument("--controller", choices=["siemens", "fanuc"], default=None,
+                        help="write the positioning tables a control loads: SINUMERIK EEC "
+                             "(AX_EEC.INI) or FANUC pitch error compensation (parameter tape)")
+    export.add_argument("--max-points", type=int, default=None,
+                        help="points per axis the control holds (SINUMERIK MD38000; default "
+                             "200 for siemens, 128 for fanuc)")
+    export.add_argument("--detection-unit-um", type=float, default=1.0,
+                        help="fanuc: the axis' detection unit")
+    export.add_argument("--fanuc-step-limit", type=int, default=None,
+                        help="fanuc: largest increment per point in detection units x "
+                             "magnification (default 7; 32767 on controls that allow it)")
     export.add_argument("--out", required=True, help="directory for the tables")
     export.add_argument("--report", help="HTML report")
     export.add_argument("--json", help="JSON summary")

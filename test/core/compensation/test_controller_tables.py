@@ -1,0 +1,140 @@
+"""Positioning tables a control loads (issue 30): written, read back by a reader written
+here from the formats' rules, applied, and compared with the model."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.core.compensation.controller_tables import (POINTS_PER_PERIOD,
+                                                                  fanuc_pitch, siemens_eec,
+                                                                  spacing_for)
+from mt_accuracy_ros.core.compensation.error_model import ErrorModel
+from mt_accuracy_ros.core.errors import ParameterError
+from mt_accuracy_ros.core.kinematics.machine import load_machine
+
+BAND = 1e-6
+
+
+def _model(k=5e-6):
+    """A 10 mm ball-screw pitch of X (2.2 um) and a user effect k x - the export used to
+    write all-zero tables for the latter."""
+    return ErrorModel(load_machine("kidani_hmc"), {
+        "positioning_periodic:EXX": {
+            "family": "positioning_periodic", "variant": "EXX", "setting": {"period_m": 0.01},
+            "coefficients": {"cos1": 2e-6, "sin1": 1e-6, "cos2": 0.0, "sin2": 0.0}},
+        "scale": {"expression": "k * x", "parameters": ["k"], "acts_on": "X",
+                  "values": {"k": k}}})
+
+
+def _truth(x):
+    """E_XX by hand from the model's definition: the sinusoid and k x."""
+    phase = 2 * np.pi * x / 0.01
+    return 2e-6 * np.cos(phase) + 1e-6 * np.sin(phase) + 5e-6 * x
+
+
+def _read_siemens(text):
+    """SINUMERIK EEC: $AA_ENC_COMP[e,N,AX]=mm, _STEP, _MIN, _MAX per axis."""
+    tables = {}
+    for line in text.splitlines():
+        match = re.fullmatch(r"\$AA_ENC_COMP\[0,(\d+),(\w+)\]=(-?[\d.]+)", line)
+        if match:
+            tables.setdefault(match[2], {}).setdefault("values", {})[int(match[1])] = \
+                float(match[3]) * 1e-3
+        match = re.fullmatch(r"\$AA_ENC_COMP_(STEP|MIN|MAX|IS_MODULO)\[0,(\w+)\]=(-?[\d.]+)",
+                             line)
+        if match:
+            tables.setdefault(match[2], {})[match[1]] = float(match[3]) * 1e-3
+    assert text.startswith("%_N_AX_EEC_INI\nCHANDATA(1)\n") and text.rstrip().endswith("M17")
+    return tables
+
+
+def test_sinumerik_eec_round_trip_holds_the_model_within_the_band():
+    model = _model()
+    choice = spacing_for(model, BAND)
+    # 8 points a 10 mm period at least, and the round trip within the band.
+    assert choice.spacing_m <= 0.01 / POINTS_PER_PERIOD + 1e-12
+    text, shifts = siemens_eec(model, choice.spacing_m)
+    table = _read_siemens(text)["X1"]
+    n = len(table["values"])
+    assert table["MAX"] == pytest.approx(table["MIN"] + table["STEP"] * (n - 1), abs=1e-9)
+    assert table["IS_MODULO"] == 0 and table["STEP"] == pytest.approx(choice.spacing_m)
+    points = table["MIN"] + table["STEP"] * np.arange(n)
+    values = np.array([table["values"][k] for k in range(n)])
+    # The value at the reference point (X = 0 here) is zero; a positive value moves the
+    # axis negative, so what is left of the error is E - C = the shift (a datum).
+    assert np.interp(0.0, points, values) == pytest.approx(0.0, abs=1e-9)
+    x = np.linspace(0.0, 0.39, 5001)
+    left = _truth(x) - np.interp(x, points, values)
+    assert np.ptp(left) / 2 <= BAND and abs(np.mean(left) - shifts["X"]) < BAND
+    assert shifts["X"] == pytest.approx(_truth(np.array([0.0]))[0], abs=1e-12)
+
+
+def _read_fanuc(text):
+    """FANUC parameter tape: N<param>A<axis>P<value>...; N<10000+n>P<increment>."""
+    lines = text.strip().splitlines()
+    assert lines[0] == "%" and lines[-1] == "%"
+    parameters, data = {}, {}
+    for line in lines[1:-1]:
+        if line.startswith("("):
+            continue
+        number = int(re.match(r"N(\d+)", line)[1])
+        if number >= 10000:
+            data[number - 10000] = int(re.fullmatch(r"N\d+P(-?\d+)", line)[1])
+        else:
+            parameters[number] = {int(a): int(p) for a, p in re.findall(r"A(\d+)P(-?\d+)", line)}
+    return parameters, data
+
+
+def test_fanuc_pitch_error_data_round_trip():
+    model = _model()
+    choice = spacing_for(model, BAND, max_points=128)
+    assert choice.limited_by.startswith("the control holds 128 points per axis")
+    text, _ = fanuc_pitch(model, choice.spacing_m, step_limit=7)
+    parameters, data = _read_fanuc(text)
+    axis = 1                                          # X: the control's first axis
+    reference, low, high = (parameters[p][axis] for p in (3620, 3621, 3622))
+    unit = 1e-6 * parameters[3623][axis]              # detection unit x magnification
+    interval = parameters[3624][axis] * 1e-6
+    assert interval == pytest.approx(choice.spacing_m) and high - low + 1 <= 128
+    # Absolute compensation: zero at the reference point, the increment of point n over
+    # the section from n - 1 to n.
+    absolute = {reference: 0}
+    for n in range(reference + 1, high + 1):
+        absolute[n] = absolute[n - 1] + data[n]
+    for n in range(reference - 1, low - 1, -1):
+        absolute[n] = absolute[n + 1] - data[n + 1]
+    assert all(abs(data[n]) <= 7 for n in range(low, high + 1))
+    numbers = np.arange(low, high + 1)
+    points = (numbers - reference) * interval        # the reference position is X = 0
+    compensation = np.array([absolute[n] for n in numbers]) * unit
+    x = np.linspace(0.0, 0.39, 5001)
+    # The compensation is added to the command: what is left is E + C, its datum E(0).
+    left = _truth(x) + np.interp(x, points, compensation) - _truth(np.array([0.0]))[0]
+    assert np.max(np.abs(left)) <= choice.errors_m["X"] + 0.5 * unit + 1e-9
+    # The limit forced a coarser table and said what it leaves (over the band here).
+    assert choice.max_error_m > BAND and "leaves up to" in choice.limited_by
+
+
+def test_a_spacing_that_cannot_hold_the_model_is_refused_with_one_that_can():
+    model = _model()
+    with pytest.raises(ParameterError, match=r"spacing 5 mm cannot hold this model: "
+                       r"positioning_periodic:EXX has a 10 mm period .*coarsest spacing that "
+                       r"holds it is 1.25 mm"):
+        spacing_for(model, BAND, asked_m=0.005)
+    with pytest.raises(ParameterError, match="exceeds the control's 1"):
+        fanuc_pitch(model, 0.004, step_limit=1)
+    with pytest.raises(ParameterError, match="0..1023 for all axes"):
+        fanuc_pitch(model, 0.0005, step_limit=32767)
+
+
+def test_a_user_effect_reaches_the_controller_tables():
+    model = _model(k=5e-6)
+    text, _ = siemens_eec(model, 0.0025)
+    values = np.array([v for _, v in sorted(_read_siemens(text)["X1"]["values"].items())])
+    flat = _model(k=0.0)
+    flat_values = np.array([v for _, v in sorted(
+        _read_siemens(siemens_eec(flat, 0.0025)[0])["X1"]["values"].items())])
+    points = 0.0025 * np.arange(values.size)
+    np.testing.assert_allclose(values - flat_values, 5e-6 * points, atol=1e-9)
