@@ -179,3 +179,82 @@ def test_export_writes_what_a_control_loads_and_refuses_what_cannot_hold_the_mod
     assert main(["export", str(model), "--out", str(tmp_path / "f"), "--controller",
                  "fanuc"]) == 0
     assert (tmp_path / "f" / "PITCH_ERROR.TXT").read_text().splitlines()[2].startswith("N3620")
+
+
+def _rewrite(path, column, change):
+    """The CSV at ``path`` with ``change(value)`` applied to every cell of ``column``."""
+    lines = path.read_text().splitlines()
+    header = lines[0].split(",")
+    j = header.index(column)
+    out = [lines[0]]
+    for line in lines[1:]:
+        cells = line.split(",")
+        cells[j] = f"{change(float(cells[j])):.9g}"
+        out.append(",".join(cells))
+    path.write_text("\n".join(out) + "\n")
+
+
+def test_rotary_tools_judge_their_own_fits(tmp_path, capsys):
+    """Issue 30: radians in a degree column, a 5 degree arc, every reading at one angle
+    and a tool 20 um longer than assumed gave confident nonsense; now each is refused or
+    flagged, and the repeatability is printed."""
+    import math
+
+    from mt_accuracy_ros.cli import main
+
+    data = tmp_path / "bb.csv"
+    assert main(["ballbar", str(data), "--simulate", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "repeatability" in out and "misfit" not in out
+    for change, words in ((math.radians, "radians in the angle_deg column"),
+                          (lambda a: a / 72.0, "span only 5 deg"),
+                          (lambda a: 30.0, "every reading is at 30.000 deg")):
+        broken = tmp_path / "broken.csv"
+        broken.write_text(data.read_text())
+        _rewrite(broken, "angle_deg", change)
+        assert main(["ballbar", str(broken)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert words in err and "\n" not in err
+    # A unit slip in R_x scales the design: the fit is as close, its tilts ten times too
+    # large - said, with what to check.
+    assert main(["ballbar", str(data), "--radius-mm", "7.1842"]) == 0
+    assert "implausible: a tilt of 9" in capsys.readouterr().out
+
+    probe = tmp_path / "p.csv"
+    assert main(["probe", str(probe), "--simulate", "4"]) == 0
+    out = capsys.readouterr().out
+    assert "repeatability of repeated cycles" in out and "condition number" in out
+    assert "misfit" not in out
+    radians = tmp_path / "p_rad.csv"
+    radians.write_text(probe.read_text())
+    _rewrite(radians, "A_deg", math.radians)
+    assert main(["probe", str(radians)]) == 2
+    assert "radians in the A_deg column" in capsys.readouterr().err
+    # A tool 20 um longer than the cycle assumed: every centre off by what the longer
+    # tool moves the tip at that configuration (the tilting head turns it).
+    from dataclasses import replace
+
+    import numpy as np
+
+    from mt_accuracy_ros.core.kinematics.chain import KinematicModel
+    from mt_accuracy_ros.core.kinematics.machine import load_machine
+    from mt_accuracy_ros.io.rotary_csv import probing_csv_text
+    from mt_accuracy_ros.sim.rotary_instruments import ProbingPlan, probe_sphere
+
+    machine = load_machine("khan_chen_rpppr")
+    rotary = {a for a in machine.axis_order if machine.axes[a].is_rotary}
+    plan = ProbingPlan({a: list(np.arange(-60.0, 61.0, 20.0)) for a in sorted(rotary)},
+                       {a: float(np.mean(machine.axes[a].stroke)) for a in machine.axis_order
+                        if a not in rotary}, sphere_m=(0.05, 0.08, 0.06),
+                       sphere_radius_m=12.5e-3, repeats=2)
+    data = probe_sphere(machine, plan, {"EY0A": 20e-6, "EZ0A": -15e-6}, seed=3)
+    longer_tool = replace(machine, tool=np.asarray(machine.tool) + [0.0, 0.0, 20e-6])
+    shift = KinematicModel(longer_tool).nominal_relative(data["positions"]) - \
+        KinematicModel(machine).nominal_relative(data["positions"])
+    longer = tmp_path / "p_long.csv"
+    longer.write_text(probing_csv_text(data["positions"],
+                                       data["touch_points_m"] + shift[:, None, :], rotary))
+    code = main(["probe", str(longer)])
+    out, err = capsys.readouterr()
+    assert (code == 0 and "misfit: the fit leaves" in out) or \
+        (code == 2 and "makes the dispersion worse" in err)

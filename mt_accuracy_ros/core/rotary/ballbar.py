@@ -276,6 +276,20 @@ def fit_linf(design: NDArray, observed: NDArray) -> NormFit:
 
 
 # ------------------------------------------------------------------- data checks
+#: The shortest arc a run may index [deg]: below it the tilts and the axial error cannot
+#: be told apart (the design's condition number grows without bound), and an arc
+#: this short is more often radians written in a degree column.
+MIN_ARC_DEG = 90.0
+
+#: A fit whose remaining scatter exceeds the readings' repeatability by this factor is
+#: a misfit: the model of the setup (radius, bar lengths, units) is not these data's.
+MISFIT_FACTOR = 3.0
+
+#: Tilts of a rotary table's axis beyond this are not a table's (Zhu's Table 5.2: a few
+#: arc seconds; 60" is generous) [rad].
+PLAUSIBLE_TILT_RAD = 60.0 * np.pi / 648000.0
+
+
 @dataclass(frozen=True)
 class BallBarRun:
     """The readings of one setup: ``repetitions`` x ``angles`` (Zhu: 3 x 37).
@@ -300,6 +314,16 @@ class BallBarRun:
             raise InputDataError(f"{name}: angle {int(np.flatnonzero(~np.isfinite(angles))[0])} "
                                  "is not a number")
         steps = np.diff(angles)
+        if np.all(steps == 0):
+            raise InputDataError(f"{name}: every reading is at {np.degrees(angles[0]):.3f} deg; "
+                                 "a run indexes the table through an arc")
+        span_deg = float(np.degrees(np.ptp(angles)))
+        if span_deg <= MIN_ARC_DEG:
+            hint = " - or radians in the angle_deg column" if span_deg <= 2 * np.pi * 1.01 \
+                else ""
+            raise InputDataError(f"{name}: the table angles span only {span_deg:.3g} deg: too "
+                                 f"short an arc to separate E_x, E_y and D_z (index at least "
+                                 f"{MIN_ARC_DEG:g} deg, a full turn as Zhu does){hint}")
         if not (np.all(steps > 0) or np.all(steps < 0)):
             where = int(np.flatnonzero(np.sign(steps) != np.sign(steps[0]))[0]) + 1
             raise InputDataError(
@@ -424,7 +448,48 @@ class BallBarCalibration:
                                            for f in self.single_setups},
             "reversal_jumps": [{"run": j.run, "jump_m2": j.jump, "noise_m2": j.noise,
                                 "significant": bool(j.significant)} for j in self.reversal],
+            "scatter_m": self.scatter_m, "misfit": self.misfit,
+            "implausible": self.implausible,
         }
+
+    @property
+    def scatter_m(self) -> float:
+        """The l2 fit's remaining scatter as a bar reading [m]: the squared-change residual
+        (m^2) over the derivative of the squared change, 2 L, of the longer bar (the one
+        whose reading a residual of the difference resembles least)."""
+        bar = max(self.short.setup.bar_length_m, self.long.setup.bar_length_m)
+        return float(self.l2.rms / (2.0 * bar))
+
+    @property
+    def repeatability_m(self) -> float:
+        """The readings' repeatability [m]: the larger run's pooled standard deviation."""
+        return max(self.short.repeatability_m, self.long.repeatability_m)
+
+    @property
+    def implausible(self) -> str:
+        """A result no rotary table gives ("" when plausible): a tilt above
+        :data:`PLAUSIBLE_TILT_RAD` - what a unit slip in R_x or the socket height makes of
+        a good fit (the design scales with them, the scatter does not show it)."""
+        tilts = np.abs(self.l2.parameters[:2])
+        if np.max(tilts) <= PLAUSIBLE_TILT_RAD:
+            return ""
+        return (f"implausible: a tilt of {np.max(tilts) / ARCSEC:.0f}\" (a rotary table's is "
+                f"seldom above {PLAUSIBLE_TILT_RAD / ARCSEC:.0f}\") - check the units of R_x "
+                f"(--radius-mm, here {self.short.setup.radius_m * 1e3:.4g} mm) and of the "
+                "socket height")
+
+    @property
+    def misfit(self) -> str:
+        """Why the fit does not describe the data ("" when it does): a remaining scatter
+        well above the repeatability, with the likely causes."""
+        floor = max(self.repeatability_m, 0.05e-6)
+        if self.repeatability_m <= 0 or self.scatter_m <= MISFIT_FACTOR * floor:
+            return ""
+        return (f"misfit: the fit leaves {self.scatter_m * 1e6:.2f} um of scatter, "
+                f"{self.scatter_m / floor:.0f} x the readings' repeatability "
+                f"({self.repeatability_m * 1e6:.2f} um) - check R_x (--radius-mm) and the "
+                "socket height, the bar lengths, the reading units, and that the setup did "
+                "not move between the runs")
 
     def text(self) -> str:
         lines = [f"ball bar: {self.angles_rad.size} positions, bars "
@@ -440,6 +505,12 @@ class BallBarCalibration:
                          f"  D_z {p[2] * 1e6:6.2f} um{spread}; residual max "
                          f"{fit.max_abs * 1e6:.3f} mm^2, range {fit.range * 1e6:.3f} mm^2, "
                          f"RMS {fit.rms * 1e6:.3f} mm^2")
+        lines.append(f"  repeatability {self.short.repeatability_m * 1e6:.2f} / "
+                     f"{self.long.repeatability_m * 1e6:.2f} um (short / long bar); the l2 fit "
+                     f"leaves {self.scatter_m * 1e6:.2f} um RMS as a bar reading")
+        for problem in (self.misfit, self.implausible):
+            if problem:
+                lines.append(f"  {problem}")
         for jump in self.reversal:
             if jump.significant:
                 lines.append(f"  {jump.run}: a jump of {jump.jump * 1e6:.4f} mm^2 between 0 and "

@@ -164,12 +164,33 @@ class LocationIdentification:
                 "dispersion_after_m": self.dispersion_after_m, "rms_after_m": self.rms_after_m,
                 "condition_number": self.condition_number,
                 "repeatability_m": self.repeatability_m, "cycles": int(self.measured_m.shape[0]),
-                "not_observable": list(self.not_observable)}
+                "not_observable": list(self.not_observable), "misfit": self.misfit}
+
+    @property
+    def misfit(self) -> str:
+        """Why the fit does not describe the data ("" when it does): what it leaves per
+        centre well above the repeated cycles' repeatability, with the likely causes."""
+        if not self.repeatability_m:
+            return ""
+        scatter = self.rms_after_m / np.sqrt(3.0)          # per coordinate, as the repeatability
+        floor = max(self.repeatability_m, 0.05e-6)
+        if scatter <= MISFIT_FACTOR * floor:
+            return ""
+        return (f"misfit: the fit leaves {scatter * 1e6:.2f} um of scatter per coordinate, "
+                f"{scatter / floor:.0f} x the repeatability ({self.repeatability_m * 1e6:.2f} "
+                "um) - likely causes: the probe or tool length, the sphere's nominal position "
+                "(--sphere-mm), the axes' nominal positions, or the angle units")
 
     def text(self) -> str:
         lines = [f"probing: {self.measured_m.shape[0]} cycles; dispersion "
                  f"{self.dispersion_before_m * 1e6:.1f} um before, "
-                 f"{self.dispersion_after_m * 1e6:.1f} um after (RMS {self.rms_after_m * 1e6:.2f} um)"]
+                 f"{self.dispersion_after_m * 1e6:.1f} um after (RMS {self.rms_after_m * 1e6:.2f} um)",
+                 "  repeatability of repeated cycles " +
+                 (f"{self.repeatability_m * 1e6:.2f} um" if self.repeatability_m else
+                  "unknown (no cycle repeated)") +
+                 f"; condition number {self.condition_number:.3g}"]
+        if self.misfit:
+            lines.append(f"  {self.misfit}")
         for name, value in self.parameters.items():
             u = self.uncertainties[name]
             if name[1] in LETTERS:
@@ -201,6 +222,15 @@ def _check_inputs(machine: MachineDescription, positions: dict, deviations: NDAr
     if unknown:
         raise InputDataError(f"probing: unknown axis {', '.join(sorted(unknown))}; this "
                              f"machine has {', '.join(machine.axis_order)}")
+    for axis in machine.axis_order:
+        values = q[axis]
+        distinct = np.unique(np.round(values, 12)).size
+        if machine.axes[axis].is_rotary and distinct >= 3 and \
+                0 < np.degrees(np.ptp(values)) <= RADIAN_SPAN_DEG:
+            raise InputDataError(
+                f"probing: the {axis} axis was probed over {np.degrees(np.ptp(values)):.3g} deg "
+                f"only - radians in the {axis}_deg column? (a calibration turns the axis "
+                "tens of degrees)")
     for name in names:
         axis = name[-1]
         if axis not in machine.axes or len(name) != 4 or name[0] != "E" or name[2] != "0":
@@ -275,6 +305,13 @@ def identify_location_errors(machine: MachineDescription, positions: dict[str, A
         if np.max(np.abs(step / scale)) < 1e-12:
             break
     residuals = deviations - predicted(theta)
+    before = float(np.max(np.linalg.norm(deviations - deviations.mean(axis=0), axis=1)))
+    after = float(np.max(np.linalg.norm(residuals, axis=1)))
+    if after > before:
+        raise CalibrationError(
+            f"probing: the fit makes the dispersion worse ({before * 1e6:.1f} um before, "
+            f"{after * 1e6:.1f} um after): the model does not describe these data - check the "
+            "angle units, the probe or tool length and the sphere's nominal position")
     dof = 3 * n - (p + 3)
     sigma2 = float(np.sum(residuals ** 2)) / dof
     covariance = sigma2 * np.linalg.inv(scaled.T @ scaled) / np.outer(scale, scale)
@@ -290,6 +327,12 @@ def identify_location_errors(machine: MachineDescription, positions: dict[str, A
 
 
 RANK_TOLERANCE = 1e-7
+#: Remaining scatter above this many times the repeatability: a misfit (said, not hidden).
+MISFIT_FACTOR = 3.0
+#: Rotary positions whose whole span is at most this many degrees (a full turn's 2 pi,
+#: read as degrees) were radians written into a degree column - no calibration turns an
+#: axis through less.
+RADIAN_SPAN_DEG = 2.0 * np.pi * 1.01
 
 
 def _predictor(machine: MachineDescription, q: dict[str, NDArray], names: list[str],
