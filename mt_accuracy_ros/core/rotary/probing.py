@@ -123,6 +123,12 @@ def default_rotary_parameters(machine: MachineDescription) -> list[str]:
         others = [i for i in range(3) if i != own]
         names += [location_error_name(LETTERS[i], axis) for i in others]
         names += [location_error_name("ABC"[i], axis) for i in others]
+    # Zero-angle errors last: a sphere off an axis' line sees its own (issue 30: asked for
+    # by name, EB0B came back 27.9 +- 3.2 urad with 30 true); observable_parameters keeps
+    # one only where the setup separates it from the rest.
+    for axis in machine.axis_order:
+        if machine.axes[axis].is_rotary:
+            names.append(location_error_name(axis, axis))
     return names
 
 
@@ -140,6 +146,18 @@ class LocationIdentification:
     correlations: dict[str, float] = field(default_factory=dict)
     #: Default parameters one sphere could not separate (left at zero).
     not_observable: list[str] = field(default_factory=list)
+    #: What a fitted parameter stands for when others fold into it: name -> {folded
+    #: name: coefficient} (EZ0A's value is EZ0A + c EZ0B).
+    aliases: dict[str, dict[str, float]] = field(default_factory=dict)
+
+    def identified_as(self, name: str) -> str:
+        """``EZ0A - EZ0B`` for a parameter others fold into, else the name."""
+        text = name
+        for other, c in self.aliases.get(name, {}).items():
+            size = abs(c)
+            text += f" {'+' if c > 0 else '-'} " + (other if abs(size - 1) < 0.02
+                                                     else f"{size:.2g} {other}")
+        return text
 
     @property
     def dispersion_before_m(self) -> float:
@@ -164,7 +182,8 @@ class LocationIdentification:
                 "dispersion_after_m": self.dispersion_after_m, "rms_after_m": self.rms_after_m,
                 "condition_number": self.condition_number,
                 "repeatability_m": self.repeatability_m, "cycles": int(self.measured_m.shape[0]),
-                "not_observable": list(self.not_observable), "misfit": self.misfit}
+                "not_observable": list(self.not_observable), "misfit": self.misfit,
+                "identified_as": {n: self.identified_as(n) for n in self.parameters}}
 
     @property
     def misfit(self) -> str:
@@ -193,16 +212,23 @@ class LocationIdentification:
             lines.append(f"  {self.misfit}")
         for name, value in self.parameters.items():
             u = self.uncertainties[name]
+            label = self.identified_as(name)
             if name[1] in LETTERS:
-                lines.append(f"  {name} {value * 1e6:+9.2f} um  (U, k=2: {2 * u * 1e6:.2f} um)")
+                lines.append(f"  {label} {value * 1e6:+9.2f} um  (U, k=2: {2 * u * 1e6:.2f} um)")
             else:
-                lines.append(f"  {name} {value * 1e6:+9.2f} urad (U, k=2: {2 * u * 1e6:.2f} urad)")
+                lines.append(f"  {label} {value * 1e6:+9.2f} urad (U, k=2: "
+                             f"{2 * u * 1e6:.2f} urad)")
         s = self.sphere_offset_m * 1e6
         lines.append(f"  sphere set up {s[0]:+.1f}, {s[1]:+.1f}, {s[2]:+.1f} um from its "
                      "nominal place")
-        if self.not_observable:
-            lines.append(f"  not observable with one sphere (left at zero): "
-                         f"{', '.join(self.not_observable)}")
+        folded = {o for names in self.aliases.values() for o in names}
+        absorbed = [n for n in self.not_observable if n not in folded]
+        if folded:
+            lines.append(f"  folded into the parameters above (one sphere cannot part them): "
+                         f"{', '.join(sorted(folded))}")
+        if absorbed:
+            lines.append(f"  not observable with one sphere (they move the sphere's set-up "
+                         f"position alone; left at zero): {', '.join(absorbed)}")
         return "\n".join(lines)
 
 
@@ -319,11 +345,38 @@ def identify_location_errors(machine: MachineDescription, positions: dict[str, A
     correlation = covariance / np.outer(std, std)
     correlations = {f"{names[i]}~{names[j]}": float(correlation[i, j])
                     for i in range(p) for j in range(i + 1, p) if abs(correlation[i, j]) > 0.9}
+    aliases = _aliases(machine, q, names, not_observable, nominal_point) if not_observable \
+        else {}
     return LocationIdentification(
         dict(zip(names, (float(v) for v in theta[:p]))),
         dict(zip(names, (float(v) for v in std[:p]))), theta[p:].copy(), residuals, deviations,
         float(singular[0] / singular[-1]), _repeatability(q, deviations), correlations,
-        not_observable)
+        not_observable, aliases)
+
+
+def _aliases(machine: MachineDescription, q: dict[str, NDArray], kept: list[str],
+             dropped: list[str], point: NDArray, step: float = 1e-6
+             ) -> dict[str, dict[str, float]]:
+    """What each dropped parameter folds into: its effect on the centres as a combination
+    of the kept parameters' and the sphere's (least squares on the first-order columns);
+    kept -> {dropped: coefficient} where the coefficient is above 5 %."""
+    names = kept + dropped
+    predicted = _predictor(machine, q, names, point)
+    base = predicted(np.zeros(len(names) + 3)).ravel()
+    columns = []
+    for j in range(len(names) + 3):
+        theta = np.zeros(len(names) + 3)
+        theta[j] = step
+        columns.append((predicted(theta).ravel() - base) / step)
+    columns = np.column_stack(columns)
+    basis = np.column_stack([columns[:, :len(kept)], columns[:, len(names):]])
+    out: dict[str, dict[str, float]] = {}
+    for i, name in enumerate(dropped):
+        coefficients, *_ = np.linalg.lstsq(basis, columns[:, len(kept) + i], rcond=None)
+        for k, value in enumerate(coefficients[:len(kept)]):
+            if abs(value) > 0.05:
+                out.setdefault(kept[k], {})[name] = float(value)
+    return out
 
 
 RANK_TOLERANCE = 1e-7

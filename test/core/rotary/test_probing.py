@@ -53,8 +53,11 @@ def test_location_errors_and_the_sphere_are_found_within_their_uncertainty():
     assert result.rms_after_m < 1.5e-6 and result.dispersion_after_m < 3e-6
     # B's frame offsets are constant in the machine: one sphere cannot tell them from the
     # sphere's own setup position or from A's offsets - said, not guessed.
-    assert set(result.not_observable) == {"EX0B", "EZ0B"}
+    assert set(result.not_observable) == {"EA0A", "EX0B", "EZ0B"}
     assert "not observable" in result.text()
+    # ... and what the fitted value then stands for (EZ0B folds into EZ0A with -1).
+    assert result.identified_as("EZ0A") == "EZ0A - EZ0B"
+    assert "folded into the parameters above" in result.text()
 
 
 def test_volumetric_error_falls_once_the_identified_errors_are_compensated():
@@ -81,9 +84,20 @@ def test_repeated_cycles_give_a_repeatability():
 
 def test_the_default_parameters_and_what_one_sphere_can_see():
     assert default_rotary_parameters(MACHINE) == ["EY0A", "EZ0A", "EB0A", "EC0A",
-                                                  "EX0B", "EZ0B", "EA0B", "EC0B"]
+                                                  "EX0B", "EZ0B", "EA0B", "EC0B",
+                                                  "EA0A", "EB0B"]
     kept, dropped = observable_parameters(MACHINE, _cycles(), sphere_nominal_m=SPHERE)
-    assert dropped == ["EX0B", "EZ0B"] and "EY0A" in kept
+    # B's zero angle is seen by a sphere off B's line; A's is not (issue 30).
+    assert dropped == ["EA0A", "EX0B", "EZ0B"] and "EY0A" in kept and "EB0B" in kept
+
+
+def test_the_b_zero_angle_error_is_identified_where_the_setup_sees_it():
+    """Issue 30: called unidentifiable, yet asked for by name it came back 27.9 +- 3.2 urad
+    with 30 true. Now a default parameter wherever one sphere separates it."""
+    q = _cycles()
+    truth = {"A": TRUTH["A"], "B": TRUTH["B"] + np.array([0, 0, 0, 0, 30e-6, 0])}
+    result = identify_location_errors(MACHINE, q, _measured(q, truth), sphere_nominal_m=SPHERE)
+    assert abs(result.parameters["EB0B"] - 30e-6) <= 3 * result.uncertainties["EB0B"]
 
 
 def test_sphere_fit_recovers_the_centre_and_refuses_a_stray_touch():
