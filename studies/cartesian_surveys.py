@@ -213,37 +213,17 @@ def hidden(kind: str, layout: Layout, survey: Survey, rng: np.random.Generator,
         errors.linear[(str(b), "XYZ".index(str(a)))] = lambda x: slope * x
         return errors, {"squareness:*"}
     if kind == "angular":
-        # A tilt of an axis, smooth along its travel, acting through the machine's real
-        # arms. Only one the data can tell from a straightness: its effect must change
+        # A tilt of a tool-side axis, smooth along its travel, acting through the machine's
+        # real arms. Only one the data can tell from a straightness: its effect must change
         # with another axis' position (the yaw of a table axis about z acts through its
         # own position alone - a straightness by any measurement - and is not drawn).
-        arm = 0.5 * max(h - l for l, h in layout.travel.values()) + abs(layout.tool_z_m)
-        pairs = [(a, r) for a in layout.tool for r in "XYZ"]
-        for k in rng.permutation(len(pairs)):
-            axis, turn = pairs[k]
-            low, high = layout.travel[axis]
-            trial = Errors(angular={(axis, "XYZ".index(turn)):
-                                    spline(rng, low, high, 1.5 * magnitude_m / arm)})
-            if _depends_on_other_axes(layout, trial, axis, rng):
-                return trial, {f"angular:E{'ABC'['XYZ'.index(turn)]}{axis}"}
-        raise NotDrawn(f"{layout.name}: no tool-side axis whose tilt acts through another "
-                       "axis' position")
+        return _tilt(layout, layout.tool, rng, magnitude_m, "tool-side")
     if kind == "angular_table":
         # A tilt of an axis that carries the workpiece, the error read where it matters:
         # at the workpiece point under the tool (Khan & Chen eq. 17 with w the nominal
         # contact point). The package's chain takes w as a fixed workpiece point (Kidani
         # eq. 2.10 as written), so these are reported apart (docs/results.md).
-        arm = 0.5 * max(h - l for l, h in layout.travel.values()) + abs(layout.tool_z_m)
-        pairs = [(a, r) for a in layout.work for r in "XYZ"]
-        for k in rng.permutation(len(pairs)) if pairs else []:
-            axis, turn = pairs[k]
-            low, high = layout.travel[axis]
-            trial = Errors(angular={(axis, "XYZ".index(turn)):
-                                    spline(rng, low, high, 1.5 * magnitude_m / arm)})
-            if _depends_on_other_axes(layout, trial, axis, rng):
-                return trial, {f"angular:E{'ABC'['XYZ'.index(turn)]}{axis}"}
-        raise NotDrawn(f"{layout.name}: no workpiece-side axis whose tilt acts through "
-                       "another axis' position")
+        return _tilt(layout, layout.work, rng, magnitude_m, "workpiece-side")
     if kind == "drift":
         sensor = str(rng.choice(["column", "spindle"]))
         rise = survey.temperatures[sensor] - survey.temperatures[sensor][0]
@@ -265,6 +245,23 @@ def hidden(kind: str, layout: Layout, survey: Survey, rng: np.random.Generator,
         errors.tcp.append(column)
         return errors, {f"servo_lag:{axis}"}
     raise ValueError(f"unknown kind {kind!r}")
+
+
+def _tilt(layout: Layout, axes: tuple[str, ...], rng: np.random.Generator, magnitude_m: float,
+          side: str) -> tuple[Errors, set[str]]:
+    """A smooth tilt of one of ``axes`` about a random direction whose effect at the tool
+    changes with another axis' position, about ``magnitude_m`` through the longest arm."""
+    arm = 0.5 * max(h - l for l, h in layout.travel.values()) + abs(layout.tool_z_m)
+    pairs = [(a, r) for a in axes for r in "XYZ"]
+    for k in (rng.permutation(len(pairs)) if pairs else []):
+        axis, turn = pairs[k]
+        low, high = layout.travel[axis]
+        trial = Errors(angular={(axis, "XYZ".index(turn)):
+                                spline(rng, low, high, 1.5 * magnitude_m / arm)})
+        if _depends_on_other_axes(layout, trial, axis, rng):
+            return trial, {f"angular:E{'ABC'['XYZ'.index(turn)]}{axis}"}
+    raise NotDrawn(f"{layout.name}: no {side} axis whose tilt acts through another axis' "
+                   "position")
 
 
 class NotDrawn(ValueError):

@@ -133,6 +133,21 @@ def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_0
     return position, orientation
 
 
+def candidate_named(diagnosis, name: str, why: str, where: str):
+    """The candidate ``name`` of a diagnosis, or a one-line error saying why it cannot be
+    ``why``-ed (not a candidate in this ``where``, or refused by physics)."""
+    from ..core.workbench.diagnosis import pick_candidate
+
+    candidate = pick_candidate(diagnosis, name)
+    if candidate is None:
+        raise InputDataError(f"cannot {why} {name}: not a candidate here (in the model "
+                             f"already, unknown, or no regressors in this {where})")
+    if candidate.refusal:
+        raise InputDataError(f"cannot {why} {candidate.name}: physics refuses its fit "
+                             f"({candidate.refusal})")
+    return candidate
+
+
 def check_observations(model, obs, add: list[str], auto: int, min_reduction: float,
                        predict=None) -> dict:
     """The workbench loop on observations: diagnose, add what is asked or named, again.
@@ -142,8 +157,7 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     adds up to N of the effects the forward selection names (jointly fitted),
     ``add`` the named ones first.
     """
-    from ..core.workbench.diagnosis import (add_effect, add_effects, diagnose, pick_candidate,
-                                           residuals)
+    from ..core.workbench.diagnosis import add_effect, add_effects, diagnose, residuals
 
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c.setdefault(sensor, float(values[0]))
@@ -163,15 +177,7 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
         steps.append({"model_version": model.version, "effects": sorted(model.effects),
                       "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text()})
         if queue:
-            name = queue.pop(0)
-            candidate = pick_candidate(diagnosis, name)
-            if candidate is None:
-                raise InputDataError(f"cannot add {name}: not a candidate here (in the model "
-                                     "already, unknown, or no regressors in this data)")
-            if candidate.refusal:
-                raise InputDataError(f"cannot add {candidate.name}: physics refuses its fit "
-                                     f"({candidate.refusal})")
-            chosen = [candidate]
+            chosen = [candidate_named(diagnosis, queue.pop(0), "add", "data")]
         elif auto and diagnosis.selected and \
                 sum(len(s.get("added", [])) for s in steps) < auto:
             chosen = diagnosis.selected[:auto - sum(len(s.get("added", [])) for s in steps)]
@@ -357,7 +363,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     (metres); the printed lines are in the target column's unit.
     """
     from ..core.effects.thermal import sensor_weights
-    from ..core.workbench.diagnosis import add_effect, diagnose, pick_candidate
+    from ..core.workbench.diagnosis import add_effect, diagnose
     from ..core.workbench.thermal_log import (DEFAULT_STRUCTURE_LENGTH_M,
                                               all_inputs_least_squares, held_out_residual,
                                               held_out_rmse, log_model, log_observations)
@@ -409,19 +415,9 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         return diagnose(current, training, min_reduction=min_reduction, forward=True,
                         folds=folds)
 
-    def candidate_named(diagnosis, name: str, why: str):
-        candidate = pick_candidate(diagnosis, name)
-        if candidate is None:
-            raise InputDataError(f"cannot {why} {name}: not a candidate here (in the model "
-                                 "already, unknown, or no regressors in this log)")
-        if candidate.refusal:
-            raise InputDataError(f"cannot {why} {candidate.name}: physics refuses its fit "
-                                 f"({candidate.refusal})")
-        return candidate
-
     for name in model_terms:   # the starting model's terms, fitted on the training rows
-        model = add_effect(model, candidate_named(diagnosis_of(model), name, "start with"),
-                           training)
+        model = add_effect(model, candidate_named(diagnosis_of(model), name, "start with",
+                                                  "log"), training)
     start_model = model
     diagnosis = diagnosis_of(model)
     first = diagnosis
@@ -434,7 +430,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     while True:
         asked = bool(queue)
         if queue:
-            candidate = candidate_named(diagnosis, queue.pop(0), "add")
+            candidate = candidate_named(diagnosis, queue.pop(0), "add", "log")
         elif auto and len(steps) - 1 < auto and diagnosis.selected:
             candidate = diagnosis.selected[0]
         else:

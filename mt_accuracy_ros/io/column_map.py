@@ -173,24 +173,30 @@ def parse_col_flags(flags: list[str], base: ColumnMap | None = None) -> ColumnMa
     return out
 
 
+def si_scale(quantity: str, unit: str, what: str) -> tuple[float, float]:
+    """(scale, offset) that take ``unit`` of ``quantity`` to SI (temperatures to degC; an
+    empty unit is the quantity's default); raises naming ``what`` and the known units."""
+    if quantity == "temperature":
+        unit = unit or "degC"
+        if unit not in TEMPERATURE:
+            raise ParameterError(f"{what}: unknown temperature unit {unit!r}; known: "
+                                 f"{', '.join(TEMPERATURE)}")
+        return TEMPERATURE[unit]
+    unit = unit or DEFAULT_UNITS[quantity]
+    table = UNITS[quantity]
+    if unit not in table:
+        raise ParameterError(f"{what}: unknown {quantity} unit {unit!r}; known: "
+                             f"{', '.join(u for u in table if u)}")
+    return table[unit], 0.0
+
+
 def _scale(column_map: ColumnMap, role: str, unit: str):
     """(scale, offset) that take the column to SI; raises naming the role's unit."""
     quantity = column_map.quantity(role)
     if not quantity:
         raise ParameterError(f"column role {role!r} unknown; roles: time, pos.X, err.x, "
                              "temp.<sensor>, vel.X, acc.X, dir.X, spindle")
-    if quantity == "temperature":
-        unit = unit or "degC"
-        if unit not in TEMPERATURE:
-            raise ParameterError(f"{role}: unknown temperature unit {unit!r}; known: "
-                                 f"{', '.join(TEMPERATURE)}")
-        return TEMPERATURE[unit]
-    unit = unit or DEFAULT_UNITS[quantity]
-    table = UNITS[quantity]
-    if unit not in table:
-        raise ParameterError(f"{role}: unknown {quantity} unit {unit!r}; known: "
-                             f"{', '.join(u for u in table if u)}")
-    return table[unit], 0.0
+    return si_scale(quantity, unit, role)
 
 
 @dataclass

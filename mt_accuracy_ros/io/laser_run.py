@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError
-from .column_map import TEMPERATURE, UNITS
+from .column_map import si_scale
 from .csv_table import read_csv_table
 
 ROLES = ("target", "measured", "deviation", "direction", "run", "temperature")
@@ -77,17 +77,8 @@ def _guess(role: str, names: list[str]) -> tuple[str, str] | None:
 
 
 def _scale(role: str, unit: str, column: str) -> tuple[float, float]:
-    if role == "temperature":
-        unit = unit or "degC"
-        if unit not in TEMPERATURE:
-            raise InputDataError(f"temperature column {column!r}: unknown unit {unit!r}; "
-                                 f"known: {', '.join(TEMPERATURE)}")
-        return TEMPERATURE[unit]
-    unit = unit or DEFAULT_UNIT[role]
-    if unit not in UNITS["length"]:
-        raise InputDataError(f"{role} column {column!r}: unknown length unit {unit!r}; known: "
-                             f"{', '.join(UNITS['length'])}")
-    return UNITS["length"][unit], 0.0
+    quantity = "temperature" if role == "temperature" else "length"
+    return si_scale(quantity, unit or DEFAULT_UNIT[role], f"{role} column {column!r}")
 
 
 def infer_directions(target: np.ndarray) -> np.ndarray:

@@ -23,36 +23,26 @@ _THERMAL_GAIN_FAMILIES = {"structural_thermal_drift", "thermal_lag", "thermal_gr
                           "all_sensors_ridge", "spindle_thermal_growth"}
 
 
+#: The kind of quantity each family's parameters are, where one kind fits them all.
+_KIND_OF_FAMILY = {**{f: "length" for f in _LENGTH_FAMILIES},
+                   **{f: "gain_k" for f in _THERMAL_GAIN_FAMILIES},
+                   "angular": "angle", "angular_periodic": "angle", "squareness": "angle",
+                   "position_dependent_thermal": "expansion", "thermal_squareness": "angle_k",
+                   "reversal": "length", "servo_lag": "time", "acceleration": "per_acceleration",
+                   "cross_axis": "per_area", "abbe_offset": "lever"}
+
+
 def parameter_unit(family: str, variant: str, name: str) -> tuple[str, float]:
     """(unit, factor) a parameter ``name`` of ``family:variant`` is read in; ("", 1.0) for
     one without a physical reading (a user expression's own constants stay as declared)."""
-    kind = None
-    if family in _LENGTH_FAMILIES:
-        kind = "length"
-    elif family in ("angular", "angular_periodic", "squareness"):
-        kind = "angle"
-    elif family == "rotary_error":
+    if family == "rotary_error":        # E<component><axis>: a translation or a rotation
         kind = "length" if variant[1:2] in ("X", "Y", "Z") else "angle"
-    elif family == "rotary_location":
+    elif family == "rotary_location":   # each parameter its own ISO location error
         kind = "length" if name[1:2] in ("X", "Y", "Z") else "angle"
-    elif family in _THERMAL_GAIN_FAMILIES:
-        kind = "gain_k"
     elif family == "heat_source":
         kind = "spindle_gain" if variant == "spindle_speed" else "feed_gain"
-    elif family == "position_dependent_thermal":
-        kind = "expansion"
-    elif family == "thermal_squareness":
-        kind = "angle_k"
-    elif family == "reversal":
-        kind = "length"
-    elif family == "servo_lag":
-        kind = "time"
-    elif family == "acceleration":
-        kind = "per_acceleration"
-    elif family == "cross_axis":
-        kind = "per_area"
-    elif family == "abbe_offset":
-        kind = "lever"
+    else:
+        kind = _KIND_OF_FAMILY.get(family)
     return UNITS[kind] if kind else ("", 1.0)
 
 
