@@ -68,7 +68,7 @@ def _ballbar(args: argparse.Namespace) -> int:
               f"D_z {truth.axial_m * 1e6:.2f} um"
               f"{', with a rotary backlash' if args.backlash else ''})")
     short, long = read_ballbar_csv(args.file, args.radius_mm * 1e-3, args.socket_height_mm * 1e-3)
-    result = calibrate(short, long)
+    result = calibrate(short, long, socket_change_m=args.socket_change_um * 1e-6)
     print(result.text())
     if args.report or args.json:
         from ..report.rotary import ballbar_sections
@@ -278,6 +278,9 @@ def add_parser(commands) -> None:
                          help="R_x: the table ball's distance from the table centre [mm]")
     ballbar.add_argument("--socket-height-mm", type=float, default=0.0,
                          help="R_z: the table ball's height above the table centre [mm]")
+    ballbar.add_argument("--socket-change-um", type=float, default=1.0,
+                         help="how far the table ball may re-seat between the two setups, "
+                              "unseen by two setups: carried into U (default 1 um)")
     ballbar.add_argument("--simulate", type=int, metavar="SEED",
                          help="first write FILE from the virtual rotary table")
     ballbar.add_argument("--scenario", help="with --simulate: measure this scenario's "

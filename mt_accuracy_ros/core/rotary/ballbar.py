@@ -428,6 +428,11 @@ class BallBarCalibration:
     condition_number: float                 # eq. 5.20
     single_setups: list[SingleSetupFit] = field(default_factory=list)
     reversal: list[ReversalJump] = field(default_factory=list)
+    #: The unseen socket change allowed for, and what it and the runs' drift add to the
+    #: l2 parameters' standard uncertainties (3,) [rad, rad, m] (already in l2's).
+    socket_change_m: float = 0.0
+    socket_u: NDArray[np.float64] | None = None
+    drift_u: NDArray[np.float64] | None = None
 
     @property
     def angles_rad(self) -> NDArray[np.float64]:
@@ -511,10 +516,20 @@ class BallBarCalibration:
         for problem in (self.misfit, self.implausible):
             if problem:
                 lines.append(f"  {problem}")
+        if self.socket_u is not None and self.socket_change_m > 0:
+            lines.append(f"  in U: the table ball re-seating by up to "
+                         f"{self.socket_change_m * 1e6:.2g} um between the setups (two setups "
+                         f"cannot show it) - E_x, E_y +-{self.socket_u[0] * np.sqrt(3) / ARCSEC:.2f}\"")
+        if self.drift_u is not None and np.any(self.drift_u > 0):
+            lines.append(f"  in U: a drift over each run as large as its closing-reading jump "
+                         f"- E_x {self.drift_u[0] * np.sqrt(3) / ARCSEC:.2f}\", "
+                         f"E_y {self.drift_u[1] * np.sqrt(3) / ARCSEC:.2f}\", "
+                         f"D_z {self.drift_u[2] * np.sqrt(3) * 1e6:.2f} um")
         for jump in self.reversal:
             if jump.significant:
                 lines.append(f"  {jump.run}: a jump of {jump.jump * 1e6:.4f} mm^2 between 0 and "
-                             "360 deg - lost motion (backlash) of the rotary axis")
+                             "360 deg - lost motion (backlash) of the rotary axis, or a drift "
+                             "during the run")
         return "\n".join(lines)
 
 
@@ -548,8 +563,27 @@ def reversal_jump(run_name: str, angles_rad: NDArray, residuals: NDArray) -> Rev
                         _robust_sigma(residuals[1:-1]))
 
 
-def calibrate(short: BallBarRun, long: BallBarRun) -> BallBarCalibration:
+#: How far the table ball may re-seat between the two setups unseen [m] (a kinematic
+#: socket's repeatability): two setups cannot show it (see :func:`calibrate`).
+SOCKET_CHANGE_M = 1e-6
+
+
+def calibrate(short: BallBarRun, long: BallBarRun, *,
+              socket_change_m: float = SOCKET_CHANGE_M) -> BallBarCalibration:
     """E_x, E_y, D_z from a short- and a long-bar run (eqs. 5.14-5.19), l2 and l-infinity.
+
+    The l2 uncertainties also carry two effects the fit itself cannot see:
+
+    * a **change of the table ball's position** (eccentricity H) between the setups by up
+      to ``socket_change_m``: it enters the difference (eq. 5.19) as 2 R_x dH (sin, cos)
+      c - the tilts' own columns over the spindle-height difference - so it shifts E_x,
+      E_y by dH / dh, and the two single-setup fits agree whatever dH is (four harmonic
+      coefficients, four unknowns): only a third setup would show it. Taken as a
+      rectangular bound;
+    * a **drift during a run**, read at its closing reading (a full turn reads the start
+      angle twice): the jump between them as a linear ramp over the run's readings,
+      propagated through the fit, also a rectangular bound (a lost motion of the axis
+      makes the same jump; either way the result is that uncertain).
 
     Raises
     ------
@@ -579,5 +613,17 @@ def calibrate(short: BallBarRun, long: BallBarRun) -> BallBarCalibration:
     difference_jump = reversal_jump("two-setup difference", angles, l2.residuals)
     if difference_jump:
         jumps.append(difference_jump)
+    # What the fit cannot see, carried into U (rectangular bounds, as standard deviations).
+    dh = long.setup.spindle_height_m - short.setup.spindle_height_m
+    socket = np.array([socket_change_m / abs(dh), socket_change_m / abs(dh), 0.0]) / np.sqrt(3)
+    ramp = np.linspace(0.0, 1.0, angles.size)
+    drift = np.zeros(3)
+    for jump in jumps[:2]:                 # the two runs' own closing readings
+        shift, *_ = np.linalg.lstsq(design, jump.jump * ramp, rcond=None)
+        drift = np.hypot(drift, np.abs(shift) / np.sqrt(3))
+    if l2.uncertainties is not None:
+        l2 = NormFit(l2.method, l2.parameters, l2.residuals,
+                     np.sqrt(l2.uncertainties ** 2 + socket ** 2 + drift ** 2))
     return BallBarCalibration(short, long, observed, design, l2, linf,
-                              float(singular[0] / singular[-1]), singles, jumps)
+                              float(singular[0] / singular[-1]), singles, jumps,
+                              socket_change_m=socket_change_m, socket_u=socket, drift_u=drift)

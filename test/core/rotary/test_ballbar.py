@@ -139,3 +139,45 @@ def test_the_simulator_is_zhus_plan_by_default():
     data = ballbar_test(TRUTH, plan, seed=0)
     assert data.short.shape == data.long.shape == (3, 37)
     assert plan.short_bar_m == 0.090850 and plan.long_bar_m == 0.217952
+
+
+def test_a_socket_change_between_setups_shifts_the_tilts_unseen_and_is_in_u():
+    """Issue 30: an eccentricity change of 5 um between the setups shifted E_y by 7.5".
+    Two setups cannot show it (the single-setup fits agree whatever it is); the shift is
+    dH / dh (eq. 5.19), and U allows for a re-seating of SOCKET_CHANGE_M."""
+    from mt_accuracy_ros.core.rotary.ballbar import SOCKET_CHANGE_M
+
+    short, long = _runs(ballbar_test(TRUTH, seed=2))
+    base = calibrate(short, long)
+    moved = 5e-6
+    # The table ball 5 um further along y in the long setup: its squared change gains
+    # 2 R_x dH sin c (eq. 5.13's coupled sum), i.e. a reading change of that over 2 L.
+    change = 2 * LONG.radius_m * moved * np.sin(long.angles_rad)
+    shifted = BallBarRun(LONG, long.angles_rad,
+                         long.readings_m - change / (2 * LONG.bar_length_m))
+    after = calibrate(short, shifted)
+    dh = LONG.spindle_height_m - SHORT.spindle_height_m
+    assert abs(after.l2.parameters[0] - base.l2.parameters[0]) == \
+        pytest.approx(moved / abs(dh), rel=0.02)
+    # ... and nothing in the fit says so: the residual is as small as before.
+    assert after.l2.rms == pytest.approx(base.l2.rms, rel=0.05)
+    # U allows for a re-seating of SOCKET_CHANGE_M: dH / dh as a rectangular bound.
+    assert base.socket_u[0] == pytest.approx(SOCKET_CHANGE_M / abs(dh) / np.sqrt(3))
+    no_socket = calibrate(short, long, socket_change_m=0.0)
+    assert np.all(base.l2.uncertainties >= no_socket.l2.uncertainties)
+
+
+def test_a_drift_read_at_the_closing_reading_is_in_u():
+    """A 2 um drift over the long run (issue 30: it shifted E_x by 1.6"), read as the jump
+    between its 0 and 360 deg readings, widens U by what that ramp does to the fit."""
+    short, long = _runs(ballbar_test(TRUTH, seed=3))
+    steady = calibrate(short, long)
+    ramp = 2e-6 * np.linspace(0.0, 1.0, long.angles_rad.size)
+    drifting = calibrate(short, BallBarRun(LONG, long.angles_rad, long.readings_m + ramp))
+    moved = np.abs(drifting.l2.parameters - steady.l2.parameters)
+    assert moved[0] > 0.5 * ARCSEC                       # the drift does move E_x ...
+    # ... and U now allows for a shift of that size (the rectangular bound of it) in E_x
+    # and D_z, the parameters a ramp over the turn moves (E_y's cosine is orthogonal to it).
+    bound = drifting.drift_u * np.sqrt(3)
+    assert bound[0] >= 0.5 * moved[0] and bound[2] >= 0.5 * moved[2]
+    assert drifting.l2.uncertainties[0] > steady.l2.uncertainties[0]
