@@ -262,3 +262,19 @@ def test_rotary_tools_judge_their_own_fits(tmp_path, capsys):
     out, err = capsys.readouterr()
     assert (code == 0 and "misfit: the fit leaves" in out) or \
         (code == 2 and "makes the dispersion worse" in err)
+
+
+def test_a_badly_conditioned_arc_is_said(tmp_path, capsys):
+    """A 100 degree arc passes the 90 degree floor but barely separates the tilts: the
+    condition number is named."""
+    from mt_accuracy_ros.cli import main
+
+    data = tmp_path / "bb.csv"
+    assert main(["ballbar", str(data), "--simulate", "1"]) == 0
+    capsys.readouterr()
+    lines = data.read_text().splitlines()
+    keep = [lines[0]] + [line for line in lines[1:] if float(line.split(",")[2]) <= 100.0]
+    data.write_text("\n".join(keep) + "\n")
+    assert main(["ballbar", str(data)]) == 0
+    out = capsys.readouterr().out
+    assert "warning: a badly conditioned design (cond(J)" in out

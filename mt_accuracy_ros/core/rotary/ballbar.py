@@ -516,6 +516,10 @@ class BallBarCalibration:
         for problem in (self.misfit, self.implausible):
             if problem:
                 lines.append(f"  {problem}")
+        if self.condition_number > ILL_CONDITIONED:
+            lines.append(f"  warning: a badly conditioned design (cond(J) "
+                         f"{self.condition_number:.3g}, eq. 5.20; a full turn gives about 20): "
+                         "the arc or the bar lengths barely separate E_x, E_y and D_z")
         if self.socket_u is not None and self.socket_change_m > 0:
             lines.append(f"  in U: the table ball re-seating by up to "
                          f"{self.socket_change_m * 1e6:.2g} um between the setups (two setups "
@@ -562,6 +566,10 @@ def reversal_jump(run_name: str, angles_rad: NDArray, residuals: NDArray) -> Rev
     return ReversalJump(run_name, float(residuals[0] - residuals[-1]),
                         _robust_sigma(residuals[1:-1]))
 
+
+#: cond(J) (eq. 5.20) above which the design is called badly conditioned: a full turn
+#: with Zhu's bars gives about 20.
+ILL_CONDITIONED = 100.0
 
 #: How far the table ball may re-seat between the two setups unseen [m] (a kinematic
 #: socket's repeatability): two setups cannot show it (see :func:`calibrate`).

@@ -210,6 +210,10 @@ class LocationIdentification:
                  f"; condition number {self.condition_number:.3g}"]
         if self.misfit:
             lines.append(f"  {self.misfit}")
+        if self.condition_number > ILL_CONDITIONED:
+            lines.append(f"  warning: a badly conditioned design (condition number "
+                         f"{self.condition_number:.3g}): the probed positions barely separate "
+                         "the parameters - probe the rotary axes over wider angles")
         for name, value in self.parameters.items():
             u = self.uncertainties[name]
             label = self.identified_as(name)
@@ -380,6 +384,9 @@ def _aliases(machine: MachineDescription, q: dict[str, NDArray], kept: list[str]
 
 
 RANK_TOLERANCE = 1e-7
+#: Condition number (of the scaled Jacobian) above which the design is called badly
+#: conditioned (the simulated +-60 deg plan gives about 16).
+ILL_CONDITIONED = 1e3
 #: Remaining scatter above this many times the repeatability: a misfit (said, not hidden).
 MISFIT_FACTOR = 3.0
 #: Rotary positions whose whole span is at most this many degrees (a full turn's 2 pi,
