@@ -243,7 +243,10 @@ class ThermalSquareness(EffectFamily):
         from .geometric import Squareness
 
         temperatures = ctx.structure_sensors() + _gradient_names(ctx)
-        return [f"{s}:{t}" for s in Squareness().variants(ctx) for t in temperatures]
+        # The location-error forms only (EC0Y, EB0Z, EA0Z): the other-reference slopes
+        # would double the candidates for a distinction the thermal data cannot make.
+        squares = [v for v in Squareness().variants(ctx) if v not in Squareness.OTHER_REFERENCE]
+        return [f"{s}:{t}" for s in squares for t in temperatures]
 
     def parameter_names(self, variant, setting):
         return ["rad_per_k"]
