@@ -169,6 +169,46 @@ def ridge_standard_errors(gram: NDArray[np.float64], penalised: NDArray[np.float
     return np.sqrt(sigma2 * np.clip(np.einsum("ij,jk,ki->i", inverse, gram, inverse), 0.0, None))
 
 
+#: Sign patterns drawn for the max-T adjustment (the smallest adjusted p is 1 / (K + 1)).
+MAX_T_DRAWS = 4000
+
+
+def max_t_adjusted(gains: NDArray[np.float64], draws: int = MAX_T_DRAWS,
+                   seed: int = 28) -> NDArray[np.float64]:
+    """Westfall-Young max-T adjusted p-values of one-sided t-tests over blocks.
+
+    Parameters
+    ----------
+    gains : ndarray, shape (M, B)
+        Each of M candidates' gain in each of B held-out blocks.
+
+    Returns
+    -------
+    ndarray, shape (M,)
+        P(max over candidates of t >= candidate's t) when no candidate helps: every
+        block's gains keep their sign or flip it together (a block's gains are symmetric
+        about zero then), so the candidates' correlation is kept. Seeded: the same data
+        give the same answer.
+    """
+    m, b = gains.shape
+    if b < 2:
+        return np.ones(m)
+    mean = gains.mean(axis=1)
+    spread = gains.std(axis=1, ddof=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        observed = np.where(spread > 0, mean / (spread / np.sqrt(b)),
+                            np.where(mean > 0, np.inf, -np.inf))
+    flips = np.random.default_rng(seed).choice([-1.0, 1.0], size=(draws, b))
+    first = flips @ gains.T / b                                    # (K, M) means
+    second = np.mean(gains ** 2, axis=1)                           # (M,) unchanged by flips
+    variance = np.maximum(second - first ** 2, 0.0) * b / (b - 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(variance > 0, first / np.sqrt(variance / b), -np.inf)
+    largest = np.sort(t.max(axis=1))
+    exceed = draws - np.searchsorted(largest, observed, side="left")
+    return (1.0 + exceed) / (draws + 1.0)
+
+
 @dataclass
 class _BaseStatistics:
     """The selected model's columns and per-fold products of [columns, y] with themselves."""
@@ -737,7 +777,7 @@ class Selector:
         stats, base_sq, count, base_mse, _ = self._baseline()
         base = stats.base
         q = base.shape[1]
-        scored = []
+        scored, gains = [], []
         measured_per_component = self.judged_mask.sum(axis=0)
         base_per_component = base_sq.sum(axis=0)
         for term in terms:
@@ -749,6 +789,8 @@ class Selector:
             own_base = float(base_per_component[moved].sum()) / own_count
             own_mse = float(per_sample[:, moved].sum()) / own_count
             own_excess = own_base - self.noise_sigma ** 2
+            gains.append(self._block_gains(base_sq[:, moved].sum(axis=1),
+                                           per_sample[:, moved].sum(axis=1)))
             p_value = self._block_test(base_sq[:, moved].sum(axis=1),
                                        per_sample[:, moved].sum(axis=1))
             share = (own_base - own_mse) / own_excess if own_excess > 0 else \
@@ -768,9 +810,15 @@ class Selector:
             candidate.parameter_names = term.family.parameter_names(term.variant, setting)
             candidate.refusal = self.physics_refusal(term, setting, candidate.coefficients)
             scored.append(candidate)
-        tried = max(1, len(scored))
-        for s in scored:
-            s.adjusted_p = min(1.0, s.p_value * tried)
+        # The best of many candidates is no chance winner: each p-value is adjusted for
+        # every candidate tried, by the distribution of the *largest* t over them all
+        # (Westfall-Young max-T, blocks' signs flipped together). Bonferroni assumed the
+        # candidates independent; dozens of near-copies (thermal lags of one sensor, a
+        # straightness and its periodic twin) made it far too strict (issue 28: a 7 sigma
+        # coefficient ranked first and was not named).
+        if scored:
+            for s, adjusted in zip(scored, max_t_adjusted(np.array(gains))):
+                s.adjusted_p = float(adjusted)
         scored.sort(key=lambda s: s.cv_rmse)
         # Physics first: a fit it refuses is no explanation, however well it scores.
         plausible = [s for s in scored if not s.refusal]
@@ -807,16 +855,22 @@ class Selector:
                 s.per_sample_sq = None
         return Step(float(np.sqrt(base_mse)), scored, added)
 
-    def _block_test(self, base_sq: NDArray[np.float64], per_sample: NDArray[np.float64]
-                    ) -> float:
-        """One-sided p-value that ``per_sample`` errors are below ``base_sq``: per block, the
-        fraction of its held-out error removed - scale-free, so a trend whose error sits in
-        the end blocks counts as much as a uniform one."""
+    def _block_gains(self, base_sq: NDArray[np.float64], per_sample: NDArray[np.float64]
+                     ) -> NDArray[np.float64]:
+        """Per held-out block, the fraction of its error that ``per_sample`` removes from
+        ``base_sq`` - scale-free, so a trend whose error sits in the end blocks counts as
+        much as a uniform one."""
         blocks = self.n_test_blocks + 1
         base_blocks = np.bincount(self.block_of_sample, weights=base_sq, minlength=blocks)
         gain = 1.0 - np.bincount(self.block_of_sample, weights=per_sample, minlength=blocks) / \
             np.maximum(base_blocks, 1e-300)
-        gain = gain[:self.n_test_blocks]
+        return gain[:self.n_test_blocks]
+
+    def _block_test(self, base_sq: NDArray[np.float64], per_sample: NDArray[np.float64]
+                    ) -> float:
+        """One-sided p-value (t-test over blocks) that ``per_sample`` errors are below
+        ``base_sq`` (:meth:`_block_gains`)."""
+        gain = self._block_gains(base_sq, per_sample)
         spread = float(np.std(gain, ddof=1))
         if spread == 0:
             return 0.0 if np.mean(gain) > 0 else 1.0
