@@ -397,8 +397,8 @@ def _evidence_section(check: dict) -> Section:
         f"time-blocked 5-fold cross-validation, its period, order or time constant chosen "
         f"inside each fold; without any candidate the cross-validated error is "
         f"{baseline * UM:.3g} µm. The best is accepted when, on readings its fit did not see, "
-        "it removes error in block after block (a t-test, its p-value multiplied by the number "
-        "of candidates tried), cuts the error by the minimum reduction, removes at least a "
+        "it removes error in block after block (a t-test on the components it moves, its "
+        "p-value adjusted for every candidate tried by Westfall-Young max-T), cuts the error by the minimum reduction, removes at least a "
         "quarter of what stands above the instrument's noise, and carries a parameter above 3 "
         "standard errors; then the search repeats with it in the model. "
         "Confidence = 1 - that adjusted p-value.")

@@ -123,7 +123,7 @@ class Candidate:
     #: Standard (k = 1) uncertainty of each fitted parameter [unit of the parameter].
     parameter_uncertainties: dict = field(default_factory=dict)
     setting: dict = field(default_factory=dict)
-    confidence: float = 0.0           # 1 - Bonferroni-adjusted p-value of the held-out test
+    confidence: float = 0.0           # 1 - max-T-adjusted p-value of the held-out test
     share_of_excess: float = 0.0      # of the residual above noise it removes (held out)
     group: str = ""
     declaration: dict | None = None   # a user effect's declaration

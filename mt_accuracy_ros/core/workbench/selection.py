@@ -13,8 +13,9 @@ catalogue's candidate terms, each step
    the fraction of the out-of-fold squared error it removes is taken in each
    of ``n_blocks`` contiguous blocks (blocks against the residual's
    autocorrelation; fractions so that a trend whose error sits in the end
-   blocks weighs like a uniform one) and tested one-sided (t-test), the p-value multiplied by the number of
-   candidates tried (Bonferroni: the best of M is not a chance winner), and it
+   blocks weighs like a uniform one) on the components the candidate moves, and tested
+   one-sided (t-test), the p-value adjusted for every candidate tried by Westfall-Young
+   max-T (:func:`max_t_adjusted`: the best of M is not a chance winner), and it
    must also cut the out-of-fold RMSE by ``min_reduction``, remove at least
    ``min_share`` of what lies above the instrument's noise (a wrong family
    that trims a little is not an explanation), and carry a parameter above
