@@ -326,10 +326,10 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
 
 
 # ------------------------------------------------------------------ thermal log path
-def _column_and_unit(flag: str, names: list[str], quantity: str, what: str,
-                     default: str | None = None) -> tuple[str, float]:
-    """``COLUMN[:UNIT]`` -> (column, SI scale); the unit from the flag, else the column's
-    suffix (``ch5_um``, ``spindle_rpm``), else ``default``."""
+def _column_and_unit(flag: str, names: list[str], quantity: str, what: str
+                     ) -> tuple[str, float, str]:
+    """``COLUMN[:UNIT]`` -> (column, SI scale, unit); the unit from the flag, else the
+    column's suffix (``ch5_um``, ``spindle_rpm``)."""
     from ..io.column_map import UNITS
 
     column, unit = (flag.rsplit(":", 1) + [""])[:2] if ":" in flag else (flag, "")
@@ -339,12 +339,12 @@ def _column_and_unit(flag: str, names: list[str], quantity: str, what: str,
     table = UNITS[quantity]
     if not unit:
         suffix = column.rsplit("_", 1)[-1] if "_" in column else ""
-        unit = suffix if suffix in table else (default or "")
+        unit = suffix if suffix in table else ""
     if unit not in table or not unit:
         raise InputDataError(f"{what} {column!r}: give its unit as {column}:UNIT (one of "
                              f"{', '.join(u for u in table if u)}); none could be read off "
                              "its name")
-    return column, float(table[unit])
+    return column, float(table[unit]), unit
 
 
 def check_csv(path: Path, target: str, time_column: str, inputs: list[str], drivers: list[str],
@@ -375,9 +375,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     table = read_csv_table(path)
     names = table.names
     columns = table.columns
-    target_column, target_scale = _column_and_unit(target, names, "length", "target")
-    unit = target.rsplit(":", 1)[1].strip() if ":" in target else \
-        target_column.rsplit("_", 1)[-1]
+    target_column, target_scale, unit = _column_and_unit(target, names, "length", "target")
     if time_column in names:
         time_s = columns[time_column]
     elif row_period_s is not None:
@@ -392,7 +390,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         raise InputDataError(f"{path}: no input column matches {inputs}")
     speed = None
     for driver in drivers:
-        column, scale = _column_and_unit(driver, names, "speed", "driver")
+        column, scale, _ = _column_and_unit(driver, names, "speed", "driver")
         if speed is not None:
             raise InputDataError("one --driver: the spindle speed (the heat source the "
                                  "catalogue models, heat_source:spindle_speed)")
@@ -402,7 +400,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                            component=component, uncertainty_m=uncertainty_m)
     train = np.arange(obs.n) < int(train_fraction * obs.n)
     training = obs.subset(np.flatnonzero(train))
-    model = log_model(obs, structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
+    empty = model = log_model(obs, structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
     to_unit = 1.0 / target_scale
 
     # Forward validation needs 4 readings a fold; a short log gets fewer folds.
@@ -457,7 +455,6 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                       "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text(),
                       "held_out_rmse": after, "cv_rmse": diagnosis.baseline_cv_rmse})
     # Never silently worse than a constant on the held-out rows.
-    empty = log_model(obs, structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
     constant = held_out_rmse(empty, obs, train)
     if steps[-1]["held_out_rmse"] > constant:
         warnings.append(f"warning: the model's held-out RMSE "
@@ -500,10 +497,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
             "_plot": {"time": obs.time_s, "target": obs.measured_m[:, c],
                       "before": obs.measured_m[:, c] - before_residual,
                       "after": obs.measured_m[:, c] - after_residual, "train": train,
-                      "unit_scale": to_unit, "unit": unit,
-                      "positions": obs.positions, "residual_after": np.column_stack(
-                          [after_residual if k == c else np.zeros(obs.n) for k in range(3)]),
-                      "mask": obs.measured_mask, "temperatures": obs.temperatures}}
+                      "unit_scale": to_unit, "unit": unit}}
 
 
 # ------------------------------------------------------------------ report

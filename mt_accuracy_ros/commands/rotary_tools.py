@@ -139,11 +139,11 @@ MAX_TABLE_POINTS = 100_000
 def _export(args: argparse.Namespace) -> int:
     from ..core.compensation.cnc_export import (bilateral_tables, round_trip, write_bilateral_csv,
                                                write_isg_csv)
-    from ..core.compensation.controller_tables import (CONTROLLERS,
-                                                       POINTS_PER_PERIOD, fanuc_pitch,
-                                                       periodic_periods, siemens_eec,
-                                                       spacing_for, table_points,
-                                                       uncovered_effects)
+    from ..core.compensation.controller_tables import (CONTROLLERS, fanuc_pitch,
+                                                       period_problems, periodic_periods,
+                                                       siemens_eec, spacing_for,
+                                                       table_points, uncovered_effects,
+                                                       volumetric_spacing)
     from ..core.compensation.error_model import resolve_model
     from ..core.errors import ParameterError
     from ..io.rotary_csv import atomic_write_text
@@ -196,19 +196,15 @@ def _export(args: argparse.Namespace) -> int:
         check = None
     else:
         if asked is None:
-            spacing = _volumetric_spacing(model, band, periodic_periods(model))
+            spacing = volumetric_spacing(model, band)
         else:
             spacing = asked
-            periods = periodic_periods(model)
-            short = {n: p for n, p in periods.items() if p / spacing < POINTS_PER_PERIOD}
+            short = period_problems(periodic_periods(model), spacing)
             if short:
-                good = _volumetric_spacing(model, band, periods)
                 raise ParameterError(
-                    f"spacing {args.spacing_mm:g} mm cannot hold this model: " + "; ".join(
-                        f"{n} has a {p * 1e3:.4g} mm period ({POINTS_PER_PERIOD} points a period"
-                        f" need <= {p / POINTS_PER_PERIOD * 1e3:.4g} mm)"
-                        for n, p in short.items()) + f"; a spacing that holds it: {good * 1e3:g}"
-                    " mm")
+                    f"spacing {args.spacing_mm:g} mm cannot hold this model: "
+                    f"{'; '.join(short)}; a spacing that holds it: "
+                    f"{volumetric_spacing(model, band) * 1e3:g} mm")
         # Everything is computed before anything is written: a bad spacing writes nothing.
         texts = {f"{axis}_bilateral.csv": write_bilateral_csv(table, machine.name)
                  for axis, table in bilateral_tables(model, spacing).items()}
@@ -251,23 +247,6 @@ def _export(args: argparse.Namespace) -> int:
         Path(args.json).write_text(json.dumps({**summary, "files": list(texts),
                                                "notes": notes}, indent=2, default=float))
     return 0
-
-
-def _volumetric_spacing(model, band: float, periods: dict) -> float:
-    """The coarsest round spacing whose bilateral/volumetric tables, read back and applied,
-    keep the TCP within ``band`` and sample every period at 8 points or more."""
-    from ..core.compensation.cnc_export import round_trip
-    from ..core.compensation.controller_tables import NICE_SPACINGS_M, POINTS_PER_PERIOD
-
-    strokes = [model.machine.axes[a].stroke for a in model.machine.axis_order
-               if not model.machine.axes[a].is_rotary]
-    shortest = min((h - l for l, h in strokes), default=1.0)
-    for spacing in NICE_SPACINGS_M:
-        if spacing > shortest or any(p / spacing < POINTS_PER_PERIOD for p in periods.values()):
-            continue
-        if round_trip(model, spacing, points=500).tcp_max_error_m <= band:
-            return spacing
-    return NICE_SPACINGS_M[-1]
 
 
 def add_parser(commands) -> None:

@@ -20,7 +20,7 @@ def _reading(x: float, error_x: float, direction: int):
     return message
 
 
-def test_iso230_2_section_from_stop_and_measure_readings():
+def test_iso230_2_section_from_stop_and_measure_readings(tmp_path):
     from mt_accuracy_ros.core.scales.repeatability import iso230_2
     from mt_accuracy_ros.report.bag_data import BagData
     from mt_accuracy_ros.report.sections import _iso_section
@@ -36,7 +36,7 @@ def test_iso230_2_section_from_stop_and_measure_readings():
                 references.append((len(references), _reading(target, deviation, sign)))
     data = BagData(Path("synthetic"), {"message_count": 0, "topics": {}, "duration_s": 0}, 0,
                    references=references)
-    section = _iso_section(data, Path("."), "r")
+    section = _iso_section(data, tmp_path, "r")
     row = {c: cell.text for c, cell in zip(section.tables[0].columns,
                                            section.tables[0].rows[0].cells)}
     expected = iso230_2(targets, np.array(up).reshape(3, 5).T,
@@ -45,9 +45,11 @@ def test_iso230_2_section_from_stop_and_measure_readings():
     assert float(row["B"]) == pytest.approx(expected.reversal_value * 1e6, rel=1e-3)
     assert float(row["A"]) == pytest.approx(expected.accuracy * 1e6, rel=1e-3)
     assert float(row["R↑"]) == pytest.approx(expected.repeatability_up_axis * 1e6, rel=1e-3)
+    # The standard's plot is written beside the report, never into the working directory.
+    assert (tmp_path / "r_iso230_2.png").is_file()
 
 
-def test_iso230_2_section_says_so_without_positioning_runs():
+def test_iso230_2_section_says_so_without_positioning_runs(tmp_path):
     from mt_accuracy_ros.report.bag_data import BagData
     from mt_accuracy_ros.report.sections import _iso_section
 
@@ -55,5 +57,5 @@ def test_iso230_2_section_says_so_without_positioning_runs():
                   for k in range(300)]
     data = BagData(Path("synthetic"), {"message_count": 0, "topics": {}, "duration_s": 0}, 0,
                    references=continuous)
-    section = _iso_section(data, Path("."), "r")
+    section = _iso_section(data, tmp_path, "r")
     assert not section.tables and "no positioning runs" in section.paragraphs[0]

@@ -111,11 +111,35 @@ def interpolation_error(model: ErrorModel, axis: str, spacing_m: float,
     return float(np.max(np.abs(table - positioning_error(model, axis, q))))
 
 
+def period_problems(periods: dict[str, float], spacing_m: float) -> list[str]:
+    """Why ``spacing_m`` samples a periodic effect too coarsely (one line each)."""
+    return [f"{name} has a {period * 1e3:.4g} mm period ({POINTS_PER_PERIOD} points a "
+            f"period need <= {period / POINTS_PER_PERIOD * 1e3:.4g} mm)"
+            for name, period in periods.items() if period / spacing_m < POINTS_PER_PERIOD]
+
+
+def volumetric_spacing(model: ErrorModel, band_m: float) -> float:
+    """The coarsest round spacing whose bilateral tables and volumetric file, read back and
+    applied (:func:`.cnc_export.round_trip`), keep the TCP within ``band_m`` and sample
+    every period at :data:`POINTS_PER_PERIOD` points or more."""
+    from .cnc_export import round_trip
+
+    periods = periodic_periods(model)
+    shortest = min((h - l for l, h in (model.machine.axes[a].stroke
+                                        for a in linear_axes(model))), default=1.0)
+    for spacing in NICE_SPACINGS_M:
+        if spacing > shortest or period_problems(periods, spacing):
+            continue
+        if round_trip(model, spacing, points=500).tcp_max_error_m <= band_m:
+            return spacing
+    return NICE_SPACINGS_M[-1]
+
+
 def _holds(model: ErrorModel, spacing_m: float, band_m: float, periods: dict[str, float]
            ) -> tuple[bool, dict[str, float]]:
     errors = {a: interpolation_error(model, a, spacing_m) for a in linear_axes(model)}
-    sampled = all(period / spacing_m >= POINTS_PER_PERIOD for period in periods.values())
-    return sampled and max(errors.values(), default=0.0) <= band_m, errors
+    return not period_problems(periods, spacing_m) and \
+        max(errors.values(), default=0.0) <= band_m, errors
 
 
 def spacing_for(model: ErrorModel, band_m: float, *, asked_m: float | None = None,
@@ -154,10 +178,7 @@ def spacing_for(model: ErrorModel, band_m: float, *, asked_m: float | None = Non
             raise ParameterError(f"table spacing must be a positive number (got {asked_m!r})")
         ok, errors = _holds(model, asked_m, band_m, periods)
         if not ok:
-            why = [f"{name} has a {period * 1e3:.4g} mm period ({POINTS_PER_PERIOD} points a "
-                   f"period need <= {period / POINTS_PER_PERIOD * 1e3:.4g} mm)"
-                   for name, period in periods.items()
-                   if period / asked_m < POINTS_PER_PERIOD]
+            why = period_problems(periods, asked_m)
             worst = max(errors.values(), default=0.0)
             if worst > band_m:
                 why.append(f"the table would leave {worst * 1e6:.3g} um against a band of "

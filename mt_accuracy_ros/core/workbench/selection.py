@@ -170,6 +170,14 @@ def ridge_standard_errors(gram: NDArray[np.float64], penalised: NDArray[np.float
     return np.sqrt(sigma2 * np.clip(np.einsum("ij,jk,ki->i", inverse, gram, inverse), 0.0, None))
 
 
+def gain_p_value(gain: NDArray[np.float64]) -> float:
+    """One-sided t-test p-value that the blocks' mean gain (B,) is above zero."""
+    spread = float(np.std(gain, ddof=1))
+    if spread == 0:
+        return 0.0 if np.mean(gain) > 0 else 1.0
+    return t_sf(float(np.mean(gain)) / (spread / np.sqrt(gain.size)), gain.size - 1)
+
+
 #: Sign patterns drawn for the max-T adjustment (the smallest adjusted p is 1 / (K + 1)).
 MAX_T_DRAWS = 4000
 
@@ -661,9 +669,10 @@ class Selector:
         return [term.settings[int(np.argmin(per_fold[f]))] if seen[f] else middle
                 for f in range(folds)]
 
-    def _choose_penalty_all(self, term: Term) -> dict:
-        """A penalised family's strength on all readings: the least out-of-fold error."""
-        stats = self.base_statistics(self.base_columns())
+    def _choose_penalty_all(self, term: Term, base: NDArray[np.float64]) -> dict:
+        """A penalised family's strength on all readings: the least out-of-fold error
+        after ``base``."""
+        stats = self.base_statistics(base)
         folds = self.folds
         pairs = []
         for g in range(1 if self.forward else 0, folds):
@@ -678,7 +687,7 @@ class Selector:
         where the family has a continuous setting (a period, a time constant)."""
         setting = term.settings[0]
         if getattr(term.family, "penalty_setting", None) and len(term.settings) > 1:
-            return self._choose_penalty_all(term)
+            return self._choose_penalty_all(term, base)
         if len(term.settings) > 1:
             after_base = np.zeros(self.mask.size)
             coefficients, *_ = np.linalg.lstsq(base, self.y, rcond=None)
@@ -790,10 +799,10 @@ class Selector:
             own_base = float(base_per_component[moved].sum()) / own_count
             own_mse = float(per_sample[:, moved].sum()) / own_count
             own_excess = own_base - self.noise_sigma ** 2
-            gains.append(self._block_gains(base_sq[:, moved].sum(axis=1),
-                                           per_sample[:, moved].sum(axis=1)))
-            p_value = self._block_test(base_sq[:, moved].sum(axis=1),
-                                       per_sample[:, moved].sum(axis=1))
+            gain = self._block_gains(base_sq[:, moved].sum(axis=1),
+                                     per_sample[:, moved].sum(axis=1))
+            gains.append(gain)
+            p_value = gain_p_value(gain)
             share = (own_base - own_mse) / own_excess if own_excess > 0 else \
                 (1.0 if own_mse < own_base else 0.0)
             # The setting reported is the most frequent in-fold choice.
@@ -871,11 +880,7 @@ class Selector:
                     ) -> float:
         """One-sided p-value (t-test over blocks) that ``per_sample`` errors are below
         ``base_sq`` (:meth:`_block_gains`)."""
-        gain = self._block_gains(base_sq, per_sample)
-        spread = float(np.std(gain, ddof=1))
-        if spread == 0:
-            return 0.0 if np.mean(gain) > 0 else 1.0
-        return t_sf(float(np.mean(gain)) / (spread / np.sqrt(gain.size)), gain.size - 1)
+        return gain_p_value(self._block_gains(base_sq, per_sample))
 
     def above_noise(self) -> bool:
         """Could what the selected terms leave be the instrument's noise alone? (chi-square
