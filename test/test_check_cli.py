@@ -279,3 +279,22 @@ def test_a_term_that_makes_the_later_rows_worse_is_not_added_and_the_output_says
     out = capsys.readouterr().out
     assert f"warning: {refused['name']} (asked for) raised the held-out RMSE" in out
     assert "is worse than a constant's" in out
+
+
+def test_a_log_target_without_a_unit_is_refused_in_one_line(tmp_path, capsys):
+    """The engine works in metres: a target whose unit neither the flag nor the name gives
+    is refused, naming both ways out; COLUMN:UNIT is then read."""
+    from mt_accuracy_ros.cli import main
+
+    rng = np.random.default_rng(2)
+    t1 = 20 + np.cumsum(rng.normal(0, 0.05, 120))
+    growth = 3.0 * (t1 - t1[0]) + rng.normal(0, 0.05, 120)
+    rows = "\n".join(f"{k * 60},{a:.4f},{b:.4f}" for k, (a, b) in enumerate(zip(t1, growth)))
+    (tmp_path / "log.csv").write_text("time_s,t1_C,growth\n" + rows + "\n")
+    args = ["check", str(tmp_path / "log.csv"), "--inputs", "t1_C"]
+    assert main(args + ["--target", "growth"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "give its unit as growth:UNIT" in err and "\n" not in err
+    assert main(args + ["--target", "growth:um", "--json", str(tmp_path / "s.json")]) == 0
+    summary = json.loads((tmp_path / "s.json").read_text())
+    assert summary["target_unit"] == "um" and summary["target_unit_per_m"] == 1e6
