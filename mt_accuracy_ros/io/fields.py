@@ -58,3 +58,13 @@ def machine_error(reading) -> tuple[float, float, float]:
         return (reading.error.x, reading.error.y, reading.error.z)
     return (reading.error.x - applied.x, reading.error.y - applied.y,
             reading.error.z - applied.z)
+
+
+def machine_direction_error(reading) -> tuple[float, float, float] | None:
+    """A ``ReferenceMeasurement``'s tool-direction error without the rotary correction the
+    CNC applied [rad] (``orientation_error - applied_orientation_correction``), or None
+    when the instrument did not measure the direction (or the reading predates it)."""
+    if not getattr(reading, "orientation_measured", False):
+        return None
+    error, applied = reading.orientation_error, reading.applied_orientation_correction
+    return (error.x - applied.x, error.y - applied.y, error.z - applied.z)

@@ -7,7 +7,9 @@ windows and publishes, in real time x ``rate_factor``:
   every scale pair and the CNC command positions, ``batch_period_s`` per message;
 * ``reference/tcp_error`` (``mt_accuracy_msgs/ReferenceMeasurement``, reliable):
   every ``reference_period_s`` the TCP error a reference instrument (laser
-  tracker-like, 1 um at k = 2) measures at the current command position.
+  tracker-like, 1 um at k = 2) measures at the current command position. With a
+  scenario's ``work_offset`` the instrument was zeroed there at the start (an
+  R-test's zero on the part): each reading is the error relative to that one.
 
 Sample i is stamped ``start_stamp_ns + i / sample_rate``. Late timer ticks
 publish every batch that fell due - no sample is skipped. The node exits when
@@ -120,6 +122,8 @@ class EncoderPublisher(Node):
         self._next_index = 0
         self._next_reference_s = 0.0
         self._window: SimulationResult | None = None
+        #: (3,) the machine's error where the reference instrument was zeroed [m].
+        self._instrument_zero: np.ndarray | None = None
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="simulate")
         # The window thread must not hold the GIL for the default 5 ms while a batch or a
         # compensation is due: hand it over every 0.5 ms.
@@ -208,6 +212,10 @@ class EncoderPublisher(Node):
             window = ahead[1].result()
         else:
             window = simulate(self.scenario, start_index=first, stop_index=first + size)
+        if self.scenario.work_offset and self._instrument_zero is None and first == 0:
+            # The instrument is zeroed at the work offset before the program starts:
+            # every reading is then relative to the error it had there.
+            self._instrument_zero = window.error_at(self.scenario.work_offset, 0)
         following = first + size
         self._ahead = None
         if following < self.scenario.n_samples:
@@ -309,6 +317,8 @@ class EncoderPublisher(Node):
         # rotary turn caused (the controller knows both through its nominal kinematics).
         applied = applied + shift[0]
         error = position[0] + applied + self._rng.normal(0.0, uncertainty / 2, 3)
+        if self._instrument_zero is not None:
+            error = error - self._instrument_zero
         message = ReferenceMeasurement()
         if window.encoder_axes:
             # A two-sphere R-test: the tool's direction as well as its tip; the rotation

@@ -112,27 +112,29 @@ class SimulationResult:
         return np.split(index, breaks)
 
     # ------------------------------------------------------------- TCP truth
-    def error_overrides(self, indices) -> ErrorOverrides:
-        """The kinematic-model inputs of every enabled effect at ``indices``."""
+    def error_overrides(self, indices, positions: dict | None = None) -> ErrorOverrides:
+        """The kinematic-model inputs of every enabled effect at ``indices`` (the axes
+        where they were, or at ``positions``: axis -> (N,), the same instants)."""
+        positions = positions or {a: self.actual[a][indices] for a in self.actual}
         scenario = self.scenario
         machine = scenario.machine
         overrides = ErrorOverrides()
         geometric = self.mask("geometric", indices)
         for axis, components in self._profiles.items():
-            q = self.actual[axis][indices]
+            q = positions[axis]
             for component, profile in components.items():
                 overrides.motion[motion_error_name(component, axis)] = profile(q) * geometric
         if scenario.ever_enabled("guideway_deterioration"):
             params = scenario.parameters("guideway_deterioration")
             axis = params["axis"]
             name = motion_error_name(YAW_COMPONENT[axis], axis)
-            change = self._deterioration_yaw(axis, indices)
+            change = self._deterioration_yaw(axis, indices, positions[axis])
             overrides.motion[name] = overrides.motion.get(name, 0.0) + change
         if scenario.ever_enabled("position_dependent_thermal"):
             params = scenario.parameters("position_dependent_thermal")
             axis = params["axis"]
             name = motion_error_name(axis, axis)
-            q = self.actual[axis][indices]
+            q = positions[axis]
             growth = (float(params["alpha_per_k"]) * (q - float(params["reference_m"]))
                       * self.thermal_at("bed", indices)
                       * self.mask("position_dependent_thermal", indices))
@@ -141,7 +143,7 @@ class SimulationResult:
             params = scenario.parameters("ballscrew_pitch")
             axis = params["axis"]
             name = motion_error_name(axis, axis)
-            q = self.actual[axis][indices]
+            q = positions[axis]
             amplitude = float(params["amplitude_m"]) * (
                 1.0 + float(params["growth_per_k"]) * self.thermal_at("column", indices))
             pitch = amplitude * np.sin(2.0 * np.pi * q / float(params["pitch_m"]) +
@@ -161,7 +163,7 @@ class SimulationResult:
             params = scenario.parameters("rotary_runout")
             axis = params["axis"]
             on = self.mask("rotary_runout", indices)
-            angle = self.actual[axis][indices] + float(params["phase_rad"])
+            angle = positions[axis] + float(params["phase_rad"])
             # The two directions across the axis, in cyclic order after its own (A: Y, Z).
             along = "XYZ"["ABC".index(axis)]
             first, second = "XYZ"[("XYZ".index(along) + 1) % 3], "XYZ"[("XYZ".index(along) + 2) % 3]
@@ -187,11 +189,11 @@ class SimulationResult:
             overrides.thermal["bed_tool"] = drift
         return overrides
 
-    def _deterioration_yaw(self, axis: str, indices) -> NDArray[np.float64]:
+    def _deterioration_yaw(self, axis: str, indices, q=None) -> NDArray[np.float64]:
         params = self.scenario.parameters("guideway_deterioration")
         if axis != params["axis"] or not self.scenario.ever_enabled("guideway_deterioration"):
             return np.zeros(np.size(self.time_s[indices]))
-        q = self.actual[axis][indices]
+        q = self.actual[axis][indices] if q is None else q
         peak = deterioration_peak_rad(self.scenario)
         return peak * deterioration_bump(q, float(params["start_m"]), float(params["end_m"])) \
             * self.mask("guideway_deterioration", indices)
@@ -219,6 +221,21 @@ class SimulationResult:
             return position, result["orientation"]
         return position
 
+
+    def error_at(self, pose: dict[str, float], index: int) -> NDArray[np.float64]:
+        """(3,) the machine's true TCP error [m] at ``pose`` (axis -> command, at rest) in
+        the state it was in at sample ``index``: where an instrument zeroed there reads 0."""
+        machine = self.scenario.machine
+        indices = np.array([index])
+        q = {a: np.array([float(pose[a])]) for a in machine.axis_order}
+        result = KinematicModel(machine).tcp_error(
+            q, overrides=self.error_overrides(indices, q), check_stroke=False)
+        position = result["position"][0]
+        if self.scenario.ever_enabled("abbe_offset"):
+            offset = np.asarray(self.scenario.parameters("abbe_offset")["offset_m"], float)
+            position = position + np.cross(result["orientation"][0], offset) * \
+                float(self.mask("abbe_offset", indices)[0])
+        return position
 
     def rotary_turn(self, indices, turn_rad: NDArray[np.float64]
                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

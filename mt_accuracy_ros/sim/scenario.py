@@ -18,6 +18,9 @@ Example (all keys but ``machine`` optional)::
     events:
       - {time_s: 300, enable: guideway_deterioration}
       - {time_s: 500, disable: timing_skew}
+    work_offset: {X: 0.3, Y: 0.2, Z: 0.2, A: 0.0, B: 0.0}   # the reference instrument
+                                   # is zeroed here at the start [m, rad]; absent: it
+                                   # measures the error against the nominal (absolute)
 
 Any mistake - an unknown key, effect or parameter, a negative rate, a
 program leaving the stroke - raises :class:`ScenarioError` naming the file
@@ -48,7 +51,7 @@ MAX_WINDOW_SAMPLES = 20_000_000
 
 TOP_KEYS = {"machine", "seed", "noise_seed", "duration_s", "sample_rate_hz", "temperature_rate_hz",
             "program", "spindle", "noise", "effects", "events", "start_time_s", "ambient",
-            "description"}
+            "description", "work_offset"}
 NOISE_KEYS = {"scale_m": 20e-9, "resolution_m": 10e-9, "thermocouple_k": 0.02,
               "thermocouple_resolution_k": 0.01, "scale_accuracy_fraction": 0.3}
 SPINDLE_KEYS = {"speed_rpm": 0.0, "max_rpm": 15000.0, "intervals_s": []}
@@ -106,6 +109,9 @@ class Scenario:
     events: list[tuple[float, str, bool]] = field(default_factory=list)
     source: str = "<dict>"
     description: str = ""
+    #: Axis -> command where the reference instrument was zeroed (and the part touched
+    #: off) at the start; empty: the instrument reads the error against the nominal.
+    work_offset: dict[str, float] = field(default_factory=dict)
 
     def parameters(self, effect: str) -> dict:
         """Effective parameters of ``effect`` (defaults overridden by the scenario)."""
@@ -197,6 +203,15 @@ def scenario_from_dict(data: dict, source: str = "<dict>") -> Scenario:
         _number(scenario.noise, key, source, 0.0)
     scenario.spindle = _subsection(data, "spindle", SPINDLE_KEYS, source)
     scenario.ambient = _subsection(data, "ambient", AMBIENT_KEYS, source)
+
+    if data.get("work_offset"):
+        from ..core.compensation.error_model import checked_datum
+        from ..core.errors import ParameterError
+
+        try:
+            scenario.work_offset = checked_datum(data["work_offset"], machine)
+        except ParameterError as exc:
+            raise ScenarioError(f"{_where(source, data, 'work_offset')}: {exc}") from exc
 
     program = data.get("program") or {"type": "back_and_forth", "axes": ["X"]}
     if not isinstance(program, dict) or "type" not in program:

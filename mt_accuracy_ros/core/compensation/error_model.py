@@ -42,7 +42,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..effects import Context, catalogue_error, family_named, is_catalogue_entry
+from ..effects import (Context, catalogue_error, catalogue_orientation, family_named,
+                       is_catalogue_entry)
 from ..effects.user import user_declaration
 from ..effects.variables import Variables
 from ..kinematics.error_functions import ErrorFunction
@@ -124,12 +125,18 @@ class ErrorModel:
     #: Counts live profile updates. ``version`` counts model changes (effects and
     #: their parameters) only: a version is a model a user chose, not a data update.
     profile_revision: int = 0
+    #: The work offset (axis -> command [m or rad]) where the reference instrument was
+    #: zeroed and the part touched off; empty: the model's errors are absolute.
+    #: With a datum, the TCP position error is referred to it (:meth:`tcp_error`).
+    datum: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in list(self.effects):
             self.effects[name] = self._validated(name, self.effects[name])
+        self.datum = checked_datum(self.datum, self.machine)
         self._kinematics = KinematicModel(self.machine)
         self._lag_states: dict = {}
+        self._datum_cache: dict = {}
 
     def _validated(self, name: str, parameters: dict | None) -> dict:
         """Defaults merged with ``parameters``, each checked against its default's kind, so
@@ -158,13 +165,13 @@ class ErrorModel:
         effects[name] = parameters or {}
         return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),
                           dict(self.profiles), self.version + 1, self.machine_source,
-                          dict(self.profile_offsets))
+                          dict(self.profile_offsets), datum=dict(self.datum))
 
     def without_effect(self, name: str) -> "ErrorModel":
         effects = {k: v for k, v in self.effects.items() if k != name}
         return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),
                           dict(self.profiles), self.version + 1, self.machine_source,
-                          dict(self.profile_offsets))
+                          dict(self.profile_offsets), datum=dict(self.datum))
 
     def set_profile(self, error_name: str, positions_m: ArrayLike, values: ArrayLike) -> None:
         """Use a measured profile (e.g. the kNN systematic yaw ECY) as that motion error."""
@@ -306,7 +313,56 @@ class ErrorModel:
         reversal effect where the axis stands still; without it sign(v) is used
         (0 at a standstill). ``time_s`` (N,) [s], ``accelerations`` [m/s^2] and
         ``spindle_speed_rad_s`` (N,) serve catalogue effects that need them.
+
+        With a :attr:`datum`, the position error is the error relative to the datum's
+        as the instrument was zeroed there: e(q) - e(datum) at the reference
+        temperatures, at rest (:meth:`datum_error`). A compensation then never moves
+        the part's datum, and every constant of a fitted effect (which a fit against a
+        zeroed instrument cannot know) is referred to the instrument's zero. The
+        orientation stays absolute: a touch-off does not take out a tilt.
         """
+        position, orientation = self._tcp_error(
+            positions, temperatures, velocities, directions, time_s=time_s,
+            accelerations=accelerations, spindle_speed_rad_s=spindle_speed_rad_s, fresh=fresh)
+        if self.datum:
+            position = position - self.datum_error(temperatures)[None, :]
+        return position, orientation
+
+    def datum_error(self, temperatures: dict | None = None) -> NDArray[np.float64]:
+        """(3,) the model's TCP error at the :attr:`datum` [m] in the conditions the
+        instrument was zeroed in: every temperature at its reference (no rise), the
+        axes at rest, the live profiles as they are. Zero without a datum."""
+        if not self.datum:
+            return np.zeros(3)
+        sensors = {**{k: float(np.ravel(np.asarray(v, dtype=np.float64))[0])
+                      for k, v in (temperatures or {}).items()},
+                   **self.reference_temperatures_c}
+        key = (self.profile_revision, tuple(sorted((k, id(f)) for k, f in self.profiles.items())),
+               tuple(sorted(sensors.items())), tuple(sorted(self.datum.items())))
+        if key not in self._datum_cache:
+            # A copy: the datum must not advance this model's lag states.
+            at_rest = copy.copy(self)
+            at_rest._lag_states = {}
+            at_rest.reference_temperatures_c = dict(self.reference_temperatures_c)
+            pose = {a: np.array([float(v)]) for a, v in self.datum.items()}
+            still = {a: np.zeros(1) for a in self.datum}
+            position, _ = at_rest._tcp_error(
+                pose, {k: np.array([v]) for k, v in sensors.items()}, still, still,
+                time_s=np.zeros(1), accelerations=still, spindle_speed_rad_s=np.zeros(1),
+                fresh=True)
+            if len(self._datum_cache) > 8:
+                self._datum_cache.clear()
+            self._datum_cache[key] = position[0]
+        return self._datum_cache[key]
+
+    def _tcp_error(self, positions: dict[str, ArrayLike], temperatures: dict | None = None,
+                   velocities: dict[str, ArrayLike] | None = None,
+                   directions: dict[str, ArrayLike] | None = None, *,
+                   time_s: ArrayLike | None = None,
+                   accelerations: dict[str, ArrayLike] | None = None,
+                   spindle_speed_rad_s: ArrayLike | None = None, fresh: bool = False
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`tcp_error` without the datum (absolute)."""
         q = {a: np.atleast_1d(np.asarray(positions[a], dtype=np.float64))
              for a in self.machine.axis_order if a in positions}
         missing = [a for a in self.machine.axis_order if a not in q]
@@ -349,8 +405,11 @@ class ErrorModel:
                                   self.reference_temperatures_c, spindle_speed_rad_s,
                                   lag_states=self._lag_states)
             context = Context(self.machine, variables, self._kinematics, orientation)
+            turned = np.zeros_like(orientation)
             for name, entry in catalogue.items():
                 position = position + catalogue_error(name, entry, context)
+                turned = turned + catalogue_orientation(name, entry, context)
+            orientation = orientation + turned
         return position + drive, orientation
 
     def table_motion_errors(self, axis: str, grid: ArrayLike, *, include_user: bool = True,
@@ -579,11 +638,37 @@ def _checked_catalogue_entry(name: str, entry: dict, machine: MachineDescription
                if isinstance(entry.get("uncertainties"), dict) else {})}
 
 
+def checked_datum(datum, machine: MachineDescription) -> dict[str, float]:
+    """A work offset (axis -> command) checked against ``machine``: every axis once, finite,
+    within its stroke (a datum outside it is a unit slip). Empty stays empty."""
+    if not datum:
+        return {}
+    if not isinstance(datum, dict):
+        raise ParameterError(f"datum: expected axis -> position, got {datum!r}")
+    axes = set(machine.axis_order)
+    if set(datum) != axes:
+        raise ParameterError(f"datum: give every axis of {machine.name} once "
+                             f"({', '.join(machine.axis_order)}); got {', '.join(map(str, datum))}")
+    out = {}
+    for axis in machine.axis_order:
+        value = _finite(f"datum.{axis}", datum[axis])
+        low, high = machine.axes[axis].stroke
+        if not low - 1e-9 <= value <= high + 1e-9:
+            unit = "rad" if machine.axes[axis].is_rotary else "m"
+            raise ParameterError(f"datum.{axis} = {value:g} {unit} is outside the stroke "
+                                 f"[{low:g}, {high:g}] {unit} (SI units: m and rad)")
+        out[axis] = value
+    return out
+
+
 def model_to_dict(model: ErrorModel) -> dict:
     """The YAML form of a model (profiles excluded: they stream in live)."""
-    return {"machine": model.machine_source or model.machine.name, "version": int(model.version),
-            "effects": {name: copy.deepcopy(params) for name, params in model.effects.items()},
-            "reference_temperatures_c": dict(model.reference_temperatures_c)}
+    out = {"machine": model.machine_source or model.machine.name, "version": int(model.version),
+           "effects": {name: copy.deepcopy(params) for name, params in model.effects.items()},
+           "reference_temperatures_c": dict(model.reference_temperatures_c)}
+    if model.datum:
+        out["datum"] = dict(model.datum)
+    return out
 
 
 @reraise_as(ParameterError, "model")
@@ -632,7 +717,7 @@ def model_from_dict(data: dict, source: str = "<dict>", base_dir: Path | None = 
         model = ErrorModel(load_machine(machine_source), effects,
                            {str(k): float(v) for k, v in
                             (data.get("reference_temperatures_c") or {}).items()},
-                           machine_source=machine_source)
+                           machine_source=machine_source, datum=data.get("datum") or {})
     except (ParameterError, MachineDescriptionError) as exc:
         raise ParameterError(f"{source}: {exc}") from exc
     model.version = version

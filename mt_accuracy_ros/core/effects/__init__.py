@@ -29,7 +29,7 @@ from .base import Context, EffectFamily, along, per_component
 from .user import ENTRY_POINT_GROUP, UserExpression, load_plugins, user_declaration
 
 __all__ = ["Context", "EffectFamily", "ENTRY_POINT_GROUP", "UserExpression", "along",
-           "builtin_families", "catalogue_error", "families", "family_named",
+           "builtin_families", "catalogue_error", "catalogue_orientation", "families", "family_named",
            "is_catalogue_entry", "load_plugins", "per_component", "user_declaration"]
 
 
@@ -88,3 +88,18 @@ def catalogue_error(name: str, entry: dict, ctx: Context) -> NDArray[np.float64]
     names = family.parameter_names(entry.get("variant", ""), setting)
     coefficients = np.array([entry["coefficients"][p] for p in names])
     return family.design(ctx, entry.get("variant", ""), setting) @ coefficients
+
+
+def catalogue_orientation(name: str, entry: dict, ctx: Context) -> NDArray[np.float64]:
+    """(N, 3) tool-orientation error [rad] of one fitted catalogue effect in a model: what
+    a tilted rotary axis or a pitching guideway turns (zero for a translation and for
+    user expressions, which declare a TCP error)."""
+    if "family" not in entry:
+        return np.zeros((ctx.n, 3))
+    family = family_named(entry["family"])
+    setting = entry.get("setting") or {}
+    design = family.orientation_design(ctx, entry.get("variant", ""), setting)
+    if design is None:
+        return np.zeros((ctx.n, 3))
+    names = family.parameter_names(entry.get("variant", ""), setting)
+    return design @ np.array([entry["coefficients"][p] for p in names])

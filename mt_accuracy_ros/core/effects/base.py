@@ -14,6 +14,18 @@ Kinematic sensitivities (how a unit motion or location error of an axis
 moves the TCP, with its Abbe arms, Khan & Chen eqs. 8-17, Kidani eq. 2.10)
 come from the machine's kinematic chain, to first order in the errors (each
 error's frame and lever arm): :meth:`Context.jacobian`.
+
+An effect that turns a frame of the chain also turns the tool relative to the
+workpiece: its **tool-orientation** design (N, 3, P) [rad per parameter unit]
+(:meth:`EffectFamily.orientation_design`, from :meth:`Context.orientation_jacobian`:
+d Theta = sign R eps, the rotation part of the same twists, Kidani eq. 2.10's
+companion) is what a five-axis model needs to turn its rotary axes, and what an
+instrument that measures the tool's direction (a two-sphere R-test) judges.
+When the readings measured the direction too, :meth:`Context.measured_design`
+stacks both into (N, 6, P): the position rows [m] and the direction rows
+scaled by ``orientation_lever_m`` (the instrument's position noise over its
+direction noise, so every row carries the same noise) and projected across
+the tool axis (the instrument cannot see a turn about it).
 """
 from __future__ import annotations
 
@@ -41,8 +53,12 @@ class Context:
 
     def __init__(self, machine: MachineDescription, variables: Variables,
                  kinematics: KinematicModel | None = None,
-                 orientation: NDArray[np.float64] | None = None) -> None:
+                 orientation: NDArray[np.float64] | None = None, *,
+                 orientation_lever_m: float | None = None) -> None:
         self.machine = machine
+        #: Set when the readings measured the tool's direction: [m per rad] that makes a
+        #: direction row's noise the position rows' (see the module docstring).
+        self.orientation_lever_m = orientation_lever_m
         self.variables = variables
         self.kinematics = kinematics or KinematicModel(machine)
         self.orientation = orientation
@@ -79,6 +95,70 @@ class Context:
                     sensitivity = np.cross(rotation[:, :, component - 3], lever)
                 self._jacobians[error_name] = sign * np.ascontiguousarray(sensitivity)
         return self._jacobians[error_name]
+
+    def orientation_jacobian(self, error_name: str) -> NDArray[np.float64]:
+        """d (tool orientation relative to the workpiece) / d (error ``error_name``), (N, 3)
+        [rad per m or rad]: ``sign R[:, :, c]`` for a rotation component c of the error
+        (its axis in the bed frame), zero for a translation (Kidani eq. 2.10's rotation
+        part; :meth:`KinematicModel.tcp_error_linear`)."""
+        key = "orientation:" + error_name
+        if key not in self._jacobians:
+            self.jacobian(error_name)   # builds the frames
+            frame = self._frames.get(error_name)
+            if frame is None or COMPONENTS.index(error_name[1]) < 3:
+                self._jacobians[key] = np.zeros((self.n, 3))
+            else:
+                sign, rotation, _ = frame
+                component = COMPONENTS.index(error_name[1]) - 3
+                self._jacobians[key] = sign * np.ascontiguousarray(rotation[:, :, component])
+        return self._jacobians[key]
+
+    @property
+    def width(self) -> int:
+        """Measured components per reading: 3 (TCP position) or 6 (and tool direction)."""
+        return 3 if self.orientation_lever_m is None else 6
+
+    def tool_axis(self) -> NDArray[np.float64]:
+        """(N, 3) unit tool axis in the bed frame, nominal chain."""
+        if "tool_axis" not in self.cache:
+            positions = {a: self.variables.positions[a] for a in self.machine.axis_order}
+            tool = self.kinematics.branch("tool", positions, errors=False, check_stroke=False)
+            vector = np.asarray(self.machine.tool, dtype=np.float64)
+            norm = float(np.linalg.norm(vector))
+            local = vector / norm if norm > 0 else np.array([0.0, 0.0, 1.0])
+            self.cache["tool_axis"] = tool[:, :3, :3] @ local
+        return self.cache["tool_axis"]
+
+    def _direction_rows(self, orientation: NDArray[np.float64]) -> NDArray[np.float64]:
+        """(N, 3, ...) orientation -> what the instrument sees of it, scaled: the part
+        across the tool axis times ``orientation_lever_m``."""
+        axis = self.tool_axis()
+        along_axis = np.einsum("nc,nc...->n...", axis, orientation)
+        across = orientation - axis.reshape(axis.shape + (1,) * (orientation.ndim - 2)) * \
+            along_axis[:, None]
+        return self.orientation_lever_m * across
+
+    def measured_design(self, family: "EffectFamily", variant: str, setting: dict
+                        ) -> NDArray[np.float64]:
+        """(N, width, P): the family's TCP design, and (when the direction was measured)
+        its direction design as the instrument sees it (module docstring)."""
+        design = family.design(self, variant, setting)
+        if self.orientation_lever_m is None:
+            return design
+        turn = family.orientation_design(self, variant, setting)
+        turn = np.zeros_like(design) if turn is None else self._direction_rows(turn)
+        return np.concatenate([design, turn], axis=1)
+
+    def measured_separable(self, family: "EffectFamily", variant: str, setting: dict
+                           ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        """:meth:`EffectFamily.separable_design` with the sensitivity (N, width)."""
+        separable = family.separable_design(self, variant, setting)
+        if separable is None or self.orientation_lever_m is None:
+            return separable
+        sensitivity, basis = separable
+        turn = family.orientation_sensitivity(self, variant, setting)
+        turn = np.zeros_like(sensitivity) if turn is None else self._direction_rows(turn)
+        return np.concatenate([sensitivity, turn], axis=1), basis
 
     def normalised_position(self, axis: str) -> NDArray[np.float64]:
         """Position mapped to [-1, 1] over the stroke (Legendre's domain)."""
@@ -181,6 +261,26 @@ class EffectFamily:
         then scores the candidate on N values per column instead of 3N (it keeps the
         sensitivity per candidate, so families may differ for the same variant)."""
         return None
+
+    def orientation_sensitivity(self, ctx: Context, variant: str, setting: dict
+                                ) -> NDArray[np.float64] | None:
+        """(N, 3) tool-orientation sensitivity [rad per unit] along the same scalar columns
+        as :meth:`separable_design`'s, or None when the effect turns nothing (a
+        translation, a thermal drift): the default."""
+        return None
+
+    def orientation_design(self, ctx: Context, variant: str, setting: dict
+                           ) -> NDArray[np.float64] | None:
+        """(N, 3, P) tool-orientation error per unit parameter [rad per parameter unit],
+        or None when the effect does not turn the tool relative to the workpiece. By
+        default the separable design's columns along :meth:`orientation_sensitivity`."""
+        sensitivity = self.orientation_sensitivity(ctx, variant, setting)
+        if sensitivity is None:
+            return None
+        separable = self.separable_design(ctx, variant, setting)
+        if separable is None:
+            return None
+        return along(sensitivity, separable[1])
 
     def explanation(self, variant: str, setting: dict) -> str:
         return self.summary

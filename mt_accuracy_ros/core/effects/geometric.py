@@ -136,6 +136,10 @@ class ComponentError(EffectFamily):
             basis = ctx.cache[key][:, first:setting["order"] + 1]
         return ctx.jacobian(variant), basis
 
+    def orientation_sensitivity(self, ctx: Context, variant: str, setting: dict):
+        # Pitch, yaw and roll turn the tool; positioning and straightness do not.
+        return ctx.orientation_jacobian(variant) if self.kind == "angular" else None
+
     def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
         """The error motion itself, E(q) [m or rad] at axis positions q: what a CNC's
         per-axis compensation table holds (not its effect at the TCP)."""
@@ -228,6 +232,13 @@ class Squareness(EffectFamily):
             return (ctx.jacobian(variant) * position[:, None])[:, :, None]
         return ctx.jacobian(variant)[:, :, None]
 
+    def orientation_design(self, ctx, variant, setting):
+        # The first form turns the later axis' frame (and what it carries); the other
+        # reference is a straightness slope, a translation.
+        if variant in self.OTHER_REFERENCE:
+            return None
+        return ctx.orientation_jacobian(variant)[:, :, None]
+
     def location_error(self, variant: str, coefficients) -> dict[str, float]:
         """The location error it stands for (a CNC table's squareness entry) [rad]; the
         other-reference form is a motion error (:meth:`motion_error`), not one."""
@@ -274,20 +285,39 @@ class RotaryError(EffectFamily):
         # the tie must not be broken by rounding.
         return self.complexity + (variant[1] in "ABC")
 
-    # The first harmonic of an error seen from the rotating frame is an offset or tilt of
-    # the axis (its location errors, :class:`RotaryLocation`); the position-dependent
-    # part starts at the second, as ISO 230-7 separates them.
+    @staticmethod
+    def first_harmonic(variant: str) -> int:
+        """The lowest harmonic of ``variant`` that no location error of the axis holds.
+
+        The chain applies a rotary axis' error motions in its turning frame. There, a
+        tilt of the centre line (a location error, :class:`RotaryLocation`) is a
+        once-per-revolution wobble about the two directions across the axis, so those
+        start at the second harmonic (as ISO 230-7 separates them). A once-per-revolution
+        radial or axial runout and angular positioning error (an eccentric bearing or
+        encoder disc) is no location error: those start at the first.
+        """
+        along_axis = "ABC".index(variant[2])
+        tilt = variant[1] in "ABC" and "ABC".index(variant[1]) != along_axis
+        return 2 if tilt else 1
+
+    def harmonics(self, variant, setting) -> range:
+        first = self.first_harmonic(variant)
+        return range(first, first + setting["harmonics"])
+
     def parameter_names(self, variant, setting):
-        return [f"{f}{h}" for h in range(2, setting["harmonics"] + 2) for f in ("cos", "sin")]
+        return [f"{f}{h}" for h in self.harmonics(variant, setting) for f in ("cos", "sin")]
 
     def design(self, ctx, variant, setting):
         return along(*self.separable_design(ctx, variant, setting))
 
     def separable_design(self, ctx, variant, setting):
         angle = ctx.variables.positions[variant[2]]
-        columns = np.column_stack([f(h * angle) for h in range(2, setting["harmonics"] + 2)
+        columns = np.column_stack([f(h * angle) for h in self.harmonics(variant, setting)
                                    for f in (np.cos, np.sin)])
         return ctx.jacobian(variant), columns
+
+    def orientation_sensitivity(self, ctx, variant, setting):
+        return ctx.orientation_jacobian(variant) if variant[1] in "ABC" else None
 
     def explanation(self, variant, setting):
         what = {"X": "radial/axial runout", "Y": "radial/axial runout", "Z": "radial/axial runout",
@@ -307,13 +337,24 @@ class RotaryLocation(EffectFamily):
     reference = "Khan & Chen position-independent errors (section 5); Zhu ch. 5"
 
     def variants(self, ctx):
-        return ctx.rotary_axes()
+        rotary = ctx.rotary_axes()
+        # Every rotary axis at once as well: a tilt of one axis and of the next turn the
+        # tool alike (in Khan & Chen's chain both are constant rotations of the tool
+        # against the table), so the tool's direction sees their sum and only the levers
+        # part them - one axis at a time, the first would take the other's tilt.
+        return rotary + (["".join(rotary)] if len(rotary) > 1 else [])
 
-    def _names(self, axis):
-        along_axis = "XYZ"["ABC".index(axis)]
-        offsets = [f"E{c}0{axis}" for c in "XYZ" if c != along_axis]
-        tilts = [f"E{c}0{axis}" for c in "ABC" if c != axis]
-        return offsets + tilts + [f"E{axis}0{axis}"]
+    def variant_complexity(self, variant: str) -> int:
+        return self.complexity + (len(variant) > 1)
+
+    def _names(self, variant):
+        names = []
+        for axis in variant:
+            along_axis = "XYZ"["ABC".index(axis)]
+            offsets = [f"E{c}0{axis}" for c in "XYZ" if c != along_axis]
+            tilts = [f"E{c}0{axis}" for c in "ABC" if c != axis]
+            names += offsets + tilts + [f"E{axis}0{axis}"]
+        return names
 
     def parameter_names(self, variant, setting):
         return self._names(variant)
@@ -321,10 +362,16 @@ class RotaryLocation(EffectFamily):
     def design(self, ctx, variant, setting):
         return np.stack([ctx.jacobian(name) for name in self._names(variant)], axis=2)
 
+    def orientation_design(self, ctx, variant, setting):
+        return np.stack([ctx.orientation_jacobian(name) for name in self._names(variant)],
+                        axis=2)
+
     def explanation(self, variant, setting):
-        return (f"the {variant} axis is not where the model puts it: its centre line is "
-                f"offset or tilted, or its zero is shifted ({', '.join(self._names(variant))}; "
-                "Khan & Chen position-independent errors)")
+        which = f"the {variant} axis is" if len(variant) == 1 else \
+            f"the {' and '.join(variant)} axes are"
+        return (f"{which} not where the model puts it: centre line offset or tilted, or the "
+                f"zero shifted ({', '.join(self._names(variant))}; Khan & Chen "
+                "position-independent errors)")
 
 
 class CrossAxis(EffectFamily):

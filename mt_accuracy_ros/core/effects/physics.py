@@ -74,12 +74,17 @@ def limit_problems(names: list[str], values: NDArray[np.float64],
     return out
 
 
+#: Measured components: the TCP position's (x, y, z) and the tool direction's, about
+#: x, y and z (a, b, c; scaled to metres, :class:`~.base.Context`).
+COMPONENT_NAMES = "xyzabc"
+
+
 def consistency_allowances(residual: NDArray[np.float64], mask: NDArray[np.bool_],
                            noise_sigma: float) -> dict[str, float]:
     """Per measured component, the largest spread [m] an effect may have at the readings:
     :data:`CONSISTENCY_FACTOR` x the residual's spread + 2 sigma of noise."""
     out = {}
-    for c, component in enumerate("xyz"):
+    for c, component in enumerate(COMPONENT_NAMES[:residual.shape[1]]):
         rows = mask[:, c]
         if rows.any():
             r = residual[rows, c]
@@ -88,17 +93,25 @@ def consistency_allowances(residual: NDArray[np.float64], mask: NDArray[np.bool_
     return out
 
 
-def spread_problems(spreads: dict[str, float], allowances: dict[str, float]) -> list[str]:
+def spread_problems(spreads: dict[str, float], allowances: dict[str, float],
+                    orientation_lever_m: float | None = None) -> list[str]:
     """Components where an effect's own spread [m] exceeds its allowance
-    (:func:`consistency_allowances`)."""
+    (:func:`consistency_allowances`); a direction component (a, b, c: scaled by
+    ``orientation_lever_m``) is said in urad."""
     out = []
     for component, allowed in allowances.items():
         spread = spreads.get(component, 0.0)
         if spread == 0.0:
             continue
         if not np.isfinite(spread) or spread > allowed:
-            out.append(f"it would move {component} by {spread * 1e6:.3g} um RMS at the readings, "
-                       f"more than the {allowed * 1e6:.3g} um the residual there allows")
+            if component in "abc" and orientation_lever_m:
+                what, factor, unit = (f"the tool's direction about {'xyz'['abc'.index(component)]}",
+                                      1e6 / orientation_lever_m, "urad")
+            else:
+                what, factor, unit = component, 1e6, "um"
+            out.append(f"it would move {what} by {spread * factor:.3g} {unit} RMS at the "
+                       f"readings, more than the {allowed * factor:.3g} {unit} the residual "
+                       "there allows")
     return out
 
 

@@ -256,6 +256,11 @@ class ThermalSquareness(EffectFamily):
         column = temperature_variable(ctx, temperature)
         return (ctx.jacobian(square) * column[:, None])[:, :, None]
 
+    def orientation_design(self, ctx, variant, setting):
+        square, temperature = variant.split(":", 1)
+        column = temperature_variable(ctx, temperature)
+        return (ctx.orientation_jacobian(square) * column[:, None])[:, :, None]
+
     def parameter_limits(self, ctx, variant, setting):
         bound = GENEROUS_CTE_PER_K * BENDING_LEVER
         return {"rad_per_k": (bound, f"a link tilts at most {GENEROUS_CTE_PER_K * 1e6:.0f} "

@@ -62,6 +62,13 @@ class Observations:
     measured_m (N, 3) [m] with measured_mask (N, 3); time_s (N,) [s];
     temperatures: sensor -> (N,) [degC]; spindle_speed_rad_s (N,) or None;
     uncertainty_m: the instrument's k = 2 uncertainty [m].
+
+    An instrument that also measures the tool's direction (a two-sphere R-test)
+    gives ``measured_orientation_rad`` (N, 3) [rad]: the rotation of the tool
+    relative to the workpiece in the bed frame, as seen across the tool axis
+    (the part about the axis is invisible to it), with ``orientation_measured``
+    (N,) and its own k = 2 uncertainty ``orientation_uncertainty_rad``. The
+    workbench then judges every effect on both (:class:`~..effects.base.Context`).
     """
 
     positions: dict[str, NDArray[np.float64]]
@@ -78,6 +85,9 @@ class Observations:
     directions: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     accelerations: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     spindle_speed_rad_s: NDArray[np.float64] | None = None
+    measured_orientation_rad: NDArray[np.float64] | None = None
+    orientation_measured: NDArray[np.bool_] | None = None
+    orientation_uncertainty_rad: float = 2e-6
 
     def subset(self, rows) -> "Observations":
         pick = lambda d: {k: np.asarray(v)[rows] for k, v in d.items()}  # noqa: E731
@@ -89,7 +99,24 @@ class Observations:
                             else self.predicted_orientation[rows], pick(self.directions),
                             pick(self.accelerations),
                             None if self.spindle_speed_rad_s is None
-                            else self.spindle_speed_rad_s[rows])
+                            else self.spindle_speed_rad_s[rows],
+                            None if self.measured_orientation_rad is None
+                            else self.measured_orientation_rad[rows],
+                            None if self.orientation_measured is None
+                            else self.orientation_measured[rows],
+                            self.orientation_uncertainty_rad)
+
+    @property
+    def measures_direction(self) -> bool:
+        """Did the instrument measure the tool's direction at any reading?"""
+        return self.measured_orientation_rad is not None and \
+            self.orientation_measured is not None and bool(np.any(self.orientation_measured))
+
+    @property
+    def orientation_lever_m(self) -> float:
+        """[m/rad] that gives a direction reading the noise of a position reading: the
+        position's k = 2 uncertainty over the direction's."""
+        return float(self.uncertainty_m / self.orientation_uncertainty_rad)
 
     @property
     def n(self) -> int:
@@ -169,6 +196,11 @@ class Diagnosis:
     #: Where what the selected effects leave lives (the same as ``localisation`` when
     #: nothing was selected).
     localisation_after: Localisation | None = None
+    #: When the instrument measured the tool's direction: the direction residual's RMS
+    #: [rad] as the model stands, and per component (about x, y, z) what the selected
+    #: effects leave above the instrument's noise [rad].
+    direction_rmse_rad: float | None = None
+    unexplained_direction_rad: dict[str, float] = field(default_factory=dict)
 
     @property
     def found(self) -> Candidate | None:
@@ -181,15 +213,25 @@ class Diagnosis:
     def verdict(self) -> str:
         """The honest closing sentence: what remains unexplained, if anything."""
         systematic = {c: v for c, v in self.unexplained_m.items() if v > 0}
-        if not systematic or not self.residual_above_noise:
+        turned = {c: v for c, v in self.unexplained_direction_rad.items() if v > 0}
+        if not (systematic or turned) or not self.residual_above_noise:
             return ""
-        worst = max(systematic, key=systematic.get)
-        where = self.localisation_after.sentence() if self.localisation_after else ""
-        return (f"an unexplained systematic residual of {systematic[worst] * 1e6:.1f} um on "
-                f"{worst} remains{'; ' + where if where else ''}")
+        parts = []
+        if systematic:
+            worst = max(systematic, key=systematic.get)
+            where = self.localisation_after.sentence() if self.localisation_after else ""
+            parts.append(f"an unexplained systematic residual of {systematic[worst] * 1e6:.1f} "
+                         f"um on {worst} remains{'; ' + where if where else ''}")
+        if turned:
+            worst = max(turned, key=turned.get)
+            parts.append(f"an unexplained tool-direction error of {turned[worst] * 1e6:.1f} "
+                         f"urad about {worst} remains")
+        return "; ".join(parts)
 
     def text(self) -> str:
         head = f"residual RMSE {self.baseline_rmse * 1e6:.2f} um"
+        if self.direction_rmse_rad is not None:
+            head += f" (tool direction {self.direction_rmse_rad * 1e6:.1f} urad)"
         if self.selected:
             names = "; ".join(f"{c.name} ({c.explanation}; confidence {c.confidence:.0%})"
                               for c in self.selected)
@@ -265,7 +307,8 @@ def _check_user_terms(terms: list[Term], selector: Selector, model: ErrorModel,
             from ..effects import family_named
 
             family = family_named(entry["family"])
-            design = family.design(ctx, entry.get("variant", ""), entry.get("setting") or {})
+            design = ctx.measured_design(family, entry.get("variant", ""),
+                                         entry.get("setting") or {})
             included.append(design.reshape(-1, design.shape[2])[selector.rows])
             names.append(name)
     for term in terms:
@@ -324,9 +367,20 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     noise_sigma = obs.uncertainty_m / 2.0   # the instrument's k = 2 uncertainty
     variables = obs.variables(model.reference_temperatures_c)
     orientation = obs.predicted_orientation
-    if orientation is None and ("geometric" in model.effects or model.profiles):
+    directions = obs.measures_direction
+    if orientation is None and ("geometric" in model.effects or model.profiles or directions):
         orientation = model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[1]
-    ctx = Context(model.machine, variables, model._kinematics, orientation)
+    lever = obs.orientation_lever_m if directions else None
+    ctx = Context(model.machine, variables, model._kinematics, orientation,
+                  orientation_lever_m=lever)
+    position_residual = residual
+    if directions:
+        # The tool's direction as a second measured quantity, scaled to the position's
+        # noise and seen as the instrument sees it (across the tool axis).
+        turned = direction_residuals(ctx, obs, orientation)
+        residual = np.concatenate([residual, turned], axis=1)
+        mask = np.concatenate([mask, np.repeat(obs.orientation_measured[:, None], 3, axis=1)],
+                              axis=1)
     selector = Selector(ctx, residual, mask, noise_sigma, folds=folds, alpha=alpha,
                         min_reduction=min_reduction, min_share=min_share, forward=forward)
     terms = candidate_terms(model, ctx, family_list)
@@ -341,36 +395,59 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     selected = [_candidate(s.added, explain, True) for s in steps if s.added is not None]
     for candidate, step in zip(selected, [s for s in steps if s.added is not None]):
         candidate.cv_rmse_after = step.added.cv_rmse
-    in_sample = float(np.sqrt(np.mean(residual[mask] ** 2))) if mask.any() else 0.0
+    position_mask = obs.measured_mask
+    in_sample = float(np.sqrt(np.mean(position_residual[position_mask] ** 2))) \
+        if position_mask.any() else 0.0
     remaining = selector.remaining_residual()
     final_cv = steps[-1].base_cv_rmse if steps and steps[-1].added is None else \
         (steps[-1].added.cv_rmse if steps else in_sample)
-    unexplained, above = {}, False
-    for c, component in enumerate("xyz"):
+    unexplained, unexplained_direction, above = {}, {}, False
+    for c, component in enumerate(selector.components):
         rows = mask[:, c]
         if rows.sum() < 2:
             continue
         r = remaining[rows, c]
         mean_square = float(np.mean(r ** 2))
-        unexplained[component] = float(np.sqrt(max(0.0, mean_square - noise_sigma ** 2)))
+        systematic = float(np.sqrt(max(0.0, mean_square - noise_sigma ** 2)))
+        if c < 3:
+            unexplained[component] = systematic
+        else:
+            unexplained_direction["xyz"[c - 3]] = systematic / lever
         # Chi-square: could these residuals be the instrument's noise alone?
         if noise_sigma > 0 and chi2_sf(mean_square * r.size / noise_sigma ** 2, r.size - 1) < \
-                0.001 and unexplained[component] > 0.5 * noise_sigma:
+                0.001 and systematic > 0.5 * noise_sigma:
             above = True
     localisation = localisation_after = None
     if localise_residual:
         strokes = {a: model.machine.axes[a].stroke for a in model.machine.axis_order}
-        localisation = localise(residual, mask, variables, ctx.structure_sensors(),
-                                noise_sigma, strokes, folds)
-        localisation_after = localise(remaining, mask, variables, ctx.structure_sensors(),
-                                      noise_sigma, strokes, folds) if selected and above \
-            else localisation
+        localisation = localise(position_residual, position_mask, variables,
+                                ctx.structure_sensors(), noise_sigma, strokes, folds)
+        localisation_after = localise(remaining[:, :3], position_mask, variables,
+                                      ctx.structure_sensors(), noise_sigma, strokes, folds) \
+            if selected and above else localisation
+    direction_rmse = None
+    if directions:
+        rows = mask[:, 3:]
+        direction_rmse = float(np.sqrt(np.sum(residual[:, 3:][rows] ** 2) /
+                                       max(1, int(obs.orientation_measured.sum())))) / lever
     return Diagnosis(in_sample, first.base_cv_rmse if first else in_sample,
-                     float(np.max(np.abs(residual[mask]), initial=0.0)),
-                     float(np.mean(np.abs(residual[mask]) > obs.uncertainty_m))
-                     if mask.any() else 0.0,
+                     float(np.max(np.abs(position_residual[position_mask]), initial=0.0)),
+                     float(np.mean(np.abs(position_residual[position_mask]) > obs.uncertainty_m))
+                     if position_mask.any() else 0.0,
                      ranking, selected, localisation, unexplained, above, noise_sigma,
-                     float(final_cv), localisation_after)
+                     float(final_cv), localisation_after, direction_rmse, unexplained_direction)
+
+
+def direction_residuals(ctx: Context, obs: Observations, predicted: NDArray[np.float64]
+                        ) -> NDArray[np.float64]:
+    """(N, 3) measured - model tool direction across the tool axis, times
+    ``ctx.orientation_lever_m`` [m]; zero where the direction was not measured. Absolute,
+    unlike the position (:class:`~.selection.Selector`): a constant tilt is the machine's."""
+    axis = ctx.tool_axis()
+    difference = np.asarray(obs.measured_orientation_rad, dtype=np.float64) - predicted
+    across = difference - axis * np.einsum("nc,nc->n", difference, axis)[:, None]
+    across[~np.asarray(obs.orientation_measured, dtype=bool)] = 0.0
+    return ctx.orientation_lever_m * across
 
 
 def effect_name_problem(name: str, model: ErrorModel) -> str:

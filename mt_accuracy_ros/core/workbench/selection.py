@@ -274,8 +274,17 @@ def time_blocks(n: int, count: int) -> NDArray[np.intp]:
     return np.repeat(np.arange(count), sizes)
 
 
+#: Names of the measured components of a reading: the TCP position's, then (when the
+#: instrument measured the tool's direction) the direction's, about x, y and z.
+COMPONENT_NAMES = "xyzabc"
+
+
 class Selector:
-    """Forward selection over ``terms`` for the residual (N, 3) at ``ctx``'s readings."""
+    """Forward selection over ``terms`` for the residual (N, K) at ``ctx``'s readings.
+
+    K = ``ctx.width``: 3 (the TCP position, [m]) or 6 (and the tool's direction,
+    scaled to metres by ``ctx.orientation_lever_m``: every row has the same noise).
+    """
 
     def __init__(self, ctx: Context, residual: NDArray[np.float64], mask: NDArray[np.bool_],
                  noise_sigma: float, *, folds: int = 5, n_blocks: int = 20,
@@ -290,16 +299,25 @@ class Selector:
         self.forward = bool(forward)
         folds = folds + 1 if self.forward else folds
         self.ctx = ctx
+        width = self.width = ctx.width
+        if residual.shape != (n, width) or mask.shape != (n, width):
+            raise ValueError(f"residual {residual.shape} and mask {mask.shape} must be "
+                             f"({n}, {width}) for this context")
+        self.components = COMPONENT_NAMES[:width]
         self.mask = mask
         self.rows = np.flatnonzero(mask.ravel())
-        self.sample_of_row = self.rows // 3
+        self.sample_of_row = self.rows // width
         self.y = residual.ravel()[self.rows]
         self.n = n
-        offsets = np.zeros((mask.size, 3))
-        offsets[np.arange(mask.size), np.tile(np.arange(3), n)] = 1.0
-        self.offsets = offsets[self.rows]
+        offsets = np.zeros((mask.size, width))
+        offsets[np.arange(mask.size), np.tile(np.arange(width), n)] = 1.0
+        # An instrument measures the TCP position from a zero of its own: a free offset
+        # per position component. The tool's direction it measures absolutely (an
+        # R-test's spheres lie on the tool axis; its nest is aligned to the table): a
+        # constant tilt is the machine's, not the instrument's.
+        self.offsets = offsets[self.rows][:, :3]
         self.residual = residual
-        self.component_of_row = self.rows % 3
+        self.component_of_row = self.rows % width
         self._ones = np.ones(n)
         self.allowances = consistency_allowances(residual, mask, noise_sigma)
         self.fold_of_sample = time_blocks(n, folds)
@@ -346,7 +364,7 @@ class Selector:
                 # The first columns of the largest setting's design: a view, no copy.
                 size = len(term.family.parameter_names(term.variant, setting))
                 return self.design_rows(term, term.settings[-1])[:, :size]
-            design = term.family.design(self.ctx, term.variant, setting)
+            design = self.ctx.measured_design(term.family, term.variant, setting)
             design = design.reshape(-1, design.shape[2])
             if self.rows.size != design.shape[0]:
                 design = design[self.rows]
@@ -363,7 +381,7 @@ class Selector:
                 size = len(term.family.parameter_names(term.variant, setting))
                 largest = self.basis_rows(term, term.settings[-1])
                 return None if largest is None else largest[:, :size]
-            separable = term.family.separable_design(self.ctx, term.variant, setting)
+            separable = self.ctx.measured_separable(term.family, term.variant, setting)
             if separable is None:
                 return None
             sensitivity, basis = separable
@@ -391,11 +409,11 @@ class Selector:
             else (0, 0)
         values = basis[start:stop] @ coefficients
         if self.all_rows:
-            return along_rows * np.repeat(values, 3)
+            return along_rows * np.repeat(values, self.width)
         return along_rows * values[self.present_of_row[a:b] - start]
 
     def full_design(self, term: Term, setting: dict) -> NDArray[np.float64]:
-        return term.family.design(self.ctx, term.variant, setting)
+        return self.ctx.measured_design(term.family, term.variant, setting)
 
     def base_columns(self) -> NDArray[np.float64]:
         columns = [self.offsets] + [self.design_rows(t, s) for t, s in self.selected]
@@ -414,19 +432,19 @@ class Selector:
         # Each component's spread about its mean, from the rows that measured it.
         if self.all_rows:
             # (Column reductions by products: numpy's strided std is several times slower.)
-            per_sample = own.reshape(-1, 3)
+            per_sample = own.reshape(-1, self.width)
             centred = per_sample - (self._ones @ per_sample) / per_sample.shape[0]
             spread = np.sqrt(np.einsum("ij,ij->j", centred, centred) / per_sample.shape[0])
         else:
-            count = np.bincount(self.component_of_row, minlength=3)
-            mean = np.bincount(self.component_of_row, weights=own, minlength=3) / \
+            count = np.bincount(self.component_of_row, minlength=self.width)
+            mean = np.bincount(self.component_of_row, weights=own, minlength=self.width) / \
                 np.maximum(count, 1)
             spread = np.sqrt(np.bincount(self.component_of_row,
                                          weights=(own - mean[self.component_of_row]) ** 2,
-                                         minlength=3) / np.maximum(count, 1))
-        spreads = {component: float(spread[c]) for c, component in enumerate("xyz")
+                                         minlength=self.width) / np.maximum(count, 1))
+        spreads = {component: float(spread[c]) for c, component in enumerate(self.components)
                    if component in self.allowances}
-        problems += spread_problems(spreads, self.allowances)
+        problems += spread_problems(spreads, self.allowances, self.ctx.orientation_lever_m)
         return "; ".join(problems)
 
     # ------------------------------------------------------------ scoring
@@ -446,10 +464,10 @@ class Selector:
         if self.forward:
             squared_rows = np.where(self.judged_row, squared_rows, 0.0)
         return np.bincount(self.rows, weights=squared_rows,
-                           minlength=self.mask.size).reshape(self.n, 3)
+                           minlength=self.mask.size).reshape(self.n, self.width)
 
     def components_of(self, term: Term) -> NDArray[np.bool_]:
-        """(3,) the measured components ``term``'s design moves (its largest setting's).
+        """(K,) the measured components ``term``'s design moves (its largest setting's).
 
         A candidate changes the held-out prediction only where its columns are non-zero,
         so its error there is the base model's: pooling those components into its test
@@ -466,7 +484,7 @@ class Selector:
             # Rounding (a lever's cross product) is not a component the effect moves.
             size = size / max(float(np.max(size, initial=0.0)), 1e-300)
             moved = np.array([float(np.max(size[self.component_of_row == c], initial=0.0))
-                              for c in range(3)]) > 1e-9
+                              for c in range(self.width)]) > 1e-9
             known = moved & self.mask.any(axis=0)
             if not known.any():
                 known = self.mask.any(axis=0)
@@ -518,8 +536,8 @@ class Selector:
         if contracted is None:
             if self.all_rows:
                 width = stats.with_y.shape[1]
-                contracted = np.einsum("nc,ncm->nm", along_rows.reshape(-1, 3),
-                                       stats.with_y.reshape(-1, 3, width))
+                contracted = np.einsum("nc,ncm->nm", along_rows.reshape(-1, self.width),
+                                       stats.with_y.reshape(-1, self.width, width))
             else:
                 contracted = np.add.reduceat(along_rows[:, None] * stats.with_y,
                                              self.row_starts, axis=0)
@@ -604,10 +622,11 @@ class Selector:
                         continue
                     trains[fold, self.sample_of_row[a:b]] = False
                     after_base[fold, self.rows] = self.y - stats.base @ base_coefficients[fold]
-                stats.after_base = (trains, after_base.reshape(self.folds, -1, 3))
+                stats.after_base = (trains, after_base.reshape(self.folds, -1, self.width))
             trains, after_base = stats.after_base
+            # A family chooses its setting from the TCP position's rows (its own design's).
             chosen = term.family.preselect_folds(self.ctx, term.variant, term.settings,
-                                                 after_base, self.mask, trains)
+                                                 after_base[:, :, :3], self.mask[:, :3], trains)
         if all(c is not None for c in chosen):
             return chosen
         counts = np.array([max(a, 1) if self.forward else self.y.size - (b - a)
@@ -693,8 +712,8 @@ class Selector:
             coefficients, *_ = np.linalg.lstsq(base, self.y, rcond=None)
             after_base[self.rows] = self.y - base @ coefficients
             setting = term.family.preselect(self.ctx, term.variant, term.settings,
-                                            after_base.reshape(-1, 3), self.mask,
-                                            np.ones(self.n, dtype=bool))
+                                            after_base.reshape(-1, self.width)[:, :3],
+                                            self.mask[:, :3], np.ones(self.n, dtype=bool))
             if setting is None:
                 n = self.y.size
                 best_bic = np.inf
@@ -723,7 +742,8 @@ class Selector:
             return setting
 
         def rss(value: float) -> float:
-            design = term.family.design(self.ctx, term.variant, dict(setting, **{key: value}))
+            design = self.ctx.measured_design(term.family, term.variant,
+                                              dict(setting, **{key: value}))
             x = np.column_stack([base, design.reshape(-1, design.shape[2])[self.rows]])
             coefficients, *_ = np.linalg.lstsq(x, self.y, rcond=None)
             return float(np.sum((x @ coefficients - self.y) ** 2))
@@ -741,7 +761,7 @@ class Selector:
         blocks = [self.design_rows(t, s) for t, s in terms]
         x = np.column_stack([self.offsets] + blocks)
         gram = x.T @ x
-        penalised, start = gram, 3
+        penalised, start = gram, self.offsets.shape[1]
         for (term, setting), block in zip(terms, blocks):
             penalised = penalise(penalised, start, start + block.shape[1],
                                  penalty_of(term, setting))
@@ -752,7 +772,7 @@ class Selector:
         sigma2 = float(residual @ residual) / dof
         standard = ridge_standard_errors(gram, penalised, sigma2) if penalised is not gram \
             else np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
-        out_c, out_s, start = [], [], 3
+        out_c, out_s, start = [], [], self.offsets.shape[1]
         for block in blocks:
             out_c.append(coefficients[start:start + block.shape[1]])
             out_s.append(standard[start:start + block.shape[1]])
@@ -811,7 +831,8 @@ class Selector:
             candidate = Scored(term, float(np.sqrt(mse)),
                                1.0 - np.sqrt(own_mse / own_base) if own_base > 0 else 0.0,
                                p_value, 1.0, float(share), setting, per_sample,
-                               components="".join(c for c, m in zip("xyz", moved) if m))
+                               components="".join(c for c, m in zip(self.components, moved)
+                                                  if m))
             # Every candidate carries its full-data fit, so that a user may add any of them
             # (judged by physics now, while its design is at hand).
             candidate.coefficients, candidate.standard_errors = (
@@ -983,8 +1004,8 @@ class Selector:
         return steps
 
     def remaining_residual(self) -> NDArray[np.float64]:
-        """(N, 3) residual after the offsets and the selected terms (in-sample)."""
+        """(N, K) residual after the offsets and the selected terms (in-sample)."""
         _, _, residual_rows = self.fit_full(self.selected)
         out = np.zeros(self.mask.size)
         out[self.rows] = residual_rows
-        return out.reshape(-1, 3)
+        return out.reshape(-1, self.width)
