@@ -1,8 +1,12 @@
 """The main job on the five-axis machine (``mt-accuracy demo --machine khan_chen_rpppr``).
 
-The scenario is demo_5axis shortened to 30 s; what is asserted does not depend
-on the host's speed: the rotary encoders stream, the compensation turns the
-rotary axes, the R-test measures the tool's direction and the monitor checks it.
+The whole demo_5axis scenario at 1.5x real time. What is asserted does not depend on
+the host's speed: the rotary encoders stream, the compensation turns the rotary
+axes, the R-test measures the tool's direction and the monitor checks it and names
+the rotary axes' location from it. The end state (position and tool direction
+within the R-test's band, absolutely: issue 30) is asserted unless the run says the
+host failed it (corrections late, the model live too late) - the closed loop's
+accuracy is also tested without a race in test/nodes/test_closed_loop.py.
 """
 from __future__ import annotations
 
@@ -21,13 +25,10 @@ def five_axis_run(tmp_path_factory):
     from mt_accuracy_ros.nodes._scenario import BUNDLED
 
     base = tmp_path_factory.mktemp("demo5")
-    scenario = yaml.safe_load((BUNDLED / "demo_5axis.yaml").read_text())
-    scenario["duration_s"] = 30
-    (base / "short.yaml").write_text(yaml.safe_dump(scenario))
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
         code = run_demo(out_dir=str(base / "out"), rate_factor=1.5,
-                        scenario=str(base / "short.yaml"))
+                        scenario=str(BUNDLED / "demo_5axis.yaml"))
     return code, base / "out", printed.getvalue()
 
 
@@ -67,3 +68,32 @@ def test_the_five_axis_graph_streams_encoders_and_compensates_the_tool_direction
     assert summary["tool_direction"]["phases"]
     assert "tool direction error at the same readings" in printed
     assert summary["compensation_messages"] > 0 and summary["model_checks"] >= 1
+
+
+def test_the_five_axis_job_names_the_rotary_axes_from_the_direction_and_ends_in_the_band(
+        five_axis_run):
+    from mt_accuracy_ros.commands.demo import demo_failures
+
+    code, out, printed = five_axis_run
+    summary = json.loads((out / "summary.json").read_text())
+    # The tilts and the zero error of both rotary axes, named from the tool's direction.
+    assert "rotary_location:AB" in summary["missing_effects_found"], printed
+    assert summary["effect_added_accepted"]
+    final = yaml.safe_load((out / "model.yaml").read_text())
+    start = yaml.safe_load((out / "model_start.yaml").read_text())
+    # The model is referred to the R-test's zero at the work offset.
+    assert start["datum"] == final["datum"] == {"X": 0.3, "Y": 0.2, "Z": 0.2, "A": 0.0,
+                                                "B": 0.0}
+    tilts = final["effects"]["rotary_location:AB"]["coefficients"]
+    assert abs(tilts["EB0A"] - 40e-6) < 5e-6 and abs(tilts["EC0B"] + 20e-6) < 5e-6, tilts
+    direction = summary["tool_direction"]
+    failures = demo_failures(summary, {"end_state_within_band":
+                                       summary["end_state_within_band"]})
+    if any("loaded machine?" in failure for failure in failures):
+        pytest.skip("the host failed the real-time path: " + "; ".join(failures))
+    assert code == 0 and summary["end_state_within_band"], printed
+    assert direction["end_within_band"], direction
+    end = summary["closed_loop"][-1]
+    assert end["label"] == "end state"
+    assert all(end["with_compensation"][c]["rms_um"] - end["with_compensation"][c]["u_k2_um"]
+               <= summary["instrument_band_um"] for c in "xyz")

@@ -264,19 +264,24 @@ sample_rate_hz: 500
 temperature_rate_hz: 2
 program: {type: random_points, axes: [X, Y, Z, A, B], points: 60, seed: 3, dwell_s: 2.0,
           feed_m_per_min: 30, limits: {A: [-0.8, 0.8], B: [-0.6, 0.6]}}
+work_offset: {X: 0.3, Y: 0.2, Z: 0.2, A: 0.0, B: 0.0}
 effects:
   geometric: {enabled: false}
   rotary_location: {errors: {EY0A: 25.0e-6, EZ0A: -20.0e-6, EB0A: 40.0e-6, EC0A: -30.0e-6,
                              EX0B: 20.0e-6, EA0B: 30.0e-6}}
+  rotary_runout: {axis: A, radial_m: 0.0, positioning_rad: 15.0e-6, phase_rad: 0.4}
 """
 
 
 def test_five_axis_compensation_puts_the_tools_tip_and_direction_right(rclpy_context,
                                                                        tmp_path):
     """Khan & Chen's RPPPR with its rotary axes out of place; the model knows where they
-    are (a probed machine description). The broadcaster turns the rotary axes to put the
-    tool's direction right and moves the linear ones for its tip; the two-sphere R-test of
-    the simulator (its own chain, exact at the turned axes) sees both errors gone."""
+    are (a probed machine description) and A's once-per-revolution positioning error (a
+    catalogue effect, as the workbench fits it). The broadcaster turns the rotary axes to
+    put the tool's direction right and moves the linear ones for its tip; the two-sphere
+    R-test of the simulator (its own chain, exact at the turned axes), zeroed at the work
+    offset, sees both errors gone - absolutely: the model is referred to the same datum
+    (issue 30), so the offsets of the axis lines do not move the part."""
     import rclpy
 
     scenario_path = tmp_path / "five_axis.yaml"
@@ -288,8 +293,15 @@ def test_five_axis_compensation_puts_the_tools_tip_and_direction_right(rclpy_con
         description["axes"][name[-1]]["location_errors"][name] = value
     (tmp_path / "machine.yaml").write_text(yaml.safe_dump(description))
     model = tmp_path / "model.yaml"
-    # "geometric": the description's calibrated errors (here: where the rotary axes are).
-    model.write_text(yaml.safe_dump({"machine": "machine.yaml", "effects": {"geometric": {}}}))
+    # "geometric": the description's calibrated errors (here: where the rotary axes are);
+    # A's positioning error p sin(A + phi) as the catalogue's first harmonic.
+    runout = yaml.safe_load(FIVE_AXIS)["effects"]["rotary_runout"]
+    p, phi = runout["positioning_rad"], runout["phase_rad"]
+    eaa = {"family": "rotary_error", "variant": "EAA", "setting": {"harmonics": 1},
+           "coefficients": {"cos1": float(p * np.sin(phi)), "sin1": float(p * np.cos(phi))}}
+    model.write_text(yaml.safe_dump({
+        "machine": "machine.yaml", "effects": {"geometric": {}, "rotary_error:EAA": eaa},
+        "datum": yaml.safe_load(FIVE_AXIS)["work_offset"]}))
     node = rclpy.create_node("instrument")
     listened = _subscribe(node)
     broadcaster = start_node("compensation_broadcaster", {"model": str(model),
@@ -332,7 +344,10 @@ def test_five_axis_compensation_puts_the_tools_tip_and_direction_right(rclpy_con
                         r.applied_orientation_correction.z) for r in readings])
     rotary = np.array([list(r.applied_rotary_correction) for r in readings])
     without, without_direction = measured - applied, direction - turned
-    assert np.all(_rms(without[live]) > 10e-6), _rms(without[live])
+    # The axis lines' offsets (20-25 um) move the part rigidly: zeroed at the work offset
+    # the R-test does not see them, and the model referred to that datum does not apply
+    # them (without the datum it would move the part by them: the end state of issue 30).
+    assert np.all(_rms(without[live]) < 5e-6), _rms(without[live])
     assert np.sqrt(np.mean(np.sum(without_direction[live] ** 2, axis=1))) > 20e-6
     # The rotary axes did turn (tens of urad), and the machine is right to the band.
     assert np.median(np.abs(rotary[live])) > 5e-6

@@ -91,3 +91,36 @@ def test_random_points_limits_are_checked():
     with pytest.raises(ScenarioError, match="low must be below high"):
         scenario_from_yaml("machine: khan_chen_rpppr\nprogram: {type: random_points, axes: "
                            "[X, A], limits: {A: [0.5, 0.1]}}\n")
+
+
+def test_the_error_at_a_pose_is_the_trajectorys_error_where_the_machine_stood_there():
+    """SimulationResult.error_at (where an instrument zeroed at the work offset reads 0)
+    against tcp_error at samples of the run: same state, same pose."""
+    result = _run("{rotary_location: {errors: {EB0A: 4.0e-5, EC0B: -2.0e-5}}, "
+                  "rotary_runout: {axis: A, radial_m: 6.0e-6, positioning_rad: 1.5e-5}, "
+                  "structural_thermal_drift: {time_constant_s: 5, rise_k: 3.0}}")
+    for row in (0, 1500, result.time_s.size - 1):
+        pose = {a: float(result.actual[a][row]) for a in result.scenario.machine.axis_order}
+        at_rest_same_place = result.error_at(pose, row)
+        np.testing.assert_allclose(at_rest_same_place, result.tcp_error(np.array([row]))[0]
+                                   - _command_shift(result, row), atol=1e-15)
+    assert np.linalg.norm(result.error_at(pose, 0) - at_rest_same_place) > 1e-7  # warmed
+
+
+def _command_shift(result, row):
+    """The nominal displacement of the actual pose against the command (servo lag)."""
+    model = KinematicModel(result.scenario.machine)
+    axes = result.scenario.machine.axis_order
+    actual = {a: result.actual[a][[row]] for a in axes}
+    command = {a: result.command[a][[row]] for a in axes}
+    return (model.nominal_relative(actual) - model.nominal_relative(command))[0]
+
+
+@pytest.mark.parametrize("offset, message", [
+    ("{X: 0.3, Y: 0.2, Z: 0.2, A: 0.0}", "give every axis"),
+    ("{X: 0.3, Y: 0.2, Z: 0.2, A: 30.0, B: 0.0}", "outside the stroke"),
+])
+def test_a_bad_work_offset_is_named_with_its_line(offset, message):
+    with pytest.raises(ScenarioError, match=message) as caught:
+        scenario_from_yaml(f"machine: khan_chen_rpppr\nseed: 1\nwork_offset: {offset}\n")
+    assert "line 3" in str(caught.value)

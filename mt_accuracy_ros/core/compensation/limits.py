@@ -158,6 +158,27 @@ def _heat_source_bound(model, limits: CorrectionLimits) -> NDArray[np.float64]:
     return out
 
 
+def _moves_with_direction(model) -> bool:
+    """Whether the model's corrections depend on the direction or sign of motion (backlash,
+    servo lag, acceleration, a user's expression of anything): only then is the travel
+    evaluated in both directions - a five-axis model's geometry needs it once."""
+    from ..effects import family_named
+
+    for name, entry in model.effects.items():
+        if name in ("reversal", "servo_lag") or not isinstance(entry, dict):
+            return True
+        if "expression" in entry:
+            return True
+        if "family" in entry:
+            try:
+                if family_named(entry["family"]).group not in ("geometric", "rotary",
+                                                               "thermal"):
+                    return True
+            except ValueError:
+                return True
+    return False
+
+
 def correction_envelope(model, limits: CorrectionLimits) -> Envelope:
     """The model's largest |correction| and |d correction / dt| per component (see the
     module docstring). Heat-source lags count at their steady state."""
@@ -187,7 +208,7 @@ def correction_envelope(model, limits: CorrectionLimits) -> Envelope:
         worst = np.zeros((n, 3))
         sensitivity = np.zeros((n, 3))
         axis_rate = np.zeros(3)
-        for sign in (1.0, -1.0):
+        for sign in (1.0, -1.0) if _moves_with_direction(model) else (1.0,):
             velocity = {a: np.full(n, sign * limits.max_feed_m_per_s)
                         for a in axes if not machine.axes[a].is_rotary}
             direction = {a: np.full(n, sign) for a in axes}

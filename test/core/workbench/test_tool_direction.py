@@ -1,0 +1,107 @@
+"""The tool's direction as a measured quantity of the workbench (issue 30, item 4).
+
+The data come from ``studies/five_axis_rtest.py``: Khan & Chen's RPPPR machine
+written out with its own exact rotations, sharing no code with the package, read
+by a two-sphere R-test zeroed at the work offset.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.core.compensation.error_model import ErrorModel
+from mt_accuracy_ros.core.compensation.five_axis import tool_direction
+from mt_accuracy_ros.core.kinematics.machine import load_machine
+from mt_accuracy_ros.core.workbench.diagnosis import Observations, add_effects, diagnose
+from studies.five_axis_rtest import FiveAxisErrors, survey
+
+DATUM = {"X": 0.3, "Y": 0.2, "Z": 0.2, "A": 0.0, "B": 0.0}
+#: The five-axis main job's machine: both rotary axes tilted, A's zero off, an eccentric
+#: A bearing with a once-per-revolution positioning error.
+OUT_OF_PLACE = FiveAxisErrors(a_tilt=(25e-6, 40e-6, -30e-6), b_tilt=(30e-6, 0.0, -20e-6),
+                              a_radial_m=6e-6, a_phase_rad=0.4, a_positioning_rad=15e-6)
+
+
+def _observations(data, with_direction: bool = True) -> Observations:
+    obs = Observations(data.positions, data.position_error_m,
+                       np.ones_like(data.position_error_m, dtype=bool), data.time_s,
+                       uncertainty_m=1e-6)
+    if with_direction:
+        obs.measured_orientation_rad = data.direction_error_rad
+        obs.orientation_measured = np.ones(data.time_s.size, dtype=bool)
+        obs.orientation_uncertainty_rad = 2e-6
+    return obs
+
+
+def _model() -> ErrorModel:
+    return ErrorModel(load_machine("khan_chen_rpppr"), datum=dict(DATUM))
+
+
+def _held_out(model: ErrorModel, seed: int):
+    """(position RMS [m], direction RMS [rad]) per component of what ``model`` leaves on
+    new readings of the same machine: the compensated machine, as the R-test sees it."""
+    data = survey(OUT_OF_PLACE, readings=200, seed=seed, datum=DATUM)
+    position, orientation = model.tcp_error(data.positions)
+    axis = tool_direction(model.kinematics, data.positions)
+    orientation = orientation - axis * np.einsum("ni,ni->n", orientation, axis)[:, None]
+    return (np.sqrt(np.mean((data.position_error_m - position) ** 2, axis=0)),
+            np.sqrt(np.mean((data.direction_error_rad - orientation) ** 2, axis=0)))
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_rotary_tilts_and_zero_errors_are_named_from_the_tools_direction(seed):
+    data = survey(OUT_OF_PLACE, readings=240, seed=seed, datum=DATUM)
+    obs = _observations(data)
+    diagnosis = diagnose(_model(), obs, max_effects=5)
+    names = [c.name for c in diagnosis.selected]
+    # Both axes' centre lines first (the direction sees their tilts' sum, the tip parts
+    # them), then the A bearing's once-per-revolution positioning error.
+    assert names[0] == "rotary_location:AB", diagnosis.text()
+    assert "rotary_error:EAA" in names, diagnosis.text()
+    location = diagnosis.selected[0].parameters
+    for name, truth in (("EB0A", 40e-6), ("EC0A", -30e-6), ("EC0B", -20e-6), ("EB0B", 0.0)):
+        assert abs(location[name] - truth) < 3e-6, (name, location[name])
+    # The A zero and the B tilt about x turn the tool alike: their difference is named.
+    assert abs((location["EA0A"] - location["EA0B"]) - (25e-6 - 30e-6)) < 3e-6
+    eaa = next(c for c in diagnosis.selected if c.name == "rotary_error:EAA").parameters
+    assert abs(np.hypot(eaa["cos1"], eaa["sin1"]) - 15e-6) < 2e-6
+    assert diagnosis.direction_rmse_rad > 20e-6
+    # Added, they leave the instrument's noise on new readings: the tip (0.5 um per
+    # component) and the direction (1 urad per component, seen across the tool axis).
+    position, direction = _held_out(add_effects(_model(), diagnosis.selected, obs), seed + 100)
+    assert np.all(position < 0.7e-6), position
+    assert np.all(direction < 1.3e-6), direction
+
+
+def test_without_the_direction_the_tip_is_fitted_but_the_tool_stays_tilted():
+    """The contrast that makes the direction worth measuring: from the tip alone the
+    same candidates fit the tip as well, and leave the tool tilted by tens of urad."""
+    data = survey(OUT_OF_PLACE, readings=240, seed=1, datum=DATUM)
+    obs = _observations(data, with_direction=False)
+    diagnosis = diagnose(_model(), obs, max_effects=5)
+    position, direction = _held_out(add_effects(_model(), diagnosis.selected, obs), 101)
+    assert np.all(position < 0.7e-6)
+    assert np.max(direction) > 5e-6, direction
+
+
+@pytest.mark.parametrize("errors, expected", [
+    (FiveAxisErrors(b_tilt=(30e-6, 0.0, -20e-6)), ["rotary_location:B"]),
+    (FiveAxisErrors(a_tilt=(0.0, 40e-6, -30e-6)), ["rotary_location:A"]),
+    (FiveAxisErrors(), []),
+])
+def test_one_axis_out_of_place_is_named_alone_and_nothing_is_named_when_nothing_is(
+        errors, expected):
+    data = survey(errors, readings=240, seed=3, datum=DATUM)
+    diagnosis = diagnose(_model(), _observations(data), max_effects=5)
+    assert [c.name for c in diagnosis.selected] == expected, diagnosis.text()
+    if not expected:
+        assert "nothing missing" in diagnosis.text()
+
+
+def test_a_reading_without_the_direction_is_judged_on_its_tip_only():
+    data = survey(OUT_OF_PLACE, readings=240, seed=4, datum=DATUM)
+    obs = _observations(data)
+    obs.orientation_measured[::2] = False      # every other reading: a probe, no R-test
+    obs.measured_orientation_rad[::2] = np.nan  # what it did not measure is never read
+    diagnosis = diagnose(_model(), obs, max_effects=5)
+    assert diagnosis.selected and diagnosis.selected[0].name == "rotary_location:AB"
