@@ -144,3 +144,17 @@ def survey(errors: FiveAxisErrors, *, readings: int, seed: int, datum: dict,
         axis = axis / np.linalg.norm(axis)
         noise[i] -= axis * (noise[i] @ axis)
     return Survey(poses, position, direction + noise, np.arange(readings) * 0.37)
+
+
+def reading_fields(data: Survey, with_direction: bool = True) -> dict:
+    """The survey as the workbench's ``Observations`` fields (keyword arguments), with the
+    R-test's stated k = 2 uncertainties: 1 um for the tip, 2 urad for the direction;
+    ``with_direction=False``: the tip alone, as a probe would give it."""
+    fields = {"positions": data.positions, "measured_m": data.position_error_m,
+              "measured_mask": np.ones_like(data.position_error_m, dtype=bool),
+              "time_s": data.time_s, "uncertainty_m": 1e-6}
+    if with_direction:
+        fields.update(measured_orientation_rad=data.direction_error_rad,
+                      orientation_measured=np.ones(data.time_s.size, dtype=bool),
+                      orientation_uncertainty_rad=2e-6)
+    return fields

@@ -85,7 +85,10 @@ def test_the_five_axis_job_names_the_rotary_axes_from_the_direction_and_ends_in_
     assert start["datum"] == final["datum"] == {"X": 0.3, "Y": 0.2, "Z": 0.2, "A": 0.0,
                                                 "B": 0.0}
     tilts = final["effects"]["rotary_location:AB"]["coefficients"]
-    assert abs(tilts["EB0A"] - 40e-6) < 5e-6 and abs(tilts["EC0B"] + 20e-6) < 5e-6, tilts
+    # What the direction sees: B's turn against A's (the tool on B, the part on A), about
+    # y and about z (the scenario: EB0A 40, EC0A -30, EC0B -20 urad, EB0B 0).
+    assert abs((tilts["EB0B"] - tilts["EB0A"]) + 40e-6) < 5e-6, tilts
+    assert abs((tilts["EC0B"] - tilts["EC0A"]) - 10e-6) < 5e-6, tilts
     direction = summary["tool_direction"]
     failures = demo_failures(summary, {"end_state_within_band":
                                        summary["end_state_within_band"]})

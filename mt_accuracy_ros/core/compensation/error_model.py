@@ -300,34 +300,6 @@ class ErrorModel:
             out.thermal["bed_tool"] = drift
         return out
 
-    def tcp_error(self, positions: dict[str, ArrayLike], temperatures: dict | None = None,
-                  velocities: dict[str, ArrayLike] | None = None,
-                  directions: dict[str, ArrayLike] | None = None, *,
-                  time_s: ArrayLike | None = None,
-                  accelerations: dict[str, ArrayLike] | None = None,
-                  spindle_speed_rad_s: ArrayLike | None = None, fresh: bool = False
-                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """(position error (N, 3) [m], orientation error (N, 3) [rad]) at command positions.
-
-        ``directions`` (axis -> +-1, the direction of the last motion) serves the
-        reversal effect where the axis stands still; without it sign(v) is used
-        (0 at a standstill). ``time_s`` (N,) [s], ``accelerations`` [m/s^2] and
-        ``spindle_speed_rad_s`` (N,) serve catalogue effects that need them.
-
-        With a :attr:`datum`, the position error is the error relative to the datum's
-        as the instrument was zeroed there: e(q) - e(datum) at the reference
-        temperatures, at rest (:meth:`datum_error`). A compensation then never moves
-        the part's datum, and every constant of a fitted effect (which a fit against a
-        zeroed instrument cannot know) is referred to the instrument's zero. The
-        orientation stays absolute: a touch-off does not take out a tilt.
-        """
-        position, orientation = self._tcp_error(
-            positions, temperatures, velocities, directions, time_s=time_s,
-            accelerations=accelerations, spindle_speed_rad_s=spindle_speed_rad_s, fresh=fresh)
-        if self.datum:
-            position = position - self.datum_error(temperatures)[None, :]
-        return position, orientation
-
     def datum_error(self, temperatures: dict | None = None) -> NDArray[np.float64]:
         """(3,) the model's TCP error at the :attr:`datum` [m] in the conditions the
         instrument was zeroed in: every temperature at its reference (no rise), the
@@ -346,23 +318,36 @@ class ErrorModel:
             at_rest.reference_temperatures_c = dict(self.reference_temperatures_c)
             pose = {a: np.array([float(v)]) for a, v in self.datum.items()}
             still = {a: np.zeros(1) for a in self.datum}
-            position, _ = at_rest._tcp_error(
+            position, _ = at_rest.tcp_error(
                 pose, {k: np.array([v]) for k, v in sensors.items()}, still, still,
                 time_s=np.zeros(1), accelerations=still, spindle_speed_rad_s=np.zeros(1),
-                fresh=True)
+                fresh=True, referred=False)
             if len(self._datum_cache) > 8:
                 self._datum_cache.clear()
             self._datum_cache[key] = position[0]
         return self._datum_cache[key]
 
-    def _tcp_error(self, positions: dict[str, ArrayLike], temperatures: dict | None = None,
-                   velocities: dict[str, ArrayLike] | None = None,
-                   directions: dict[str, ArrayLike] | None = None, *,
-                   time_s: ArrayLike | None = None,
-                   accelerations: dict[str, ArrayLike] | None = None,
-                   spindle_speed_rad_s: ArrayLike | None = None, fresh: bool = False
-                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """:meth:`tcp_error` without the datum (absolute)."""
+    def tcp_error(self, positions: dict[str, ArrayLike], temperatures: dict | None = None,
+                  velocities: dict[str, ArrayLike] | None = None,
+                  directions: dict[str, ArrayLike] | None = None, *,
+                  time_s: ArrayLike | None = None,
+                  accelerations: dict[str, ArrayLike] | None = None,
+                  spindle_speed_rad_s: ArrayLike | None = None, fresh: bool = False,
+                  referred: bool = True) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(position error (N, 3) [m], orientation error (N, 3) [rad]) at command positions.
+
+        ``directions`` (axis -> +-1, the direction of the last motion) serves the
+        reversal effect where the axis stands still; without it sign(v) is used
+        (0 at a standstill). ``time_s`` (N,) [s], ``accelerations`` [m/s^2] and
+        ``spindle_speed_rad_s`` (N,) serve catalogue effects that need them.
+
+        With a :attr:`datum` (and ``referred``), the position error is the error
+        relative to the datum's as the instrument was zeroed there: e(q) - e(datum) at
+        the reference temperatures, at rest (:meth:`datum_error`). A compensation then
+        never moves the part's datum, and every constant of a fitted effect (which a fit
+        against a zeroed instrument cannot know) is referred to the instrument's zero.
+        The orientation stays absolute: a touch-off does not take out a tilt.
+        """
         q = {a: np.atleast_1d(np.asarray(positions[a], dtype=np.float64))
              for a in self.machine.axis_order if a in positions}
         missing = [a for a in self.machine.axis_order if a not in q]
@@ -410,7 +395,10 @@ class ErrorModel:
                 position = position + catalogue_error(name, entry, context)
                 turned = turned + catalogue_orientation(name, entry, context)
             orientation = orientation + turned
-        return position + drive, orientation
+        position = position + drive
+        if self.datum and referred:
+            position = position - self.datum_error(temperatures)[None, :]
+        return position, orientation
 
     def table_motion_errors(self, axis: str, grid: ArrayLike, *, include_user: bool = True,
                             strict: bool = False) -> dict[str, NDArray[np.float64]]:

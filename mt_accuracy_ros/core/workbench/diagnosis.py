@@ -116,6 +116,10 @@ class Observations:
     def orientation_lever_m(self) -> float:
         """[m/rad] that gives a direction reading the noise of a position reading: the
         position's k = 2 uncertainty over the direction's."""
+        if not (np.isfinite(self.orientation_uncertainty_rad) and
+                0.0 < self.orientation_uncertainty_rad < 0.1):
+            raise ParameterError(f"tool-direction uncertainty {self.orientation_uncertainty_rad!r}"
+                                 " rad: must be finite, positive and below 0.1 rad")
         return float(self.uncertainty_m / self.orientation_uncertainty_rad)
 
     @property

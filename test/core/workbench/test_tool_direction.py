@@ -13,7 +13,7 @@ from mt_accuracy_ros.core.compensation.error_model import ErrorModel
 from mt_accuracy_ros.core.compensation.five_axis import tool_direction
 from mt_accuracy_ros.core.kinematics.machine import load_machine
 from mt_accuracy_ros.core.workbench.diagnosis import Observations, add_effects, diagnose
-from studies.five_axis_rtest import FiveAxisErrors, survey
+from studies.five_axis_rtest import FiveAxisErrors, reading_fields, survey
 
 DATUM = {"X": 0.3, "Y": 0.2, "Z": 0.2, "A": 0.0, "B": 0.0}
 #: The five-axis main job's machine: both rotary axes tilted, A's zero off, an eccentric
@@ -23,14 +23,7 @@ OUT_OF_PLACE = FiveAxisErrors(a_tilt=(25e-6, 40e-6, -30e-6), b_tilt=(30e-6, 0.0,
 
 
 def _observations(data, with_direction: bool = True) -> Observations:
-    obs = Observations(data.positions, data.position_error_m,
-                       np.ones_like(data.position_error_m, dtype=bool), data.time_s,
-                       uncertainty_m=1e-6)
-    if with_direction:
-        obs.measured_orientation_rad = data.direction_error_rad
-        obs.orientation_measured = np.ones(data.time_s.size, dtype=bool)
-        obs.orientation_uncertainty_rad = 2e-6
-    return obs
+    return Observations(**reading_fields(data, with_direction))
 
 
 def _model() -> ErrorModel:
@@ -105,3 +98,13 @@ def test_a_reading_without_the_direction_is_judged_on_its_tip_only():
     obs.measured_orientation_rad[::2] = np.nan  # what it did not measure is never read
     diagnosis = diagnose(_model(), obs, max_effects=5)
     assert diagnosis.selected and diagnosis.selected[0].name == "rotary_location:AB"
+
+
+@pytest.mark.parametrize("uncertainty", [0.0, float("nan"), 5.0])
+def test_a_direction_uncertainty_that_is_no_uncertainty_is_one_clear_error(uncertainty):
+    from mt_accuracy_ros.core.errors import ParameterError
+
+    obs = _observations(survey(OUT_OF_PLACE, readings=40, seed=5, datum=DATUM))
+    obs.orientation_uncertainty_rad = uncertainty
+    with pytest.raises(ParameterError, match="tool-direction uncertainty"):
+        diagnose(_model(), obs)
