@@ -101,15 +101,9 @@ def observations_from_bag(bag: Path, namespace: str = ""):
                                        np.sign(obs.velocities[a][k])
                                        for k, r in enumerate(readings)], dtype=float)
                           for i, a in enumerate(axes)}
-    turned = [machine_direction_error(r[1]) for r in readings]
-    if any(t is not None for t in turned):
-        # An R-test's tool direction: a second measured quantity (issue 30).
-        obs.measured_orientation_rad = np.array([t if t is not None else (0.0, 0.0, 0.0)
-                                                 for t in turned])
-        obs.orientation_measured = np.array([t is not None for t in turned])
-        obs.orientation_uncertainty_rad = float(np.median(
-            [r[1].orientation_uncertainty for r, t in zip(readings, turned)
-             if t is not None])) or 2e-6
+    # An R-test's tool direction: a second measured quantity (issue 30).
+    obs.set_directions([machine_direction_error(r[1]) for r in readings],
+                       [getattr(r[1], "orientation_uncertainty", 0.0) for r in readings])
     return obs, stamps, sorted(profiles, key=lambda p: p[0])
 
 

@@ -425,16 +425,10 @@ class ModelMonitor(Node):
             # The CNC's last direction per axis; where unknown (0), the feed's sign.
             obs.directions = {a: np.array([r["directions"][a] or np.sign(r["velocities"][a])
                                            for r in readings], dtype=float) for a in axes}
-        turned = [r["direction_error"] is not None for r in readings]
-        if any(turned):
-            # The instrument measured the tool's direction too (an R-test): a second
-            # measured quantity with its own uncertainty.
-            obs.measured_orientation_rad = np.array([
-                r["direction_error"] if r["direction_error"] is not None else np.zeros(3)
-                for r in readings])
-            obs.orientation_measured = np.array(turned)
-            obs.orientation_uncertainty_rad = float(np.median(
-                [r["direction_uncertainty"] for r, t in zip(readings, turned) if t])) or 2e-6
+        # Where the instrument measured the tool's direction too (an R-test): a second
+        # measured quantity with its own uncertainty.
+        obs.set_directions([r["direction_error"] for r in readings],
+                           [r["direction_uncertainty"] for r in readings])
         self._predict(model or self.inputs.model, readings, obs)
         return obs
 

@@ -209,33 +209,30 @@ class SimulationResult:
         model = KinematicModel(self.scenario.machine)
         actual = {a: self.actual[a][indices] for a in self.scenario.machine.axis_order}
         command = {a: self.command[a][indices] for a in self.scenario.machine.axis_order}
-        result = model.tcp_error(actual, overrides=self.error_overrides(indices),
-                                 check_stroke=False)
-        position = result["position"] + (model.nominal_relative(actual)
-                                         - model.nominal_relative(command))
-        if self.scenario.ever_enabled("abbe_offset"):
-            offset = np.asarray(self.scenario.parameters("abbe_offset")["offset_m"], float)
-            position += np.cross(result["orientation"], offset) \
-                * self.mask("abbe_offset", indices)[:, None]
+        position, orientation = self._pose_error(model, indices, actual)
+        position = position + (model.nominal_relative(actual) - model.nominal_relative(command))
         if with_orientation:
-            return position, result["orientation"]
+            return position, orientation
         return position
 
+    def _pose_error(self, model: KinematicModel, indices, positions: dict):
+        """(position (N, 3) [m], orientation (N, 3) [rad]) error of the chain at
+        ``positions`` in the machine's state at ``indices``, the Abbe term included."""
+        result = model.tcp_error(positions, overrides=self.error_overrides(indices, positions),
+                                 check_stroke=False)
+        position = result["position"]
+        if self.scenario.ever_enabled("abbe_offset"):
+            offset = np.asarray(self.scenario.parameters("abbe_offset")["offset_m"], float)
+            position = position + np.cross(result["orientation"], offset) \
+                * self.mask("abbe_offset", indices)[:, None]
+        return position, result["orientation"]
 
     def error_at(self, pose: dict[str, float], index: int) -> NDArray[np.float64]:
         """(3,) the machine's true TCP error [m] at ``pose`` (axis -> command, at rest) in
         the state it was in at sample ``index``: where an instrument zeroed there reads 0."""
         machine = self.scenario.machine
-        indices = np.array([index])
         q = {a: np.array([float(pose[a])]) for a in machine.axis_order}
-        result = KinematicModel(machine).tcp_error(
-            q, overrides=self.error_overrides(indices, q), check_stroke=False)
-        position = result["position"][0]
-        if self.scenario.ever_enabled("abbe_offset"):
-            offset = np.asarray(self.scenario.parameters("abbe_offset")["offset_m"], float)
-            position = position + np.cross(result["orientation"][0], offset) * \
-                float(self.mask("abbe_offset", indices)[0])
-        return position
+        return self._pose_error(KinematicModel(machine), np.array([index]), q)[0][0]
 
     def rotary_turn(self, indices, turn_rad: NDArray[np.float64]
                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

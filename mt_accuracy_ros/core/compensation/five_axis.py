@@ -63,10 +63,7 @@ class FiveAxisCorrection:
 
 def tool_direction(kinematics: KinematicModel, positions: dict[str, ArrayLike]) -> NDArray:
     """Unit vector (N, 3) of the tool axis in the bed frame, nominal chain."""
-    tool = kinematics.branch("tool", positions, errors=False, check_stroke=False)
-    vector = np.asarray(kinematics.machine.tool, dtype=np.float64)
-    local = vector / np.linalg.norm(vector) if np.linalg.norm(vector) > 0 else np.array([0, 0, 1.0])
-    return tool[:, :3, :3] @ local
+    return kinematics.tool_axis(positions)
 
 
 def rotary_jacobians(kinematics: KinematicModel, positions: dict[str, ArrayLike],

@@ -29,8 +29,9 @@ from .base import Context, EffectFamily, along, per_component
 from .user import ENTRY_POINT_GROUP, UserExpression, load_plugins, user_declaration
 
 __all__ = ["Context", "EffectFamily", "ENTRY_POINT_GROUP", "UserExpression", "along",
-           "builtin_families", "catalogue_error", "catalogue_orientation", "families", "family_named",
-           "is_catalogue_entry", "load_plugins", "per_component", "user_declaration"]
+           "builtin_families", "catalogue_error", "catalogue_orientation", "families",
+           "family_named", "is_catalogue_entry", "load_plugins", "per_component",
+           "user_declaration"]
 
 
 def builtin_families() -> list[EffectFamily]:
@@ -83,11 +84,16 @@ def catalogue_error(name: str, entry: dict, ctx: Context) -> NDArray[np.float64]
         coefficients = np.array([entry["values"][p] for p in
                                  family.parameter_names(name, {})])
         return family.design(ctx, name, {}) @ coefficients
+    family, variant, setting, coefficients = _fitted(entry)
+    return family.design(ctx, variant, setting) @ coefficients
+
+
+def _fitted(entry: dict) -> tuple[EffectFamily, str, dict, NDArray[np.float64]]:
+    """(family, variant, setting, coefficients in parameter order) of a fitted entry."""
     family = family_named(entry["family"])
-    setting = entry.get("setting") or {}
-    names = family.parameter_names(entry.get("variant", ""), setting)
-    coefficients = np.array([entry["coefficients"][p] for p in names])
-    return family.design(ctx, entry.get("variant", ""), setting) @ coefficients
+    variant, setting = entry.get("variant", ""), entry.get("setting") or {}
+    names = family.parameter_names(variant, setting)
+    return family, variant, setting, np.array([entry["coefficients"][p] for p in names])
 
 
 def catalogue_orientation(name: str, entry: dict, ctx: Context) -> NDArray[np.float64]:
@@ -96,10 +102,6 @@ def catalogue_orientation(name: str, entry: dict, ctx: Context) -> NDArray[np.fl
     user expressions, which declare a TCP error)."""
     if "family" not in entry:
         return np.zeros((ctx.n, 3))
-    family = family_named(entry["family"])
-    setting = entry.get("setting") or {}
-    design = family.orientation_design(ctx, entry.get("variant", ""), setting)
-    if design is None:
-        return np.zeros((ctx.n, 3))
-    names = family.parameter_names(entry.get("variant", ""), setting)
-    return design @ np.array([entry["coefficients"][p] for p in names])
+    family, variant, setting, coefficients = _fitted(entry)
+    design = family.orientation_design(ctx, variant, setting)
+    return np.zeros((ctx.n, 3)) if design is None else design @ coefficients

@@ -121,12 +121,8 @@ class Context:
     def tool_axis(self) -> NDArray[np.float64]:
         """(N, 3) unit tool axis in the bed frame, nominal chain."""
         if "tool_axis" not in self.cache:
-            positions = {a: self.variables.positions[a] for a in self.machine.axis_order}
-            tool = self.kinematics.branch("tool", positions, errors=False, check_stroke=False)
-            vector = np.asarray(self.machine.tool, dtype=np.float64)
-            norm = float(np.linalg.norm(vector))
-            local = vector / norm if norm > 0 else np.array([0.0, 0.0, 1.0])
-            self.cache["tool_axis"] = tool[:, :3, :3] @ local
+            self.cache["tool_axis"] = self.kinematics.tool_axis(
+                {a: self.variables.positions[a] for a in self.machine.axis_order})
         return self.cache["tool_axis"]
 
     def _direction_rows(self, orientation: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -301,6 +301,15 @@ class KinematicModel:
                     frames[name_of(component, axis)] = (sign, frame_rot, lever)
         return frames
 
+    def tool_axis(self, positions: Positions) -> NDArray:
+        """(N, 3) unit vector of the tool axis in the bed frame, nominal chain (the tool
+        vector's direction; +z of the spindle frame for a zero tool vector)."""
+        tool = self.branch("tool", positions, errors=False, check_stroke=False)
+        vector = np.asarray(self.machine.tool, dtype=np.float64)
+        norm = float(np.linalg.norm(vector))
+        local = vector / norm if norm > 0 else np.array([0.0, 0.0, 1.0])
+        return tool[:, :3, :3] @ local
+
     def nominal_relative(self, positions: Positions, check_stroke: bool = False) -> NDArray:
         """(N, 3) nominal tool point relative to the workpiece point, bed frame."""
         tool0 = self.branch("tool", positions, errors=False, check_stroke=check_stroke)

@@ -106,6 +106,19 @@ class Observations:
                             else self.orientation_measured[rows],
                             self.orientation_uncertainty_rad)
 
+    def set_directions(self, errors: list, uncertainties: list[float]) -> None:
+        """Take the tool direction of the readings that measured it: ``errors`` (N,) of a
+        (3,) error [rad] or None (not measured), ``uncertainties`` (N,) k = 2 [rad]
+        (those of unmeasured readings are ignored). Nothing measured: nothing is set."""
+        measured = np.array([e is not None for e in errors], dtype=bool)
+        if not measured.any():
+            return
+        self.measured_orientation_rad = np.array([e if e is not None else (0.0, 0.0, 0.0)
+                                                  for e in errors], dtype=np.float64)
+        self.orientation_measured = measured
+        self.orientation_uncertainty_rad = float(np.median(
+            np.asarray(uncertainties, dtype=np.float64)[measured])) or 2e-6
+
     @property
     def measures_direction(self) -> bool:
         """Did the instrument measure the tool's direction at any reading?"""

@@ -108,3 +108,16 @@ def test_a_direction_uncertainty_that_is_no_uncertainty_is_one_clear_error(uncer
     obs.orientation_uncertainty_rad = uncertainty
     with pytest.raises(ParameterError, match="tool-direction uncertainty"):
         diagnose(_model(), obs)
+
+
+def test_directions_are_taken_from_the_readings_that_measured_them():
+    data = survey(OUT_OF_PLACE, readings=4, seed=6, datum=DATUM)
+    obs = Observations(**reading_fields(data, with_direction=False))
+    obs.set_directions([None, None, None, None], [0.0] * 4)
+    assert not obs.measures_direction
+    errors = [data.direction_error_rad[0], None, data.direction_error_rad[2], None]
+    obs.set_directions(errors, [3e-6, 99.0, 5e-6, 99.0])   # unmeasured: ignored
+    assert obs.orientation_measured.tolist() == [True, False, True, False]
+    assert obs.orientation_uncertainty_rad == pytest.approx(4e-6)
+    np.testing.assert_array_equal(obs.measured_orientation_rad[1], 0.0)
+    np.testing.assert_array_equal(obs.measured_orientation_rad[2], data.direction_error_rad[2])
