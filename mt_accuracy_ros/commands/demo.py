@@ -138,8 +138,11 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
              # effects from ~150 candidates, ~1-2 s of CPU) leaves the CPU to the loop.
              # A five-axis machine has more ways to be out of place (each rotary axis'
              # location and runout, besides the structure's drift): up to 5 at once.
+             # The monitor renews the added effects' numbers by itself once more
+             # readings predict better (auto_refit): a drift named over the first 2 K
+             # of warming is refitted over the whole warm-up.
              start_node("model_monitor", {"model": str(model), "window": 300,
-                                          "check_every": 30,
+                                          "check_every": 30, "auto_refit": True,
                                           "max_effects": 5 if five_axis else 3}, quiet=True),
              start_node("temperature_publisher",
                         {**machine, "min_subscribers": temperature_consumers}, quiet=True)]

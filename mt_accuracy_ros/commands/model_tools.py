@@ -1,7 +1,7 @@
-"""``mt-accuracy model``: change the live model from a terminal (add, remove, show).
+"""``mt-accuracy model``: change the live model from a terminal (add, remove, refit, show).
 
-``add`` and ``remove`` set the model monitor's ``add_effects`` / ``remove_effects``
-parameter through its ``set_parameters`` service, as ``ros2 param set`` would;
+``add``, ``remove`` and ``refit`` set the model monitor's ``add_effects`` /
+``remove_effects`` / ``refit_effects`` parameter through its ``set_parameters`` service, as ``ros2 param set`` would;
 the monitor fits what is added to the readings it holds and publishes the new
 version on ``model``, which the compensation broadcaster follows. A refusal
 (an unknown effect, one not in the model, too few readings) is the command's
@@ -58,18 +58,19 @@ def set_remote_parameter(node, target: str, name: str, value, timeout_s: float =
 def _change(args: argparse.Namespace) -> int:
     import rclpy
 
-    parameter = "add_effects" if args.verb == "add" else "remove_effects"
+    parameter = f"{args.verb}_effects"
+    effects = list(args.effects) or ["all"]   # refit with no names: every fitted effect
     rclpy.init()
     node = rclpy.create_node("mt_accuracy_model_tool")
     try:
-        accepted, reason = set_remote_parameter(node, args.monitor, parameter, list(args.effects),
+        accepted, reason = set_remote_parameter(node, args.monitor, parameter, effects,
                                                 timeout_s=args.timeout)
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
     if not accepted:
-        raise ParameterError(f"{args.verb} {' '.join(args.effects)} refused: {reason}")
-    print(f"{args.verb} {' '.join(args.effects)}: accepted by {args.monitor}")
+        raise ParameterError(f"{args.verb} {' '.join(effects)} refused: {reason}")
+    print(f"{args.verb} {' '.join(effects)}: accepted by {args.monitor}")
     return 0
 
 
@@ -106,9 +107,11 @@ def add_parser(commands) -> None:
                                 "effects at run time)")
     verbs = model.add_subparsers(dest="verb", required=True)
     for verb, text in (("add", "fit effects to the monitor's readings and add them"),
-                       ("remove", "take effects out of the live model")):
+                       ("remove", "take effects out of the live model"),
+                       ("refit", "refit the live model's fitted effects on the readings the "
+                        "monitor holds now (none named: all of them)")):
         parser = verbs.add_parser(verb, help=text)
-        parser.add_argument("effects", nargs="+", metavar="EFFECT")
+        parser.add_argument("effects", nargs="*" if verb == "refit" else "+", metavar="EFFECT")
         parser.add_argument("--monitor", default="/model_monitor",
                             help="the model monitor node (default /model_monitor)")
         parser.add_argument("--timeout", type=float, default=30.0, metavar="S")

@@ -4,7 +4,9 @@ ROS-free (the worker process imports only the engine, not rclpy).
 """
 from __future__ import annotations
 
+from ..core.errors import MtAccuracyError
 from ..core.workbench.diagnosis import Observations, diagnose
+from ..core.workbench.refit import refit_effects, refittable_effects
 
 
 #: Scheduling of the search worker process. The search takes a core for as long as it
@@ -52,12 +54,25 @@ def _set_thread_scheduling(thread_id: int, idle: bool, niceness: int) -> bool:
 _WARNED = False
 
 
+def check(model, obs: Observations, min_reduction: float, max_effects: int):
+    """:func:`diagnose`, and - when the model holds fitted effects - their refit on the
+    same readings (:func:`refit_effects`), carried as ``diagnosis.refit`` (None when
+    there is nothing to refit)."""
+    diagnosis = diagnose(model, obs, min_reduction=min_reduction, max_effects=max_effects)
+    if refittable_effects(model):
+        try:
+            diagnosis.refit = refit_effects(model, obs, min_reduction=min_reduction)
+        except MtAccuracyError:
+            diagnosis.refit = None
+    return diagnosis
+
+
 def search(model, obs: Observations, min_reduction: float, max_effects: int):
-    """The monitor's check, :func:`diagnose` - in the worker process, idle class first."""
+    """The monitor's check (:func:`check`) - in the worker process, idle class first."""
     import threading
 
     if _WORKER_SCHEDULING is None or _WORKER_SCHEDULING[0] <= 0:
-        return diagnose(model, obs, min_reduction=min_reduction, max_effects=max_effects)
+        return check(model, obs, min_reduction, max_effects)
     idle_s, niceness = _WORKER_SCHEDULING
     me = threading.get_native_id()
     _set_thread_scheduling(me, True, niceness)
@@ -65,7 +80,7 @@ def search(model, obs: Observations, min_reduction: float, max_effects: int):
     promote.daemon = True
     promote.start()
     try:
-        return diagnose(model, obs, min_reduction=min_reduction, max_effects=max_effects)
+        return check(model, obs, min_reduction, max_effects)
     finally:
         promote.cancel()
         _set_thread_scheduling(me, False, niceness)

@@ -34,6 +34,15 @@ the monitor fits them to the readings it holds, adds them and publishes the new
 model version. ``remove_effects`` takes effects out. ``auto_add`` adds the top
 significant candidate by itself. ``mt-accuracy model add|remove EFFECT`` does
 the same from a terminal.
+
+An effect is fitted on the readings held when it was added. Every check also
+refits the model's fitted effects on the readings held now
+(:mod:`..core.workbench.refit`: families and settings kept, only the numbers
+move) and says on ``/diagnostics`` what that would leave, held out. ``refit_effects``
+(names, or ``["all"]``; ``mt-accuracy model refit``) makes the refit live;
+``auto_refit`` does so by itself whenever the refit passes its held-out test and
+the live version has been judged at the machine. A refit version is judged and,
+if it made the machine worse, rolled back like any other.
 """
 from __future__ import annotations
 
@@ -88,6 +97,11 @@ class ModelMonitor(Node):
             "Effects to take out of the model now (run-time action)"))
         self.declare_parameter("auto_add", False, plain_descriptor(
             "Add the top significant candidate by itself"))
+        self.declare_parameter("refit_effects", [""], plain_descriptor(
+            "Fitted effects to refit on the readings held now, or ['all'] (run-time action)"))
+        self.declare_parameter("auto_refit", False, plain_descriptor(
+            "Make a refit of the fitted effects live by itself when it passes its held-out "
+            "test (once the live version has been judged at the machine)"))
         self.declare_parameter("judge_readings", 15, int_descriptor(
             "Readings of a new version's compensated machine judged against the previous "
             "version's last ones (roll back if worse)", 5, 10000))
@@ -164,6 +178,12 @@ class ModelMonitor(Node):
                     return refuse("; ".join(problems))
                 if names:
                     reason = self._add_many(names, "user")
+                    if reason:
+                        return refuse(reason)
+            elif parameter.name == "refit_effects":
+                names = [n for n in parameter.value if n]
+                if names:
+                    reason = self._refit(None if names == ["all"] else names, "user")
                     if reason:
                         return refuse(reason)
             elif parameter.name == "remove_effects":
@@ -264,6 +284,40 @@ class ModelMonitor(Node):
             return problem
         self.get_logger().info(f"added {candidate.name} {candidate.parameters}; model version "
                                f"{self.inputs.model.version}")
+        self._since_check = int(self.get_parameter("check_every").value)  # check at once
+        return None
+
+    def _refit(self, names: list[str] | None, who: str, refit=None) -> str | None:
+        """Make the refit of ``names`` (None: every fitted effect) live through the gate;
+        the reason it cannot be, else None. ``refit``: one the last check made."""
+        from ..core.workbench.refit import refit_effects
+
+        model = self.inputs.model
+        obs = self._last_check[1] if refit is not None else self._observations()
+        if refit is None:
+            if obs is None:
+                return f"cannot refit: only {len(self._readings)} reference readings yet"
+            try:
+                refit = refit_effects(model, obs, names, min_reduction=float(
+                    self.get_parameter("min_reduction").value))
+            except MtAccuracyError as exc:
+                return f"cannot refit: {exc}"
+        if refit.refusal:
+            return f"refit refused: physics refuses it ({refit.refusal})"
+        if refit.reduction < 0:
+            return (f"refit refused: it would predict the readings it did not see worse "
+                    f"({refit.cv_rmse_refit * 1e6:.2f} against {refit.cv_rmse_live * 1e6:.2f} "
+                    "um held out)")
+        moved = sorted(refit.moved, key=lambda c: -c.z)[:2]
+        by_name = {c.name: c for c in refit.candidates}
+        changes = ", ".join(c.text(by_name[c.effect].effect, by_name[c.effect].variant)
+                            for c in moved)
+        reason = (f"refitted {', '.join(refit.names)} on {refit.readings} readings ({who})"
+                  + (f": {changes}" if changes else ""))
+        problem = self._make_live(refit.apply(model, obs), reason)
+        if problem:
+            return problem
+        self.get_logger().info(f"{reason}; {refit.sentence()}")
         self._since_check = int(self.get_parameter("check_every").value)  # check at once
         return None
 
@@ -530,13 +584,24 @@ class ModelMonitor(Node):
         found = diagnosis.found
         level = DiagnosticStatus.OK if found is None and diagnosis.baseline_rmse <= obs.uncertainty_m \
             else DiagnosticStatus.WARN
-        self._status(level, diagnosis.text(), [
+        refit = diagnosis.refit
+        text = diagnosis.text() + (f"; {refit.sentence()}" if refit is not None and
+                                   refit.recommended else "")
+        self._status(level, text, [
             KeyValue(key="rmse_m", value=f"{diagnosis.baseline_rmse:.3e}"),
             KeyValue(key="model_version", value=str(model.version)),
-            KeyValue(key="missing_effect", value=found.effect if found else "")])
+            KeyValue(key="missing_effect", value=found.effect if found else ""),
+            KeyValue(key="refit", value=refit.sentence() if refit is not None else "")])
         if found is not None and self.get_parameter("auto_add").value and \
                 found.name not in self.rolled_back:
             problem = self._add(found.name, "auto_add", found)
+            if problem:
+                self.get_logger().warning(problem)
+        elif refit is not None and refit.recommended and \
+                self.get_parameter("auto_refit").value and self._judging is None and \
+                model.version == self.inputs.model.version:
+            # The live version has been judged at the machine: its numbers may be renewed.
+            problem = self._refit(refit.names, "monitor", refit)
             if problem:
                 self.get_logger().warning(problem)
 

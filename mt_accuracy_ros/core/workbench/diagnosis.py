@@ -218,6 +218,9 @@ class Diagnosis:
     #: effects leave above the instrument's noise [rad].
     direction_rmse_rad: float | None = None
     unexplained_direction_rad: dict[str, float] = field(default_factory=dict)
+    #: The model's fitted effects refitted on the same readings (a
+    #: :class:`~.refit.Refit`, set by the monitor's check; None if not made).
+    refit: object | None = None
 
     @property
     def found(self) -> Candidate | None:
@@ -270,18 +273,21 @@ class Diagnosis:
         return f"{text}; {verdict}" if verdict else text
 
 
-def residuals(model: ErrorModel, obs: Observations) -> NDArray[np.float64]:
+def residuals(model: ErrorModel, obs: Observations, *, absolute: bool = False
+              ) -> NDArray[np.float64]:
     """measured - model (N, 3), each measured component's mean removed.
 
     Reference instruments measure from a zero reference of their own, so a
-    constant offset per component carries no information about the model.
+    constant offset per component carries no information about the model -
+    unless the instrument was zeroed at the model's datum (``absolute``: the
+    model's error is referred to the same pose, and the mean is kept).
     """
     predicted = obs.predicted_m if obs.predicted_m is not None else \
         model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[0]
     residual = obs.measured_m - predicted
     for c in range(3):
         measured = obs.measured_mask[:, c]
-        if measured.any():
+        if measured.any() and not absolute:
             residual[measured, c] -= residual[measured, c].mean()
     residual[~obs.measured_mask] = 0.0
     return residual
@@ -379,25 +385,12 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     a fit on the earlier blocks only (:class:`~.selection.Selector`)."""
     if obs.n < 4 * folds:
         raise InsufficientDataError(f"{obs.n} reference readings; need >= {4 * folds}")
-    residual = residuals(model, obs)
-    mask = obs.measured_mask
+    frame = residual_frame(model, obs)
+    ctx, residual, mask = frame.ctx, frame.residual, frame.mask
+    position_residual, lever, directions = frame.position_residual, frame.lever, \
+        obs.measures_direction
     noise_sigma = obs.uncertainty_m / 2.0   # the instrument's k = 2 uncertainty
-    variables = obs.variables(model.reference_temperatures_c)
-    orientation = obs.predicted_orientation
-    directions = obs.measures_direction
-    if orientation is None and ("geometric" in model.effects or model.profiles or directions):
-        orientation = model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[1]
-    lever = obs.orientation_lever_m if directions else None
-    ctx = Context(model.machine, variables, model._kinematics, orientation,
-                  orientation_lever_m=lever)
-    position_residual = residual
-    if directions:
-        # The tool's direction as a second measured quantity, scaled to the position's
-        # noise and seen as the instrument sees it (across the tool axis).
-        turned = direction_residuals(ctx, obs, orientation)
-        residual = np.concatenate([residual, turned], axis=1)
-        mask = np.concatenate([mask, np.repeat(obs.orientation_measured[:, None], 3, axis=1)],
-                              axis=1)
+    variables = ctx.variables
     selector = Selector(ctx, residual, mask, noise_sigma, folds=folds, alpha=alpha,
                         min_reduction=min_reduction, min_share=min_share, forward=forward)
     terms = candidate_terms(model, ctx, family_list)
@@ -453,6 +446,46 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
                      if position_mask.any() else 0.0,
                      ranking, selected, localisation, unexplained, above, noise_sigma,
                      float(final_cv), localisation_after, direction_rmse, unexplained_direction)
+
+
+@dataclass
+class ResidualFrame:
+    """What the workbench fits: the context of the readings and the residual (N, K).
+
+    K = 3 (the TCP position [m]) or 6 when the instrument measured the tool's direction
+    too (its residual across the tool axis, times ``lever`` [m/rad]: every row then has
+    the position's noise). ``position_residual`` (N, 3) is the first part alone."""
+
+    ctx: Context
+    residual: NDArray[np.float64]
+    mask: NDArray[np.bool_]
+    position_residual: NDArray[np.float64]
+    lever: float | None
+
+
+def residual_frame(model: ErrorModel, obs: Observations, *, absolute: bool = False
+                   ) -> ResidualFrame:
+    """The residual of ``model`` at ``obs`` as the selection sees it (see ResidualFrame;
+    ``absolute``: the position's mean kept, see :func:`residuals`)."""
+    residual = residuals(model, obs, absolute=absolute)
+    mask = obs.measured_mask
+    variables = obs.variables(model.reference_temperatures_c)
+    orientation = obs.predicted_orientation
+    directions = obs.measures_direction
+    if orientation is None and ("geometric" in model.effects or model.profiles or directions):
+        orientation = model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[1]
+    lever = obs.orientation_lever_m if directions else None
+    ctx = Context(model.machine, variables, model._kinematics, orientation,
+                  orientation_lever_m=lever)
+    position_residual = residual
+    if directions:
+        # The tool's direction as a second measured quantity, scaled to the position's
+        # noise and seen as the instrument sees it (across the tool axis).
+        turned = direction_residuals(ctx, obs, orientation)
+        residual = np.concatenate([residual, turned], axis=1)
+        mask = np.concatenate([mask, np.repeat(obs.orientation_measured[:, None], 3, axis=1)],
+                              axis=1)
+    return ResidualFrame(ctx, residual, mask, position_residual, lever)
 
 
 def direction_residuals(ctx: Context, obs: Observations, predicted: NDArray[np.float64]

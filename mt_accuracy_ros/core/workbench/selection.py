@@ -903,6 +903,13 @@ class Selector:
         ``base_sq`` (:meth:`_block_gains`)."""
         return gain_p_value(self._block_gains(base_sq, per_sample))
 
+    def held_out_p_value(self, base_sq: NDArray[np.float64], per_sample: NDArray[np.float64]
+                         ) -> float:
+        """One-sided p-value that the out-of-fold squared errors per sample ``per_sample``
+        (N,) are below ``base_sq`` (N,): the test a selected term passes, for any two
+        predictions of the same readings (e.g. a refit against the live model)."""
+        return self._block_test(base_sq, per_sample)
+
     def above_noise(self) -> bool:
         """Could what the selected terms leave be the instrument's noise alone? (chi-square
         at 0.1 %, and a systematic part above half the noise)"""
