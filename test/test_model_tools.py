@@ -36,6 +36,10 @@ def test_model_remove_show_and_refusals_on_a_running_monitor(tmp_path):
         assert early.returncode == 2 and "reference readings" in early.stderr, early.stderr
         unknown = _cli("add", "flux_capacitor")
         assert unknown.returncode == 2 and "unknown effect 'flux_capacitor'" in unknown.stderr
+        # Refitting (no names: every fitted effect) needs readings too: one line, exit 2.
+        refit = _cli("refit")
+        assert refit.returncode == 2, refit.stderr
+        assert "refit all refused: cannot refit: only 0 reference readings" in refit.stderr
         assert monitor.popen.poll() is None
     finally:
         monitor.stop()

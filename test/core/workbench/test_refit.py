@@ -131,3 +131,44 @@ def test_bad_requests_are_one_clear_error():
         refit_effects(ErrorModel(MACHINE, {}), obs)
     with pytest.raises(InsufficientDataError):
         refit_effects(model, obs.subset(np.arange(12)))
+
+
+def test_from_the_datum_a_drift_is_pinned_by_how_far_the_machine_moved():
+    """An instrument zeroed at the model's datum (cold) reads absolutely: a drift slope
+    whose error hides in the spread of a warm plateau shows as an offset from the
+    datum. The absolute refit pins it; the same readings with a free offset cannot."""
+    rng = np.random.default_rng(7)
+    n = 300
+    positions = {a: rng.uniform(*MACHINE.axes[a].stroke, n) for a in "XYZ"}
+    t = np.arange(n) * 0.4
+    rise = 3.0 * (1.0 - np.exp(-t / 15.0))          # warm within the first readings
+    datum = {"X": 0.2, "Y": -0.2, "Z": 0.25}
+    # Zeroed at the datum before the warm-up: a drift constant in space reads beta dT.
+    measured = rise[:, None] * BETA[None, :] + rng.normal(0.0, NOISE, (n, 3))
+    obs = Observations(positions, measured, np.ones((n, 3), bool), t,
+                       temperatures={"column": 20.0 + rise}, uncertainty_m=2 * NOISE)
+    entry = {"family": "structural_thermal_drift", "variant": "column", "setting": {},
+             "coefficients": {"bx": 1.5e-6, "by": 2.0e-6, "bz": 3.0e-6},
+             "uncertainties": {"bx": 0.2e-6, "by": 0.2e-6, "bz": 0.2e-6}}
+    referred = ErrorModel(MACHINE, {"structural_thermal_drift:column": entry},
+                          reference_temperatures_c={"column": 20.0}, datum=datum)
+    free = ErrorModel(MACHINE, {"structural_thermal_drift:column": entry},
+                      reference_temperatures_c={"column": 20.0})
+    absolute, relative = refit_effects(referred, obs), refit_effects(free, obs)
+    assert absolute.absolute and not relative.absolute
+    a = absolute.candidates[0]
+    r = relative.candidates[0]
+    assert abs(a.parameters["bx"] - BETA[0]) < 3 * a.parameter_uncertainties["bx"]
+    assert a.parameter_uncertainties["bx"] < 0.03e-6
+    # With a free offset the plateau says little about the slope.
+    assert r.parameter_uncertainties["bx"] > 3 * a.parameter_uncertainties["bx"]
+    # The live model's offset from the datum (0.5 um/K x dT in x) is what the refit
+    # removes: the live figure is that offset and the noise, in closed form.
+    expected = np.sqrt(((0.5e-6) ** 2 * np.mean(rise ** 2) + 3 * NOISE ** 2) / 3)
+    assert absolute.position_cv_rmse[0] == pytest.approx(expected, rel=0.05)
+    assert absolute.recommended
+    assert absolute.position_cv_rmse[1] < 1.2 * NOISE
+    assert "both from the datum" in absolute.sentence()
+    # The model's datum error at the reference temperature is zero for a pure drift, so
+    # the referred design is the plain one: the two fits' in-sample slopes agree closely.
+    assert a.parameters["by"] == pytest.approx(BETA[1], abs=3 * a.parameter_uncertainties["by"])
