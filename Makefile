@@ -8,7 +8,7 @@
 PYTHON ?= python3
 VENV   ?= .venv
 PY      = $(VENV)/bin/python
-PYTEST_ARGS ?=
+PYTEST_ARGS ?= -rs
 
 DEPS_STAMP = $(VENV)/.deps-stamp
 MSGS_STAMP = $(VENV)/.msgs-stamp

@@ -173,6 +173,7 @@ def slow_diagnosis(model, obs, **settings):
     record(); time.sleep(0.8); record()
     return "searched"
 monitor.diagnose = slow_diagnosis
+monitor.refittable_effects = lambda model: []   # the stub model holds nothing to refit
 base = os.nice(0)
 monitor._search_worker({idle_s}, 10)
 print(monitor.search(None, None, 0.05, 3))
