@@ -16,7 +16,7 @@ for _ in $(seq 1 "$burners"); do
 done
 for run in $(seq 1 "$runs"); do
     started=$(date +%s)
-    if ! make test PYTEST_ARGS="-q -p no:cacheprovider" > "/tmp/mt_accuracy_run_${run}.log" 2>&1; then
+    if ! make test PYTEST_ARGS="-q -rs -p no:cacheprovider" > "/tmp/mt_accuracy_run_${run}.log" 2>&1; then
         echo "run $run of $runs with $burners burners: FAILED (log /tmp/mt_accuracy_run_${run}.log)"
         tail -30 "/tmp/mt_accuracy_run_${run}.log"
         exit 1
