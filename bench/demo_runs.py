@@ -23,6 +23,26 @@ def _burners(count: int) -> list[subprocess.Popen]:
     return [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(count)]
 
 
+def _from_bag(bag: Path) -> tuple[list[str], list[float]]:
+    """The model versions' reasons after the start, and the compensated machine's mean
+    error over the run's last 10 s [um] (its offset from the instrument's zero)."""
+    import numpy as np
+
+    from mt_accuracy_ros.io.bag_reader import decode, read_messages
+
+    try:
+        versions = [decode(m).reason for m in read_messages(bag, ["/model"])][1:]
+        readings = [decode(m) for m in read_messages(bag, ["/reference/tcp_error"])]
+    except Exception:  # noqa: BLE001 - a run that left no readable bag: said as "-"
+        return [], [float("nan")] * 3
+    if not readings:
+        return versions, [float("nan")] * 3
+    stamps = np.array([r.header.stamp.sec + r.header.stamp.nanosec * 1e-9 for r in readings])
+    last = [r for r, t in zip(readings, stamps) if t >= stamps[-1] - 10.0]
+    mean = np.mean([(r.error.x, r.error.y, r.error.z) for r in last], axis=0) * 1e6
+    return versions, [float(v) for v in mean]
+
+
 def run_once(out: Path, rate: float | None, machine: str) -> dict:
     command = [sys.executable, "-m", "mt_accuracy_ros.cli", "demo", "--out", str(out),
                "--machine", machine]
@@ -34,7 +54,11 @@ def run_once(out: Path, rate: float | None, machine: str) -> dict:
     summary_path = out / "summary.json"
     summary = json.loads(summary_path.read_text()) if summary_path.is_file() else {}
     end = (summary.get("closed_loop") or [{}])[-1].get("with_compensation", {})
-    return {"code": done.returncode, "wall_s": wall,
+    versions, mean = _from_bag(out / "bag")
+    refits = [reason for reason in versions if reason.startswith("refitted")]
+    return {"refits": "; ".join(r.split(" on ")[1] if " on " in r else r for r in refits) or "-",
+            "end_mean_um": mean,
+"code": done.returncode, "wall_s": wall,
             "added": ", ".join(summary.get("missing_effects_found", [])) or "-",
             "accepted": summary.get("effect_added_accepted"),
             "end_um": [end.get(c, {}).get("rms_um", float("nan")) for c in "xyz"],
@@ -70,7 +94,8 @@ def main(argv: list[str] | None = None) -> int:
                 rows.append(result)
                 print(f"run {k + 1}/{args.runs}: exit {result['code']}, end state "
                       + "/".join(f"{v:.2f}" for v in result["end_um"])
-                      + f" um, stale {result['stale']}{result['stale_window']}, lost {result['lost']}, "
+                      + " um (mean " + "/".join(f"{v:+.2f}" for v in result["end_mean_um"])
+                      + f"), refits: {result['refits']}, stale {result['stale']}{result['stale_window']}, lost {result['lost']}, "
                       f"{result['wall_s']:.0f} s",
                       file=sys.stderr, flush=True)
     finally:
@@ -80,13 +105,15 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\n`python -m bench.demo_runs --runs {args.runs} --burners {args.burners}"
           + (f" --rate {args.rate}" if args.rate is not None else "") + "`"
           f" ({args.machine}, rate {rate}, {args.burners} CPU burners)\n")
-    print("| run | exit | effects the user added | end state e_x / e_y / e_z [um] | within "
+    print("| run | exit | effects the user added | end state e_x / e_y / e_z [um] | its mean "
+          "(off the instrument's zero) [um] | refits (the monitor's) | within "
           "band | roll-backs | corrections applied / stale / lost | p99 [ms] | wall [s] | why not 0 |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for k, r in enumerate(rows, 1):
         print(f"| {k} | {r['code']} | {r['added']} | "
-              + " / ".join(f"{v:.2f}" for v in r["end_um"])
-              + f" | {'yes' if r['within'] else 'no'} | {r['rolled_back']} | {r['applied']} / "
+              + " / ".join(f"{v:.2f}" for v in r["end_um"]) + " | "
+              + " / ".join(f"{v:+.2f}" for v in r["end_mean_um"])
+              + f" | {r['refits']} | {'yes' if r['within'] else 'no'} | {r['rolled_back']} | {r['applied']} / "
               f"{r['stale']}{r['stale_window']} / {r['lost']} | {r['p99_ms']:.0f} | {r['wall_s']:.0f} | "
               f"{'; '.join(r['failed']) or '-'} |")
     return 0

@@ -111,16 +111,16 @@ def test_the_monitor_renews_the_drift_from_the_datum_and_the_part_stays_put(five
     from mt_accuracy_ros.io.bag_reader import decode, read_messages
 
     code, out, printed = five_axis_run
-    said = [{v.key: v.value for v in s.values}.get("refit", "")
-            for m in read_messages(out / "bag", ["/diagnostics"])
-            for s in decode(m).status if s.name.endswith("model_monitor: model")]
-    # The refit's judgement is made on data alone (the checks come every 30 readings).
-    assert any("from the datum" in s and ": worth a new version" in s for s in said), said
     summary = json.loads((out / "summary.json").read_text())
     failures = demo_failures(summary, {"end_state_within_band":
                                        summary["end_state_within_band"]})
     if any("loaded machine?" in failure for failure in failures):
+        # The added model came too late for anything after it (its checks, its refit).
         pytest.skip("the host failed the real-time path: " + "; ".join(failures))
+    said = [{v.key: v.value for v in s.values}.get("refit", "")
+            for m in read_messages(out / "bag", ["/diagnostics"])
+            for s in decode(m).status if s.name.endswith("model_monitor: model")]
+    assert any("from the datum" in s and ": worth a new version" in s for s in said), said
     versions = [decode(m) for m in read_messages(out / "bag", ["/model"])]
     refits = [v for v in versions if v.reason.startswith("refitted") and "(monitor)" in v.reason]
     assert refits, [v.reason for v in versions]
