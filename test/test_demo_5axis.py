@@ -1,6 +1,9 @@
 """The main job on the five-axis machine (``mt-accuracy demo --machine khan_chen_rpppr``).
 
-The whole demo_5axis scenario at 1.5x real time. What is asserted does not depend on
+The whole demo_5axis scenario in real time (at 1.5x, with two CPU burners beside it,
+the diagnosis fell so far behind that the added model reached the machine only after
+the run, 2 runs of 2; in real time it went live at 53 s, and the refit at 84 s). What
+is asserted does not depend on
 the host's speed: the rotary encoders stream, the compensation turns the rotary
 axes, the R-test measures the tool's direction and the monitor checks it and names
 the rotary axes' location from it. The end state (position and tool direction
@@ -27,7 +30,7 @@ def five_axis_run(tmp_path_factory):
     base = tmp_path_factory.mktemp("demo5")
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
-        code = run_demo(out_dir=str(base / "out"), rate_factor=1.5,
+        code = run_demo(out_dir=str(base / "out"), rate_factor=1.0,
                         scenario=str(BUNDLED / "demo_5axis.yaml"))
     return code, base / "out", printed.getvalue()
 
