@@ -1,11 +1,12 @@
 """``mt-accuracy model``: change the live model from a terminal (add, remove, refit, show).
 
 ``add``, ``remove`` and ``refit`` set the model monitor's ``add_effects`` /
-``remove_effects`` / ``refit_effects`` parameter through its ``set_parameters`` service, as ``ros2 param set`` would;
-the monitor fits what is added to the readings it holds and publishes the new
-version on ``model``, which the compensation broadcaster follows. A refusal
-(an unknown effect, one not in the model, too few readings) is the command's
-one-line error, exit status 2. ``show`` prints the live version from ``model``.
+``remove_effects`` / ``refit_effects`` parameter through its ``set_parameters``
+service, as ``ros2 param set`` would; the monitor fits what is added (or
+refits what it holds) to the readings it holds and publishes the new version on
+``model``, which the compensation broadcaster follows. A refusal (an unknown
+effect, one not in the model, too few readings) is the command's one-line error,
+exit status 2. ``show`` prints the live version from ``model``.
 """
 from __future__ import annotations
 

@@ -361,16 +361,16 @@ def refit_effects(model: ErrorModel, obs: Observations, names: list[str] | None 
             changes.append(ParameterChange(name, parameter, float(old.get(parameter, 0.0)),
                                            float(value), float(old_u.get(parameter, 0.0)),
                                            float(error)))
-        candidates.append(Candidate(term.family.name, dict(zip(parameter_names, map(float, values))),
-                                    rms(refit_errors), 0.0, True, term.family.explanation(
-                                        term.variant, setting), term.variant,
-                                    dict(zip(parameter_names, map(float, errors))), setting,
-                                    group=term.family.group, refusal=refusal))
+        candidates.append(Candidate(
+            term.family.name, dict(zip(parameter_names, map(float, values))),
+            rms(refit_errors), 0.0, True, term.family.explanation(term.variant, setting),
+            term.variant, dict(zip(parameter_names, map(float, errors))), setting,
+            group=term.family.group, refusal=refusal))
     return Refit(names, candidates, obs.n, absolute, rms(live_errors), rms(refit_errors),
                  (rms(live_errors, position_rows), rms(refit_errors, position_rows)),
                  direction_cv, changes, "; ".join(refusals), p_value, min_reduction, alpha,
                  moved_sigma)
 
 
-__all__ = ["MOVED_SIGMA", "REFIT_ALPHA", "ParameterChange", "Refit", "blocked_cv_errors", "refit_effects",
-           "refittable_effects"]
+__all__ = ["MOVED_SIGMA", "REFIT_ALPHA", "ParameterChange", "Refit", "blocked_cv_errors",
+           "least_squares", "refit_effects", "refittable_effects"]
