@@ -47,7 +47,8 @@ from ..compensation.error_model import ErrorModel
 from ..effects import family_named
 from ..errors import InsufficientDataError, ParameterError
 from .diagnosis import Candidate, Observations, add_effect, residual_frame
-from .selection import Selector, Term, penalise, penalty_of, solve_normal
+from .selection import (Selector, Term, penalise, penalised_fit, penalty_of,
+                        solve_normal)
 
 #: A coefficient is said to have moved when |new - old| exceeds this many combined
 #: standard uncertainties.
@@ -217,23 +218,6 @@ def _datum_design(model: ErrorModel, base: ErrorModel, name: str, names: list[st
     return np.column_stack(columns) if columns else np.zeros((3, 0))
 
 
-def least_squares(x: NDArray[np.float64], y: NDArray[np.float64],
-                  penalties: list[tuple[int, int, float]]
-                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Coefficients and standard errors of y ~ x (minimum norm; ridge on ``penalties``'
-    column ranges, with the sandwich standard errors the selection uses)."""
-    from .selection import ridge_standard_errors
-
-    gram = x.T @ x
-    penalised = gram
-    for start, stop, strength in penalties:
-        penalised = penalise(penalised, start, stop, strength)
-    coefficients = solve_normal(penalised, x.T @ y)
-    residual = y - x @ coefficients
-    sigma2 = float(residual @ residual) / max(1, y.size - x.shape[1])
-    return coefficients, ridge_standard_errors(gram, penalised, sigma2)
-
-
 def blocked_cv_errors(x: NDArray[np.float64], y: NDArray[np.float64],
                       fold_of_row: NDArray[np.intp], penalties: list[tuple[int, int, float]]
                       ) -> NDArray[np.float64]:
@@ -325,7 +309,7 @@ def refit_effects(model: ErrorModel, obs: Observations, names: list[str] | None 
     old_values = [np.array([float((model.effects[name].get("coefficients") or {}).get(p, 0.0))
                             for p in term.family.parameter_names(term.variant, setting)])
                   for name, (term, setting) in zip(names, terms)]
-    change, standard = least_squares(x, live_y, penalties)
+    change, standard, _ = penalised_fit(x, live_y, penalties)
     coefficients, standard_errors, start = [], [], penalties[0][0]
     for block, old in zip(blocks, old_values):
         coefficients.append(old + change[start:start + block.shape[1]])
@@ -373,4 +357,4 @@ def refit_effects(model: ErrorModel, obs: Observations, names: list[str] | None 
 
 
 __all__ = ["MOVED_SIGMA", "REFIT_ALPHA", "ParameterChange", "Refit", "blocked_cv_errors",
-           "least_squares", "refit_effects", "refittable_effects"]
+           "refit_effects", "refittable_effects"]

@@ -170,6 +170,24 @@ def ridge_standard_errors(gram: NDArray[np.float64], penalised: NDArray[np.float
     return np.sqrt(sigma2 * np.clip(np.einsum("ij,jk,ki->i", inverse, gram, inverse), 0.0, None))
 
 
+def penalised_fit(x: NDArray[np.float64], y: NDArray[np.float64],
+                  penalties: list[tuple[int, int, float]]
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Least squares y ~ x (minimum norm, :func:`solve_normal`), ridge on ``penalties``'
+    (start, stop, strength) column ranges: (coefficients, standard errors - the sandwich
+    where penalised -, residual)."""
+    gram = x.T @ x
+    penalised = gram
+    for start, stop, strength in penalties:
+        penalised = penalise(penalised, start, stop, strength)
+    coefficients = solve_normal(penalised, x.T @ y)
+    residual = y - x @ coefficients
+    sigma2 = float(residual @ residual) / max(1, y.size - x.shape[1])
+    standard = ridge_standard_errors(gram, penalised, sigma2) if penalised is not gram \
+        else np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
+    return coefficients, standard, residual
+
+
 def gain_p_value(gain: NDArray[np.float64]) -> float:
     """One-sided t-test p-value that the blocks' mean gain (B,) is above zero."""
     spread = float(np.std(gain, ddof=1))
@@ -760,18 +778,11 @@ class Selector:
         Returns (coefficients per term, standard errors per term, residual rows)."""
         blocks = [self.design_rows(t, s) for t, s in terms]
         x = np.column_stack([self.offsets] + blocks)
-        gram = x.T @ x
-        penalised, start = gram, self.offsets.shape[1]
+        penalties, start = [], self.offsets.shape[1]
         for (term, setting), block in zip(terms, blocks):
-            penalised = penalise(penalised, start, start + block.shape[1],
-                                 penalty_of(term, setting))
+            penalties.append((start, start + block.shape[1], penalty_of(term, setting)))
             start += block.shape[1]
-        coefficients = solve_normal(penalised, x.T @ self.y)
-        residual = self.y - x @ coefficients
-        dof = max(1, self.y.size - x.shape[1])
-        sigma2 = float(residual @ residual) / dof
-        standard = ridge_standard_errors(gram, penalised, sigma2) if penalised is not gram \
-            else np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
+        coefficients, standard, residual = penalised_fit(x, self.y, penalties)
         out_c, out_s, start = [], [], self.offsets.shape[1]
         for block in blocks:
             out_c.append(coefficients[start:start + block.shape[1]])
