@@ -121,6 +121,17 @@ EFFECTS: dict[str, EffectSpec] = {spec.name: spec for spec in [
         "motion (semi-closed loop; the scales see it).", "q = c - sign(v) b / 2",
         "ISO 230-2 reversal value B", "both", {"backlash_m": (6e-6, "m"), "axes": (["X", "Y", "Z"], "axes")}),
     EffectSpec(
+        "table_tilt", "The table (an axis that carries the workpiece) pitches, yaws or "
+        "rolls as it travels: its guideway is not straight, or it sags under the part. "
+        "The part under the tool moves by the tilt times the arm from the table's frame "
+        "to the machining point, so the error grows with the tool's height above the "
+        "table and with the other axes' positions.",
+        "E_A/B/C,table(q, t) = eps (1 + g dT_bed(t)); e = -eps x (P_tool - O_table)",
+        "Kidani eqs. 2.9-2.10 (w the machining point); ISO 230-1 angular error motions",
+        "tcp", {"errors_rad": ({"EAY": 12e-6, "EBX": -10e-6}, "rad, constant angular "
+                               "error motions of workpiece-side axes (EAX, EBY, ...)"),
+                "growth_per_k": (0.0, "1/K, relative growth per K of the bed")}),
+    EffectSpec(
         "servo_lag", "Residual following error after feed-forward: the axis trails the "
         "command by v tau.", "q = c - v tau_lag", "servo following error (Kidani section 4.2)",
         "both", {"lag_s": (2e-4, "s"), "axes": (["X", "Y", "Z"], "axes")}),

@@ -20,9 +20,10 @@ scale pair (distance D, Kidani Table 3.1):
   white noise; then quantised to the 10 nm resolution;
 * thermocouples every 110 mm on each scale and on the structure, with noise
   and 0.01 K resolution;
-* the TCP error relative to the workpiece against the command, from the
-  kinematic model (:class:`~mt_accuracy_ros.core.kinematics.chain.KinematicModel`)
-  with every enabled effect, on demand at chosen samples (:meth:`tcp_error`).
+* the TCP error relative to the workpiece point under the tool against the
+  command, from the simulator's own rigid-body poses (:mod:`.rigid_body`, no
+  code of the kinematic model it judges) with every enabled effect, on demand
+  at chosen samples (:meth:`tcp_error`).
 """
 from __future__ import annotations
 
@@ -31,11 +32,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.kinematics.chain import ErrorOverrides, KinematicModel
-from ..core.kinematics.machine import motion_error_name
+from ..core.kinematics.machine import COMPONENTS
 from ..core.scales.dual_scale import YAW_COMPONENT
 from .effects import SineProfile, deterioration_bump, random_profiles
 from .programs import PROGRAMS
+from .rigid_body import BodyErrors, tool_against_work
 from ..core.errors import ScenarioError
 from .scenario import MAX_WINDOW_SAMPLES, THERMAL_MOTION_RATE_HZ, Scenario
 from .thermal_state import ScaleTemperatureField, first_order_response, thermocouple_positions
@@ -112,53 +113,61 @@ class SimulationResult:
         return np.split(index, breaks)
 
     # ------------------------------------------------------------- TCP truth
-    def error_overrides(self, indices, positions: dict | None = None) -> ErrorOverrides:
-        """The kinematic-model inputs of every enabled effect at ``indices`` (the axes
-        where they were, or at ``positions``: axis -> (N,), the same instants)."""
+    def body_errors(self, indices, positions: dict | None = None) -> BodyErrors:
+        """The error twists of every body, from every enabled effect, at ``indices``
+        (the axes where they were, or at ``positions``: axis -> (N,), the same
+        instants), the description's own error functions included."""
         positions = positions or {a: self.actual[a][indices] for a in self.actual}
         scenario = self.scenario
         machine = scenario.machine
-        overrides = ErrorOverrides()
+        n = int(np.size(self.time_s[indices]))
+        errors = BodyErrors()
+        c = COMPONENTS.index
+        for axis in machine.axis_order:
+            spec = machine.axes[axis]
+            q = np.broadcast_to(np.asarray(positions[axis], float), (n,))
+            for component, function in spec.motion_errors.items():
+                value = function(q)
+                if np.any(value):
+                    errors.add("motion", axis, c(component), value, n)
+            for component, value in spec.location_errors.items():
+                if value:
+                    errors.add("location", axis, c(component), value, n)
         geometric = self.mask("geometric", indices)
         for axis, components in self._profiles.items():
             q = positions[axis]
             for component, profile in components.items():
-                overrides.motion[motion_error_name(component, axis)] = profile(q) * geometric
+                errors.add("motion", axis, c(component), profile(q) * geometric, n)
         if scenario.ever_enabled("guideway_deterioration"):
-            params = scenario.parameters("guideway_deterioration")
-            axis = params["axis"]
-            name = motion_error_name(YAW_COMPONENT[axis], axis)
-            change = self._deterioration_yaw(axis, indices, positions[axis])
-            overrides.motion[name] = overrides.motion.get(name, 0.0) + change
+            axis = scenario.parameters("guideway_deterioration")["axis"]
+            errors.add("motion", axis, c(YAW_COMPONENT[axis]),
+                       self._deterioration_yaw(axis, indices, positions[axis]), n)
         if scenario.ever_enabled("position_dependent_thermal"):
             params = scenario.parameters("position_dependent_thermal")
             axis = params["axis"]
-            name = motion_error_name(axis, axis)
-            q = positions[axis]
-            growth = (float(params["alpha_per_k"]) * (q - float(params["reference_m"]))
+            growth = (float(params["alpha_per_k"]) * (positions[axis] - float(params["reference_m"]))
                       * self.thermal_at("bed", indices)
                       * self.mask("position_dependent_thermal", indices))
-            overrides.motion[name] = overrides.motion.get(name, 0.0) + growth
+            errors.add("motion", axis, c(axis), growth, n)
         if scenario.ever_enabled("ballscrew_pitch"):
             params = scenario.parameters("ballscrew_pitch")
             axis = params["axis"]
-            name = motion_error_name(axis, axis)
-            q = positions[axis]
             amplitude = float(params["amplitude_m"]) * (
                 1.0 + float(params["growth_per_k"]) * self.thermal_at("column", indices))
-            pitch = amplitude * np.sin(2.0 * np.pi * q / float(params["pitch_m"]) +
+            pitch = amplitude * np.sin(2.0 * np.pi * positions[axis] / float(params["pitch_m"]) +
                                        float(params["phase_rad"]))
-            overrides.motion[name] = overrides.motion.get(name, 0.0) + \
-                pitch * self.mask("ballscrew_pitch", indices)
+            errors.add("motion", axis, c(axis), pitch * self.mask("ballscrew_pitch", indices), n)
         if scenario.ever_enabled("squareness"):
             on = self.mask("squareness", indices)
             for name, value in scenario.parameters("squareness")["errors_rad"].items():
                 if name[-1] in machine.axes:
-                    overrides.location[name] = float(value) * on
+                    # a declared squareness replaces the description's value
+                    twist = errors.location.setdefault(name[-1], np.zeros((n, 6)))
+                    twist[:, c(name[1])] = float(value) * on
         if scenario.ever_enabled("rotary_location"):
             on = self.mask("rotary_location", indices)
             for name, value in scenario.parameters("rotary_location")["errors"].items():
-                overrides.location[name] = overrides.location.get(name, 0.0) + float(value) * on
+                errors.add("location", name[-1], c(name[1]), float(value) * on, n)
         if scenario.ever_enabled("rotary_runout"):
             params = scenario.parameters("rotary_runout")
             axis = params["axis"]
@@ -171,9 +180,8 @@ class SimulationResult:
             for component, value in ((first, radius * np.cos(angle)),
                                      (second, radius * np.sin(angle)),
                                      (axis, float(params["positioning_rad"]) * np.sin(angle) * on)):
-                name = motion_error_name(component, axis)
-                overrides.motion[name] = overrides.motion.get(name, 0.0) + value
-        drift = np.zeros((np.size(self.time_s[indices]), 6))
+                errors.add("motion", axis, c(component), value, n)
+        drift = np.zeros((n, 6))
         if scenario.ever_enabled("structural_thermal_drift"):
             beta = np.asarray(scenario.parameters("structural_thermal_drift")["beta_m_per_k"])
             drift[:, :3] += np.outer(self.thermal_at("column", indices)
@@ -185,9 +193,17 @@ class SimulationResult:
             growth = (float(params["growth_m"]) * self.thermal_at("spindle", indices)
                       * self.mask("spindle_thermal_growth", indices))
             drift[:, :3] += np.outer(growth, direction)
+        if scenario.ever_enabled("table_tilt"):
+            params = scenario.parameters("table_tilt")
+            on = self.mask("table_tilt", indices)
+            for name, value in params["errors_rad"].items():
+                # a tilt of a workpiece-side axis' body: one of its angular error motions
+                errors.add("motion", name[-1], c(name[1]),
+                           float(value) * (1.0 + float(params.get("growth_per_k", 0.0))
+                                           * self.thermal_at("bed", indices)) * on, n)
         if np.any(drift):
-            overrides.thermal["bed_tool"] = drift
-        return overrides
+            errors.thermal["bed_tool"] = drift
+        return errors
 
     def _deterioration_yaw(self, axis: str, indices, q=None) -> NDArray[np.float64]:
         params = self.scenario.parameters("guideway_deterioration")
@@ -198,83 +214,76 @@ class SimulationResult:
         return peak * deterioration_bump(q, float(params["start_m"]), float(params["end_m"])) \
             * self.mask("guideway_deterioration", indices)
 
-    def tcp_error(self, indices=None, *, with_orientation: bool = False):
-        """True TCP error relative to the workpiece, against the command (N, 3) [m].
+    def tcp_error(self, indices=None, *, with_orientation: bool = False,
+                  work_point: NDArray | None = None):
+        """True TCP error against the command (N, 3) [m] (and the tool's orientation
+        error (N, 3) [rad] with ``with_orientation``).
 
-        The kinematic model's error at the actual axis positions (Kidani eq. 2.10)
-        plus the nominal displacement of actual vs commanded positions
-        (reversal, servo lag), plus the Abbe term eps x offset.
+        The tool point against the workpiece point under it (the one the command
+        puts the tool on), from the simulator's own rigid-body poses
+        (:func:`.rigid_body.tool_against_work`) at the actual axis positions
+        (reversal, servo lag) with every enabled effect, plus the Abbe term
+        eps x offset. ``work_point`` ((3,) [m], workpiece frame) is a fixed
+        target instead (an R-test sphere).
         """
         indices = np.arange(self.time_s.size)[slice(None) if indices is None else indices]
-        model = KinematicModel(self.scenario.machine)
-        actual = {a: self.actual[a][indices] for a in self.scenario.machine.axis_order}
-        command = {a: self.command[a][indices] for a in self.scenario.machine.axis_order}
-        position, orientation = self._pose_error(model, indices, actual)
-        position = position + (model.nominal_relative(actual) - model.nominal_relative(command))
+        machine = self.scenario.machine
+        actual = {a: self.actual[a][indices] for a in machine.axis_order}
+        command = {a: self.command[a][indices] for a in machine.axis_order}
+        position, orientation = self._pose_error(indices, actual, command, work_point)
         if with_orientation:
             return position, orientation
         return position
 
-    def _pose_error(self, model: KinematicModel, indices, positions: dict):
-        """(position (N, 3) [m], orientation (N, 3) [rad]) error of the chain at
-        ``positions`` in the machine's state at ``indices``, the Abbe term included."""
-        result = model.tcp_error(positions, overrides=self.error_overrides(indices, positions),
-                                 check_stroke=False)
-        position = result["position"]
+    def _pose_error(self, indices, actual: dict, command: dict, work_point=None):
+        """(position (N, 3) [m], orientation (N, 3) [rad]) truth at ``actual`` against
+        ``command`` in the machine's state at ``indices``, the Abbe term included."""
+        machine = self.scenario.machine
+        position, orientation = tool_against_work(
+            machine, actual, command, self.body_errors(indices, actual), work_point)
         if self.scenario.ever_enabled("abbe_offset"):
             offset = np.asarray(self.scenario.parameters("abbe_offset")["offset_m"], float)
-            position = position + np.cross(result["orientation"], offset) \
+            position = position + np.cross(orientation, offset) \
                 * self.mask("abbe_offset", indices)[:, None]
-        return position, result["orientation"]
+        return position, orientation
 
     def error_at(self, pose: dict[str, float], index: int) -> NDArray[np.float64]:
         """(3,) the machine's true TCP error [m] at ``pose`` (axis -> command, at rest) in
         the state it was in at sample ``index``: where an instrument zeroed there reads 0."""
         machine = self.scenario.machine
         q = {a: np.array([float(pose[a])]) for a in machine.axis_order}
-        return self._pose_error(KinematicModel(machine), np.array([index]), q)[0][0]
+        return self._pose_error(np.array([index]), q, q)[0][0]
 
     def rotary_turn(self, indices, turn_rad: NDArray[np.float64]
                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """How the tool's pose relative to the workpiece changes when the CNC turns the
         rotary axes by ``turn_rad`` (N, R) beyond the command (a compensation).
 
-        Exact (the nominal chain at both commands, no linearisation). Returns the
-        TCP shift (N, 3) [m] and the rotation vector (N, 3) [rad], bed frame.
+        Exact (nominal rigid-body poses at both commands, no linearisation): the
+        tool point's shift against the material that was under it (N, 3) [m] and
+        the rotation vector (N, 3) [rad], bed frame.
         """
-        from ..core.kinematics.htm import rotation_vector
-
         indices = np.arange(self.time_s.size)[indices]
-        model = KinematicModel(self.scenario.machine)
-        command = {a: self.command[a][indices] for a in self.scenario.machine.axis_order}
+        machine = self.scenario.machine
+        command = {a: self.command[a][indices] for a in machine.axis_order}
         turned = dict(command)
         for k, axis in enumerate(self.encoder_axes):
             turned[axis] = command[axis] + turn_rad[:, k]
-        poses = []
-        for q in (command, turned):
-            tool = model.branch("tool", q, errors=False, check_stroke=False)
-            work = model.branch("workpiece", q, errors=False, check_stroke=False)
-            poses.append((tool, work))
-        (tool0, work0), (tool1, work1) = poses
-        shift = (tool1[:, :3, 3] - work1[:, :3, 3]) - (tool0[:, :3, 3] - work0[:, :3, 3])
-        tool_turn = tool1[:, :3, :3] @ np.swapaxes(tool0[:, :3, :3], 1, 2)
-        work_turn = work1[:, :3, :3] @ np.swapaxes(work0[:, :3, :3], 1, 2)
-        return shift, rotation_vector(np.swapaxes(work_turn, 1, 2) @ tool_turn)
+        return tool_against_work(machine, turned, command, None)
 
 
 def yaw_lever_m(machine, axis: str) -> float:
-    """|d e_TCP / d E_yaw| of ``axis`` from the kinematic model, mid stroke [m].
+    """|d e_TCP / d E_yaw| of ``axis`` from the simulator's rigid bodies, mid stroke [m].
 
     The Abbe lever d through which the pair's yaw moves the TCP (Kidani
     eq. 3.14: e_y = E_CY d).
     """
-    model = KinematicModel(machine)
     positions = {a: np.array([0.5 * sum(machine.axes[a].stroke)]) for a in machine.axis_order}
-    name = motion_error_name(YAW_COMPONENT[axis], axis)
     unit = 1e-6
-    moved = model.tcp_error(positions, overrides=ErrorOverrides(motion={name: unit},
-                                                                use_description=False))
-    return float(np.linalg.norm(moved["position"][0]) / unit)
+    errors = BodyErrors()
+    errors.add("motion", axis, COMPONENTS.index(YAW_COMPONENT[axis]), unit, 1)
+    moved, _ = tool_against_work(machine, positions, positions, errors)
+    return float(np.linalg.norm(moved[0]) / unit)
 
 
 def deterioration_peak_rad(scenario: Scenario) -> float:

@@ -297,6 +297,7 @@ def _check_effect_axes(scenario: Scenario) -> None:
                 raise ScenarioError(f"{scenario.source}: effect {name}: axis {axis!r} is not a "
                                     f"linear axis of {machine.name}")
     _check_rotary_effects(scenario)
+    _check_table_tilt(scenario)
     if scenario.ever_enabled("guideway_deterioration"):
         params = scenario.parameters("guideway_deterioration")
         low, high = machine.axes[params["axis"]].stroke
@@ -305,6 +306,28 @@ def _check_effect_axes(scenario: Scenario) -> None:
                 raise ScenarioError(f"{scenario.source}: guideway_deterioration {key} = "
                                     f"{params[key]} m is outside the {params['axis']} stroke "
                                     f"[{low}, {high}] m")
+
+
+def _check_table_tilt(scenario: Scenario) -> None:
+    if not scenario.ever_enabled("table_tilt"):
+        return
+    machine = scenario.machine
+    errors = scenario.parameters("table_tilt")["errors_rad"]
+    work = [a for a in machine.workpiece_branch if not machine.axes[a].is_rotary]
+    if not isinstance(errors, dict):
+        raise ScenarioError(f"{scenario.source}: table_tilt errors_rad must be a mapping such "
+                            "as {EAY: 1.2e-5}")
+    for key, value in errors.items():
+        match = re.fullmatch(r"E[ABC]([XYZ])", str(key))
+        if not match or match.group(1) not in work:
+            raise ScenarioError(f"{scenario.source}: table_tilt {key!r} is not an angular error "
+                                f"motion of a linear axis that carries the workpiece on "
+                                f"{machine.name} ({', '.join(work) or 'none'}), e.g. "
+                                f"EA{work[0] if work else 'X'}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                not math.isfinite(value) or abs(value) > 1e-3:
+            raise ScenarioError(f"{scenario.source}: table_tilt {key} = {value!r}: expected a "
+                                "finite angle below 1e-3 rad")
 
 
 def _check_rotary_effects(scenario: Scenario) -> None:

@@ -32,7 +32,8 @@ def test_an_offset_rotary_axis_line_shifts_the_work_by_the_offset_at_every_pose(
 
 def test_a_rotary_positioning_error_is_an_extra_turn_of_the_axis():
     """rotary_runout with no radial part: the table stands at A + p sin(A + phi) - the
-    nominal chain turned by that much is the same TCP error (a second formulation)."""
+    nominal chain turned by that much moves the material under the tool by the same
+    amount (a second formulation: the model's nominal chain, no error terms)."""
     result = _run("{geometric: false, rotary_runout: {axis: A, radial_m: 0.0, "
                   "positioning_rad: 2.0e-5, phase_rad: 0.4}}")
     rows = np.arange(0, result.time_s.size, 53)
@@ -40,7 +41,9 @@ def test_a_rotary_positioning_error_is_an_extra_turn_of_the_axis():
     q = {a: result.command[a][rows] for a in result.scenario.machine.axis_order}
     turned = dict(q)
     turned["A"] = q["A"] + 2.0e-5 * np.sin(q["A"] + 0.4)
-    expected = model.nominal_relative(turned) - model.nominal_relative(q)
+    under_tool = model.machining_point(q)
+    expected = model.nominal_relative(turned, work_point=under_tool) \
+        - model.nominal_relative(q, work_point=under_tool)
     np.testing.assert_allclose(result.tcp_error(rows), expected, atol=1e-12)
     assert np.max(np.abs(expected)) > 1e-7
 

@@ -14,7 +14,23 @@ TCP error is
 
     e = (P_t - P_w)_actual - (P_t - P_w)_nominal          (Kidani eq. 2.10, K&C eq. 17)
 
-in the bed (reference) frame. Two independent formulations are provided:
+in the bed (reference) frame.
+
+**The machining point.** Kidani (eqs. 2.9-2.10) takes w as "the target position
+on the work surface", the machining point; Khan & Chen (eq. 17) relate the
+cutter contact point to the workpiece. So by default w is, for every
+configuration, the nominal tool point expressed in the workpiece frame
+(:meth:`KinematicModel.machining_point`): the material the tool is cutting, and
+the nominal tool-to-work vector is zero. A table's tilt then acts through the
+arm from the table's frame to the tool, which changes with the other axes. An
+instrument whose target is fixed on the workpiece side (an R-test sphere, a
+probed sphere, a retroreflector) passes its point as ``work_point`` (in the
+workpiece frame, the frame the description's ``workpiece`` is given in) and the
+error is taken there. The description's ``workpiece`` is the workpiece
+*reference* point (the work offset): :meth:`KinematicModel.nominal_relative`
+gives the tool relative to it, the commanded geometry.
+
+Two independent formulations are provided:
 
 * :meth:`KinematicModel.tcp_error` - the full matrix products (exact, or with
   the first-order error matrices);
@@ -126,22 +142,25 @@ class KinematicModel:
 
     def branch(self, which: str, positions: Positions, *, errors: bool = True,
                first_order: bool = False, overrides: ErrorOverrides | None = None,
-               check_stroke: bool = True) -> NDArray:
+               check_stroke: bool = True, end_point: NDArray | None = None) -> NDArray:
         """(N, 4, 4) HTM from the bed to the branch's end point frame.
 
         ``which`` is ``"tool"`` (M loop, ending at the tool vector) or
         ``"workpiece"`` (N loop, ending at the workpiece point); the returned
-        frame's origin is that point.
+        frame's origin is that point. ``end_point`` ((3,) or (N, 3) [m], in the
+        branch's last frame) replaces the description's tool vector or workpiece
+        reference point.
         """
         rot, pos = self._branch_rp(which, positions, errors, first_order,
-                                   overrides or ErrorOverrides(), check_stroke)
+                                   overrides or ErrorOverrides(), check_stroke, end_point)
         out = identity((rot.shape[0],))
         out[:, :3, :3] = rot
         out[:, :3, 3] = pos
         return out
 
     def _branch_rp(self, which: str, positions: Positions, errors: bool, first_order: bool,
-                   overrides: ErrorOverrides, check_stroke: bool) -> tuple[NDArray, NDArray]:
+                   overrides: ErrorOverrides, check_stroke: bool,
+                   end_point: NDArray | None = None) -> tuple[NDArray, NDArray]:
         """The branch product kept as rotation (N, 3, 3) and translation (N, 3).
 
         Composing T1 T2 as (R1 R2, R1 p2 + p1) skips the constant last row of
@@ -150,7 +169,9 @@ class KinematicModel:
         """
         q, n = self._positions(positions, check_stroke)
         axes = self.machine.tool_branch if which == "tool" else self.machine.workpiece_branch
-        end = self.machine.tool if which == "tool" else self.machine.workpiece
+        if end_point is None:
+            end_point = self.machine.tool if which == "tool" else self.machine.workpiece
+        end = np.asarray(end_point, dtype=np.float64)
         rotation_of = rotation_matrix_first_order if first_order else rotation_matrix_xyz
         rot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
         pos = np.zeros((n, 3))
@@ -187,13 +208,58 @@ class KinematicModel:
                 if thermal is not None:
                     apply_error(thermal)
             parent_offset = spec.offset
-        pos = pos + rot @ (parent_offset + end)
+        if end.ndim == 1:
+            pos = pos + rot @ (parent_offset + end)
+        else:
+            pos = pos + rot @ parent_offset + np.einsum("nij,nj->ni", rot, end)
         return rot, pos
 
+    # ------------------------------------------------------ the machining point
+    def machining_point(self, positions: Positions, check_stroke: bool = False) -> NDArray:
+        """(N, 3) [m] the nominal tool point expressed in the workpiece frame.
+
+        The workpiece frame is the one the description's ``workpiece`` is given
+        in (the last workpiece axis' frame moved by its ``offset``; the bed for a
+        machine whose workpiece branch is empty). This is Kidani's w of eqs.
+        2.9-2.10 ("the target position on the work surface"): the material the
+        tool is cutting in this configuration.
+        """
+        q, _ = self._positions(positions, check_stroke)
+        return self._machining_point(q)
+
+    def _machining_point(self, q: Positions) -> NDArray:
+        none = ErrorOverrides()
+        _, tool_p = self._branch_rp("tool", q, False, False, none, False)
+        work_r, work_o = self._branch_rp("workpiece", q, False, False, none, False,
+                                         np.zeros(3))
+        return np.einsum("nji,nj->ni", work_r, tool_p - work_o)
+
+    def _work_point(self, q: Positions, n: int, work_point) -> NDArray:
+        """(N, 3) the work point in the workpiece frame: the machining point for None."""
+        if work_point is None:
+            return self._machining_point(q)
+        point = np.asarray(work_point, dtype=np.float64)
+        if point.shape not in ((3,), (n, 3)):
+            raise MachineDescriptionError(
+                f"work_point must have shape (3,) or ({n}, 3), not {point.shape}")
+        if not np.all(np.isfinite(point)):
+            raise MachineDescriptionError("work_point is not finite")
+        return np.broadcast_to(point, (n, 3))
+
+    # ------------------------------------------------------------- the error
     def tcp_error(self, positions: Positions, *, first_order: bool = False,
                   overrides: ErrorOverrides | None = None,
-                  check_stroke: bool = True) -> dict[str, NDArray]:
+                  check_stroke: bool = True, work_point: NDArray | None = None
+                  ) -> dict[str, NDArray]:
         """TCP position and tool-orientation error from the matrix products.
+
+        Parameters
+        ----------
+        work_point : (3,) or (N, 3) [m], optional
+            The workpiece-side point the error is taken at, in the workpiece frame
+            (a fixed instrument target: an R-test or probed sphere). Default: the
+            machining point (:meth:`machining_point`), so the nominal
+            tool-to-work vector is zero.
 
         Returns
         -------
@@ -204,10 +270,12 @@ class KinematicModel:
         """
         overrides = overrides or ErrorOverrides()
         args = (overrides, check_stroke)
-        tool_r, tool_p = self._branch_rp("tool", positions, True, first_order, *args)
-        work_r, work_p = self._branch_rp("workpiece", positions, True, first_order, *args)
-        tool0_r, tool0_p = self._branch_rp("tool", positions, False, False, *args)
-        work0_r, work0_p = self._branch_rp("workpiece", positions, False, False, *args)
+        q, n = self._positions(positions, check_stroke)
+        point = self._work_point(q, n, work_point)
+        tool_r, tool_p = self._branch_rp("tool", q, True, first_order, *args)
+        work_r, work_p = self._branch_rp("workpiece", q, True, first_order, *args, point)
+        tool0_r, tool0_p = self._branch_rp("tool", q, False, False, *args)
+        work0_r, work0_p = self._branch_rp("workpiece", q, False, False, *args, point)
         position = (tool_p - work_p) - (tool0_p - work0_p)
         # Orientation error: (work rotation error)^T (tool rotation error), both as
         # R_actual R_nominal^T in the bed frame.
@@ -217,23 +285,29 @@ class KinematicModel:
         return {"position": position, "orientation": rotation_vector(relative)}
 
     def tcp_error_linear(self, positions: Positions, *, overrides: ErrorOverrides | None = None,
-                         check_stroke: bool = True) -> dict[str, NDArray]:
+                         check_stroke: bool = True, work_point: NDArray | None = None
+                         ) -> dict[str, NDArray]:
         """First-order TCP error as a sum of joint error twists (independent of the matrices).
 
         For every error HTM in a branch, with R the nominal rotation of the frame
         it acts in and r the nominal vector from that frame's origin to the branch
         end point (both in the bed frame): dP = R d + (R eps) x r, dTheta = R eps.
-        The workpiece branch enters with a minus sign.
+        The workpiece branch enters with a minus sign; its end point is the
+        machining point (the nominal tool point itself) unless ``work_point`` is
+        given (see :meth:`tcp_error`).
         """
         overrides = overrides or ErrorOverrides()
         q, n = self._positions(positions, check_stroke)
         position = np.zeros((n, 3))
         orientation = np.zeros((n, 3))
+        tool_end = self.branch("tool", q, errors=False, check_stroke=False)[:, :3, 3]
         for which, sign in (("tool", 1.0), ("workpiece", -1.0)):
             axes = self.machine.tool_branch if which == "tool" else self.machine.workpiece_branch
-            end_frame = self.branch(which, positions, errors=False, overrides=overrides,
-                                    check_stroke=check_stroke)
-            end = end_frame[:, :3, 3]
+            if which == "tool" or work_point is None:
+                end = tool_end
+            else:
+                end = self.branch("workpiece", q, errors=False, check_stroke=False,
+                                  end_point=self._work_point(q, n, work_point))[:, :3, 3]
             # (frame, twist) pairs in chain order, frames nominal.
             frames_and_twists = []
             frame = identity((n,))
@@ -260,14 +334,17 @@ class KinematicModel:
                 orientation += sign * eps
         return {"position": position, "orientation": orientation}
 
-    def error_frames(self, positions: Positions, check_stroke: bool = False
+    def error_frames(self, positions: Positions, check_stroke: bool = False,
+                     work_point: NDArray | None = None
                      ) -> dict[str, tuple[float, NDArray, NDArray]]:
         """Where every motion and location error acts: name -> (sign, R, lever).
 
         ``R`` (N, 3, 3) is the nominal rotation of the frame the error twist acts
         in, ``lever`` (N, 3) [m] the nominal vector from that frame's origin to
         the branch end point, both in the bed frame, and ``sign`` +1 for the
-        tool branch, -1 for the workpiece branch. A unit error in component c
+        tool branch, -1 for the workpiece branch. The workpiece branch ends at
+        the machining point (the nominal tool point), or at ``work_point`` when
+        given (see :meth:`tcp_error`). A unit error in component c
         then moves the TCP by ``sign * R[:, :, c]`` (translations) or
         ``sign * (R[:, :, c-3] x lever)`` (rotations): the same first-order
         terms as :meth:`tcp_error_linear`, so a sensitivity costs one cross
@@ -276,9 +353,9 @@ class KinematicModel:
         """
         q, n = self._positions(positions, check_stroke)
         frames: dict[str, tuple[float, NDArray, NDArray]] = {}
+        tool_end = None
         for which, sign in (("tool", 1.0), ("workpiece", -1.0)):
             axes = self.machine.tool_branch if which == "tool" else self.machine.workpiece_branch
-            end_point = self.machine.tool if which == "tool" else self.machine.workpiece
             rot = np.broadcast_to(np.eye(3), (n, 3, 3))
             pos = np.zeros((n, 3))
             origins = []
@@ -293,7 +370,14 @@ class KinematicModel:
                     pos = pos + rot[:, :, spec.direction] * (spec.sign * q[axis])[:, None]
                 origins.append((axis, "motion", rot, pos))
                 parent_offset = spec.offset
-            end = pos + rot @ (parent_offset + end_point)
+            if which == "tool":
+                end = pos + rot @ (parent_offset + self.machine.tool)
+                tool_end = end
+            elif work_point is None:
+                end = tool_end
+            else:
+                point = self._work_point(q, n, work_point)
+                end = pos + rot @ parent_offset + np.einsum("nij,nj->ni", rot, point)
             for axis, kind, frame_rot, origin in origins:
                 name_of = location_error_name if kind == "location" else motion_error_name
                 lever = end - origin
@@ -310,11 +394,20 @@ class KinematicModel:
         local = vector / norm if norm > 0 else np.array([0.0, 0.0, 1.0])
         return tool[:, :3, :3] @ local
 
-    def nominal_relative(self, positions: Positions, check_stroke: bool = False) -> NDArray:
-        """(N, 3) nominal tool point relative to the workpiece point, bed frame."""
-        tool0 = self.branch("tool", positions, errors=False, check_stroke=check_stroke)
-        work0 = self.branch("workpiece", positions, errors=False, check_stroke=check_stroke)
-        return tool0[:, :3, 3] - work0[:, :3, 3]
+    def nominal_relative(self, positions: Positions, check_stroke: bool = False,
+                         work_point: NDArray | None = None) -> NDArray:
+        """(N, 3) nominal tool point relative to a workpiece point, bed frame.
+
+        The point is the description's workpiece reference point (the work
+        offset) or ``work_point`` ((3,) or (N, 3) [m], workpiece frame): the
+        commanded geometry, whose derivative maps axis moves to TCP moves.
+        """
+        q, n = self._positions(positions, check_stroke)
+        point = None if work_point is None else self._work_point(q, n, work_point)
+        none = ErrorOverrides()
+        _, tool0 = self._branch_rp("tool", q, False, False, none, False)
+        _, work0 = self._branch_rp("workpiece", q, False, False, none, False, point)
+        return tool0 - work0
 
     # ----------------------------------------------------------- compensation
     def compensate(self, positions: Positions, *, iterations: int = 4,
@@ -333,19 +426,22 @@ class KinematicModel:
         """
         q, n = self._positions(positions, check_stroke=True)
         linear = [a for a in self.machine.axis_order if not self.machine.axes[a].is_rotary]
-        target = self.nominal_relative(q)
+        # The material to cut stays the one nominally under the tool at the command.
+        point = self._machining_point(q)
         jacobian = self._linear_jacobian(q, linear)
-        initial = self.tcp_error(q, overrides=overrides, check_stroke=False)["position"]
+        initial = self.tcp_error(q, overrides=overrides, check_stroke=False,
+                                 work_point=point)["position"]
         current = dict(q)
+
+        def off_target(command):
+            return self.nominal_relative(command, work_point=point) + self.tcp_error(
+                command, overrides=overrides, check_stroke=False, work_point=point)["position"]
+
         for _ in range(max(1, int(iterations))):
-            actual = self.nominal_relative(current) + self.tcp_error(
-                current, overrides=overrides, check_stroke=False)["position"]
-            step = np.linalg.solve(jacobian, (target - actual)[..., None])[..., 0]
+            step = np.linalg.solve(jacobian, (-off_target(current))[..., None])[..., 0]
             for i, axis in enumerate(linear):
                 current[axis] = current[axis] + step[:, i]
-        actual = self.nominal_relative(current) + self.tcp_error(
-            current, overrides=overrides, check_stroke=False)["position"]
-        return {"positions": current, "residual": actual - target, "initial": initial}
+        return {"positions": current, "residual": off_target(current), "initial": initial}
 
     def _linear_jacobian(self, q: Positions, linear: list[str]) -> NDArray:
         if len(linear) != 3:

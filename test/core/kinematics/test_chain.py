@@ -23,17 +23,18 @@ def grinder():
     return KinematicModel(load_machine("khan_chen_rpppr"))
 
 
-def kidani_eq_2_12(E: dict, m) -> np.ndarray:
+def kidani_eq_2_12(E: dict, m, w) -> np.ndarray:
     """Kidani eq. 2.12 as printed (the 3-vector is spread over nine rows in the
     thesis; rows 4-9 continue rows 1-3). Two printed terms are corrected by
     the structure of the equation and by eq. 2.14: '- L_YY E_CX' in e_x is
     '- L_YX E_CX', and '- L_XY E_BX' in e_z is '- L_XX E_BX' (eq. 2.14 gives
-    -E_BX (L_XX + L_XY))."""
+    -E_BX (L_XX + L_XY)). ``w`` = (X_w, Y_w, Z_w) is Kidani's "target position on
+    the work surface", the machining point, in the table frame."""
     L_XX, L_YX, L_ZX = m.axes["X"].offset
     L_XY, L_YY, L_ZY = m.axes["Y"].offset
     L_XZ, L_YZ, L_ZZ = m.axes["Z"].offset
     Z_t = m.tool[2]
-    X_w, Y_w, Z_w = m.workpiece
+    X_w, Y_w, Z_w = w
     g = lambda n: E.get(n, 0.0)  # noqa: E731
     e_x = (g("EXX") + g("EXY") - g("EXZ") + L_ZY * (g("EBX") + g("EBY"))
            - L_YY * (g("ECX") + g("ECY")) + Z_t * (g("EBX") + g("EBY")) - L_YX * g("ECX")
@@ -56,7 +57,7 @@ def test_first_order_model_reproduces_eq_2_12_coefficient(hmc, name):
     plus = hmc.tcp_error(ZERO, overrides=ErrorOverrides(motion={name: h}))["position"][0]
     minus = hmc.tcp_error(ZERO, overrides=ErrorOverrides(motion={name: -h}))["position"][0]
     coefficient = (plus - minus) / (2 * h)
-    expected = kidani_eq_2_12({name: 1.0}, hmc.machine)
+    expected = kidani_eq_2_12({name: 1.0}, hmc.machine, hmc.machining_point(ZERO)[0])
     np.testing.assert_allclose(coefficient, expected, rtol=0, atol=1e-8)
     linear = hmc.tcp_error_linear(ZERO, overrides=ErrorOverrides(motion={name: 1.0}))["position"][0]
     np.testing.assert_allclose(linear, expected, rtol=0, atol=1e-14)
@@ -68,7 +69,7 @@ def test_yaw_only_case_is_eq_2_14(hmc):
     L_XX, _, L_ZX = m.axes["X"].offset
     L_XY, L_YY, L_ZY = m.axes["Y"].offset
     L_XZ, _, L_ZZ = m.axes["Z"].offset
-    Z_t, (X_w, _, Z_w) = m.tool[2], m.workpiece
+    Z_t, (X_w, _, Z_w) = m.tool[2], hmc.machining_point(ZERO)[0]
     eq_2_14 = np.array([
         -E["EBZ"] * (L_ZZ + Z_w) + E["EBX"] * (L_ZX + L_ZY + Z_t) - L_YY * E["ECY"],
         L_XY * E["ECY"],
@@ -148,14 +149,17 @@ def test_error_frames_give_the_central_difference_of_the_exact_chain(hmc, grinde
                                        err_msg=f"{model.machine.name} {name}")
         assert np.all(ctx.jacobian("EXW") == 0.0)  # not an axis of this chain
 
-def _per_point_reference(model, positions, overrides):
-    """Plain per-point 4x4 loop, written independently of KinematicModel.branch."""
+def _per_point_reference(model, positions, overrides, work_point=None):
+    """Plain per-point 4x4 loop, written independently of KinematicModel.branch.
+
+    The work point is the machining point (the nominal tool point in the workpiece
+    frame, inverted here with a 4x4 inverse) unless ``work_point`` is given."""
     m = model.machine
     out = []
     n = len(next(iter(positions.values())))
     for i in range(n):
-        ends = {}
-        for which, axes, end in (("t", m.tool_branch, m.tool), ("w", m.workpiece_branch, m.workpiece)):
+        frames = {}
+        for which, axes in (("t", m.tool_branch), ("w", m.workpiece_branch)):
             act, nom = np.eye(4), np.eye(4)
             parent = np.zeros(3)
             for a in axes:
@@ -167,9 +171,16 @@ def _per_point_reference(model, positions, overrides):
                 act = act @ translation(*parent) @ move @ error_htm_exact(errs)
                 nom = nom @ translation(*parent) @ move
                 parent = spec.offset
-            point = np.append(parent + end, 1.0)
-            ends[which] = (act @ point)[:3] - (nom @ point)[:3]
-        out.append(ends["t"] - ends["w"])
+            frames[which] = (act @ translation(*parent), nom @ translation(*parent))
+        tool_point = np.append(m.tool, 1.0)
+        nominal_tool = frames["t"][1] @ tool_point
+        if work_point is None:
+            point = np.linalg.inv(frames["w"][1]) @ nominal_tool
+        else:
+            point = np.append(work_point, 1.0)
+        actual = frames["t"][0] @ tool_point - frames["w"][0] @ point
+        nominal = nominal_tool - frames["w"][1] @ point
+        out.append((actual - nominal)[:3])
     return np.array(out)
 
 
@@ -182,6 +193,72 @@ def test_vectorised_map_equals_a_per_point_loop(grinder):
     fast = grinder.tcp_error(positions, overrides=overrides)["position"]
     slow = _per_point_reference(grinder, positions, overrides)
     np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-15)
+    # A fixed target on the workpiece side (an R-test sphere) is evaluated there.
+    sphere = np.array([0.05, -0.01, 0.03])
+    fast = grinder.tcp_error(positions, overrides=overrides, work_point=sphere)["position"]
+    slow = _per_point_reference(grinder, positions, overrides, work_point=sphere)
+    np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-15)
+
+
+def test_the_machining_point_is_the_nominal_tool_point_on_the_work(hmc, grinder):
+    """w is the nominal tool point in the workpiece frame, so the nominal
+    tool-to-work vector is zero at every configuration; and the three
+    formulations (matrices, twist sum, error frames) take the error there."""
+    rng = np.random.default_rng(11)
+    for model in (hmc, grinder):
+        m = model.machine
+        n = 30
+        q = {a: rng.uniform(*m.axes[a].stroke, n) for a in m.axis_order}
+        w = model.machining_point(q)
+        np.testing.assert_allclose(model.nominal_relative(q, work_point=w), 0.0, atol=1e-15)
+        assert np.ptp(w, axis=0).max() > 0.1   # it moves with the axes
+        overrides = ErrorOverrides(motion={f"E{c}{a}": rng.normal(0, 1e-6, n)
+                                           for a in m.axis_order for c in "XYZABC"},
+                                   use_description=False)
+        linear = model.tcp_error_linear(q, overrides=overrides, check_stroke=False)
+        first = model.tcp_error(q, overrides=overrides, first_order=True, check_stroke=False)
+        exact = model.tcp_error(q, overrides=overrides, check_stroke=False)
+        np.testing.assert_allclose(first["position"], linear["position"], atol=5e-11)  # 2nd order
+        np.testing.assert_allclose(exact["position"], linear["position"], atol=1e-10)
+        # the error frames' sum of sensitivities is the same first-order error
+        frames = model.error_frames(q)
+        summed = np.zeros((n, 3))
+        for name, value in overrides.motion.items():
+            sign, rot, lever = frames[name]
+            c = "XYZABC".index(name[1])
+            column = rot[:, :, c] if c < 3 else np.cross(rot[:, :, c - 3], lever)
+            summed += sign * column * value[:, None]
+        np.testing.assert_allclose(summed, linear["position"], atol=1e-12)
+        # ... and with a fixed target all three move their arm together
+        target = np.array([0.02, 0.03, -0.01])
+        linear_t = model.tcp_error_linear(q, overrides=overrides, check_stroke=False,
+                                          work_point=target)
+        exact_t = model.tcp_error(q, overrides=overrides, check_stroke=False, work_point=target)
+        np.testing.assert_allclose(exact_t["position"], linear_t["position"], atol=1e-10)
+        frames_t = model.error_frames(q, work_point=target)
+        summed = np.zeros((n, 3))
+        for name, value in overrides.motion.items():
+            sign, rot, lever = frames_t[name]
+            c = "XYZABC".index(name[1])
+            column = rot[:, :, c] if c < 3 else np.cross(rot[:, :, c - 3], lever)
+            summed += sign * column * value[:, None]
+        np.testing.assert_allclose(summed, linear_t["position"], atol=1e-12)
+
+
+def test_a_table_pitch_acts_through_the_arm_to_the_tool(hmc):
+    """The issue's case: a 10 urad pitch of the Z table (EAZ) on the HMC moves the
+    part under the tool by eps x (tool - table frame), so Y changes the error."""
+    y = np.array([-0.44, -0.20, 0.0])
+    q = {"X": np.full(3, 0.2), "Y": y, "Z": np.full(3, 0.25)}
+    pitch = ErrorOverrides(motion={"EAZ": 1e-5}, use_description=False)
+    e = hmc.tcp_error(q, overrides=pitch)["position"]
+    table_origin = np.array([0.0, 0.0, 0.25])   # where the Z table's motion error acts
+    tool = hmc.branch("tool", q, errors=False)[:, :3, 3]
+    expected = -np.cross([1e-5, 0.0, 0.0], tool - table_origin)
+    np.testing.assert_allclose(hmc.tcp_error_linear(q, overrides=pitch)["position"], expected,
+                               atol=1e-15)
+    np.testing.assert_allclose(e, expected, atol=1e-10)
+    assert abs(e[0, 2] - e[2, 2]) == pytest.approx(1e-5 * 0.44, rel=1e-6)
 
 
 class TestKhanChenValidation:
