@@ -53,7 +53,7 @@ def trial(errors: FiveAxisErrors, seed: int, with_direction: bool) -> dict:
     seconds = time.perf_counter() - started
     fitted = add_effects(model, diagnosis.selected, obs)
     new = survey(errors, readings=200, seed=seed + 10_000, datum=DATUM)
-    position, orientation = fitted.tcp_error(new.positions)
+    position, orientation = fitted.tcp_error(new.positions, work_point=new.work_point_m)
     axis = tool_direction(fitted.kinematics, new.positions)
     orientation = orientation - axis * np.einsum("ni,ni->n", orientation, axis)[:, None]
     before_position = np.sqrt(np.mean(new.position_error_m ** 2, axis=0))

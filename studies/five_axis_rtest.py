@@ -122,6 +122,7 @@ class Survey:
     position_error_m: np.ndarray = None               # (N, 3)
     direction_error_rad: np.ndarray = None            # (N, 3)
     time_s: np.ndarray = None
+    work_point_m: tuple = (0.05, 0.0, 0.02)           # the sphere nest in the A table frame
 
 
 def survey(errors: FiveAxisErrors, *, readings: int, seed: int, datum: dict,
@@ -143,16 +144,19 @@ def survey(errors: FiveAxisErrors, *, readings: int, seed: int, datum: dict,
         axis = rotation([0.0, poses["B"][i], 0.0]) @ np.asarray(geometry.tool_m)
         axis = axis / np.linalg.norm(axis)
         noise[i] -= axis * (noise[i] @ axis)
-    return Survey(poses, position, direction + noise, np.arange(readings) * 0.37)
+    return Survey(poses, position, direction + noise, np.arange(readings) * 0.37,
+                  tuple(geometry.workpiece_m))
 
 
 def reading_fields(data: Survey, with_direction: bool = True) -> dict:
     """The survey as the workbench's ``Observations`` fields (keyword arguments), with the
     R-test's stated k = 2 uncertainties: 1 um for the tip, 2 urad for the direction;
-    ``with_direction=False``: the tip alone, as a probe would give it."""
+    ``with_direction=False``: the tip alone, as a probe would give it. The R-test states
+    its target: the sphere nest, fixed on the A table (``work_point``)."""
     fields = {"positions": data.positions, "measured_m": data.position_error_m,
               "measured_mask": np.ones_like(data.position_error_m, dtype=bool),
-              "time_s": data.time_s, "uncertainty_m": 1e-6}
+              "time_s": data.time_s, "uncertainty_m": 1e-6,
+              "work_point": np.asarray(data.work_point_m, dtype=float)}
     if with_direction:
         fields.update(measured_orientation_rad=data.direction_error_rad,
                       orientation_measured=np.ones(data.time_s.size, dtype=bool),

@@ -90,25 +90,37 @@ def _motion(letter: str, value: np.ndarray) -> np.ndarray:
 
 def tcp_point(geometry: Geometry, q: dict[str, np.ndarray], errors: "ErrorSet | None"
               ) -> np.ndarray:
-    """Tool point minus workpiece point in the bed frame (N, 3)."""
+    """Tool point minus the workpiece point under the tool, bed frame (N, 3).
+
+    The point under the tool is the material the nominal machine puts the tool on: the
+    nominal tool point expressed in the nominal workpiece frame (Kidani's w, "the
+    machining point"), carried by the actual workpiece frame.
+    """
     n = next(iter(q.values())).size
-    ends = []
-    for axes, end in ((geometry.tool_axes, geometry.tool), (geometry.work_axes,
-                                                            geometry.workpiece)):
+
+    def frames(axes, with_errors):
         frame = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
         parent = np.zeros(3)
         for axis in axes:
             frame = frame @ _homogeneous(np.broadcast_to(np.eye(3), (n, 3, 3)),
                                          np.broadcast_to(parent, (n, 3)))
-            if errors is not None:
+            if with_errors:
                 frame = frame @ _error_transform(errors.location(axis, n))
             frame = frame @ _motion(axis, q[axis])
-            if errors is not None:
+            if with_errors:
                 frame = frame @ _error_transform(errors.motion(axis, q))
             parent = geometry.offsets[axis]
-        point = np.append(parent + end, 1.0)
-        ends.append((frame @ point)[:, :3])
-    return ends[0] - ends[1]
+        return frame @ _homogeneous(np.broadcast_to(np.eye(3), (n, 3, 3)),
+                                    np.broadcast_to(parent, (n, 3)))
+
+    tip = np.append(np.asarray(geometry.tool, float), 1.0)
+    nominal_tool = frames(geometry.tool_axes, False) @ tip
+    under_tool = np.einsum("nij,nj->ni", np.linalg.inv(frames(geometry.work_axes, False)),
+                           nominal_tool)
+    with_errors = errors is not None
+    tool = frames(geometry.tool_axes, with_errors) @ tip
+    work = np.einsum("nij,nj->ni", frames(geometry.work_axes, with_errors), under_tool)
+    return tool[:, :3] - work[:, :3]
 
 
 @dataclass

@@ -254,10 +254,11 @@ def survey_model(survey, model_text: str | None, machine: str | None,
 
     if model_text is not None and machine is not None:
         raise InputDataError("give --model or --machine, not both: a model names its machine")
-    if model_text is not None:
-        return resolve_model(model_text), ""
-    if machine is not None:
-        return ErrorModel(load_machine(machine), {}), ""
+    if model_text is not None or machine is not None:
+        model = resolve_model(model_text) if model_text is not None else \
+            ErrorModel(load_machine(machine), {})
+        refuse_contradicting_work_axes(model.machine, work_axes)
+        return model, ""
     travel = {axis: (float(np.min(q)), float(np.max(q))) for axis, q in survey.positions.items()
               if axis in "XYZ" and q.size}
     model = ErrorModel(generic_cartesian(travel, tool_length_m=tool_offset_m or 0.0,
@@ -265,13 +266,69 @@ def survey_model(survey, model_text: str | None, machine: str | None,
     spans = ", ".join(f"{a} {low * 1e3:.1f}..{high * 1e3:.1f} mm" for a, (low, high) in
                       travel.items())
     arm = (f"the tool {tool_offset_m * 1e3:.1f} mm long (the map's tool_offset)"
-           if tool_offset_m else "a constant Abbe arm shows as straightness or positioning "
-           "(give the map's tool_offset)")
+           if tool_offset_m else "a tilt's arm along the tool, which the map does not give "
+           "(tool_offset), fitted (angular_arm)")
     layout = (f"the workpiece on {', '.join(work_axes)} (bed outwards), the tool on the rest"
               if work_axes else "every axis on the tool side (give the map's work_axes)")
     return model, (f"machine: none given (--machine): a generic Cartesian machine over the "
                    f"surveyed travel ({spans}), {layout}; angular errors act through the "
                    f"other axes' positions and {arm}")
+
+
+def refuse_contradicting_work_axes(machine, work_axes: tuple[str, ...]) -> None:
+    """One line (InputDataError) when a column map's ``work_axes`` are not the given
+    machine's axes that carry the workpiece (its chain says which they are)."""
+    if not work_axes:
+        return
+    carried = tuple(a for a in machine.workpiece_branch if not machine.axes[a].is_rotary)
+    if tuple(work_axes) != carried:
+        raise InputDataError(
+            f"the column map's work_axes [{', '.join(work_axes)}] contradict {machine.name}, "
+            f"whose chain {machine.chain} puts the workpiece on "
+            f"[{', '.join(carried) or 'no linear axis'}] (bed outwards): correct the map or "
+            "leave work_axes out")
+
+
+def arm_verdicts(named: list[dict], tool_offset_m: float | None) -> tuple[list[str], str]:
+    """What the named ``angular_arm`` effects say about the tool offset.
+
+    Returns (notes, refusal): a note per tilt whose arm was fitted, and a one-line
+    refusal when the map gave a tool offset the data contradict (the tilt's arm
+    differs from it by more than 3 standard uncertainties and 5 mm), naming the value
+    the data support. The tool points along +z for a positive or absent offset.
+    """
+    from ..core.effects.geometric import AngularWithArm
+
+    notes, refusal = [], ""
+    given = tool_offset_m or 0.0
+    along_z = -1.0 if given < 0 else 1.0
+    for entry in named:
+        if entry.get("effect") != "angular_arm":
+            continue
+        values = entry["parameters"]
+        shape = [values[k] for k in values if not k.startswith("arm_")]
+        arm = [values[k] for k in values if k.startswith("arm_")]
+        extra = AngularWithArm.arm_m(shape + arm)
+        # l = <a, b> / <a, a>: its standard uncertainty from the b's (dl/db_k = a_k / |a|^2)
+        spread = entry.get("parameter_uncertainties", {})
+        weights = np.asarray(shape, dtype=np.float64) / max(float(np.dot(shape, shape)), 1e-300)
+        sigma = float(np.sqrt(np.sum((weights * np.array(
+            [spread.get(k, 0.0) for k in values if k.startswith("arm_")])) ** 2)))
+        supported = given + along_z * extra
+        if tool_offset_m is None:
+            notes.append(f"{entry['name']}: the tilt acts through {extra * 1e3:+.1f} "
+                         f"± {2e3 * sigma:.1f} mm of arm along the tool beyond the surveyed "
+                         f"axes' (k = 2): a tool offset of {supported * 1e3:.1f} mm; give it "
+                         "as the map's tool_offset and the tilt is named with its arm known")
+        elif abs(extra) > max(3.0 * sigma, 5e-3) and not refusal:
+            refusal = (f"the column map's tool_offset {given * 1e3:.1f} mm contradicts the "
+                       f"data: {entry['variant']} acts through an arm that puts the tool tip "
+                       f"at {supported * 1e3:.1f} ± {2e3 * sigma:.1f} mm (k = 2); correct the "
+                       "map's tool_offset")
+        else:
+            notes.append(f"{entry['name']}: its arm agrees with the map's tool_offset within "
+                         f"{abs(extra) * 1e3:.1f} mm")
+    return notes, refusal
 
 
 def outside_travel(machine, positions: dict, tolerance_m: float = 1e-6) -> str:
@@ -323,6 +380,11 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
                        spindle_speed_rad_s=survey.spindle_speed_rad_s)
     warning = outside_travel(model.machine, survey.positions)
     result = check_observations(model, obs, add, auto, min_reduction)
+    if not model.machine.abbe_arms_known:
+        notes, refusal = arm_verdicts(result.get("named", []), column_map.tool_offset_m)
+        if refusal:
+            raise InputDataError(f"{path}: {refusal}")
+        result.setdefault("warnings", []).extend(notes)
     return {"data": str(path), "kind": "survey_csv", "rows_read": survey.rows_read,
             "rows_dropped": survey.rows_dropped, "rows_note": survey.summary(Path(path).name),
             "machine": model.machine.name, "machine_note": machine_note,

@@ -195,12 +195,16 @@ class SimulationResult:
             drift[:, :3] += np.outer(growth, direction)
         if scenario.ever_enabled("table_tilt"):
             params = scenario.parameters("table_tilt")
-            on = self.mask("table_tilt", indices)
+            on = self.mask("table_tilt", indices) * (
+                1.0 + float(params.get("growth_per_k", 0.0)) * self.thermal_at("bed", indices))
             for name, value in params["errors_rad"].items():
-                # a tilt of a workpiece-side axis' body: one of its angular error motions
-                errors.add("motion", name[-1], c(name[1]),
-                           float(value) * (1.0 + float(params.get("growth_per_k", 0.0))
-                                           * self.thermal_at("bed", indices)) * on, n)
+                # A workpiece-side axis' angular error motion that turns from -amplitude
+                # to +amplitude over its stroke along a quarter sine (a worn or bowed way).
+                axis = name[-1]
+                low, high = machine.axes[axis].stroke
+                u = (2.0 * positions[axis] - (low + high)) / (high - low)
+                errors.add("motion", axis, c(name[1]),
+                           float(value) * np.sin(0.5 * np.pi * u) * on, n)
         if np.any(drift):
             errors.thermal["bed_tool"] = drift
         return errors

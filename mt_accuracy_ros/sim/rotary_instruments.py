@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from .rigid_body import BodyErrors, body_pose, tool_against_work
+
 
 def _rodrigues(vector: NDArray) -> NDArray:
     """Rotation matrix of the rotation vector ``vector`` (axis * angle), exact."""
@@ -142,10 +144,6 @@ def probe_sphere(machine, plan: ProbingPlan, location_errors: dict[str, float], 
     machine's own kinematic chain); returns ``positions`` (axis -> (N,)),
     ``touch_points_m`` (N, touches, 3) and the truth.
     """
-    from dataclasses import replace
-
-    from ..core.kinematics.chain import ErrorOverrides, KinematicModel
-
     rng = np.random.default_rng(seed)
     rows = []
     for axis, angles in plan.rotary_positions_deg.items():
@@ -156,11 +154,17 @@ def probe_sphere(machine, plan: ProbingPlan, location_errors: dict[str, float], 
     rows = rows * plan.repeats
     positions = {a: np.array([r[a] for r in rows], float) for a in machine.axis_order}
     sphere = np.asarray(plan.sphere_m, float)
-    nominal = KinematicModel(replace(machine, workpiece=sphere)).nominal_relative(positions)
-    actual_machine = KinematicModel(replace(machine, workpiece=sphere + plan.sphere_offset_m))
-    error = actual_machine.tcp_error(positions, overrides=ErrorOverrides(
-        location=dict(location_errors), use_description=False), check_stroke=False)["position"]
-    error = error + actual_machine.nominal_relative(positions) - nominal
+    # The sphere is a fixed target: the truth compares the probe's place with the
+    # sphere's real place, from the simulator's own rigid bodies.
+    n = positions[machine.axis_order[0]].size
+    errors = BodyErrors()
+    for name, value in location_errors.items():
+        errors.add("location", name[-1], "XYZABC".index(name[1]), float(value), n)
+    real_sphere = sphere + np.asarray(plan.sphere_offset_m, float)
+    truth, _ = tool_against_work(machine, positions, positions, errors, work_point=real_sphere)
+    # ... against the centre the CNC expects (the sphere where the plan puts it)
+    error = truth + (_relative(machine, positions, real_sphere)
+                     - _relative(machine, positions, sphere))
     centres = -error                                   # where the probe finds the centre
     n = centres.shape[0]
     directions = rng.normal(size=(n, plan.touches, 3))
@@ -169,6 +173,12 @@ def probe_sphere(machine, plan: ProbingPlan, location_errors: dict[str, float], 
     points = centres[:, None, :] + plan.sphere_radius_m * directions \
         + rng.normal(0.0, plan.noise_m, (n, plan.touches, 3))
     return {"positions": positions, "touch_points_m": points, "centres_m": centres}
+
+
+def _relative(machine, positions, point) -> NDArray:
+    """(N, 3) nominal tool point minus a workpiece point (workpiece frame), bed frame."""
+    tool = body_pose(machine, "tool", positions).point(np.asarray(machine.tool, float))
+    return tool - body_pose(machine, "workpiece", positions).point(point)
 
 
 # ------------------------------------------------------------- from a scenario

@@ -300,17 +300,20 @@ class ErrorModel:
             out.thermal["bed_tool"] = drift
         return out
 
-    def datum_error(self, temperatures: dict | None = None) -> NDArray[np.float64]:
+    def datum_error(self, temperatures: dict | None = None,
+                    work_point: ArrayLike | None = None) -> NDArray[np.float64]:
         """(3,) the model's TCP error at the :attr:`datum` [m] in the conditions the
         instrument was zeroed in: every temperature at its reference (no rise), the
-        axes at rest, the live profiles as they are. Zero without a datum."""
+        axes at rest, the live profiles as they are; at the instrument's fixed target
+        ``work_point`` when it has one (else the machining point). Zero without a datum."""
         if not self.datum:
             return np.zeros(3)
         sensors = {**{k: float(np.ravel(np.asarray(v, dtype=np.float64))[0])
                       for k, v in (temperatures or {}).items()},
                    **self.reference_temperatures_c}
         key = (self.profile_revision, tuple(sorted((k, id(f)) for k, f in self.profiles.items())),
-               tuple(sorted(sensors.items())), tuple(sorted(self.datum.items())))
+               tuple(sorted(sensors.items())), tuple(sorted(self.datum.items())),
+               None if work_point is None else tuple(np.ravel(work_point).tolist()))
         if key not in self._datum_cache:
             # A copy: the datum must not advance this model's lag states.
             at_rest = copy.copy(self)
@@ -321,7 +324,7 @@ class ErrorModel:
             position, _ = at_rest.tcp_error(
                 pose, {k: np.array([v]) for k, v in sensors.items()}, still, still,
                 time_s=np.zeros(1), accelerations=still, spindle_speed_rad_s=np.zeros(1),
-                fresh=True, referred=False)
+                fresh=True, referred=False, work_point=work_point)
             if len(self._datum_cache) > 8:
                 self._datum_cache.clear()
             self._datum_cache[key] = position[0]
@@ -333,8 +336,14 @@ class ErrorModel:
                   time_s: ArrayLike | None = None,
                   accelerations: dict[str, ArrayLike] | None = None,
                   spindle_speed_rad_s: ArrayLike | None = None, fresh: bool = False,
-                  referred: bool = True) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+                  referred: bool = True, work_point: ArrayLike | None = None
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position error (N, 3) [m], orientation error (N, 3) [rad]) at command positions.
+
+        The error is taken at the machining point (the material under the tool,
+        Kidani eqs. 2.9-2.10), or at ``work_point`` ((3,) or (N, 3) [m] in the
+        workpiece frame) for an instrument whose target is fixed on the workpiece
+        side (an R-test or probed sphere).
 
         ``directions`` (axis -> +-1, the direction of the last motion) serves the
         reversal effect where the axis stands still; without it sign(v) is used
@@ -354,7 +363,7 @@ class ErrorModel:
         if missing:
             raise InputDataError(f"positions missing for axis {', '.join(missing)}")
         result = self._kinematics.tcp_error(q, overrides=self.overrides(q, temperatures),
-                                            check_stroke=False)
+                                            check_stroke=False, work_point=work_point)
         position, orientation = result["position"], result["orientation"]
         if "abbe_offset" in self.effects:
             offset = np.asarray(self.effects["abbe_offset"]["offset_m"], dtype=np.float64)
@@ -389,7 +398,8 @@ class ErrorModel:
                                   dict(directions or {}), temps,
                                   self.reference_temperatures_c, spindle_speed_rad_s,
                                   lag_states=self._lag_states)
-            context = Context(self.machine, variables, self._kinematics, orientation)
+            context = Context(self.machine, variables, self._kinematics, orientation,
+                              work_point=work_point)
             turned = np.zeros_like(orientation)
             for name, entry in catalogue.items():
                 position = position + catalogue_error(name, entry, context)
@@ -397,7 +407,7 @@ class ErrorModel:
             orientation = orientation + turned
         position = position + drive
         if self.datum and referred:
-            position = position - self.datum_error(temperatures)[None, :]
+            position = position - self.datum_error(temperatures, work_point)[None, :]
         return position, orientation
 
     def table_motion_errors(self, axis: str, grid: ArrayLike, *, include_user: bool = True,

@@ -70,6 +70,9 @@ def rotary_jacobians(kinematics: KinematicModel, positions: dict[str, ArrayLike]
                      step_rad: float = JACOBIAN_STEP_RAD) -> tuple[NDArray, NDArray, tuple]:
     """d(tool - workpiece)/d r and d(relative orientation)/d r of the nominal chain.
 
+    The workpiece point is the machining point of ``positions`` (the material
+    under the tool), held fixed in the workpiece frame while the axis turns.
+
     Returns
     -------
     (J_p (N, 3, R) [m/rad], J_o (N, 3, R) [rad/rad], rotary axes)
@@ -78,6 +81,7 @@ def rotary_jacobians(kinematics: KinematicModel, positions: dict[str, ArrayLike]
     rotary = tuple(a for a in machine.axis_order if machine.axes[a].is_rotary)
     q = {a: np.atleast_1d(np.asarray(v, dtype=np.float64)) for a, v in positions.items()}
     n = np.broadcast(*q.values()).size
+    under_tool = kinematics.machining_point(q)
     jac_p = np.zeros((n, 3, len(rotary)))
     jac_o = np.zeros((n, 3, len(rotary)))
     for i, axis in enumerate(rotary):
@@ -86,7 +90,8 @@ def rotary_jacobians(kinematics: KinematicModel, positions: dict[str, ArrayLike]
             moved = dict(q)
             moved[axis] = q[axis] + sign * step_rad
             tool = kinematics.branch("tool", moved, errors=False, check_stroke=False)
-            work = kinematics.branch("workpiece", moved, errors=False, check_stroke=False)
+            work = kinematics.branch("workpiece", moved, errors=False, check_stroke=False,
+                                     end_point=under_tool)
             ends.append((tool, work))
         (tool_plus, work_plus), (tool_minus, work_minus) = ends
         jac_p[:, :, i] = ((tool_plus[:, :3, 3] - work_plus[:, :3, 3])

@@ -48,14 +48,18 @@ class Context:
     """Machine + variables at N readings; caches kinematic sensitivities.
 
     ``orientation`` (N, 3) [rad]: the model's tool-orientation error at the readings,
-    for the Abbe family (optional).
+    for the Abbe family (optional). ``work_point`` ((3,) or (N, 3) [m], workpiece
+    frame): a fixed target the readings were taken at (an R-test or probed
+    sphere); by default the machining point (:meth:`KinematicModel.machining_point`).
     """
 
     def __init__(self, machine: MachineDescription, variables: Variables,
                  kinematics: KinematicModel | None = None,
                  orientation: NDArray[np.float64] | None = None, *,
-                 orientation_lever_m: float | None = None) -> None:
+                 orientation_lever_m: float | None = None,
+                 work_point: NDArray[np.float64] | None = None) -> None:
         self.machine = machine
+        self.work_point = work_point
         #: Set when the readings measured the tool's direction: [m per rad] that makes a
         #: direction row's noise the position rows' (see the module docstring).
         self.orientation_lever_m = orientation_lever_m
@@ -82,7 +86,8 @@ class Context:
         if error_name not in self._jacobians:
             if self._frames is None:
                 positions = {a: self.variables.positions[a] for a in self.machine.axis_order}
-                self._frames = self.kinematics.error_frames(positions)
+                self._frames = self.kinematics.error_frames(positions,
+                                                            work_point=self.work_point)
             frame = self._frames.get(error_name)
             if frame is None:
                 self._jacobians[error_name] = np.zeros((self.n, 3))
@@ -95,6 +100,24 @@ class Context:
                     sensitivity = np.cross(rotation[:, :, component - 3], lever)
                 self._jacobians[error_name] = sign * np.ascontiguousarray(sensitivity)
         return self._jacobians[error_name]
+
+    def arm_jacobian(self, error_name: str) -> NDArray[np.float64]:
+        """d e_TCP / d (rotation ``error_name`` times an extra arm of 1 m along the tool
+        axis), (N, 3) [m per rad m]: ``sign (R[:, :, c] x t)`` for a rotation component c,
+        t the nominal tool axis; zero for a translation. How a tilt moves the TCP through
+        the part of its Abbe arm the chain does not know (a tool offset not given)."""
+        key = "arm:" + error_name
+        if key not in self._jacobians:
+            self.jacobian(error_name)   # builds the frames
+            frame = self._frames.get(error_name)
+            if frame is None or COMPONENTS.index(error_name[1]) < 3:
+                self._jacobians[key] = np.zeros((self.n, 3))
+            else:
+                sign, rotation, _ = frame
+                component = COMPONENTS.index(error_name[1]) - 3
+                self._jacobians[key] = sign * np.cross(rotation[:, :, component],
+                                                       self.tool_axis())
+        return self._jacobians[key]
 
     def orientation_jacobian(self, error_name: str) -> NDArray[np.float64]:
         """d (tool orientation relative to the workpiece) / d (error ``error_name``), (N, 3)

@@ -424,8 +424,82 @@ class AbbeOffset(EffectFamily):
                 "workpiece is offset from the scales' line (Abbe)")
 
 
+class AngularWithArm(EffectFamily):
+    """An angular error of a linear axis whose Abbe arm along the tool is not known.
+
+    The chain knows the arm of a tilt up to what the machine description (or a
+    survey's column map) says: the tool length, the offsets between the axes. When
+    the real arm is longer by a constant l along the tool axis t, the tilt E(q)
+    moves the TCP by J(q_all) E(q) + l sign (r x t) E(q), r the tilt's axis: the
+    second term depends on the axis' own position alone and looks like a
+    straightness or positioning error of the same axis. This family fits both with
+    the same Legendre shape, E(q) = sum a_k P_k(u) and l E(q) = sum b_k P_k(u), so
+    the tilt is named once with the arm the data identify (l = <a, b> / <a, a>),
+    not as an angular error plus substitute terms. Offered on a machine known only from
+    a survey (``MachineDescription.abbe_arms_known`` False); a described machine's arms
+    are its description's.
+    """
+
+    name = "angular_arm"
+    group = "geometric"
+    reference = "ISO 230-1 (Abbe principle); Kidani eq. 2.10 with an unknown arm"
+    summary = ("an angular error of an axis acting through a longer or shorter arm than the "
+               "machine description gives (a tool offset that is wrong or not given)")
+    # One more assumption than the angular error: the arm is fitted, not known.
+    complexity = 4
+    nested_settings = False
+
+    def variants(self, ctx: Context) -> list[str]:
+        # A machine whose description gives its offsets has its arms: nothing to fit.
+        if getattr(ctx.machine, "abbe_arms_known", True):
+            return []
+        return component_names(ctx, "angular")
+
+    def settings(self, ctx: Context, variant: str) -> list[dict]:
+        return [{"order": k} for k in range(1, 1 + _ORDERS)]
+
+    def parameter_names(self, variant: str, setting: dict) -> list[str]:
+        orders = range(1, setting["order"] + 1)
+        return [f"P{k}" for k in orders] + [f"arm_P{k}" for k in orders]
+
+    def _basis(self, ctx: Context, variant: str, setting: dict):
+        key = ("legendre", variant[2])
+        if key not in ctx.cache:
+            ctx.cache[key] = _legendre_columns(ctx.normalised_position(variant[2]), 0,
+                                               _LARGEST_ORDER)
+        if setting["order"] > _LARGEST_ORDER:
+            return _legendre_columns(ctx.normalised_position(variant[2]), 1, setting["order"])
+        return ctx.cache[key][:, 1:setting["order"] + 1]
+
+    def design(self, ctx: Context, variant: str, setting: dict):
+        basis = self._basis(ctx, variant, setting)
+        return np.concatenate([along(ctx.jacobian(variant), basis),
+                               along(ctx.arm_jacobian(variant), basis)], axis=2)
+
+    def orientation_design(self, ctx: Context, variant: str, setting: dict):
+        basis = self._basis(ctx, variant, setting)
+        turn = along(ctx.orientation_jacobian(variant), basis)
+        return np.concatenate([turn, np.zeros_like(turn)], axis=2)
+
+    @staticmethod
+    def arm_m(coefficients) -> float:
+        """The extra arm l [m] the fitted coefficients (a..., b...) identify."""
+        values = np.asarray(coefficients, dtype=np.float64)
+        a, b = values[:values.size // 2], values[values.size // 2:]
+        return float(a @ b / (a @ a)) if a @ a > 0 else 0.0
+
+    def explanation(self, variant: str, setting: dict) -> str:
+        return (f"the angular error {variant} of the {variant[2]} axis (Legendre order "
+                f"{setting.get('order')}), acting through an Abbe arm along the tool that the "
+                "machine description does not give - the fit names the arm (ISO 230-1)")
+
+    def describe_setting(self, setting: dict) -> str:
+        return f"order {setting['order']}, arm fitted"
+
+
 def families() -> list[EffectFamily]:
     out: list[EffectFamily] = []
     for kind in ("positioning", "straightness", "angular"):
         out += [ComponentError(kind, False), ComponentError(kind, True)]
-    return out + [Squareness(), RotaryError(), RotaryLocation(), CrossAxis(), AbbeOffset()]
+    return out + [AngularWithArm(), Squareness(), RotaryError(), RotaryLocation(), CrossAxis(),
+                  AbbeOffset()]

@@ -91,6 +91,10 @@ class MachineDescription:
     #: The controller's compensation limits (``cnc:`` in the YAML; see
     #: :mod:`mt_accuracy_ros.core.compensation.limits`), validated numbers.
     cnc: dict = field(default_factory=dict)
+    #: False for a machine known only from a survey (:func:`generic_cartesian`): its
+    #: offsets are not known, so a tilt's Abbe arm along the tool is fitted, not assumed
+    #: (the workbench then offers ``angular_arm``).
+    abbe_arms_known: bool = True
 
     @property
     def axis_order(self) -> tuple[str, ...]:
@@ -300,11 +304,13 @@ def generic_cartesian(strokes: dict[str, tuple[float, float]], tool_length_m: fl
             # An axis that stood still: a nominal 1 mm of travel keeps the description valid.
             low, high = low - 5e-4, low + 5e-4
         spec[axis] = {"stroke": [low, high], "offset": [0.0, 0.0, 0.0]}
-    return machine_from_dict({
+    from dataclasses import replace
+
+    return replace(machine_from_dict({
         "name": name, "chain": "[" + " ".join(["w", *reversed(work), "b", *tool, "t"]) + "]",
         "description": "generic Cartesian machine from the survey's travel (no --machine)",
         "tool": [0.0, 0.0, float(tool_length_m)], "workpiece": [0.0, 0.0, 0.0],
-        "axes": spec}, name)
+        "axes": spec}, name), abbe_arms_known=False)
 
 
 def bundled_machine_names() -> list[str]:

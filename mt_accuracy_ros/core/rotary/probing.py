@@ -399,13 +399,16 @@ def _predictor(machine: MachineDescription, q: dict[str, NDArray], names: list[s
                nominal_point: NDArray):
     """theta = (errors..., sphere offset (3)) -> (N, 3) predicted centre deviations."""
     p = len(names)
-    nominal = KinematicModel(replace(machine, workpiece=nominal_point)).nominal_relative(q)
+    # The sphere is a fixed target on the workpiece side: the error is taken there.
+    model = KinematicModel(machine)
+    nominal = model.nominal_relative(q, work_point=nominal_point)
 
     def predicted(theta: NDArray) -> NDArray:
-        model = KinematicModel(replace(machine, workpiece=nominal_point + theta[p:]))
+        sphere = nominal_point + theta[p:]
         overrides = ErrorOverrides(location=dict(zip(names, theta[:p])), use_description=False)
-        error = model.tcp_error(q, overrides=overrides, check_stroke=False)["position"]
-        return -(error + model.nominal_relative(q) - nominal)
+        error = model.tcp_error(q, overrides=overrides, check_stroke=False,
+                                work_point=sphere)["position"]
+        return -(error + model.nominal_relative(q, work_point=sphere) - nominal)
     return predicted
 
 

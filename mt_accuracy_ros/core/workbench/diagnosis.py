@@ -69,6 +69,11 @@ class Observations:
     (the part about the axis is invisible to it), with ``orientation_measured``
     (N,) and its own k = 2 uncertainty ``orientation_uncertainty_rad``. The
     workbench then judges every effect on both (:class:`~..effects.base.Context`).
+
+    ``work_point`` ((3,) [m], in the workpiece frame): the target of an instrument
+    fixed on the workpiece side (an R-test's or a probed sphere, a retroreflector);
+    the model is evaluated there. None (the default): the readings are taken at
+    the machining point, where the tool is (Kidani eqs. 2.9-2.10).
     """
 
     positions: dict[str, NDArray[np.float64]]
@@ -88,6 +93,7 @@ class Observations:
     measured_orientation_rad: NDArray[np.float64] | None = None
     orientation_measured: NDArray[np.bool_] | None = None
     orientation_uncertainty_rad: float = 2e-6
+    work_point: NDArray[np.float64] | None = None
 
     def subset(self, rows) -> "Observations":
         pick = lambda d: {k: np.asarray(v)[rows] for k, v in d.items()}  # noqa: E731
@@ -104,7 +110,7 @@ class Observations:
                             else self.measured_orientation_rad[rows],
                             None if self.orientation_measured is None
                             else self.orientation_measured[rows],
-                            self.orientation_uncertainty_rad)
+                            self.orientation_uncertainty_rad, self.work_point)
 
     def set_directions(self, errors: list, uncertainties: list[float]) -> None:
         """Take the tool direction of the readings that measured it: ``errors`` (N,) of a
@@ -147,10 +153,13 @@ class Observations:
 
     def model_inputs(self) -> dict:
         """Keyword arguments of :meth:`ErrorModel.tcp_error` beyond positions."""
-        return {"temperatures": self.temperatures, "velocities": self.velocities or None,
-                "directions": self.directions or None, "time_s": self.time_s,
-                "accelerations": self.accelerations or None,
-                "spindle_speed_rad_s": self.spindle_speed_rad_s}
+        inputs = {"temperatures": self.temperatures, "velocities": self.velocities or None,
+                  "directions": self.directions or None, "time_s": self.time_s,
+                  "accelerations": self.accelerations or None,
+                  "spindle_speed_rad_s": self.spindle_speed_rad_s}
+        if self.work_point is not None:
+            inputs["work_point"] = self.work_point
+        return inputs
 
 
 @dataclass
@@ -476,7 +485,7 @@ def residual_frame(model: ErrorModel, obs: Observations, *, absolute: bool = Fal
         orientation = model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[1]
     lever = obs.orientation_lever_m if directions else None
     ctx = Context(model.machine, variables, model._kinematics, orientation,
-                  orientation_lever_m=lever)
+                  orientation_lever_m=lever, work_point=obs.work_point)
     position_residual = residual
     if directions:
         # The tool's direction as a second measured quantity, scaled to the position's

@@ -27,10 +27,12 @@ def _overrides(q):
                           use_description=False)
 
 
-def _pose(model: KinematicModel, q, errors: bool):
+def _pose(model: KinematicModel, q, errors: bool, under_tool):
+    """Tool and the workpiece frame carried to ``under_tool`` (the machining point of the
+    original command: the material to cut does not move with the correction)."""
     tool = model.branch("tool", q, errors=errors, overrides=_overrides(q), check_stroke=False)
     work = model.branch("workpiece", q, errors=errors, overrides=_overrides(q),
-                        check_stroke=False)
+                        check_stroke=False, end_point=under_tool)
     return tool, work
 
 
@@ -48,8 +50,8 @@ def test_the_corrected_machine_is_right_to_second_order_at_random_poses():
     moved = dict(q)
     for k, axis in enumerate(fix.rotary_axes):
         moved[axis] = q[axis] + fix.rotary_rad[:, k]
-    tool1, work1 = _pose(model, moved, errors=True)
-    tool0, work0 = _pose(model, q, errors=False)
+    tool1, work1 = _pose(model, moved, errors=True, under_tool=model.machining_point(q))
+    tool0, work0 = _pose(model, q, errors=False, under_tool=model.machining_point(q))
     tip = (tool1[:, :3, 3] - work1[:, :3, 3]) - (tool0[:, :3, 3] - work0[:, :3, 3]) \
         + fix.position_m
     turn = rotation_vector(np.swapaxes(work1[:, :3, :3] @ np.swapaxes(work0[:, :3, :3], 1, 2),
@@ -60,8 +62,9 @@ def test_the_corrected_machine_is_right_to_second_order_at_random_poses():
     direction_after = np.linalg.norm(np.cross(turn, axis), axis=1)
     assert np.max(np.linalg.norm(before["position"], axis=1)) > 20e-6
     assert np.max(direction_before) > 40e-6
-    # What is left is second order in errors of ~5e-5: below 1e-9 m and 1e-8 rad.
-    assert np.max(np.abs(tip)) < 1e-9, np.max(np.abs(tip))
+    # What is left is second order in errors of ~5e-5 through arms up to ~1 m (the
+    # machining point is far from the A axis): below 5e-9 m and 1e-8 rad.
+    assert np.max(np.abs(tip)) < 5e-9, np.max(np.abs(tip))
     assert np.max(direction_after) < 1e-8, np.max(direction_after)
     assert np.max(np.abs(fix.residual_direction_rad)) < 1e-12
 
@@ -90,9 +93,11 @@ def test_a_tilt_about_the_tilting_axis_is_taken_out_by_that_axis_closed_form():
     # The tip's correction undoes the shift the turn causes: c = -J_p delta.
     np.testing.assert_allclose(fix.position_m[0], -jac_p[0, :, 0] * delta, atol=1e-15)
     # J_p closed form: turning the work point about the A axis line by dA moves it by
-    # (0, -w_z, w_y) dA, w its position from the axis (the workpiece vector at A = 0),
-    # so the tool relative to it moves by -(0, -w_z, w_y) dA.
-    w = TILT_TABLE["workpiece"]
+    # (0, -w_z, w_y) dA, w its position from the axis (the machining point in the A frame,
+    # at A = 0: the tool (0, 0.1, 0.1) less the axis line's origin (0.2, 0, 0.1)), so the
+    # tool relative to it moves by -(0, -w_z, w_y) dA.
+    w = [-0.2, 0.1, 0.0]
+    np.testing.assert_allclose(model.machining_point(q)[0], w, atol=1e-15)
     np.testing.assert_allclose(jac_p[0, :, 0], [0.0, w[2], -w[1]], atol=1e-9)
 
 

@@ -113,9 +113,10 @@ def test_a_fitted_rotary_location_turns_the_models_tool_as_the_chain_does(five_a
     overrides = ErrorOverrides()
     overrides.location.update(errors)
     exact = kinematics.tcp_error(q, overrides=overrides, check_stroke=False)
-    # First order in 5e-5 rad: the second-order rest is ~1e-9 rad and ~1e-10 m.
+    # First order in 5e-5 rad: the second-order rest is ~1e-9 rad, and ~1e-9 m through the
+    # arms to the machining point (up to ~0.6 m from the A axis).
     np.testing.assert_allclose(orientation, exact["orientation"], atol=5e-9, rtol=0)
-    np.testing.assert_allclose(position, exact["position"], atol=5e-10, rtol=0)
+    np.testing.assert_allclose(position, exact["position"], atol=2e-9, rtol=0)
     assert np.max(np.abs(orientation)) > 2e-5
 
 

@@ -34,7 +34,7 @@ def _held_out(model: ErrorModel, seed: int):
     """(position RMS [m], direction RMS [rad]) per component of what ``model`` leaves on
     new readings of the same machine: the compensated machine, as the R-test sees it."""
     data = survey(OUT_OF_PLACE, readings=200, seed=seed, datum=DATUM)
-    position, orientation = model.tcp_error(data.positions)
+    position, orientation = model.tcp_error(data.positions, work_point=data.work_point_m)
     axis = tool_direction(model.kinematics, data.positions)
     orientation = orientation - axis * np.einsum("ni,ni->n", orientation, axis)[:, None]
     return (np.sqrt(np.mean((data.position_error_m - position) ** 2, axis=0)),
