@@ -22,8 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from studies.cartesian_surveys import (KINDS, LAYOUTS, NotDrawn, accepted, log_leaving_range,
-                                       single_effect_trial, weak_bow_trial)
+from studies.cartesian_surveys import (KINDS, LAYOUTS, NotDrawn, accepted, judged,
+                                       log_leaving_range, single_effect_trial, weak_bow_trial)
 
 
 def check(csv: Path, column_map: Path, out: Path) -> dict:
@@ -49,30 +49,33 @@ def main(argv: list[str] | None = None) -> int:
     trials, started = [], time.monotonic()
     quiet = contextlib.redirect_stdout(io.StringIO())
     with tempfile.TemporaryDirectory() as scratch:
-        plan = [(m, k, 1000 * s + 17 * i + j) for s in range(args.seeds)
+        plan = [(m, k, 1000 * s + 17 * i + j, True) for s in range(args.seeds)
                 for i, m in enumerate(LAYOUTS) for j, k in enumerate(KINDS)]
-        plan += [(m, None, 50_000 + 100 * i + s) for i, m in enumerate(LAYOUTS)
+        plan += [(m, None, 50_000 + 100 * i + s, True) for i, m in enumerate(LAYOUTS)
                  for s in range(args.nulls)]
-        # Tilts of the axes that carry the workpiece, apart (see cartesian_surveys).
-        plan += [(m, "angular_table", 90_000 + 100 * i + s) for i, m in enumerate(LAYOUTS)
-                 for s in range(args.seeds)]
-        for number, (machine, kind, seed) in enumerate(plan, 1):
+        # Table tilts on surveys whose map does not give the tool offset (the VMC).
+        plan += [("vmc_500", k, 80_000 + 100 * j + s, False) for s in range(args.seeds)
+                 for j, k in enumerate(("angular_table", "angular_tables"))]
+        for number, (machine, kind, seed, tool_given) in enumerate(plan, 1):
             where = Path(scratch) / f"t{number}"
+            label = (kind or "nothing") + ("" if tool_given else " (no tool offset)")
             try:
-                csv, column_map, fair = single_effect_trial(machine, kind, seed, where)
+                csv, column_map, fair = single_effect_trial(machine, kind, seed, where,
+                                                            give_tool_offset=tool_given)
             except NotDrawn as why:
-                print(f"[{number}/{len(plan)}] {machine:12s} {kind:9s} not drawn: {why}",
+                print(f"[{number}/{len(plan)}] {machine:12s} {label:9s} not drawn: {why}",
                       file=sys.stderr, flush=True)
+                trials.append({"machine": machine, "kind": label, "seed": seed,
+                               "not_drawn": str(why)})
                 continue
             with quiet:
                 result = check(csv, column_map, where / "s.json")
             named = [entry["name"] for entry in result["named"]]
-            right = bool(named) and accepted(named[0], fair) if kind else not named
-            extra = [n for n in named[1:] if not accepted(n, fair)] if kind else named
-            trials.append({"machine": machine, "kind": kind or "nothing", "seed": seed,
+            right, extra = judged(kind, named, fair)
+            trials.append({"machine": machine, "kind": label, "seed": seed,
                            "named": named, "fair": sorted(fair), "right_first": right,
-                           "spurious": extra})
-            print(f"[{number}/{len(plan)}] {machine:12s} {kind or 'nothing':9s} named "
+                           "spurious": extra, "notes": result.get("warnings", [])})
+            print(f"[{number}/{len(plan)}] {machine:12s} {label:9s} named "
                   f"{', '.join(named) or '-'}: {'ok' if right and not extra else 'WRONG'}"
                   f"{' (extra: ' + ', '.join(extra) + ')' if extra and kind else ''}",
                   file=sys.stderr, flush=True)
@@ -96,9 +99,10 @@ def main(argv: list[str] | None = None) -> int:
             result = check_csv(log, "growth_um", "time_s", ["t*_C"], [], [], 3, 0.5, 0.05,
                                [])
         result.pop("_plot")
-    table_tilts = [t for t in trials if t["kind"] == "angular_table"]
-    effects = [t for t in trials if t["kind"] not in ("nothing", "angular_table")]
-    nulls = [t for t in trials if t["kind"] == "nothing"]
+    drawn = [t for t in trials if "not_drawn" not in t]
+    table_tilts = [t for t in drawn if t["kind"].startswith("angular_table")]
+    effects = [t for t in drawn if t["kind"] != "nothing"]
+    nulls = [t for t in drawn if t["kind"] == "nothing"]
     figures = {
         "single_effect_trials": len(effects),
         "right_named_first": sum(t["right_first"] for t in effects) / len(effects),
@@ -106,8 +110,11 @@ def main(argv: list[str] | None = None) -> int:
         "null_trials": len(nulls),
         "false_alarms": sum(bool(t["named"]) for t in nulls) / max(1, len(nulls)),
         "low_snr_named": weak,
+        "right_named_first_count": f"{sum(t['right_first'] for t in effects)} of "
+                                   f"{len(effects)}",
         "workpiece_side_tilts_named": f"{sum(t['right_first'] for t in table_tilts)} of "
                                       f"{len(table_tilts)}",
+        "not_drawn": [f"{t['machine']} {t['kind']}" for t in trials if "not_drawn" in t],
         "log_added": result["added"], "log_not_added": result["not_added"],
         "log_held_out_um": result["final_rmse"] * 1e6,
         "log_constant_um": result["constant_held_out_rmse"] * 1e6,
@@ -117,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
     print(json.dumps(figures, indent=2))
     print("\n| machine | kind | named | right first | spurious extra |")
     print("| --- | --- | --- | --- | --- |")
-    for t in trials:
+    for t in drawn:
         print(f"| {t['machine']} | {t['kind']} | {', '.join(t['named']) or '-'} | "
               f"{'yes' if t['right_first'] else 'no'} | {', '.join(t['spurious']) or '-'} |")
     if args.json:

@@ -178,8 +178,11 @@ def spline(rng, low, high, amplitude, knots=5):
 
 
 #: Single hidden effects: (kind, what it is named by, fairly) per machine, filled in by
-#: :func:`hidden`. Kinds: pitch, scale, bow, square, angular, drift, backlash, lag.
-KINDS = ("pitch", "scale", "bow", "square", "angular", "drift", "backlash", "lag")
+#: :func:`hidden`. Kinds: pitch, scale, bow, square, angular (a tool-side tilt),
+#: angular_table (a tilt of an axis that carries the workpiece), angular_tables (tilts of
+#: two such axes at once: both must be named), drift, backlash, lag.
+KINDS = ("pitch", "scale", "bow", "square", "angular", "angular_table", "angular_tables",
+         "drift", "backlash", "lag")
 
 
 def hidden(kind: str, layout: Layout, survey: Survey, rng: np.random.Generator,
@@ -220,10 +223,20 @@ def hidden(kind: str, layout: Layout, survey: Survey, rng: np.random.Generator,
         return _tilt(layout, layout.tool, rng, magnitude_m, "tool-side")
     if kind == "angular_table":
         # A tilt of an axis that carries the workpiece, the error read where it matters:
-        # at the workpiece point under the tool (Khan & Chen eq. 17 with w the nominal
-        # contact point). The package's chain takes w as a fixed workpiece point (Kidani
-        # eq. 2.10 as written), so these are reported apart (docs/results.md).
+        # at the workpiece point under the tool (Kidani eqs. 2.9-2.10, Khan & Chen eq. 17:
+        # w the machining point). Its arm runs from the table to the tool, so it changes
+        # with the other axes' positions.
         return _tilt(layout, layout.work, rng, magnitude_m, "workpiece-side")
+    if kind == "angular_tables":
+        # Both axes that carry the workpiece tilt at once (a worn saddle and a worn table).
+        if len(layout.work) < 2:
+            raise NotDrawn(f"{layout.name}: fewer than two axes carry the workpiece")
+        errors, fair = Errors(), set()
+        for axis in layout.work[:2]:
+            one, names = _tilt(layout, (axis,), rng, magnitude_m, f"{axis} table")
+            errors.angular.update(one.angular)
+            fair |= names
+        return errors, fair
     if kind == "drift":
         sensor = str(rng.choice(["column", "spindle"]))
         rise = survey.temperatures[sensor] - survey.temperatures[sensor][0]
@@ -286,8 +299,10 @@ def accepted(name: str, fair: set[str]) -> bool:
 
 
 def write_survey(survey: Survey, error_m: np.ndarray, noise_m: float,
-                 rng: np.random.Generator, directory: Path) -> tuple[Path, Path]:
-    """The logger's CSV (mm, um, mm/min, degC) and its column map; returns both paths."""
+                 rng: np.random.Generator, directory: Path, give_tool_offset: bool = True
+                 ) -> tuple[Path, Path]:
+    """The logger's CSV (mm, um, mm/min, degC) and its column map; returns both paths.
+    ``give_tool_offset=False``: the map does not say how long the tool is."""
     directory.mkdir(parents=True, exist_ok=True)
     measured = error_m + rng.normal(0.0, noise_m, error_m.shape)
     header = ["time_s"] + [f"{a}_mm" for a in "XYZ"] + [f"d{c}_um" for c in "xyz"] + \
@@ -312,6 +327,8 @@ def write_survey(survey: Survey, error_m: np.ndarray, noise_m: float,
         "tool_offset": {"value": float(survey.layout.tool_z_m * 1e3), "unit": "mm"},
         "work_axes": list(survey.layout.work),
     }
+    if not give_tool_offset:
+        del column_map["tool_offset"]
     path = directory / "map.yaml"
     path.write_text(yaml.safe_dump(column_map, sort_keys=False))
     return csv, path
@@ -319,8 +336,12 @@ def write_survey(survey: Survey, error_m: np.ndarray, noise_m: float,
 
 def single_effect_trial(machine: str, kind: str | None, seed: int, directory: Path,
                         magnitude_m: float | None = None, noise_m: float = 0.3e-6,
-                        readings: int = 500) -> tuple[Path, Path, set[str]]:
-    """A survey of ``machine`` with one hidden effect (``None``: nothing hidden)."""
+                        readings: int = 500, give_tool_offset: bool = True
+                        ) -> tuple[Path, Path, set[str]]:
+    """A survey of ``machine`` with one hidden effect (``None``: nothing hidden).
+
+    ``give_tool_offset=False`` leaves the tool's length out of the column map: a tilt
+    is then fairly named only with the arm the data identify (``angular_arm``)."""
     rng = np.random.default_rng(seed)
     layout = LAYOUTS[machine]
     survey = make_survey(layout, rng, readings)
@@ -330,8 +351,23 @@ def single_effect_trial(machine: str, kind: str | None, seed: int, directory: Pa
         size = magnitude_m if magnitude_m is not None else rng.uniform(2e-6, 5e-6)
         errors, fair = hidden(kind, layout, survey, rng, size)
     error = tcp_error(layout, survey.q, errors)
-    csv, column_map = write_survey(survey, error, noise_m, rng, directory)
+    csv, column_map = write_survey(survey, error, noise_m, rng, directory, give_tool_offset)
+    if not give_tool_offset:
+        fair = {name.replace("angular:", "angular_arm:") for name in fair}
     return csv, column_map, fair
+
+
+def judged(kind: str | None, named: list[str], fair: set[str]) -> tuple[bool, list[str]]:
+    """(right, spurious): the right effect named first (for two tilts at once: both named
+    as the first two), and every name beyond the fair ones; nothing hidden: right when
+    nothing is named."""
+    if kind is None:
+        return not named, list(named)
+    if kind == "angular_tables":
+        right = set(named[:2]) == fair
+        return right, [n for n in named if n not in fair]
+    right = bool(named) and accepted(named[0], fair)
+    return right, [n for n in named[1:] if not accepted(n, fair)]
 
 
 def weak_bow_trial(sigmas: float, seed: int, directory: Path, readings: int = 300,

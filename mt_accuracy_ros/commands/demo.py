@@ -583,11 +583,31 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
             "orientation": result_orientation}
 
 
+def table_tilts(machine, effects: list[str]) -> list[str]:
+    """The named effects that tilt an axis carrying the workpiece, each with what it is
+    (e.g. 'angular:EBX (the X table's pitch)')."""
+    out = []
+    for name in effects:
+        family, _, variant = str(name).partition(":")
+        if family not in ("angular", "angular_periodic", "angular_arm") or len(variant) != 3:
+            continue
+        axis = variant[2]
+        if axis not in machine.workpiece_branch or machine.axes[axis].is_rotary:
+            continue
+        about = "XYZ"["ABC".index(variant[1])]
+        kind = "roll" if about == axis else ("yaw" if about == "Z" else "pitch")
+        if axis == "Z":
+            kind = "roll" if about == "Z" else "tilt"
+        out.append(f"{name} (the {axis} table's {kind})")
+    return out
+
+
 def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
                references, losses: list[str], story: dict, delivery: dict,
                scenario: str = "demo", model_alarms: list[str] | None = None,
                start_ns: int = 0) -> dict:
     from ..io.bag_reader import bag_info
+    from ..nodes._scenario import resolve_scenario
 
     info = bag_info(out / "bag")
     before = [c.rmse for t, c in checks if not actions or t < actions[0]["time_s"]]
@@ -624,6 +644,8 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         else float("nan"),
         "missing_effect_found": actions[0]["added"] if actions else "",
         "missing_effects_found": actions[0]["effects"] if actions else [],
+        "table_tilts_named": table_tilts(resolve_scenario(scenario).machine,
+                                         actions[0]["effects"]) if actions else [],
         "where_the_residual_lived": actions[0]["where"] if actions else "",
         "effect_added_accepted": bool(actions and actions[0]["accepted"]),
         "offline_residual_rmse_after_um": float(np.mean(after) * 1e6) if after
@@ -704,6 +726,12 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: 
     for action in actions:
         run.paragraphs.append(f"At {action['time_s']:.1f} s the user added {action['added']} "
                               f"({'accepted' if action['accepted'] else 'refused: ' + action['reason']}).")
+        tilts = table_tilts(chosen.machine, action.get("effects", []))
+        if tilts:
+            run.paragraphs.append(
+                "Tilts of the axes that carry the workpiece named: " + "; ".join(tilts) +
+                ". Each moves the part under the tool by the tilt times the arm from the "
+                "table to the machining point, which changes with the other axes.")
     for when, axis in alarms:
         run.paragraphs.append(f"At {when:.1f} s the {axis} axis raised its deterioration alarm.")
     run.paragraphs.append("Delivery: " + ("; ".join(losses) if losses else

@@ -126,11 +126,12 @@ EFFECTS: dict[str, EffectSpec] = {spec.name: spec for spec in [
         "The part under the tool moves by the tilt times the arm from the table's frame "
         "to the machining point, so the error grows with the tool's height above the "
         "table and with the other axes' positions.",
-        "E_table(q, t) = eps sin(pi/2 u) (1 + g dT_bed(t)), u = q over the stroke in "
+        "E_table(q, t) = eps ((1 - k) u + k u^3) (1 + g dT_bed(t)), u = q over the stroke in "
         "[-1, 1]; e = -E x (P_tool - O_table)",
         "Kidani eqs. 2.9-2.10 (w the machining point); ISO 230-1 angular error motions",
         "tcp", {"errors_rad": ({"EAY": 12e-6, "EBX": -10e-6}, "rad, amplitude at the stroke's "
                                "ends of angular error motions of workpiece-side axes"),
+                "bow": (0.0, "k in [0, 1]: the cubic share of the pitch (a worn middle)"),
                 "growth_per_k": (0.0, "1/K, relative growth per K of the bed")}),
     EffectSpec(
         "servo_lag", "Residual following error after feed-forward: the axis trails the "

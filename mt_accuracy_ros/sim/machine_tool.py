@@ -199,12 +199,14 @@ class SimulationResult:
                 1.0 + float(params.get("growth_per_k", 0.0)) * self.thermal_at("bed", indices))
             for name, value in params["errors_rad"].items():
                 # A workpiece-side axis' angular error motion that turns from -amplitude
-                # to +amplitude over its stroke along a quarter sine (a worn or bowed way).
+                # to +amplitude over its stroke: a bowed way (a circular-arc straightness)
+                # pitches linearly along it; ``bow`` > 0 adds a cubic (a worn middle).
                 axis = name[-1]
                 low, high = machine.axes[axis].stroke
                 u = (2.0 * positions[axis] - (low + high)) / (high - low)
+                bow = float(params.get("bow", 0.0))
                 errors.add("motion", axis, c(name[1]),
-                           float(value) * np.sin(0.5 * np.pi * u) * on, n)
+                           float(value) * ((1.0 - bow) * u + bow * u ** 3) * on, n)
         if np.any(drift):
             errors.thermal["bed_tool"] = drift
         return errors

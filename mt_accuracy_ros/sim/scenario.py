@@ -312,7 +312,12 @@ def _check_table_tilt(scenario: Scenario) -> None:
     if not scenario.ever_enabled("table_tilt"):
         return
     machine = scenario.machine
-    errors = scenario.parameters("table_tilt")["errors_rad"]
+    params = scenario.parameters("table_tilt")
+    errors = params["errors_rad"]
+    bow = params.get("bow", 0.0)
+    if isinstance(bow, bool) or not isinstance(bow, (int, float)) or not 0.0 <= bow <= 1.0:
+        raise ScenarioError(f"{scenario.source}: table_tilt bow = {bow!r}: expected a number "
+                            "in [0, 1] (the cubic share of the pitch)")
     work = [a for a in machine.workpiece_branch if not machine.axes[a].is_rotary]
     if not isinstance(errors, dict):
         raise ScenarioError(f"{scenario.source}: table_tilt errors_rad must be a mapping such "

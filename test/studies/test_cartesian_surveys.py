@@ -55,3 +55,82 @@ def test_a_survey_of_a_machine_never_seen_names_its_effect_and_nothing_else(
     assert summary["machine"] == "generic_cartesian" and not summary["travel_warning"]
     named = [entry["name"] for entry in summary["named"]]
     assert named and all(accepted(name, fair) for name in named), (named, fair)
+
+
+def _check(tmp_path, csv, column_map, *extra):
+    from mt_accuracy_ros.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["check", str(csv), "--columns", str(column_map), "--auto", "3",
+                     "--json", str(tmp_path / "s.json"), *extra])
+    return code, out.getvalue(), err.getvalue()
+
+
+@pytest.mark.parametrize("machine, kind, seed", [("vmc_500", "angular_table", 90_001),
+                                                 ("hmc_600", "angular_table", 90_102),
+                                                 ("vmc_500", "angular_tables", 90_003)])
+def test_a_tilt_of_an_axis_that_carries_the_workpiece_is_named_alone(tmp_path, machine, kind,
+                                                                    seed):
+    """Issue 38: the generator reads the error at the workpiece point under the tool; the
+    workbench, taking every error at the machining point too, names the table's tilt -
+    both tables' when both tilt - and nothing else (before: 3-4 substitute terms)."""
+    from studies.cartesian_surveys import judged
+
+    csv, column_map, fair = single_effect_trial(machine, kind, seed, tmp_path, readings=700,
+                                                noise_m=0.4e-6)
+    assert all(name.startswith("angular:E") and name[-1] in LAYOUTS[machine].work
+               for name in fair)
+    code, _, _ = _check(tmp_path, csv, column_map)
+    assert code == 0
+    named = [entry["name"] for entry in json.loads((tmp_path / "s.json").read_text())["named"]]
+    right, spurious = judged(kind, named, fair)
+    assert right and not spurious, (named, fair)
+
+
+def test_without_the_tool_offset_a_table_tilt_is_named_once_with_the_arm_the_data_give(
+        tmp_path):
+    """No tool_offset in the map: the tilt is named as angular_arm (the tilt with its arm
+    along the tool fitted), not as a tilt plus a substitute straightness, and the arm it
+    reports is the generator's tool (-120 mm) within its stated uncertainty."""
+    import re
+
+    csv, column_map, fair = single_effect_trial("vmc_500", "angular_table", 80_001, tmp_path,
+                                                readings=700, noise_m=0.4e-6,
+                                                give_tool_offset=False)
+    code, out, _ = _check(tmp_path, csv, column_map)
+    assert code == 0
+    named = [entry["name"] for entry in json.loads((tmp_path / "s.json").read_text())["named"]]
+    assert named == sorted(fair) and named[0].startswith("angular_arm:"), (named, fair)
+    line = next(l for l in out.splitlines() if l.startswith(named[0] + ": the tilt acts"))
+    arm, half_width = (float(v) for v in re.search(r"([-+][\d.]+) ± ([\d.]+) mm", line).groups())
+    assert abs(arm - (-120.0)) <= max(half_width, 5.0), line
+
+
+def test_a_tool_offset_the_data_contradict_is_refused_naming_the_value_they_support(tmp_path):
+    import re
+
+    import yaml
+
+    csv, column_map, _ = single_effect_trial("vmc_500", "angular_table", 80_001, tmp_path,
+                                             readings=700, noise_m=0.4e-6)
+    data = yaml.safe_load(column_map.read_text())
+    data["tool_offset"]["value"] = -300.0          # the truth is -120 mm
+    column_map.write_text(yaml.safe_dump(data))
+    code, out, err = _check(tmp_path, csv, column_map)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    supported = float(re.search(r"tool tip at ([-\d.]+) ±", err).group(1))
+    assert "tool_offset -300.0 mm contradicts the data" in err
+    assert abs(supported - (-120.0)) < 15.0, err
+
+
+def test_work_axes_that_contradict_the_given_machine_are_refused_in_one_line(tmp_path):
+    import yaml
+
+    csv, column_map, _ = single_effect_trial("vmc_500", "scale", 3, tmp_path)
+    data = yaml.safe_load(column_map.read_text())
+    data.pop("tool_offset")
+    column_map.write_text(yaml.safe_dump(data))       # work_axes [Y, X]
+    code, _, err = _check(tmp_path, csv, column_map, "--machine", "kidani_hmc")
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "work_axes [Y, X] contradict kidani_hmc" in err and "[Z]" in err
