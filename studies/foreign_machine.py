@@ -88,13 +88,15 @@ def _motion(letter: str, value: np.ndarray) -> np.ndarray:
     return _homogeneous(Rotation.from_rotvec(vector).as_matrix(), np.zeros((n, 3)))
 
 
-def tcp_point(geometry: Geometry, q: dict[str, np.ndarray], errors: "ErrorSet | None"
-              ) -> np.ndarray:
+def tcp_point(geometry: Geometry, q: dict[str, np.ndarray], errors: "ErrorSet | None",
+              work_point: np.ndarray | None = None) -> np.ndarray:
     """Tool point minus the workpiece point under the tool, bed frame (N, 3).
 
     The point under the tool is the material the nominal machine puts the tool on: the
     nominal tool point expressed in the nominal workpiece frame (Kidani's w, "the
-    machining point"), carried by the actual workpiece frame.
+    machining point"), carried by the actual workpiece frame. ``work_point`` (3,) [m]
+    is a target fixed on the workpiece side instead (a probed sphere), in the frame of
+    the last workpiece axis after its offset.
     """
     n = next(iter(q.values())).size
 
@@ -115,8 +117,11 @@ def tcp_point(geometry: Geometry, q: dict[str, np.ndarray], errors: "ErrorSet | 
 
     tip = np.append(np.asarray(geometry.tool, float), 1.0)
     nominal_tool = frames(geometry.tool_axes, False) @ tip
-    under_tool = np.einsum("nij,nj->ni", np.linalg.inv(frames(geometry.work_axes, False)),
-                           nominal_tool)
+    if work_point is None:
+        under_tool = np.einsum("nij,nj->ni", np.linalg.inv(frames(geometry.work_axes, False)),
+                               nominal_tool)
+    else:
+        under_tool = np.broadcast_to(np.append(np.asarray(work_point, float), 1.0), (n, 4))
     with_errors = errors is not None
     tool = frames(geometry.tool_axes, with_errors) @ tip
     work = np.einsum("nij,nj->ni", frames(geometry.work_axes, with_errors), under_tool)

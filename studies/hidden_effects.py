@@ -114,15 +114,21 @@ def trial(hidden_names: tuple[str, ...], seed: int, scale: float = 1.0,
 
     before = truth_rmse(model)
     steps = [before]
-    # One diagnosis names every missing effect it can (forward selection); they are
-    # added in the order named, the error judged after each.
-    diagnosis = diagnose(model, obs, min_reduction=min_reduction)
-    found = [c.name for c in diagnosis.selected]
-    for candidate in diagnosis.selected:
-        model = add_effect(model, candidate, obs)
-        steps.append(truth_rmse(model))
+    # As the monitor and its user work: a diagnosis names the missing effects it can
+    # (forward selection), they are added in the order named (the error judged after
+    # each), and the model is checked again - until a check names nothing more (three
+    # checks at most). A greedy selection can take a term that stands in for two (a
+    # tilt whose arms mimic two squarenesses); the next check names what it left.
+    found: list[str] = []
+    for _ in range(3):
+        diagnosis = diagnose(model, obs, min_reduction=min_reduction)
+        if not diagnosis.selected:
+            break
+        for candidate in diagnosis.selected:
+            found.append(candidate.name)
+            model = add_effect(model, candidate, obs)
+            steps.append(truth_rmse(model))
     first_ok = bool(found) and _old_name(found[0]) in hidden_names
-    named = {_old_name(f) for f in found}
     after = truth_rmse(model)
     return Trial(tuple(hidden_names), found, first_ok, before, after,
                  1.0 - after / before if before > 0 else 0.0,

@@ -34,12 +34,16 @@ def error_figures(residual: np.ndarray, unit_scale: float = 1.0) -> dict:
 
 
 # ------------------------------------------------------------------ bag path
-def observations_from_bag(bag: Path, namespace: str = ""):
-    """Readings, temperatures at their stamps, and the profile history of a bag."""
+def observations_from_bag(bag: Path, namespace: str = "", kinematics=None):
+    """Readings, temperatures at their stamps, and the profile history of a bag.
+
+    Readings whose instrument states a fixed target (``target_point``) are taken there;
+    the others at the machining point of ``kinematics`` (the model's chain)."""
     from ..core.workbench.diagnosis import Observations
     from ..io.bag_reader import decode, read_messages, topics
+    from ..core.workbench.diagnosis import work_points
     from ..io.fields import (machine_direction_error, machine_error, stamp_to_nanoseconds,
-                             unpack_float64)
+                             target_point, unpack_float64)
 
     prefix = namespace.rstrip("/")
     available = topics(bag)
@@ -104,6 +108,11 @@ def observations_from_bag(bag: Path, namespace: str = ""):
     # An R-test's tool direction: a second measured quantity (issue 30).
     obs.set_directions([machine_direction_error(r[1]) for r in readings],
                        [getattr(r[1], "orientation_uncertainty", 0.0) for r in readings])
+    targets = [target_point(r[1]) for r in readings]
+    if any(t is not None for t in targets):
+        if kinematics is None:
+            raise InputDataError(f"{bag}: readings with a target_point need the model's chain")
+        obs.work_point = work_points(kinematics, obs.positions, targets)
     return obs, stamps, sorted(profiles, key=lambda p: p[0])
 
 
@@ -233,7 +242,7 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
     from ..core.compensation.error_model import resolve_model
 
     model = resolve_model(model_text)  # a bad model is refused before a long bag is read
-    obs, stamps, profiles = observations_from_bag(bag, namespace)
+    obs, stamps, profiles = observations_from_bag(bag, namespace, model.kinematics)
     result = check_observations(model, obs, add, auto, min_reduction,
                                 lambda current: predict_with_history(current, obs, stamps,
                                                                      profiles))

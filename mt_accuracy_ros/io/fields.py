@@ -60,6 +60,24 @@ def machine_error(reading) -> tuple[float, float, float]:
             reading.error.z - applied.z)
 
 
+def target_point(reading):
+    """A ``ReferenceMeasurement``'s fixed target on the workpiece side (3,) [m], or None
+    for the machining point (empty, or a reading that predates the field). A target that
+    is not 3 finite values within 10 m is refused (InputDataError)."""
+    import numpy as np
+
+    from ..core.errors import InputDataError
+
+    values = np.asarray(getattr(reading, "target_point", ()) or (), dtype=np.float64)
+    if values.size == 0:
+        return None
+    if values.shape != (3,) or not np.all(np.isfinite(values)) or np.any(np.abs(values) > 10):
+        raise InputDataError(f"reference reading with a target_point of {values.size} values "
+                             "(3 finite values in m within 10 m, or none for the machining "
+                             "point): skipped")
+    return values
+
+
 def machine_direction_error(reading) -> tuple[float, float, float] | None:
     """A ``ReferenceMeasurement``'s tool-direction error without the rotary correction the
     CNC applied [rad] (``orientation_error - applied_orientation_correction``), or None

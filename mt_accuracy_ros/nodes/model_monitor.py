@@ -63,7 +63,8 @@ from ..core.workbench.closed_loop import judge_version
 from ..core.compensation.five_axis import tool_direction
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.workbench.diagnosis import (Candidate, Observations, add_effect,
-                                        effect_name_problem, pick_candidate)
+                                        effect_name_problem, pick_candidate, work_points)
+from ..io.fields import target_point
 from ._common import (run_node, LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, plain_descriptor, refuse, stamp_to_nanoseconds)
 from ._health import DeliveryHealth
@@ -412,6 +413,7 @@ class ModelMonitor(Node):
                 raise InputDataError("reference reading with a tool-direction error or "
                                      "uncertainty that is not finite or beyond 0.1 rad "
                                      "(degrees sent as radians?): skipped")
+        target = target_point(message)
         self._judge_log.append((int(message.compensation_model_version),
                                 np.where(measured, [message.error.x, message.error.y,
                                                     message.error.z], 0.0),
@@ -420,6 +422,7 @@ class ModelMonitor(Node):
             "stamp_ns": stamp_to_nanoseconds(message.header.stamp),
             "direction_error": direction_error,
             "direction_uncertainty": float(message.orientation_uncertainty),
+            "target": target,
             "directions": dict(zip(axes, directions)),
             "time": stamp_to_nanoseconds(message.header.stamp) * 1e-9,
             "positions": dict(zip(axes, message.command_positions)),
@@ -483,6 +486,9 @@ class ModelMonitor(Node):
         # measured quantity with its own uncertainty.
         obs.set_directions([r["direction_error"] for r in readings],
                            [r["direction_uncertainty"] for r in readings])
+        # An instrument with a fixed target on the workpiece side is judged there.
+        obs.work_point = work_points((model or self.inputs.model).kinematics, obs.positions,
+                                     [r.get("target") for r in readings])
         self._predict(model or self.inputs.model, readings, obs)
         return obs
 

@@ -347,7 +347,11 @@ def test_five_axis_compensation_puts_the_tools_tip_and_direction_right(rclpy_con
     # The axis lines' offsets (20-25 um) move the part rigidly: zeroed at the work offset
     # the R-test does not see them, and the model referred to that datum does not apply
     # them (without the datum it would move the part by them: the end state of issue 30).
-    assert np.all(_rms(without[live]) < 5e-6), _rms(without[live])
+    # What it sees without compensation is the tilts and the positioning error, acting
+    # through the arm from the A axis to the machining point (up to ~0.6 m): a few um,
+    # well below the offsets' 20-25 um on top.
+    assert np.all(_rms(without[live]) < 10e-6), _rms(without[live])
+    assert np.all(np.abs(np.mean(without[live], axis=0)) < 15e-6), np.mean(without[live], 0)
     assert np.sqrt(np.mean(np.sum(without_direction[live] ** 2, axis=1))) > 20e-6
     # The rotary axes did turn (tens of urad), and the machine is right to the band.
     assert np.median(np.abs(rotary[live])) > 5e-6

@@ -111,6 +111,17 @@ def _checked_parameter(where: str, value, default, machine: MachineDescription):
     return _finite(where, value)
 
 
+def _datum_point(work_point) -> NDArray[np.float64] | None:
+    """The target the instrument was zeroed on at the datum: its one fixed target, or the
+    machining point (None) when the readings' points differ (several instruments)."""
+    if work_point is None:
+        return None
+    point = np.asarray(work_point, dtype=np.float64)
+    if point.ndim == 1:
+        return point
+    return point[0] if np.all(point == point[0]) else None
+
+
 @dataclass
 class ErrorModel:
     """Machine + included effects; evaluate the TCP error at command positions."""
@@ -407,7 +418,8 @@ class ErrorModel:
             orientation = orientation + turned
         position = position + drive
         if self.datum and referred:
-            position = position - self.datum_error(temperatures, work_point)[None, :]
+            position = position - self.datum_error(temperatures,
+                                                   _datum_point(work_point))[None, :]
         return position, orientation
 
     def table_motion_errors(self, axis: str, grid: ArrayLike, *, include_user: bool = True,

@@ -70,10 +70,11 @@ class Observations:
     (N,) and its own k = 2 uncertainty ``orientation_uncertainty_rad``. The
     workbench then judges every effect on both (:class:`~..effects.base.Context`).
 
-    ``work_point`` ((3,) [m], in the workpiece frame): the target of an instrument
-    fixed on the workpiece side (an R-test's or a probed sphere, a retroreflector);
-    the model is evaluated there. None (the default): the readings are taken at
-    the machining point, where the tool is (Kidani eqs. 2.9-2.10).
+    ``work_point`` ((3,) or (N, 3) [m], in the workpiece frame): the target of an
+    instrument fixed on the workpiece side (an R-test's or a probed sphere, a
+    retroreflector); the model is evaluated there. None (the default): the readings
+    are taken at the machining point, where the tool is (Kidani eqs. 2.9-2.10);
+    :func:`work_points` builds it from per-reading targets.
     """
 
     positions: dict[str, NDArray[np.float64]]
@@ -110,7 +111,10 @@ class Observations:
                             else self.measured_orientation_rad[rows],
                             None if self.orientation_measured is None
                             else self.orientation_measured[rows],
-                            self.orientation_uncertainty_rad, self.work_point)
+                            self.orientation_uncertainty_rad,
+                            self.work_point if self.work_point is None or
+                            np.ndim(self.work_point) == 1
+                            else np.asarray(self.work_point)[rows])
 
     def set_directions(self, errors: list, uncertainties: list[float]) -> None:
         """Take the tool direction of the readings that measured it: ``errors`` (N,) of a
@@ -160,6 +164,22 @@ class Observations:
         if self.work_point is not None:
             inputs["work_point"] = self.work_point
         return inputs
+
+
+def work_points(kinematics, positions: dict[str, NDArray[np.float64]], targets: list
+                ) -> NDArray[np.float64] | None:
+    """(N, 3) [m] the point each reading was taken at, workpiece frame: its instrument's
+    fixed target, or - for a reading without one (None) - the machining point. None when
+    no reading names a target (every reading at the machining point)."""
+    if all(t is None for t in targets):
+        return None
+    if all(t is not None and np.array_equal(t, targets[0]) for t in targets):
+        return np.asarray(targets[0], dtype=np.float64)     # one instrument, one target
+    points = kinematics.machining_point(positions)
+    for i, target in enumerate(targets):
+        if target is not None:
+            points[i] = target
+    return points
 
 
 @dataclass
