@@ -326,6 +326,12 @@ class EffectFamily:
         consistency rule and the controller's limits (:mod:`.physics`)."""
         return {}
 
+    def fit_problems(self, ctx: Context, variant: str, setting: dict, coefficients
+                     ) -> list[str]:
+        """Why physics refuses this fit beyond single parameters' limits (a relation
+        between the parameters, e.g. an implausible arm): one sentence each, or none."""
+        return []
+
     def describe_setting(self, setting: dict) -> str:
         return ", ".join(f"{k} {v:g}" if isinstance(v, (int, float)) else f"{k} {v}"
                          for k, v in setting.items())

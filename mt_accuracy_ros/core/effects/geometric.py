@@ -209,9 +209,16 @@ class Squareness(EffectFamily):
     #: the instrument's frame, which a survey aligned to the machine does not remove,
     #: so both are candidates; by ISO 230-1 convention a straightness has no slope, so
     #: no other family holds this one. A CNC table holds it as that axis' motion error.
-    OTHER_REFERENCE = {"EYX": "EC0Y", "EZX": "EB0Z", "EZY": "EA0Z"}
+    #: The later axis' travel tilted (EXY: e_x ~ y) is a slope too: on a tool-side axis it
+    #: equals the location error (EC0Y) up to a constant, but on an axis that carries the
+    #: workpiece the location error turns the table about a pivot that may lie under the
+    #: tool - where the error is taken (the machining point) it then moves nothing, while
+    #: a tilted travel moves the part by angle x position.
+    OTHER_REFERENCE = {"EYX": "EC0Y", "EZX": "EB0Z", "EZY": "EA0Z",
+                       "EXY": "EC0Y", "EXZ": "EB0Z", "EYZ": "EA0Z"}
     PAIRS = {"EC0Y": "X and Y", "EB0Z": "X and Z", "EA0Z": "Y and Z", "EYX": "X and Y",
-             "EZX": "X and Z", "EZY": "Y and Z"}
+             "EZX": "X and Z", "EZY": "Y and Z", "EXY": "X and Y", "EXZ": "X and Z",
+             "EYZ": "Y and Z"}
 
     def variants(self, ctx: Context) -> list[str]:
         moving = ctx.linear_axes(moving=True)
@@ -480,6 +487,20 @@ class AngularWithArm(EffectFamily):
         basis = self._basis(ctx, variant, setting)
         turn = along(ctx.orientation_jacobian(variant), basis)
         return np.concatenate([turn, np.zeros_like(turn)], axis=2)
+
+    def fit_problems(self, ctx: Context, variant: str, setting: dict, coefficients
+                     ) -> list[str]:
+        # An arm beyond the machine's reach is no tilt: the "arm" part is then a
+        # straightness or squareness of the axis that a vanishing tilt divides.
+        reach = sum(high - low for low, high in (ctx.machine.axes[a].stroke
+                                                 for a in ctx.linear_axes())) + \
+            float(np.linalg.norm(ctx.machine.tool)) + 0.5
+        arm = self.arm_m(coefficients)
+        if not abs(arm) <= reach:
+            return [f"the fitted arm along the tool ({arm:+.2f} m) is beyond the machine's "
+                    f"reach ({reach:.2f} m): not a tilt, a straightness or squareness of "
+                    f"{variant[2]}"]
+        return []
 
     @staticmethod
     def arm_m(coefficients) -> float:

@@ -444,6 +444,7 @@ class Selector:
         problems = limit_problems(names, coefficients,
                                   term.family.parameter_limits(self.ctx, term.variant, setting))
         coefficients = np.asarray(coefficients, float)
+        problems += term.family.fit_problems(self.ctx, term.variant, setting, coefficients)
         basis = self.basis_rows(term, setting)
         own = self.design_rows(term, setting) @ coefficients if basis is None else \
             self._separable_prediction(term, basis, coefficients)
