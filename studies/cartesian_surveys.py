@@ -353,7 +353,9 @@ def single_effect_trial(machine: str, kind: str | None, seed: int, directory: Pa
     error = tcp_error(layout, survey.q, errors)
     csv, column_map = write_survey(survey, error, noise_m, rng, directory, give_tool_offset)
     if not give_tool_offset:
-        fair = {name.replace("angular:", "angular_arm:") for name in fair}
+        # A tilt acts through an arm along the tool (z) unless it turns about z (a yaw).
+        fair = {name.replace("angular:", "angular_arm:") if name[9] != "C" else name
+                for name in fair}
     return csv, column_map, fair
 
 

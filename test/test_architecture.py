@@ -103,6 +103,16 @@ def test_simulator_imports_no_node_and_no_ros_client():
     assert {path: names for path, names in graph.items() if names} == {}
 
 
+def test_the_simulators_truth_shares_no_physics_with_the_model_it_judges():
+    """Issue 38: the virtual machine makes its truth with its own rigid bodies - no module
+    of the simulator imports the kinematic chain, its HTMs, the error model or the effect
+    catalogue (the machine description, which is data, it may read)."""
+    physics = ("mt_accuracy_ros.core.kinematics.chain", "mt_accuracy_ros.core.kinematics.htm",
+               "mt_accuracy_ros.core.compensation", "mt_accuracy_ros.core.effects",
+               "mt_accuracy_ros.core.workbench")
+    assert _offending(_sources("sim"), physics) == {}
+
+
 @pytest.mark.parametrize("path", _sources("nodes"), ids=lambda p: p.stem)
 def test_only_the_virtual_machine_nodes_import_the_simulator(path):
     hits = _offending([path], ("mt_accuracy_ros.sim",))

@@ -205,7 +205,7 @@ def scenario_from_dict(data: dict, source: str = "<dict>") -> Scenario:
     scenario.ambient = _subsection(data, "ambient", AMBIENT_KEYS, source)
 
     if data.get("work_offset"):
-        from ..core.compensation.error_model import checked_datum
+        from ..core.kinematics.machine import checked_datum
         from ..core.errors import ParameterError
 
         try:

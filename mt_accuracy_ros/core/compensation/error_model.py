@@ -49,6 +49,7 @@ from ..effects.variables import Variables
 from ..kinematics.error_functions import ErrorFunction
 from ..errors import InputDataError, MachineDescriptionError, ParameterError, reraise_as
 from ..kinematics.chain import ErrorOverrides, KinematicModel
+from ..kinematics.machine import checked_datum  # noqa: F401 (its home; used below)
 from ..kinematics.machine import MachineDescription, load_machine
 from ..inputs.safe_files import load_yaml, plain_name, read_description
 
@@ -646,29 +647,6 @@ def _checked_catalogue_entry(name: str, entry: dict, machine: MachineDescription
             **({"uncertainties": {str(k): float(v) for k, v in
                                   entry["uncertainties"].items()}}
                if isinstance(entry.get("uncertainties"), dict) else {})}
-
-
-def checked_datum(datum, machine: MachineDescription) -> dict[str, float]:
-    """A work offset (axis -> command) checked against ``machine``: every axis once, finite,
-    within its stroke (a datum outside it is a unit slip). Empty stays empty."""
-    if not datum:
-        return {}
-    if not isinstance(datum, dict):
-        raise ParameterError(f"datum: expected axis -> position, got {datum!r}")
-    axes = set(machine.axis_order)
-    if set(datum) != axes:
-        raise ParameterError(f"datum: give every axis of {machine.name} once "
-                             f"({', '.join(machine.axis_order)}); got {', '.join(map(str, datum))}")
-    out = {}
-    for axis in machine.axis_order:
-        value = _finite(f"datum.{axis}", datum[axis])
-        low, high = machine.axes[axis].stroke
-        if not low - 1e-9 <= value <= high + 1e-9:
-            unit = "rad" if machine.axes[axis].is_rotary else "m"
-            raise ParameterError(f"datum.{axis} = {value:g} {unit} is outside the stroke "
-                                 f"[{low:g}, {high:g}] {unit} (SI units: m and rad)")
-        out[axis] = value
-    return out
 
 
 def model_to_dict(model: ErrorModel) -> dict:

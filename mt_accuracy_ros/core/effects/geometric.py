@@ -460,7 +460,10 @@ class AngularWithArm(EffectFamily):
         # A machine whose description gives its offsets has its arms: nothing to fit.
         if getattr(ctx.machine, "abbe_arms_known", True):
             return []
-        return component_names(ctx, "angular")
+        # A turn about the tool's own axis has no arm along it (a yaw under a vertical
+        # spindle): that tilt is the plain angular error.
+        return [name for name in component_names(ctx, "angular")
+                if np.any(np.abs(ctx.arm_jacobian(name)) > 1e-12)]
 
     def settings(self, ctx: Context, variant: str) -> list[dict]:
         return [{"order": k} for k in range(1, 1 + _ORDERS)]

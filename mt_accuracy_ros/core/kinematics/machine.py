@@ -313,6 +313,36 @@ def generic_cartesian(strokes: dict[str, tuple[float, float]], tool_length_m: fl
         "axes": spec}, name), abbe_arms_known=False)
 
 
+def checked_datum(datum, machine: MachineDescription) -> dict[str, float]:
+    """A work offset (axis -> command) checked against ``machine``: every axis once, finite,
+    within its stroke (a datum outside it is a unit slip). Empty stays empty."""
+    import math
+
+    from ..errors import ParameterError
+
+    if not datum:
+        return {}
+    if not isinstance(datum, dict):
+        raise ParameterError(f"datum: expected axis -> position, got {datum!r}")
+    if set(datum) != set(machine.axis_order):
+        raise ParameterError(f"datum: give every axis of {machine.name} once "
+                             f"({', '.join(machine.axis_order)}); got {', '.join(map(str, datum))}")
+    out = {}
+    for axis in machine.axis_order:
+        value = datum[axis]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                not math.isfinite(value):
+            raise ParameterError(f"datum.{axis}: expected a finite number, got {value!r}")
+        value = float(value)
+        low, high = machine.axes[axis].stroke
+        if not low - 1e-9 <= value <= high + 1e-9:
+            unit = "rad" if machine.axes[axis].is_rotary else "m"
+            raise ParameterError(f"datum.{axis} = {value:g} {unit} is outside the stroke "
+                                 f"[{low:g}, {high:g}] {unit} (SI units: m and rad)")
+        out[axis] = value
+    return out
+
+
 def bundled_machine_names() -> list[str]:
     return sorted(p.stem for p in BUNDLED_MACHINES.glob("*.yaml"))
 
