@@ -315,7 +315,11 @@ def make_hidden(kind: str, survey: Survey, rng: np.random.Generator) -> Hidden:
         name = str(rng.choice(["EC0Y", "EB0Z", "EA0Z"]))
         e = ErrorSet(location_fns={name[-1]: [lambda s: _twist(_component(name[1]),
                                                                np.ones(1))[0]]})
-        return Hidden(kind, {f"squareness:{name}"}, positions_all, e)
+        # The right pair, either axis the reference: where the error is taken (the
+        # machining point) a turned table and a tilted travel of the same pair differ by
+        # a constant, which no zeroed instrument sees.
+        return Hidden(kind, {f"squareness:{other}" for other in SAME_PAIR[name]},
+                      positions_all, e)
     if kind == "thermal_squareness":
         name = str(rng.choice(["EC0Y", "EB0Z", "EA0Z"]))
         difference = np.interp(survey.time_s, dense, rise("column") - rise("bed"))
@@ -429,6 +433,11 @@ def make_hidden(kind: str, survey: Survey, rng: np.random.Generator) -> Hidden:
                                                    np.cos(2 * q[r_axis] + phase))]})
         return Hidden(kind, {f"rotary_error:E{component}{r_axis}"}, {r_axis.lower()}, e)
     raise ValueError(f"unknown hidden effect kind {kind!r}")
+
+
+#: The squareness names of one axis pair (the location error and the two travel slopes).
+SAME_PAIR = {"EC0Y": ("EC0Y", "EYX", "EXY"), "EB0Z": ("EB0Z", "EZX", "EXZ"),
+             "EA0Z": ("EA0Z", "EZY", "EYZ")}
 
 
 KINDS_3AXIS = ("ballscrew_pitch", "positioning", "straightness", "angular", "squareness",
