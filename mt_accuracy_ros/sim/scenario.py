@@ -322,17 +322,24 @@ def _check_table_tilt(scenario: Scenario) -> None:
     if not isinstance(errors, dict):
         raise ScenarioError(f"{scenario.source}: table_tilt errors_rad must be a mapping such "
                             "as {EAY: 1.2e-5}")
+    _check_error_values(scenario, "table_tilt", errors, r"E[ABC]([XYZ])", work,
+                        f"an angular error motion of a linear axis that carries the workpiece "
+                        f"on {machine.name} ({', '.join(work) or 'none'}), e.g. "
+                        f"EA{work[0] if work else 'X'}", 1e-3, "rad")
+
+
+def _check_error_values(scenario: Scenario, effect: str, errors: dict, pattern: str,
+                        axes: list[str], what: str, largest: float, unit: str) -> None:
+    """Each ``errors`` key matches ``pattern`` with its axis among ``axes`` (else: it is
+    not ``what``), each value a finite number below ``largest``."""
     for key, value in errors.items():
-        match = re.fullmatch(r"E[ABC]([XYZ])", str(key))
-        if not match or match.group(1) not in work:
-            raise ScenarioError(f"{scenario.source}: table_tilt {key!r} is not an angular error "
-                                f"motion of a linear axis that carries the workpiece on "
-                                f"{machine.name} ({', '.join(work) or 'none'}), e.g. "
-                                f"EA{work[0] if work else 'X'}")
+        match = re.fullmatch(pattern, str(key))
+        if not match or match.group(1) not in axes:
+            raise ScenarioError(f"{scenario.source}: {effect} {key!r} is not {what}")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or \
-                not math.isfinite(value) or abs(value) > 1e-3:
-            raise ScenarioError(f"{scenario.source}: table_tilt {key} = {value!r}: expected a "
-                                "finite angle below 1e-3 rad")
+                not math.isfinite(value) or abs(value) > largest:
+            raise ScenarioError(f"{scenario.source}: {effect} {key} = {value!r}: expected a "
+                                f"finite number below {largest:g} ({unit})")
 
 
 def _check_rotary_effects(scenario: Scenario) -> None:
@@ -347,16 +354,9 @@ def _check_rotary_effects(scenario: Scenario) -> None:
         if not isinstance(errors, dict):
             raise ScenarioError(f"{scenario.source}: rotary_location errors must be a mapping "
                                 "such as {EY0A: 2.0e-5, EB0A: 3.0e-5}")
-        for key, value in errors.items():
-            match = re.fullmatch(r"E[XYZABC]0([A-Z])", str(key))
-            if not match or match.group(1) not in rotary:
-                raise ScenarioError(f"{scenario.source}: rotary_location error {key!r} is not a "
-                                    f"location error of a rotary axis of {machine.name} "
-                                    f"({', '.join(rotary)}), e.g. EY0{rotary[0]}")
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
-                    not math.isfinite(value) or abs(value) > 0.01:
-                raise ScenarioError(f"{scenario.source}: rotary_location {key} = {value!r}: "
-                                    "expected a finite number below 0.01 (m or rad)")
+        _check_error_values(scenario, "rotary_location error", errors, r"E[XYZABC]0([A-Z])",
+                            rotary, f"a location error of a rotary axis of {machine.name} "
+                            f"({', '.join(rotary)}), e.g. EY0{rotary[0]}", 0.01, "m or rad")
     if scenario.ever_enabled("rotary_runout"):
         axis = scenario.parameters("rotary_runout")["axis"]
         if axis not in rotary:

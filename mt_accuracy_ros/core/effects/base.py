@@ -108,15 +108,9 @@ class Context:
         the part of its Abbe arm the chain does not know (a tool offset not given)."""
         key = "arm:" + error_name
         if key not in self._jacobians:
-            self.jacobian(error_name)   # builds the frames
-            frame = self._frames.get(error_name)
-            if frame is None or COMPONENTS.index(error_name[1]) < 3:
-                self._jacobians[key] = np.zeros((self.n, 3))
-            else:
-                sign, rotation, _ = frame
-                component = COMPONENTS.index(error_name[1]) - 3
-                self._jacobians[key] = sign * np.cross(rotation[:, :, component],
-                                                       self.tool_axis())
+            # The turn's axis in the bed frame (the orientation sensitivity) across the tool.
+            self._jacobians[key] = np.cross(self.orientation_jacobian(error_name),
+                                            self.tool_axis())
         return self._jacobians[key]
 
     def orientation_jacobian(self, error_name: str) -> NDArray[np.float64]:

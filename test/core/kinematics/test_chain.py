@@ -200,6 +200,17 @@ def test_vectorised_map_equals_a_per_point_loop(grinder):
     np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-15)
 
 
+def _summed(frames, motion):
+    """First-order TCP error as the sum of each error's frame sensitivity times its value."""
+    summed = 0.0
+    for name, value in motion.items():
+        sign, rot, lever = frames[name]
+        c = "XYZABC".index(name[1])
+        column = rot[:, :, c] if c < 3 else np.cross(rot[:, :, c - 3], lever)
+        summed = summed + sign * column * value[:, None]
+    return summed
+
+
 def test_the_machining_point_is_the_nominal_tool_point_on_the_work(hmc, grinder):
     """w is the nominal tool point in the workpiece frame, so the nominal
     tool-to-work vector is zero at every configuration; and the three
@@ -221,28 +232,16 @@ def test_the_machining_point_is_the_nominal_tool_point_on_the_work(hmc, grinder)
         np.testing.assert_allclose(first["position"], linear["position"], atol=5e-11)  # 2nd order
         np.testing.assert_allclose(exact["position"], linear["position"], atol=1e-10)
         # the error frames' sum of sensitivities is the same first-order error
-        frames = model.error_frames(q)
-        summed = np.zeros((n, 3))
-        for name, value in overrides.motion.items():
-            sign, rot, lever = frames[name]
-            c = "XYZABC".index(name[1])
-            column = rot[:, :, c] if c < 3 else np.cross(rot[:, :, c - 3], lever)
-            summed += sign * column * value[:, None]
-        np.testing.assert_allclose(summed, linear["position"], atol=1e-12)
+        np.testing.assert_allclose(_summed(model.error_frames(q), overrides.motion),
+                                   linear["position"], atol=1e-12)
         # ... and with a fixed target all three move their arm together
         target = np.array([0.02, 0.03, -0.01])
         linear_t = model.tcp_error_linear(q, overrides=overrides, check_stroke=False,
                                           work_point=target)
         exact_t = model.tcp_error(q, overrides=overrides, check_stroke=False, work_point=target)
         np.testing.assert_allclose(exact_t["position"], linear_t["position"], atol=1e-10)
-        frames_t = model.error_frames(q, work_point=target)
-        summed = np.zeros((n, 3))
-        for name, value in overrides.motion.items():
-            sign, rot, lever = frames_t[name]
-            c = "XYZABC".index(name[1])
-            column = rot[:, :, c] if c < 3 else np.cross(rot[:, :, c - 3], lever)
-            summed += sign * column * value[:, None]
-        np.testing.assert_allclose(summed, linear_t["position"], atol=1e-12)
+        np.testing.assert_allclose(_summed(model.error_frames(q, work_point=target),
+                                           overrides.motion), linear_t["position"], atol=1e-12)
 
 
 def test_a_table_pitch_acts_through_the_arm_to_the_tool(hmc):
