@@ -81,9 +81,16 @@ def periodic_periods(model: ErrorModel) -> dict[str, float]:
 
 def positioning_error(model: ErrorModel, axis: str, q: NDArray[np.float64]
                       ) -> NDArray[np.float64]:
-    """E_AA of ``axis`` at ``q`` [m]: every fitted effect a table of it can hold."""
-    return np.asarray(model.component_errors(axis, q, strict=True)[f"E{axis}{axis}"],
-                      dtype=np.float64)
+    """The positioning error of ``axis`` at command ``q`` in the axis' own terms (actual
+    minus commanded axis position) [m]: every fitted effect a table of it can hold.
+
+    E_AA is the moving body's error along its direction in the machine frame; an axis
+    whose positive command moves its body backwards (``sign`` -1: a table moving against
+    the tool's commanded motion) is that much *behind* its command, so its table holds
+    sign x E_AA. A table written without the sign would double such an axis' error."""
+    sign = model.machine.axes[axis].sign
+    return sign * np.asarray(model.component_errors(axis, q, strict=True)[f"E{axis}{axis}"],
+                             dtype=np.float64)
 
 
 def linear_axes(model: ErrorModel) -> list[str]:

@@ -84,3 +84,42 @@ def test_the_per_axis_bilateral_tables_round_trip_on_a_table_carrying_machine():
     assert result.tcp_model_rms_m > 2e-6
     assert result.tcp_max_error_m <= result.tcp_bound_m
     assert result.tcp_rms_error_m < 1e-3 * result.tcp_model_rms_m
+
+
+def test_a_tables_positioning_error_enters_the_controllers_table_in_the_axis_own_terms():
+    """SINUMERIK EEC on the VMC's X table (sign -1: a positive command moves the table
+    backwards). The control moves the axis against each table value; applied on the
+    virtual machine's rigid bodies, the table must leave the tool on the cut - written
+    without the axis' sign it would double the error instead."""
+    import re
+
+    from mt_accuracy_ros.core.compensation.controller_tables import siemens_eec
+
+    data = yaml.safe_load((REPO_ROOT / "mt_accuracy_ros" / "machines" / "vmc.yaml").read_text())
+    coefficients = [0.0, 6e-6, 2e-5]                  # E_XX of the table [m], q in m
+    data["axes"]["X"]["errors"] = {"EXX": {"polynomial": coefficients}}
+    machine = machine_from_dict(data)
+    model = ErrorModel(machine, {"geometric": {}})
+    text, _ = siemens_eec(model, 0.005)
+    values = {int(n): float(v) * 1e-3 for n, v in
+              re.findall(r"\$AA_ENC_COMP\[0,(\d+),X1\]=(-?[\d.]+)", text)}
+    low = float(re.search(r"\$AA_ENC_COMP_MIN\[0,X1\]=(-?[\d.]+)", text)[1]) * 1e-3
+    step = float(re.search(r"\$AA_ENC_COMP_STEP\[0,X1\]=(-?[\d.]+)", text)[1]) * 1e-3
+    points = low + step * np.arange(len(values))
+    table = np.array([values[k] for k in range(len(values))])
+    q = np.linspace(-0.38, 0.38, 301)
+    n = q.size
+    command = {"X": q, "Y": np.full(n, 0.05), "Z": np.full(n, -0.2)}
+
+    def truth_at(axis_x):
+        errors = BodyErrors()
+        errors.add("motion", "X", 0, np.polynomial.polynomial.polyval(axis_x, coefficients), n)
+        return tool_against_work(machine, dict(command, X=axis_x), command, errors)[0][:, 0]
+
+    uncompensated = truth_at(q)
+    # A positive value moves the axis in the negative direction.
+    compensated = truth_at(q - np.interp(q, points, table))
+    assert np.ptp(uncompensated) > 5e-6
+    # What is left is the value at the reference point (a datum the control zeroes) and
+    # the table's interpolation.
+    assert np.ptp(compensated) < 0.02e-6, np.ptp(compensated)
