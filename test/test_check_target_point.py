@@ -68,3 +68,42 @@ def test_a_target_point_that_is_not_a_point_is_refused(values):
     assert target_point(ReferenceMeasurement()) is None
     np.testing.assert_array_equal(target_point(ReferenceMeasurement(
         target_point=[0.05, 0.0, 0.02])), [0.05, 0.0, 0.02])
+
+
+def test_a_recorded_profile_the_model_refuses_is_counted_and_said(tmp_path):
+    """Issue 39: a bag's profile that cannot be applied was dropped without a word, and a
+    reading without an uncertainty silently became 1 um; now the check counts and says
+    both, in its warnings (printed and in the JSON)."""
+    from mt_accuracy_msgs.msg import SystematicProfile
+    from mt_accuracy_ros.commands.check import check_bag
+    from mt_accuracy_ros.io.fields import pack_float64
+
+    rng = np.random.default_rng(5)
+    t0 = 1_700_000_000 * 10**9
+    with BagWriter(tmp_path / "bag") as bag:
+        bag.add_topic("/reference/tcp_error", "mt_accuracy_msgs/msg/ReferenceMeasurement")
+        bag.add_topic("/systematic/y", "mt_accuracy_msgs/msg/SystematicProfile")
+        profile = SystematicProfile(axis="y", error_name="ECY", unit="rad")
+        profile.header.stamp = nanoseconds_to_stamp(t0)
+        profile.positions = pack_float64([-0.1, -0.2, -0.3])      # not increasing: refused
+        profile.systematic = pack_float64([1e-6, 2e-6, 3e-6])
+        bag.write("/systematic/y", serialize_message(profile), t0)
+        for i in range(40):
+            message = ReferenceMeasurement(instrument="probe", command_axes=["x", "y", "z"])
+            stamp = t0 + (i + 2) * 10**9
+            message.header.stamp = nanoseconds_to_stamp(stamp)
+            message.command_positions = [float(rng.uniform(0, 0.39)),
+                                         float(rng.uniform(-0.44, 0)),
+                                         float(rng.uniform(0, 0.495))]
+            message.error.x, message.error.y, message.error.z = (float(v) for v in
+                                                                 rng.normal(0, 3e-7, 3))
+            message.measured = [True, True, True]
+            message.uncertainty = 0.0         # an instrument that states none
+            bag.write("/reference/tcp_error", serialize_message(message), stamp)
+    result = check_bag(tmp_path / "bag", "{machine: kidani_hmc, effects: {geometric: {}}}",
+                       [], 0, "", 0.05)
+    # ... and the documented default it is then given is said, not silent.
+    assert "reference readings: the readings state no uncertainty (0); 1e-06 m (k = 2) " \
+        "assumed" in result["warnings"]
+    assert any(line.startswith("1 of 1 recorded profiles could not be applied") and "ECY" in line
+               for line in result["warnings"]), result.get("warnings")

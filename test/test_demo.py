@@ -111,6 +111,15 @@ def test_demo_records_from_the_first_sample_and_accounts_for_every_stream(demo_r
                                        summary["end_state_within_band"]})
     assert (code == 0) == (not failures)
     assert all(f"FAILED: {failure}" in printed for failure in failures)
+    # Everything the command printed as a warning or a failure is in summary.json, and the
+    # dead nodes are (issue 39: they were written after it).
+    printed_warnings = [line.split("  WARNING ", 1)[1] for line in printed.splitlines()
+                        if line.startswith("  WARNING ")]
+    assert summary["warnings"] == printed_warnings
+    assert summary["failures"] == [line.split("  FAILED: ", 1)[1]
+                                   for line in printed.splitlines()
+                                   if line.startswith("  FAILED: ")]
+    assert summary["dead_nodes"] == []
     # Feedback while it runs: a progress line at least every 5 s of wall time.
     progress = [line for line in printed.splitlines() if " s wall] " in line]
     assert len(progress) >= int(summary["wall_time_s"] // 5) - 3

@@ -35,13 +35,15 @@ def error_figures(residual: np.ndarray, unit_scale: float = 1.0) -> dict:
 
 # ------------------------------------------------------------------ bag path
 def observations_from_bag(bag: Path, namespace: str = "", kinematics=None):
-    """Readings, temperatures at their stamps, and the profile history of a bag.
+    """Readings, temperatures at their stamps, the profile history of a bag, and the
+    sentences saying where a documented default uncertainty was taken.
 
     Readings whose instrument states a fixed target (``target_point``) are taken there;
     the others at the machining point of ``kinematics`` (the model's chain)."""
     from ..core.workbench.diagnosis import Observations
     from ..io.bag_reader import decode, read_messages, topics
     from ..core.workbench.diagnosis import work_points
+    from ..core.workbench.statistics import DEFAULT_POSITION_UNCERTAINTY_M, stated_uncertainty
     from ..io.fields import (machine_direction_error, machine_error, stamp_to_nanoseconds,
                              target_point, unpack_float64)
 
@@ -99,25 +101,35 @@ def observations_from_bag(bag: Path, namespace: str = "", kinematics=None):
                                  len(axes) else 0.0 for r in readings])
                     for i, a in enumerate(axes)},
         temperatures=temperatures,
-        uncertainty_m=float(np.median([r[1].uncertainty for r in readings])) or 1e-6)
+        uncertainty_m=DEFAULT_POSITION_UNCERTAINTY_M)
+    obs.uncertainty_m, note = stated_uncertainty([r[1].uncertainty for r in readings],
+                                                 DEFAULT_POSITION_UNCERTAINTY_M,
+                                                 "reference readings", "m")
+    notes = [note] if note else []
     if all(len(getattr(r[1], "command_directions", [])) == len(axes) for r in readings):
         obs.directions = {a: np.array([r[1].command_directions[i] or
                                        np.sign(obs.velocities[a][k])
                                        for k, r in enumerate(readings)], dtype=float)
                           for i, a in enumerate(axes)}
     # An R-test's tool direction: a second measured quantity (issue 30).
-    obs.set_directions([machine_direction_error(r[1]) for r in readings],
-                       [getattr(r[1], "orientation_uncertainty", 0.0) for r in readings])
+    note = obs.set_directions([machine_direction_error(r[1]) for r in readings],
+                              [getattr(r[1], "orientation_uncertainty", 0.0) for r in readings])
+    notes += [note] if note else []
     targets = [target_point(r[1]) for r in readings]
     if any(t is not None for t in targets):
         if kinematics is None:
             raise InputDataError(f"{bag}: readings with a target_point need the model's chain")
         obs.work_point = work_points(kinematics, obs.positions, targets)
-    return obs, stamps, sorted(profiles, key=lambda p: p[0])
+    return obs, stamps, sorted(profiles, key=lambda p: p[0]), notes
 
 
-def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_000):
-    """Model prediction at each reading with the profiles live at that time (like the monitor)."""
+def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_000,
+                         refused: dict | None = None):
+    """Model prediction at each reading with the profiles live at that time (like the monitor).
+
+    A recorded profile the model refuses (a wrong length, an axis it does not have) is left
+    out of the predictions and, with ``refused`` given, recorded there: (stamp, name) ->
+    the reason."""
     import copy
 
     position = np.zeros((obs.n, 3))
@@ -137,11 +149,12 @@ def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_0
                 position[rows], orientation[rows] = p, o
             group_start = i
             while i < obs.n and next_profile < len(profiles) and profiles[next_profile][0] <= limit:
-                _, name, x, y, difference = profiles[next_profile]
+                stamp, name, x, y, difference = profiles[next_profile]
                 try:
                     state.apply_profile(name, x, y, difference)
-                except MtAccuracyError:
-                    pass
+                except MtAccuracyError as exc:
+                    if refused is not None:
+                        refused[(stamp, name)] = str(exc)
                 next_profile += 1
     return position, orientation
 
@@ -242,10 +255,18 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
     from ..core.compensation.error_model import resolve_model
 
     model = resolve_model(model_text)  # a bad model is refused before a long bag is read
-    obs, stamps, profiles = observations_from_bag(bag, namespace, model.kinematics)
+    obs, stamps, profiles, notes = observations_from_bag(bag, namespace, model.kinematics)
+    refused: dict = {}
     result = check_observations(model, obs, add, auto, min_reduction,
                                 lambda current: predict_with_history(current, obs, stamps,
-                                                                     profiles))
+                                                                     profiles, refused=refused))
+    if notes:
+        result.setdefault("warnings", []).extend(notes)
+    if refused:
+        (_, name), why = next(iter(refused.items()))
+        result.setdefault("warnings", []).append(
+            f"{len(refused)} of {len(profiles)} recorded profiles could not be applied and "
+            f"were left out of the predictions (the first, {name}: {why})")
     return {"data": str(bag), "kind": "bag", "namespace": namespace, **result}
 
 

@@ -328,17 +328,8 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     print("  the run is over; writing the report", flush=True)
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
                          references, losses, story, delivery, scenario,
-                         [text for _, text in diagnostics_text], start_ns=start_ns)
-    summary["dead_nodes"] = dead_nodes
-    stale, messages = summary["compensation_stale"], max(summary["compensation_messages"], 1)
-    if stale > LATE_WARNING_SHARE * messages:
-        window = summary["stale_between_s"]
-        losses.append(f"{stale} of {messages} corrections ({stale / messages:.1%}) arrived too "
-                      f"late to apply (warning above {LATE_WARNING_SHARE:.0%}): the real-time "
-                      "path missed its deadline on this host" + (
-                          f", between {window[0]:.1f} s and {window[1]:.1f} s of data (the "
-                          f"oldest {summary['worst_stale_age_ms']:.0f} ms late)" if window
-                          else ""))
+                         [text for _, text in diagnostics_text], start_ns=start_ns,
+                         dead_nodes=dead_nodes)
     # The headline first: what the instrument measured on the compensated machine.
     for line in story["lines"]:
         print(line)
@@ -354,10 +345,24 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     for text in summary["model_alarms"]:
         print(f"  ALARM {text}")
     print(f"  report: {out / 'report.html'}   bag: {bag}   final model: {out / 'model.yaml'}")
-    failures = demo_failures(summary, story)
+    failures = summary["failures"]
     for failure in failures:
         print(f"  FAILED: {failure}")
     return 1 if failures else 0
+
+
+def late_warning(summary: dict) -> str:
+    """The warning line when more than :data:`LATE_WARNING_SHARE` of the corrections
+    arrived too late to apply ("" otherwise)."""
+    stale, messages = summary["compensation_stale"], max(summary["compensation_messages"], 1)
+    if stale <= LATE_WARNING_SHARE * messages:
+        return ""
+    window = summary["stale_between_s"]
+    return (f"{stale} of {messages} corrections ({stale / messages:.1%}) arrived too late to "
+            f"apply (warning above {LATE_WARNING_SHARE:.0%}): the real-time path missed its "
+            "deadline on this host" + (
+                f", between {window[0]:.1f} s and {window[1]:.1f} s of data (the oldest "
+                f"{summary['worst_stale_age_ms']:.0f} ms late)" if window else ""))
 
 
 #: Share of corrections arriving too late to apply above which the demo warns.
@@ -605,7 +610,7 @@ def table_tilts(machine, effects: list[str]) -> list[str]:
 def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
                references, losses: list[str], story: dict, delivery: dict,
                scenario: str = "demo", model_alarms: list[str] | None = None,
-               start_ns: int = 0) -> dict:
+               start_ns: int = 0, dead_nodes: list[str] | None = None) -> dict:
     from ..io.bag_reader import bag_info
     from ..nodes._scenario import resolve_scenario
 
@@ -689,14 +694,24 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         from ..nodes._scenario import resolve_scenario
 
         summary["run_data_s"] = float(resolve_scenario(scenario).duration_s)
-    report = _write_report(out, checks, actions, alarms, losses, story, scenario)
+    # Everything the command prints as a warning or a failure is in the summary and the
+    # report too (issue 39): the dead nodes, a late real-time path, every loss.
+    summary["dead_nodes"] = list(dead_nodes or [])
+    late = late_warning(summary)
+    if late:
+        losses.append(late)
+    summary["warnings"] = list(losses)
+    summary["failures"] = demo_failures(summary, story)
+    report = _write_report(out, checks, actions, alarms, losses, story, scenario,
+                           summary["dead_nodes"], summary["failures"])
     summary["report"] = report.as_dict()
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
     return summary
 
 
 def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: dict,
-                  scenario: str = "demo"):
+                  scenario: str = "demo", dead_nodes: list[str] | None = None,
+                  failures: list[str] | None = None):
     """The bag's full report, with the run as the demo's user saw it live."""
     from .check import check_bag
     from ..core.errors import MtAccuracyError
@@ -736,6 +751,10 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: 
         run.paragraphs.append(f"At {when:.1f} s the {axis} axis raised its deterioration alarm.")
     run.paragraphs.append("Delivery: " + ("; ".join(losses) if losses else
                                           "every node processed every sample and message."))
+    if dead_nodes:
+        run.paragraphs.append("Node(s) died during the run: " + ", ".join(dead_nodes) + ".")
+    for failure in failures or []:
+        run.paragraphs.append(f"FAILED: {failure}")
     try:
         # The workbench judges the model that was live at the end (model.yaml, its
         # versions and coefficients as the graph made them), not an offline re-fit.

@@ -60,6 +60,8 @@ from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ModelVersion, Referenc
 from ..core.compensation.error_model import model_from_dict, model_to_dict
 from ..core.compensation.limits import gate_problem
 from ..core.workbench.closed_loop import judge_version
+from ..core.workbench.statistics import (DEFAULT_DIRECTION_UNCERTAINTY_RAD,
+                                         DEFAULT_POSITION_UNCERTAINTY_M, stated_uncertainty)
 from ..core.compensation.five_axis import tool_direction
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.workbench.diagnosis import (Candidate, Observations, add_effect,
@@ -127,6 +129,7 @@ class ModelMonitor(Node):
         self.rolled_back: set[str] = set()   # effects a roll-back took out
         self._last_check: tuple | None = None   # (version, observations, diagnosis)
         self._since_check = 0
+        self._default_notes: set[str] = set()   # defaults taken, each said once
         self.last_diagnosis = None
         self.history: list[dict] = []
         self._check = self.create_publisher(ModelCheck, "model_check", RESULT_QOS)
@@ -334,7 +337,7 @@ class ModelMonitor(Node):
             return
         self._judging = None
         before = [r for r in self._judge_log if r[0] == judging["version"]][-count:]
-        band = float(np.median([r[2] for r in after])) or 1e-6
+        band = self._uncertainty([r[2] for r in after], "the judge's band")
         if len(before) < 5:
             self._status(DiagnosticStatus.OK, f"model version {judging['version_new']} live "
                          f"at the machine; not judged: version {judging['version']} was measured "
@@ -477,15 +480,16 @@ class ModelMonitor(Node):
             velocities={a: np.array([r["velocities"][a] for r in readings]) for a in axes},
             temperatures={s: np.array([r["temperatures"][s] for r in readings])
                           for s in sorted(sensors)},
-            uncertainty_m=float(np.median([r["uncertainty"] for r in readings])) or 1e-6)
+            uncertainty_m=self._uncertainty([r["uncertainty"] for r in readings],
+                                            "the check's readings"))
         if all(r["directions"] for r in readings):
             # The CNC's last direction per axis; where unknown (0), the feed's sign.
             obs.directions = {a: np.array([r["directions"][a] or np.sign(r["velocities"][a])
                                            for r in readings], dtype=float) for a in axes}
         # Where the instrument measured the tool's direction too (an R-test): a second
         # measured quantity with its own uncertainty.
-        obs.set_directions([r["direction_error"] for r in readings],
-                           [r["direction_uncertainty"] for r in readings])
+        self._say_default(obs.set_directions([r["direction_error"] for r in readings],
+                                             [r["direction_uncertainty"] for r in readings]))
         # An instrument with a fixed target on the workpiece side is judged there.
         obs.work_point = work_points((model or self.inputs.model).kinematics, obs.positions,
                                      [r.get("target") for r in readings])
@@ -640,7 +644,8 @@ class ModelMonitor(Node):
         predicted = predicted - axis * np.einsum("ni,ni->n", predicted, axis)[:, None]
         residual = measured - predicted
         norm = np.linalg.norm(residual, axis=1)
-        band = float(np.median([r["direction_uncertainty"] for r in readings])) or 1e-6
+        band = self._uncertainty([r["direction_uncertainty"] for r in readings],
+                                 "the tool-direction check", direction=True)
         check = self._new_check(model, obs, "tool_direction", "rad", stamp_ns)
         before = float(np.sqrt(np.mean(np.sum(measured ** 2, axis=1))))
         check.rmse = float(np.sqrt(np.mean(norm ** 2)))
@@ -674,6 +679,20 @@ class ModelMonitor(Node):
                               "effects": sorted(model.effects)})
         self.get_logger().info(f"model version {model.version}: {self._reason}")
         self._model_topic.publish(message)
+
+    def _uncertainty(self, values, what: str, direction: bool = False) -> float:
+        """The readings' stated k = 2 uncertainty, or the documented default - said on
+        /diagnostics as a WARN (once per kind) when taken (issue 39: no silent default)."""
+        default, unit = ((DEFAULT_DIRECTION_UNCERTAINTY_RAD, "rad") if direction
+                         else (DEFAULT_POSITION_UNCERTAINTY_M, "m"))
+        value, note = stated_uncertainty(values, default, what, unit)
+        self._say_default(note)
+        return value
+
+    def _say_default(self, note: str) -> None:
+        if note and note not in self._default_notes:
+            self._default_notes.add(note)
+            self._status(DiagnosticStatus.WARN, note)
 
     def _status(self, level: int, text: str, values=None) -> None:
         status = DiagnosticStatus(level=level, name=f"{self.get_fully_qualified_name()}: model",

@@ -103,6 +103,15 @@ def _component_figures(values: np.ndarray, mask: np.ndarray, u_k2: float) -> lis
     return out
 
 
+def _band(data: BagData) -> tuple[float, str]:
+    """The reference instrument's k = 2 band [m], and the sentence saying the documented
+    default was taken when the readings state none."""
+    from ..core.workbench.statistics import DEFAULT_POSITION_UNCERTAINTY_M, stated_uncertainty
+
+    return stated_uncertainty([r.uncertainty for _, r in data.references],
+                              DEFAULT_POSITION_UNCERTAINTY_M, "reference readings", "m")
+
+
 def _measured_headline(data: BagData) -> tuple[Table, str] | None:
     """The instrument's measurement of the compensated machine per phase (None when the
     machine applied no compensation)."""
@@ -115,14 +124,14 @@ def _measured_headline(data: BagData) -> tuple[Table, str] | None:
     raw = np.array([machine_error(r) for _, r in data.references])
     if not np.any(measured - raw):
         return None
-    band = float(np.median([r.uncertainty for _, r in data.references])) or 1e-6
+    band, note = _band(data)
     phases = loop_phases(data.seconds([s for s, _ in data.references]), measured,
                          measured - raw, loop_events(data), band)
     table = Table(["state", "readings"] + [f"RMS e_{c}" for c in COMPONENTS],
                   caption="Measured: RMS of the TCP error the reference instrument read on the "
                           "machine, per component, with its k = 2 uncertainty; 'without "
                           "compensation' is what it read minus what the CNC had added, at "
-                          "every reading of the run")
+                          "every reading of the run" + (f" ({note})" if note else ""))
     table.add("without compensation (whole run)", phases[0].count,
               *[format_with_uncertainty(f.rms * UM, f.rms_u_k2 * UM, "µm")
                 for f in phases[0].without])
@@ -215,7 +224,9 @@ def closed_loop_section(data: BagData, directory: Path, stem: str) -> Section:
     measured = np.array([(r.error.x, r.error.y, r.error.z) for _, r in data.references])
     raw = np.array([machine_error(r) for _, r in data.references])
     applied = measured - raw
-    band = float(np.median([r.uncertainty for _, r in data.references])) or 1e-6
+    band, note = _band(data)
+    if note:
+        section.paragraphs.append(f"The instrument's band: {note}.")
     if not np.any(applied):
         section.paragraphs.append(
             "The machine applied no compensation during this recording (open loop): the "

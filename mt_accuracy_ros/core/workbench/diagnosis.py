@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..compensation.error_model import ErrorModel
+from .statistics import DEFAULT_DIRECTION_UNCERTAINTY_RAD, stated_uncertainty
 from ..errors import InsufficientDataError, ParameterError
 from ..effects import Context, EffectFamily, families as catalogue_families, is_catalogue_entry
 from ..effects.user import UserExpression
@@ -116,18 +117,21 @@ class Observations:
                             np.ndim(self.work_point) == 1
                             else np.asarray(self.work_point)[rows])
 
-    def set_directions(self, errors: list, uncertainties: list[float]) -> None:
+    def set_directions(self, errors: list, uncertainties: list[float]) -> str:
         """Take the tool direction of the readings that measured it: ``errors`` (N,) of a
         (3,) error [rad] or None (not measured), ``uncertainties`` (N,) k = 2 [rad]
-        (those of unmeasured readings are ignored). Nothing measured: nothing is set."""
+        (those of unmeasured readings are ignored). Nothing measured: nothing is set.
+        Returns "" or the sentence saying the documented default uncertainty was taken."""
         measured = np.array([e is not None for e in errors], dtype=bool)
         if not measured.any():
-            return
+            return ""
         self.measured_orientation_rad = np.array([e if e is not None else (0.0, 0.0, 0.0)
                                                   for e in errors], dtype=np.float64)
         self.orientation_measured = measured
-        self.orientation_uncertainty_rad = float(np.median(
-            np.asarray(uncertainties, dtype=np.float64)[measured])) or 2e-6
+        self.orientation_uncertainty_rad, note = stated_uncertainty(
+            np.asarray(uncertainties, dtype=np.float64)[measured],
+            DEFAULT_DIRECTION_UNCERTAINTY_RAD, "tool direction", "rad")
+        return note
 
     @property
     def measures_direction(self) -> bool:

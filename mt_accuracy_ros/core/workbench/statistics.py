@@ -19,6 +19,23 @@ from ..validation import finite_array
 
 #: Bootstrap resamples: enough for a 2-digit uncertainty.
 RESAMPLES = 400
+#: The k = 2 uncertainty taken for readings that state none (0): one documented default
+#: per quantity, and whatever uses it says so (issue 39: no silent default).
+DEFAULT_POSITION_UNCERTAINTY_M = 1e-6
+DEFAULT_DIRECTION_UNCERTAINTY_RAD = 2e-6
+
+
+def stated_uncertainty(values: ArrayLike, default: float, what: str, unit: str
+                       ) -> tuple[float, str]:
+    """(the median of the readings' stated k = 2 uncertainties, "") - or, when they state
+    none (all zero, or none given), (``default``, the sentence that says it was assumed)."""
+    everything = np.asarray(values, dtype=np.float64).ravel()
+    positive = everything[np.isfinite(everything) & (everything > 0)]
+    if positive.size:
+        median = float(np.median(everything))
+        return (median if median > 0 else float(np.median(positive))), ""
+    return default, (f"{what}: the readings state no uncertainty (0); {default:g} {unit} "
+                     "(k = 2) assumed")
 
 
 @dataclass(frozen=True)

@@ -30,3 +30,18 @@ def test_rms_uncertainty_is_seeded_and_grows_with_the_instrument():
                                           (0.58512, 0.0473, "0.585 ± 0.047 µm (k = 2)")])
 def test_values_are_rounded_to_their_uncertainty(value, u, text):
     assert format_with_uncertainty(value, u, "µm") == text
+
+
+def test_a_stated_uncertainty_is_taken_and_none_stated_takes_the_documented_default_said():
+    from mt_accuracy_ros.core.workbench.statistics import (DEFAULT_POSITION_UNCERTAINTY_M,
+                                                           stated_uncertainty)
+
+    assert stated_uncertainty([2e-6, 2e-6, 3e-6], 1e-6, "x", "m") == (2e-6, "")
+    # Most readings state none: the median of those that do, not a zero band.
+    assert stated_uncertainty([0.0, 0.0, 4e-6], 1e-6, "x", "m") == (4e-6, "")
+    value, note = stated_uncertainty([0.0, 0.0], DEFAULT_POSITION_UNCERTAINTY_M,
+                                     "reference readings", "m")
+    assert value == DEFAULT_POSITION_UNCERTAINTY_M == 1e-6
+    assert note == "reference readings: the readings state no uncertainty (0); 1e-06 m (k = 2) " \
+                   "assumed"
+    assert stated_uncertainty([], 2e-6, "tool direction", "rad")[0] == 2e-6
