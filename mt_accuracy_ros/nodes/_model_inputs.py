@@ -63,8 +63,12 @@ def _gate_pool():
                                    initializer=_warm_worker)
         pool.submit(int)   # start the worker (and its imports) now, not at the first model
         return pool
-    except (OSError, ValueError, NotImplementedError):
-        return ThreadPoolExecutor(max_workers=1, thread_name_prefix="model_gate")
+    except (OSError, ValueError, NotImplementedError) as exc:
+        pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="model_gate")
+        pool.fallback_reason = (f"the model gate runs in a thread of the node, not in its own "
+                                f"process (the worker could not start: {exc}): gating a new "
+                                "version now competes with the compensation callbacks")
+        return pool
 
 
 class ModelInputs:
@@ -123,6 +127,8 @@ class ModelInputs:
             from rclpy.clock import Clock, ClockType
 
             self._pool = _gate_pool()
+            if getattr(self._pool, "fallback_reason", ""):
+                health.warn(self._pool.fallback_reason)
             node.create_subscription(ModelVersion, "model", health.guard("model", self._on_model),
                                      LATCHED_QOS)
             node.create_timer(0.02, self._poll_model, clock=Clock(clock_type=ClockType.STEADY_TIME))

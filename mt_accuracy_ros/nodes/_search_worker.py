@@ -138,5 +138,10 @@ def search_pool():
                                    initializer=_search_worker, initargs=(idle_s, niceness))
         pool.submit(int)   # start the worker and its imports now
         return pool
-    except (OSError, ValueError, NotImplementedError):
-        return ThreadPoolExecutor(max_workers=1, thread_name_prefix="diagnosis")
+    except (OSError, ValueError, NotImplementedError) as exc:
+        pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="diagnosis")
+        # Said, not silent (issue 39): the caller puts it on /diagnostics as a WARN.
+        pool.fallback_reason = (f"the diagnosis runs in a thread of the node, not in its own "
+                                f"process (the worker could not start: {exc}): a long search "
+                                "now competes with the node's callbacks")
+        return pool

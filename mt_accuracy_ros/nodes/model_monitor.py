@@ -144,6 +144,7 @@ class ModelMonitor(Node):
                                  RESULT_QOS)
         self._checking = None   # (model, observations, stamp, future) of the check under way
         self._pool = search_pool()
+        self._say_fallback()
         self.create_timer(0.02, self._poll_check, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._publish_model()
 
@@ -546,6 +547,7 @@ class ModelMonitor(Node):
             # The worker died (killed, out of memory): a new one for this and later checks.
             self._pool.shutdown(wait=False, cancel_futures=True)
             self._pool = search_pool()
+            self._say_fallback()
             return self._pool.submit(search_serialized, inputs, *settings)
 
     def _poll_check(self) -> None:
@@ -688,6 +690,11 @@ class ModelMonitor(Node):
         value, note = stated_uncertainty(values, default, what, unit)
         self._say_default(note)
         return value
+
+    def _say_fallback(self) -> None:
+        """A search pool that could not start its process says so: a WARN on /diagnostics."""
+        if getattr(self._pool, "fallback_reason", ""):
+            self.health.warn(self._pool.fallback_reason)
 
     def _say_default(self, note: str) -> None:
         if note and note not in self._default_notes:
