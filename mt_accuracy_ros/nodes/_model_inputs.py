@@ -56,7 +56,7 @@ def _gate_pool():
     Not niced: with two CPU burners a niced gate took so long that the user's model
     reached the machine after the run (docs/closed_loop.md)."""
     import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+    from concurrent.futures import ProcessPoolExecutor
 
     try:
         pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
@@ -64,11 +64,10 @@ def _gate_pool():
         pool.submit(int)   # start the worker (and its imports) now, not at the first model
         return pool
     except (OSError, ValueError, NotImplementedError) as exc:
-        pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="model_gate")
-        pool.fallback_reason = (f"the model gate runs in a thread of the node, not in its own "
-                                f"process (the worker could not start: {exc}): gating a new "
-                                "version now competes with the compensation callbacks")
-        return pool
+        from ._search_worker import thread_fallback
+
+        return thread_fallback("model_gate", "the model gate", "gating a new version now "
+                               "competes with the compensation callbacks", exc)
 
 
 class ModelInputs:

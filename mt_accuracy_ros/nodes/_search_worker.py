@@ -120,7 +120,7 @@ def search_pool():
     be made."""
     import multiprocessing
     import os
-    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+    from concurrent.futures import ProcessPoolExecutor
 
     try:
         niceness = min(19, max(0, int(os.environ.get("MT_ACCURACY_SEARCH_NICE",
@@ -139,9 +139,17 @@ def search_pool():
         pool.submit(int)   # start the worker and its imports now
         return pool
     except (OSError, ValueError, NotImplementedError) as exc:
-        pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="diagnosis")
-        # Said, not silent (issue 39): the caller puts it on /diagnostics as a WARN.
-        pool.fallback_reason = (f"the diagnosis runs in a thread of the node, not in its own "
-                                f"process (the worker could not start: {exc}): a long search "
-                                "now competes with the node's callbacks")
-        return pool
+        return thread_fallback("diagnosis", "the diagnosis", "a long search now competes "
+                               "with the node's callbacks", exc)
+
+
+def thread_fallback(name: str, what: str, consequence: str, error: Exception):
+    """A one-thread executor standing in for a worker process that could not start, with
+    ``fallback_reason``: said, not silent (issue 39) - the node puts it on /diagnostics
+    as a WARN."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=name)
+    pool.fallback_reason = (f"{what} runs in a thread of the node, not in its own process "
+                            f"(the worker could not start: {error}): {consequence}")
+    return pool
