@@ -2,14 +2,13 @@
 
 The whole demo_5axis scenario in real time (at 1.5x, with two CPU burners beside it,
 the diagnosis fell so far behind that the added model reached the machine only after
-the run, 2 runs of 2; in real time it went live at 53 s, and the refit at 84 s). What
-is asserted does not depend on
-the host's speed: the rotary encoders stream, the compensation turns the rotary
-axes, the R-test measures the tool's direction and the monitor checks it and names
-the rotary axes' location from it. The end state (position and tool direction
-within the R-test's band, absolutely: issue 30) is asserted unless the run says the
-host failed it (corrections late, the model live too late) - the closed loop's
-accuracy is also tested without a race in test/nodes/test_closed_loop.py.
+the run, 2 runs of 2; in real time it went live at 53 s, and the refit at 84 s). Every
+outcome is asserted every run, none skipped: the rotary encoders stream, the
+compensation turns the rotary axes, the R-test measures the tool's direction, the
+monitor names the rotary axes' location, the end state (position and tool direction
+within the R-test's band, absolutely: issue 30), the refit and the datum. A host too
+slow for the real-time path fails the test with the run's own reasons; a data-time
+(lockstep) mode that takes the host's speed out of the outcome is issue 39's item 1.
 """
 from __future__ import annotations
 
@@ -75,8 +74,6 @@ def test_the_five_axis_graph_streams_encoders_and_compensates_the_tool_direction
 
 def test_the_five_axis_job_names_the_rotary_axes_from_the_direction_and_ends_in_the_band(
         five_axis_run):
-    from mt_accuracy_ros.commands.demo import demo_failures
-
     code, out, printed = five_axis_run
     summary = json.loads((out / "summary.json").read_text())
     # The tilts and the zero error of both rotary axes, named from the tool's direction.
@@ -93,11 +90,9 @@ def test_the_five_axis_job_names_the_rotary_axes_from_the_direction_and_ends_in_
     assert abs((tilts["EB0B"] - tilts["EB0A"]) + 40e-6) < 5e-6, tilts
     assert abs((tilts["EC0B"] - tilts["EC0A"]) - 10e-6) < 5e-6, tilts
     direction = summary["tool_direction"]
-    failures = demo_failures(summary, {"end_state_within_band":
-                                       summary["end_state_within_band"]})
-    if any("loaded machine?" in failure for failure in failures):
-        pytest.skip("the host failed the real-time path: " + "; ".join(failures))
-    assert code == 0 and summary["end_state_within_band"], printed
+    # The outcome is asserted every run: a host that fails the real-time path fails the
+    # test, with the run's own reasons (a skip would hide a model that never went live).
+    assert code == 0 and summary["end_state_within_band"], (summary["failures"], printed)
     assert direction["end_within_band"], direction
     end = summary["closed_loop"][-1]
     assert end["label"] == "end state"
@@ -110,16 +105,11 @@ def test_the_monitor_renews_the_drift_from_the_datum_and_the_part_stays_put(five
     the compensated machine 0.8 um off its datum at 2.8 K. The monitor refits the added
     effects from the datum (the R-test is zeroed there), says it is worth a version,
     and makes it live by itself: the part's datum stays put to well within the band."""
-    from mt_accuracy_ros.commands.demo import demo_failures
     from mt_accuracy_ros.io.bag_reader import decode, read_messages
 
     code, out, printed = five_axis_run
     summary = json.loads((out / "summary.json").read_text())
-    failures = demo_failures(summary, {"end_state_within_band":
-                                       summary["end_state_within_band"]})
-    if any("loaded machine?" in failure for failure in failures):
-        # The added model came too late for anything after it (its checks, its refit).
-        pytest.skip("the host failed the real-time path: " + "; ".join(failures))
+    assert summary["added_version_live_at_s"] is not None, summary["failures"]
     said = [{v.key: v.value for v in s.values}.get("refit", "")
             for m in read_messages(out / "bag", ["/diagnostics"])
             for s in decode(m).status if s.name.endswith("model_monitor: model")]
@@ -133,7 +123,6 @@ def test_the_monitor_renews_the_drift_from_the_datum_and_the_part_stays_put(five
     # error is the datum's shift (the scenario's R-test zero is the work offset).
     references = [decode(m) for m in read_messages(out / "bag", ["/reference/tcp_error"])]
     under = [r for r in references if r.compensation_model_version >= refits[0].version][2:]
-    if len(under) < 10:
-        pytest.skip(f"the refit was live at only {len(under)} readings before the run ended")
+    assert len(under) >= 10, f"the refit was live at only {len(under)} readings"
     mean = np.mean([(r.error.x, r.error.y, r.error.z) for r in under], axis=0)
     assert np.all(np.abs(mean) < 0.5e-6), mean

@@ -269,13 +269,19 @@ class KinematicModel:
         one, in the bed frame.
         """
         overrides = overrides or ErrorOverrides()
-        args = (overrides, check_stroke)
         q, n = self._positions(positions, check_stroke)
-        point = self._work_point(q, n, work_point)
+        # The nominal branches once: the machining point comes from them (checked once).
+        args = (overrides, False)
+        tool0_r, tool0_p = self._branch_rp("tool", q, False, False, *args)
+        work0_r, work0_origin = self._branch_rp("workpiece", q, False, False, *args,
+                                                np.zeros(3))
+        if work_point is None:
+            point = np.einsum("nji,nj->ni", work0_r, tool0_p - work0_origin)
+        else:
+            point = self._work_point(q, n, work_point)
+        work0_p = work0_origin + np.einsum("nij,nj->ni", work0_r, point)
         tool_r, tool_p = self._branch_rp("tool", q, True, first_order, *args)
         work_r, work_p = self._branch_rp("workpiece", q, True, first_order, *args, point)
-        tool0_r, tool0_p = self._branch_rp("tool", q, False, False, *args)
-        work0_r, work0_p = self._branch_rp("workpiece", q, False, False, *args, point)
         position = (tool_p - work_p) - (tool0_p - work0_p)
         # Orientation error: (work rotation error)^T (tool rotation error), both as
         # R_actual R_nominal^T in the bed frame.
