@@ -17,7 +17,8 @@ def _demo(args: argparse.Namespace) -> int:
     rate = args.rate if args.rate is not None else DEMO_RATES[args.machine]
     return run_demo(out_dir=args.out, rate_factor=rate,
                     scenario=args.scenario or DEMO_SCENARIOS[args.machine],
-                    compensation_mode=args.compensation, path_niceness=args.niceness)
+                    compensation_mode=args.compensation, path_niceness=args.niceness,
+                    lockstep=args.lockstep)
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -291,6 +292,10 @@ def build_parser() -> argparse.ArgumentParser:
                       help="niceness of the compensation path's nodes (CNC, estimator, "
                            "broadcaster; default -15: the CPU first when the host is loaded; "
                            "0 = as started). Without the right to it they warn and run as is")
+    demo.add_argument("--lockstep", action="store_true",
+                      help="stream in data time: the machine sends each batch once every node "
+                           "of the loop has caught up, so the outcome is the same on any host "
+                           "(the tests run so); --rate is then ignored")
     demo.set_defaults(handler=_demo)
     info = commands.add_parser("info", help="counts, duration, topics and types of a bag")
     info.add_argument("bag", help="bag directory or .mcap file")

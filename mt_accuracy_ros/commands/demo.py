@@ -93,9 +93,20 @@ def paced(rate_factor: float) -> dict:
 REFERENCE_PERIOD_S = 0.37
 
 
+#: The lockstep participants and what each must have handled before the machine
+#: streams on (nodes/_lockstep.py): with them every node sees the same data in the same
+#: order and every decision falls at the same data time, whatever the host's speed.
+LOCKSTEP_NODES = ["yaw_estimator:scales", "compensation_broadcaster:compensation",
+                  "model_monitor:reference", "temperature_publisher:temperatures",
+                  "demo_user:checks"]
+
+
 def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
              scenario: str = "demo", compensation_mode: str = "hybrid",
-             path_niceness: int = PATH_NICENESS) -> int:
+             path_niceness: int = PATH_NICENESS, lockstep: bool = False) -> int:
+    """The main job; with ``lockstep`` the machine streams in data time, each batch once
+    every node of the loop has caught up, so the outcome is the same on any host
+    (``rate_factor`` then plays no part: the run goes as fast as the graph can)."""
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
     from mt_accuracy_msgs.msg import (ModelCheck, ModelVersion, ReferenceMeasurement,
@@ -118,7 +129,11 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     chosen = resolve_scenario(scenario)
     print(f"mt_accuracy_ros demo - virtual {chosen.machine.name}, scenario '{scenario}' "
           f"({chosen.description}); the CNC applies the compensation ({compensation_mode}); "
-          f"{chosen.duration_s:.0f} s of data at {rate_factor:g}x", flush=True)
+          f"{chosen.duration_s:.0f} s of data " + (
+              "in lockstep (data time: every node keeps up, the host's speed changes only "
+              "the wall time)" if lockstep else f"at {rate_factor:g}x"), flush=True)
+    if lockstep:
+        rate_factor = 1.0   # the controller's real-time delays, in data time
     model = _prepare(out, scenario)
     five_axis = any(spec.is_rotary for spec in chosen.machine.axes.values())
     # The machine's clock starts once every node is up (below): started at a fixed
@@ -131,9 +146,11 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     # estimator, broadcaster and recorder; temperatures also to the monitor.
     scales_consumers, temperature_consumers = 3, 4
     path = {"niceness": int(path_niceness)}
+    step = {"lockstep": True} if lockstep else {}
     nodes = [start_node("recorder", {"output": str(bag), "discovery_period_s": 0.2}, quiet=True),
-             start_node("yaw_estimator", {"baseline_after_s": 40.0, **path}, quiet=True),
-             start_node("compensation_broadcaster", {"model": str(model), **path}, quiet=True),
+             start_node("yaw_estimator", {"baseline_after_s": 40.0, **path, **step}, quiet=True),
+             start_node("compensation_broadcaster", {"model": str(model), **path, **step},
+                        quiet=True),
              # 300 readings = the whole run; a check every 30 readings (each names
              # effects from ~150 candidates, ~1-2 s of CPU) leaves the CPU to the loop.
              # A five-axis machine has more ways to be out of place (each rotary axis'
@@ -143,14 +160,25 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
              # of warming is refitted over the whole warm-up.
              start_node("model_monitor", {"model": str(model), "window": 300,
                                           "check_every": 30, "auto_refit": True,
-                                          "max_effects": 5 if five_axis else 3}, quiet=True),
+                                          "max_effects": 5 if five_axis else 3, **step},
+                        quiet=True),
              start_node("temperature_publisher",
-                        {**machine, "min_subscribers": temperature_consumers}, quiet=True)]
+                        {**machine, "min_subscribers": temperature_consumers, **step},
+                        quiet=True)]
+    if lockstep:
+        step["lockstep_nodes"] = LOCKSTEP_NODES
     encoder = start_node("encoder_publisher", {
         **machine, "min_subscribers": scales_consumers, "compensation_input": compensation_mode,
-        "reference_period_s": REFERENCE_PERIOD_S, **paced(rate_factor), **path}, quiet=True)
+        "reference_period_s": REFERENCE_PERIOD_S, **paced(rate_factor), **path, **step},
+        quiet=True)
     rclpy.init()
     listener = rclpy.create_node("demo_user")
+    user_progress = None
+    if lockstep:
+        from ..nodes._lockstep import ProgressReporter
+
+        # The user is a participant: the machine waits until it has looked at each check.
+        user_progress = ProgressReporter(listener, "demo_user", publishes_models=True)
     checks: list[tuple[float, ModelCheck]] = []
     alarms: list[tuple[float, str]] = []
     compensation: list[tuple[int, float]] = []
@@ -265,6 +293,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                     checks[-1][0] > USER_LOOKS_AFTER_S:
                 # Everything the monitor names, in one decision (its joint fit).
                 effects = [score.name for score in latest.named]
+                before = max((int(m.version) for _, m in models), default=0)
                 ok, reason = _set_parameter(listener, "/model_monitor", "add_effects", effects)
                 actions.append({"time_s": checks[-1][0], "added": ", ".join(effects),
                                 "effects": effects, "accepted": ok, "reason": reason,
@@ -273,6 +302,18 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                 print(f"  data {checks[-1][0]:.1f} s: the monitor names {', '.join(effects)}; "
                       f"the user adds {'them' if len(effects) > 1 else 'it'} - "
                       + ("accepted" if ok else f"refused: {reason}"), flush=True)
+                if ok and user_progress is not None:
+                    # The machine goes on once the version this made is settled where it
+                    # applies: the user waits to see it, then says which it is.
+                    seen_by = time.monotonic() + 30.0
+                    while max((int(m.version) for _, m in models), default=0) <= before and \
+                            time.monotonic() < seen_by:
+                        rclpy.spin_once(listener, timeout_sec=0.05)
+                    user_progress.report(published=max((int(m.version) for _, m in models),
+                                                       default=0))
+            if latest is not None and user_progress is not None:
+                user_progress.report(check_handled_ns=stamp_to_nanoseconds(
+                    latest.header.stamp))
 
         def monitor_done() -> bool:
             # Every reference reading the machine made has been judged by the monitor.
@@ -281,7 +322,8 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                           for k in ("processed", "refused", "lost"))
             return handled >= len(references) > 0
 
-        deadline = time.monotonic() + 90.0 / rate_factor + 60.0
+        # Lockstep has no pace to keep: bounded only so that a hung graph still ends.
+        deadline = time.monotonic() + (1800.0 if lockstep else 90.0 / rate_factor + 60.0)
         while time.monotonic() < deadline and encoder.popen.poll() is None:
             rclpy.spin_once(listener, timeout_sec=0.05)
             act()

@@ -106,6 +106,10 @@ class ModelInputs:
         self._evaluated: list[ErrorModel] = []
         #: The start-up machine, as models name it: network models may name it too.
         self.trusted_machines = (self.model.machine_source or self.model.machine.name,)
+        #: The newest version from the topic that is settled - live or refused - and a
+        #: hook told of it (a lockstep run's progress report).
+        self.settled_version = int(self.model.version)
+        self.on_settled = None
         self.temperatures: dict[str, float] = {}
         self.dead: set[str] = set()
         self.on_change = on_change
@@ -175,9 +179,16 @@ class ModelInputs:
             return
         self._submit(message)
 
+    def _settled(self, version: int) -> None:
+        if version > self.settled_version:
+            self.settled_version = int(version)
+            if self.on_settled is not None:
+                self.on_settled(self.settled_version)
+
     def _older_than_live(self, message: ModelVersion) -> bool:
         if message.version >= self.model.version:
             return False
+        self._settled(message.version)
         # Counted and on /diagnostics; the live model stays.
         self.health.refused("model", f"model version {message.version} is older than the "
                             f"live version {self.model.version}: refused, the live one stays")
@@ -210,6 +221,7 @@ class ModelInputs:
                                 f"live: {problem}; version {self.model.version} stays")
         elif not self._older_than_live(message):   # the live one may have moved on meanwhile
             self._make_live(message, model)
+        self._settled(message.version)
         if self._queued_model is not None:
             queued, self._queued_model = self._queued_model, None
             self._submit(queued)

@@ -38,6 +38,7 @@ from ..core.compensation.limits import gate_problem
 from ..core.inputs.stream_history import StreamHistory
 from ..core.errors import InputDataError, MtAccuracyError
 from ..core.validation import sample_period
+from ._lockstep import ProgressReporter, report_after
 from ._common import (COMPENSATION_QOS, TABLE_QOS, run_node, RESULT_QOS,  # noqa: F401
                       SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse,
@@ -74,6 +75,9 @@ class CompensationBroadcaster(Node):
             "Data time after which a silent input (temperatures, a systematic profile) is "
             "reported: WARN, and ERROR after 3x; meanwhile its last value is held [s]",
             0.1, 3600.0, read_only=True))
+        self.declare_parameter("lockstep", False, plain_descriptor(
+            "Report on 'lockstep' how far the scales are compensated and which model version "
+            "is settled (a lockstep run)", read_only=True))
         self.add_on_set_parameters_callback(self._validate)
         self.health = DeliveryHealth(self)
         declare_niceness(self, self.health)
@@ -96,8 +100,13 @@ class CompensationBroadcaster(Node):
         self._last_stamp = -1
         self._compensation_sequence = 0
         self._table_sequence = 0
-        self.create_subscription(ScaleBatch, "scales", self.health.guard("scales", self._on_batch),
-                                 SENSOR_QOS)
+        self._progress = ProgressReporter(self, follows_models=True) \
+            if self.get_parameter("lockstep").value else None
+        if self._progress is not None:
+            self.inputs.on_settled = lambda version: self._progress.report(settled=version)
+            self._progress.report(settled=self.inputs.settled_version)
+        self.create_subscription(ScaleBatch, "scales", report_after(
+            self._progress, self.health.guard("scales", self._on_batch)), SENSOR_QOS)
         self._publish_tables()
         self._warm_up()
 

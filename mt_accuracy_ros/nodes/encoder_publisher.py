@@ -15,6 +15,11 @@ Sample i is stamped ``start_stamp_ns + i / sample_rate``. Late timer ticks
 publish every batch that fell due - no sample is skipped. The node exits when
 the scenario ends.
 
+With ``lockstep`` the machine streams in data time instead of the wall clock's:
+the next batch goes out once every participant named in ``lockstep_nodes`` has
+handled what it needs (:mod:`._lockstep`), so the run's outcome does not depend
+on the host's speed. The controller then judges a correction's age in data time.
+
 The virtual machine is a CNC with an external compensation input
 (``compensation_input``): ``table`` interpolates the latched
 ``compensation_table`` per axis and combines it through the CNC's kinematic
@@ -49,6 +54,8 @@ from ._priority import declare_niceness
 from ._common import (MATCH_SETTLE_S, RESULT_QOS, SENSOR_QOS, accept, float_descriptor,
                       int_descriptor, nanoseconds_to_stamp, pack_float64, plain_descriptor,
                       refuse, run_node)
+from ._lockstep import (LockstepGate, ProgressReporter, check_compensation_delay,
+                        lockstep_qos, parse_participants, progress_from_message)
 from ._scenario import ScenarioClock, resolve_scenario
 
 #: Simulated seconds generated per window.
@@ -103,6 +110,19 @@ class EncoderPublisher(Node):
         self.declare_parameter("max_compensation_age_s", 0.25, float_descriptor(
             "A correction arriving later than this after its stamp is stale [s]", 1e-3, 60.0,
             read_only=True))
+        self.declare_parameter("lockstep", False, plain_descriptor(
+            "Stream in data time, each batch once every lockstep_nodes participant has caught "
+            "up (host-independent runs), instead of in real time x rate_factor",
+            read_only=True))
+        self.declare_parameter("lockstep_nodes", [""], plain_descriptor(
+            "Lockstep participants as node:stream (stream: scales, compensation, reference, "
+            "temperatures or checks)", read_only=True))
+        self.declare_parameter("lockstep_lead_s", 0.02, float_descriptor(
+            "How far a 'scales' participant may trail the stream in a lockstep run [s of data]",
+            0.0, 10.0, read_only=True))
+        self.declare_parameter("lockstep_timeout_s", 120.0, float_descriptor(
+            "Wall seconds a silent participant may hold the stream before it is left out "
+            "(WARN on /diagnostics)", 1.0, 3600.0, read_only=True))
         self.add_on_set_parameters_callback(self._validate)
 
         self.scenario = resolve_scenario(str(self.get_parameter("scenario").value))
@@ -158,9 +178,39 @@ class EncoderPublisher(Node):
         self._axis_directions = {
             a: model.axis_direction(a, middle)[0] for a in self._axes
             if not self.scenario.machine.axes[a].is_rotary}
+        self._last_reference_ns: int | None = None
+        self._lockstep: LockstepGate | None = None
+        self._waiting: tuple[str, float] | None = None   # (participant, since [monotonic s])
+        if self.get_parameter("lockstep").value:
+            self._start_lockstep()
         # Ticks several times per batch: a batch goes out within a quarter of its period
         # (at most 5 ms) after its last sample is due - its latency, not the tick's.
         self.create_timer(min(self._batch / self._rate / 4, 0.005), self._tick)
+
+    def _start_lockstep(self) -> None:
+        from mt_accuracy_msgs.msg import DataProgress
+
+        try:
+            participants = parse_participants(list(self.get_parameter("lockstep_nodes").value))
+            check_compensation_delay(float(self.get_parameter("compensation_delay_s").value),
+                                     self._batch / self._rate, participants)
+        except ValueError as exc:
+            raise MtAccuracyError(str(exc)) from exc
+        self._lockstep = LockstepGate(
+            participants, lead_ns=int(round(float(self.get_parameter("lockstep_lead_s").value)
+                                            * 1e9)),
+            compensation_delay_ns=int(round(float(
+                self.get_parameter("compensation_delay_s").value) * 1e9)))
+        self._progress = ProgressReporter(self)
+        self.create_subscription(DataProgress, "lockstep", self._on_progress, lockstep_qos())
+
+    def _on_progress(self, message) -> None:
+        if message.node in self._lockstep.participants:
+            self._lockstep.update(message.node, progress_from_message(message))
+            self._tick()
+
+    def _data_stamp_ns(self, index: int) -> int:
+        return self._scenario_clock.start_ns + int(round(index / self._rate * 1e9))
 
     def _validate(self, parameters):
         for parameter in parameters:
@@ -186,6 +236,8 @@ class EncoderPublisher(Node):
         start = int(self.get_parameter("start_stamp_ns").value) or \
             self.get_clock().now().nanoseconds
         self._scenario_clock = ScenarioClock(start, float(self.get_parameter("rate_factor").value))
+        if self._lockstep is not None:
+            self._progress.report(handled_ns=start)   # the stream's position: its start
         return True
 
     def destroy_node(self) -> None:
@@ -196,6 +248,9 @@ class EncoderPublisher(Node):
         """The controller's time in the stamps' time base (sim time), None before start."""
         if self._scenario_clock is None:
             return None
+        if self._lockstep is not None:
+            # Data time: where the stream is. A correction is as late as the data it missed.
+            return self._data_stamp_ns(self._next_index)
         clock = self._scenario_clock
         return clock.stamp_ns(clock.sim_time_s(self.get_clock().now().nanoseconds))
 
@@ -235,6 +290,9 @@ class EncoderPublisher(Node):
             return
         if self._scenario_clock is None and not self._start():
             return
+        if self._lockstep is not None:
+            self._tick_lockstep()
+            return
         due = int(self._scenario_clock.sim_time_s(self.get_clock().now().nanoseconds) * self._rate)
         total = self.scenario.n_samples
         try:
@@ -248,6 +306,46 @@ class EncoderPublisher(Node):
             self.finished = True
             if self.compensation.mode != "off":
                 self.compensation.publish_status()  # the whole run's figures, once more
+
+    def _tick_lockstep(self) -> None:
+        """Every batch the participants are ready for (at most 0.1 s of wall time: the
+        reports that open the next ones must get their turn)."""
+        total = self.scenario.n_samples
+        until = time.monotonic() + 0.1
+        try:
+            while self._next_index + self._batch <= total and time.monotonic() < until:
+                start = self._data_stamp_ns(self._next_index)
+                waiting = self._lockstep.waiting_for(
+                    start, self._data_stamp_ns(self._next_index + self._batch),
+                    self._last_reference_ns, self._scenario_clock.start_ns)
+                if waiting is not None:
+                    self._hold(*waiting)
+                    return
+                self._waiting = None
+                self._publish_batch(self._next_index)
+                self._next_index += self._batch
+                self._progress.report(handled_ns=self._data_stamp_ns(self._next_index))
+        except MtAccuracyError as exc:
+            self.get_logger().error(f"simulation failed: {exc}")
+            self.finished = True
+        if self._next_index + self._batch > total:
+            self.finished = True
+            if self.compensation.mode != "off":
+                self.compensation.publish_status()
+
+    def _hold(self, node: str, what: str) -> None:
+        """Wait for ``node``; leave it out (WARN) once it has been silent too long."""
+        now = time.monotonic()
+        if self._waiting is None or self._waiting[0] != node:
+            self._waiting = (node, now)
+            return
+        waited = now - self._waiting[1]
+        if waited > float(self.get_parameter("lockstep_timeout_s").value):
+            reason = (f"lockstep: {node} held the stream {waited:.0f} s of wall time ({what}); "
+                      "streaming on without it - the run is no longer host-independent")
+            self._lockstep.leave_out(node, reason)
+            self.health.warn(reason)
+            self._waiting = None
 
     def _publish_batch(self, first: int) -> None:
         window = self._window_for(first)
@@ -336,8 +434,9 @@ class EncoderPublisher(Node):
             message.orientation_measured = True
             message.orientation_uncertainty = ORIENTATION_UNCERTAINTY_RAD
             message.applied_rotary_correction = [float(v) for v in rotary_applied]
-        message.header.stamp = nanoseconds_to_stamp(
-            self._scenario_clock.stamp_ns((window.first_index + index) / self._rate))
+        stamp_ns = self._scenario_clock.stamp_ns((window.first_index + index) / self._rate)
+        self._last_reference_ns = stamp_ns
+        message.header.stamp = nanoseconds_to_stamp(stamp_ns)
         message.header.frame_id = frame
         message.instrument = "r_test_two_sphere" if window.encoder_axes else "reference_probe"
         message.command_axes = [a.lower() for a in self._axes]

@@ -70,6 +70,7 @@ from ..io.fields import target_point
 from ._common import (run_node, LATCHED_QOS, RESULT_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, plain_descriptor, refuse, stamp_to_nanoseconds)
 from ._health import DeliveryHealth
+from ._lockstep import ProgressReporter
 from ._model_inputs import MODEL_DIR_DESCRIPTION, ModelInputs, network_model
 from ._search_worker import search, search_pool, search_serialized
 
@@ -111,6 +112,10 @@ class ModelMonitor(Node):
         self.declare_parameter("settle_readings", 2, int_descriptor(
             "Readings after a version went live that are not judged (the change settling)",
             0, 1000))
+        self.declare_parameter("lockstep", False, plain_descriptor(
+            "Report on 'lockstep' which readings are handled - a reading that starts a check "
+            "once the check is published - and each check and model version (a lockstep run)",
+            read_only=True))
         self.add_on_set_parameters_callback(self._validate)
         self.health = DeliveryHealth(self)
         self._check_sequences: dict[str, int] = {}   # ModelCheck.sequence per quantity
@@ -139,8 +144,20 @@ class ModelMonitor(Node):
                                                       RESULT_QOS)
         self._model_topic = self.create_publisher(ModelVersion, "model", LATCHED_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
-        self.create_subscription(ReferenceMeasurement, "reference/tcp_error",
-                                 self.health.guard("reference/tcp_error", self._on_reading),
+        self._progress = ProgressReporter(self, publishes_models=True) \
+            if self.get_parameter("lockstep").value else None
+        self._newest_reading_ns = -1
+        guarded = self.health.guard("reference/tcp_error", self._on_reading)
+
+        def on_reading(message: ReferenceMeasurement) -> None:
+            try:
+                guarded(message)
+            finally:
+                self._newest_reading_ns = max(self._newest_reading_ns,
+                                              stamp_to_nanoseconds(message.header.stamp))
+                self._report_progress()
+
+        self.create_subscription(ReferenceMeasurement, "reference/tcp_error", on_reading,
                                  RESULT_QOS)
         self._checking = None   # (model, observations, stamp, future) of the check under way
         self._pool = search_pool()
@@ -559,13 +576,16 @@ class ModelMonitor(Node):
             diagnosis = future.result()
         except MtAccuracyError as exc:
             self._status(DiagnosticStatus.WARN, f"no check: {exc}")
+            self._report_progress()
             return
         except Exception as exc:  # noqa: BLE001 - a failed search must not end the monitor
             self._status(DiagnosticStatus.ERROR, f"check failed: {type(exc).__name__}: {exc}")
+            self._report_progress()
             return
         self._publish_check(model, obs, stamp_ns, diagnosis)
         if self._since_check >= int(self.get_parameter("check_every").value):
             self._run_check()
+        self._report_progress(last_check_ns=stamp_ns)
 
     def _publish_check(self, model, obs: Observations, stamp_ns: int, diagnosis) -> None:
         self.last_diagnosis = diagnosis
@@ -670,6 +690,15 @@ class ModelMonitor(Node):
     def _diagnose(self, model, obs):
         return search(model, obs, *self._search_settings())
 
+    def _report_progress(self, last_check_ns: int | None = None) -> None:
+        """Lockstep: every reading before the check under way is handled (all received,
+        when none is); the check itself once it is published."""
+        if self._progress is None:
+            return
+        handled = self._checking[2] if self._checking is not None else self._newest_reading_ns + 1
+        self._progress.report(handled_ns=handled, last_check_ns=last_check_ns,
+                              published=int(self.inputs.model.version))
+
     def _publish_model(self) -> None:
         model = self.inputs.model
         message = ModelVersion(version=int(model.version), reason=self._reason,
@@ -681,6 +710,8 @@ class ModelMonitor(Node):
                               "effects": sorted(model.effects)})
         self.get_logger().info(f"model version {model.version}: {self._reason}")
         self._model_topic.publish(message)
+        if getattr(self, "_progress", None) is not None:
+            self._progress.report(published=int(model.version))
 
     def _uncertainty(self, values, what: str, direction: bool = False) -> float:
         """The readings' stated k = 2 uncertainty, or the documented default - said on

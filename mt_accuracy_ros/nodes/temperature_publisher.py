@@ -5,6 +5,10 @@ QoS, degrees Celsius as ``sensor_msgs/Temperature``) at the scenario's
 temperature rate (x ``rate_factor``): the thermocouples every 110 mm on each
 scale and the structure sensors. ``dead_sensors`` makes chosen sensors report
 NaN (a broken thermocouple) for testing the consumers.
+
+With ``lockstep`` it follows the encoder publisher's progress instead of the wall
+clock: every temperature stamped up to the machine's stream position goes out
+before the machine streams on (participant ``temperature_publisher:temperatures``).
 """
 from __future__ import annotations
 
@@ -19,6 +23,7 @@ from mt_accuracy_msgs.msg import TemperatureArray
 from ..sim.machine_tool import simulate
 from ._common import (MATCH_SETTLE_S, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse, run_node)
+from ._lockstep import ProgressReporter, lockstep_qos
 from ._scenario import ScenarioClock, resolve_scenario
 
 
@@ -41,6 +46,9 @@ class TemperaturePublisher(Node):
         self.declare_parameter("min_subscribers", 0, int_descriptor(
             "Hold the stream until this many subscriptions match 'temperatures'", 0, 100,
             read_only=True))
+        self.declare_parameter("lockstep", False, plain_descriptor(
+            "Follow the encoder publisher's data time (its 'lockstep' progress) instead of "
+            "the wall clock", read_only=True))
         self.add_on_set_parameters_callback(self._validate)
         self.scenario = resolve_scenario(str(self.get_parameter("scenario").value))
         result = simulate(self.scenario, start_index=0, stop_index=1)
@@ -54,7 +62,22 @@ class TemperaturePublisher(Node):
         self._released = False
         self._matched_at: float | None = None
         self._publisher = self.create_publisher(TemperatureArray, "temperatures", SENSOR_QOS)
+        self._machine_at_ns: int | None = None   # the machine's stream position (lockstep)
+        self._progress: ProgressReporter | None = None
+        if self.get_parameter("lockstep").value:
+            from mt_accuracy_msgs.msg import DataProgress
+
+            self._progress = ProgressReporter(self)
+            self.create_subscription(DataProgress, "lockstep", self._on_progress, lockstep_qos())
         self.create_timer(0.05, self._tick)
+
+    def _on_progress(self, message) -> None:
+        if message.node == "encoder_publisher":
+            from ._common import stamp_to_nanoseconds
+
+            self._machine_at_ns = max(self._machine_at_ns or 0,
+                                      stamp_to_nanoseconds(message.header.stamp))
+            self._tick()
 
     def _validate(self, parameters):
         for parameter in parameters:
@@ -84,7 +107,12 @@ class TemperaturePublisher(Node):
             if wanted and time.monotonic() - self._matched_at < MATCH_SETTLE_S:
                 return
             self._released = True
-        now_s = self._scenario_clock.sim_time_s(self.get_clock().now().nanoseconds)
+        if self._progress is not None:
+            if self._machine_at_ns is None:
+                return
+            now_s = (self._machine_at_ns - self._scenario_clock.start_ns) / 1e9
+        else:
+            now_s = self._scenario_clock.sim_time_s(self.get_clock().now().nanoseconds)
         dead = {s for s in self.get_parameter("dead_sensors").value if s}
         while self._next < self._time.size and self._time[self._next] <= now_s:
             values = self._values[self._next].copy()
@@ -104,6 +132,10 @@ class TemperaturePublisher(Node):
             self._next += 1
         if self._next >= self._time.size:
             self.finished = True
+        if self._progress is not None:
+            # Once the last one is out, nothing will ever hold the machine again.
+            self._progress.report(handled_ns=2**62 if self.finished else
+                                  self._scenario_clock.stamp_ns(now_s))
 
 
 def main(args: list[str] | None = None) -> int:

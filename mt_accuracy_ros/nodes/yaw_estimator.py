@@ -44,6 +44,7 @@ from ..core.kinematics.machine import load_machine
 from ..core.scales.streaming import StreamingSystematic
 from ._health import DeliveryHealth
 from ._priority import declare_niceness
+from ._lockstep import ProgressReporter, report_after
 from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       pack_float64, plain_descriptor, refuse, stamp_to_nanoseconds,
                       unpack_float64)
@@ -111,6 +112,9 @@ class YawEstimator(Node):
             "of its stamp with the one its sample index predicts [s]; a batch beyond it is "
             "refused (forged or corrupt) until 3 consistent batches confirm a new position",
             0.001, 86400.0, read_only=True))
+        self.declare_parameter("lockstep", False, plain_descriptor(
+            "Report on 'lockstep' how far the scales are handled (a lockstep run)",
+            read_only=True))
         self.add_on_set_parameters_callback(self._validate)
 
         self.machine = load_machine(str(self.get_parameter("machine").value))
@@ -137,8 +141,9 @@ class YawEstimator(Node):
         for axis in self._wanted or [a for a in self.machine.axis_order
                                      if a in self.machine.scale_distance_m]:
             self._create_publishers(axis)
-        self.create_subscription(ScaleBatch, "scales", self.health.guard("scales", self._on_batch),
-                                 SENSOR_QOS)
+        reporter = ProgressReporter(self) if self.get_parameter("lockstep").value else None
+        self.create_subscription(ScaleBatch, "scales", report_after(
+            reporter, self.health.guard("scales", self._on_batch)), SENSOR_QOS)
         self.create_subscription(TemperatureArray, "temperatures",
                                  self.health.guard("temperatures", self._on_temperatures),
                                  SENSOR_QOS)

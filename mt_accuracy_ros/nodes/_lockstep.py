@@ -1,0 +1,244 @@
+"""Lockstep: the virtual machine streams in data time, as fast as its slowest consumer.
+
+In a real-time run the virtual machine streams at the wall clock's pace and a
+loaded host changes the outcome: corrections arrive too late to apply, a check
+ends seconds of data after its readings, a model goes live late. In a lockstep
+run (parameter ``lockstep`` on every node of the loop) each participant
+reports on ``lockstep`` (``mt_accuracy_msgs/DataProgress``) how far it has
+handled the data, and the machine streams the next batch only once every
+participant has caught up. Every node then sees the same data in the same
+order, and every decision falls at the same data time, on any host: slower
+hosts take longer, they do not get other results.
+
+A participant is named in the machine's ``lockstep_nodes`` as ``node:stream``;
+the stream says what it must have handled before the batch covering data time
+[start, end) goes out (``B`` = end - start):
+
+``scales``
+    the scale batches up to ``start - lockstep_lead_s`` (the estimator);
+``compensation``
+    the batches up to ``start + B - compensation_delay_s``: every correction the
+    CNC applies in this batch is in before it (the broadcaster; needs
+    ``compensation_delay_s >= B``);
+``reference``
+    every reference reading the machine published (the monitor: a reading
+    starting a check counts as handled once the check is published);
+``temperatures``
+    published every temperature stamped up to ``start`` (the temperature
+    publisher follows the machine's own progress);
+``checks``
+    acted on every check any participant published (a user).
+
+Besides, every participant that follows model versions (``model_version_settled
+>= 0``) must have settled - made live or refused - the newest version any
+participant published. A participant silent for ``lockstep_timeout_s`` of wall
+time while the machine waits on it is left out, with a WARN: a dead node must
+not hang the machine.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+STREAMS = ("scales", "compensation", "reference", "temperatures", "checks")
+
+
+@dataclass
+class Progress:
+    """One participant's latest ``DataProgress`` (stamps in ns of the run's time base)."""
+
+    handled_ns: int = 0
+    last_check_ns: int = 0
+    check_handled_ns: int = 0
+    model_version_published: int = -1
+    model_version_settled: int = -1
+
+
+def parse_participants(entries: list[str]) -> dict[str, str]:
+    """``["yaw_estimator:scales", ...]`` -> {node: stream}; a clear error otherwise."""
+    participants: dict[str, str] = {}
+    for entry in entries:
+        if not entry:
+            continue
+        node, _, stream = entry.partition(":")
+        if not node or stream not in STREAMS:
+            raise ValueError(f"lockstep participant {entry!r}: give node:stream, the stream one "
+                             f"of {', '.join(STREAMS)}")
+        if node in participants:
+            raise ValueError(f"lockstep participant {node!r} named twice")
+        participants[node] = stream
+    return participants
+
+
+class LockstepGate:
+    """Whether the machine may stream its next batch: pure bookkeeping, no ROS.
+
+    Parameters
+    ----------
+    participants : dict
+        node name -> stream (see the module's description).
+    lead_ns : int
+        How far ``scales`` participants may trail the stream [ns].
+    compensation_delay_ns : int
+        The CNC's fixed delay from a correction's stamp to its application [ns].
+    """
+
+    def __init__(self, participants: dict[str, str], *, lead_ns: int,
+                 compensation_delay_ns: int) -> None:
+        self.participants = dict(participants)
+        self.lead_ns = int(lead_ns)
+        self.delay_ns = int(compensation_delay_ns)
+        self.progress: dict[str, Progress] = {}
+        self.left_out: dict[str, str] = {}   # node -> why it no longer holds the stream
+
+    def update(self, node: str, progress: Progress) -> None:
+        """A participant's report; reports going back in data time are kept monotone."""
+        old = self.progress.get(node)
+        if old is not None:
+            progress = Progress(
+                max(old.handled_ns, progress.handled_ns),
+                max(old.last_check_ns, progress.last_check_ns),
+                max(old.check_handled_ns, progress.check_handled_ns),
+                max(old.model_version_published, progress.model_version_published),
+                max(old.model_version_settled, progress.model_version_settled))
+        self.progress[node] = progress
+
+    def leave_out(self, node: str, reason: str) -> None:
+        self.left_out[node] = reason
+
+    def waiting_for(self, start_ns: int, end_ns: int, last_reference_ns: int | None,
+                    stream_start_ns: int) -> tuple[str, str] | None:
+        """(node, what it has not done yet) holding the batch [start, end), or None.
+
+        ``last_reference_ns`` is the stamp of the newest reference reading the machine
+        published (None: none yet); ``stream_start_ns`` the stamp of the run's first
+        sample - nothing before it needs handling.
+        """
+        active = {n: s for n, s in self.participants.items() if n not in self.left_out}
+        for node in active:
+            if node not in self.progress:
+                return node, "has not reported yet"
+        newest_check = max((p.last_check_ns for p in self.progress.values()), default=0)
+        newest_version = max((p.model_version_published for p in self.progress.values()),
+                             default=-1)
+        for node, stream in active.items():
+            p = self.progress[node]
+            scales_needed = start_ns - self.lead_ns
+            if stream == "scales" and scales_needed > stream_start_ns and \
+                    p.handled_ns < scales_needed:
+                return node, f"scales handled to {p.handled_ns} ns, needed {scales_needed}"
+            corrections_needed = end_ns - self.delay_ns
+            if stream == "compensation" and corrections_needed > stream_start_ns and \
+                    p.handled_ns < corrections_needed:
+                return node, "the corrections this batch applies are not in"
+            if stream == "reference" and last_reference_ns is not None and \
+                    p.handled_ns <= last_reference_ns:
+                return node, f"reference reading {last_reference_ns} ns not handled"
+            if stream == "temperatures" and p.handled_ns < start_ns:
+                return node, "temperatures before the batch not published"
+            if stream == "checks" and p.check_handled_ns < newest_check:
+                return node, f"check {newest_check} ns not acted on"
+            if p.model_version_settled >= 0 and p.model_version_settled < newest_version:
+                return node, f"model version {newest_version} not settled"
+        return None
+
+
+def check_compensation_delay(delay_s: float, batch_s: float, participants: dict[str, str]) -> None:
+    """A ``compensation`` participant can only keep up when the CNC's delay covers a batch."""
+    if "compensation" in participants.values() and delay_s + 1e-12 < batch_s:
+        raise ValueError(f"lockstep with a compensation participant needs compensation_delay_s "
+                         f"({delay_s:g} s) >= batch_period_s ({batch_s:g} s): a batch's "
+                         "corrections must be computable before it goes out")
+
+
+# ------------------------------------------------------------------ ROS glue
+def lockstep_qos():
+    """Reliable, transient local: a late subscriber gets each participant's newest
+    report; keep last 100 so that one participant's reports never push out another's."""
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+    return QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                      history=HistoryPolicy.KEEP_LAST)
+
+
+class ProgressReporter:
+    """Publishes one node's ``DataProgress`` on ``lockstep``: at each change and every
+    0.25 s of wall time (so a machine that subscribes late still hears it)."""
+
+    def __init__(self, node, name: str | None = None, *, follows_models: bool = False,
+                 publishes_models: bool = False) -> None:
+        from rclpy.clock import Clock, ClockType
+
+        from mt_accuracy_msgs.msg import DataProgress
+
+        self._type = DataProgress
+        self.node = node
+        self.name = name or node.get_name()
+        self.state = Progress(model_version_published=0 if publishes_models else -1,
+                              model_version_settled=0 if follows_models else -1)
+        self._publisher = node.create_publisher(DataProgress, "lockstep", lockstep_qos())
+        node.create_timer(0.25, self.publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.publish()
+
+    def report(self, *, handled_ns: int | None = None, last_check_ns: int | None = None,
+               check_handled_ns: int | None = None, published: int | None = None,
+               settled: int | None = None) -> None:
+        s = self.state
+        if handled_ns is not None:
+            s.handled_ns = max(s.handled_ns, int(handled_ns))
+        if last_check_ns is not None:
+            s.last_check_ns = max(s.last_check_ns, int(last_check_ns))
+        if check_handled_ns is not None:
+            s.check_handled_ns = max(s.check_handled_ns, int(check_handled_ns))
+        if published is not None:
+            s.model_version_published = max(s.model_version_published, int(published))
+        if settled is not None:
+            s.model_version_settled = max(s.model_version_settled, int(settled))
+        self.publish()
+
+    def publish(self) -> None:
+        from ._common import nanoseconds_to_stamp
+
+        message = self._type()
+        message.header.stamp = nanoseconds_to_stamp(self.state.handled_ns)
+        message.node = self.name
+        message.last_check = nanoseconds_to_stamp(self.state.last_check_ns)
+        message.check_handled = nanoseconds_to_stamp(self.state.check_handled_ns)
+        message.model_version_published = int(self.state.model_version_published)
+        message.model_version_settled = int(self.state.model_version_settled)
+        self._publisher.publish(message)
+
+
+def progress_from_message(message) -> Progress:
+    from ._common import stamp_to_nanoseconds
+
+    return Progress(stamp_to_nanoseconds(message.header.stamp),
+                    stamp_to_nanoseconds(message.last_check),
+                    stamp_to_nanoseconds(message.check_handled),
+                    int(message.model_version_published), int(message.model_version_settled))
+
+
+def batch_end_ns(message) -> int:
+    """The stamp just after a ``ScaleBatch``'s last sample: what handling it covers [ns]."""
+    from ._common import stamp_to_nanoseconds
+
+    width = max(1, len(message.command_axes)) if len(message.command_axes) else \
+        max(1, len(message.channel_names))
+    values = len(message.command_positions) if len(message.command_axes) else \
+        len(message.positions)
+    return stamp_to_nanoseconds(message.header.stamp) + int(round(
+        values // width * float(message.sample_period) * 1e9))
+
+
+def report_after(reporter: ProgressReporter | None, callback):
+    """``callback`` for ``ScaleBatch`` messages, then (lockstep) the batch reported
+    handled - refused or not: a bad batch must not hold the machine."""
+    if reporter is None:
+        return callback
+
+    def handle(message) -> None:
+        try:
+            callback(message)
+        finally:
+            reporter.report(handled_ns=batch_end_ns(message))
+    return handle
