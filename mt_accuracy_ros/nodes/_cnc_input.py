@@ -67,6 +67,7 @@ class CompensationInput:
                                      max_correction_m=max_correction_m)
         self.tables = TableCompensation(machine, max_correction_m=max_correction_m)
         self._reported = (0, 0)
+        self.newest_stamp_ns = -1
         self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", 10)
         if mode in ("realtime", "hybrid"):
             node.create_subscription(VolumetricCompensation, "compensation",
@@ -82,6 +83,9 @@ class CompensationInput:
 
     # ------------------------------------------------------------ inputs
     def _on_compensation(self, message: VolumetricCompensation) -> None:
+        #: The newest correction stamp that reached this input, whatever became of it [ns].
+        self.newest_stamp_ns = max(self.newest_stamp_ns,
+                                   stamp_to_nanoseconds(message.header.stamp))
         arrival = self._now()
         if arrival is None:
             raise InputDataError("compensation before the controller runs: not applied")

@@ -318,6 +318,8 @@ class EncoderPublisher(Node):
                 waiting = self._lockstep.waiting_for(
                     start, self._data_stamp_ns(self._next_index + self._batch),
                     self._last_reference_ns, self._scenario_clock.start_ns)
+                if waiting is None:
+                    waiting = self._corrections_in_flight(start)
                 if waiting is not None:
                     self._hold(*waiting)
                     return
@@ -332,6 +334,20 @@ class EncoderPublisher(Node):
             self.finished = True
             if self.compensation.mode != "off":
                 self.compensation.publish_status()
+
+    def _corrections_in_flight(self, start_ns: int) -> tuple[str, str] | None:
+        """The broadcaster says it has computed this batch's corrections: wait (at most
+        1 s of wall time - they travel best effort) until they have reached the input."""
+        if self.compensation.mode not in ("realtime", "hybrid") or \
+                "compensation" not in self._lockstep.participants.values():
+            return None
+        needed = start_ns - self.compensation.offset.delay_ns
+        if needed <= self._scenario_clock.start_ns or self.compensation.newest_stamp_ns >= needed:
+            return None
+        if self._waiting is not None and self._waiting[0] == "corrections" and \
+                time.monotonic() - self._waiting[1] > 1.0:
+            return None
+        return "corrections", "computed, not yet received"
 
     def _hold(self, node: str, what: str) -> None:
         """Wait for ``node``; leave it out (WARN) once it has been silent too long."""

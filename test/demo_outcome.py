@@ -1,0 +1,72 @@
+"""The main jobs' outcome, recomputed from the bag by code that shares nothing with the
+demo's own verdict: the reference readings decoded with the MCAP ROS 2 decoder Foxglove
+uses (not the package's reader), the phases cut and the RMS taken here."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclass
+class Readings:
+    """Every reference reading of a bag, in stamp order."""
+
+    time_s: np.ndarray          # (N,) data time from the first reading [s]
+    stamp_ns: np.ndarray        # (N,) the readings' stamps [ns]
+    measured_m: np.ndarray      # (N, 3) what the instrument read on the compensated machine
+    applied_m: np.ndarray       # (N, 3) the correction the CNC had added
+    version: np.ndarray         # (N,) the model version live at the CNC
+    uncertainty_m: np.ndarray   # (N,) the instrument's U (k = 2)
+    direction_rad: np.ndarray | None   # (N, 3) measured tool-direction error (R-test)
+    direction_applied_rad: np.ndarray | None
+    direction_uncertainty_rad: np.ndarray | None
+
+
+def read_references(bag: Path) -> Readings:
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    rows = []
+    for path in sorted(Path(bag).glob("*.mcap")):
+        with open(path, "rb") as stream:
+            reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+            for _, _, _, m in reader.iter_decoded_messages(topics=["/reference/tcp_error"]):
+                stamp = m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
+                rows.append((stamp, (m.error.x, m.error.y, m.error.z),
+                             (m.applied_correction.x, m.applied_correction.y,
+                              m.applied_correction.z), m.compensation_model_version,
+                             m.uncertainty, m.orientation_measured,
+                             (m.orientation_error.x, m.orientation_error.y,
+                              m.orientation_error.z),
+                             (m.applied_orientation_correction.x,
+                              m.applied_orientation_correction.y,
+                              m.applied_orientation_correction.z),
+                             m.orientation_uncertainty))
+    rows.sort(key=lambda r: r[0])
+    stamps = np.array([r[0] for r in rows], dtype=np.int64)
+    oriented = bool(rows) and all(r[5] for r in rows)
+    return Readings(
+        time_s=(stamps - stamps[0]) / 1e9, stamp_ns=stamps,
+        measured_m=np.array([r[1] for r in rows]), applied_m=np.array([r[2] for r in rows]),
+        version=np.array([r[3] for r in rows]), uncertainty_m=np.array([r[4] for r in rows]),
+        direction_rad=np.array([r[6] for r in rows]) if oriented else None,
+        direction_applied_rad=np.array([r[7] for r in rows]) if oriented else None,
+        direction_uncertainty_rad=np.array([r[8] for r in rows]) if oriented else None)
+
+
+def rms(values: np.ndarray) -> np.ndarray:
+    """Per-column root mean square of (N, 3) values."""
+    return np.sqrt(np.mean(np.asarray(values) ** 2, axis=0))
+
+
+def end_rows(readings: Readings, window_s: float = 10.0) -> np.ndarray:
+    """The readings of the run's last ``window_s`` seconds (the end state)."""
+    return readings.time_s >= readings.time_s[-1] - window_s
+
+
+def first_live_s(readings: Readings, version: int) -> float | None:
+    """Data time [s] of the first reading the CNC took with ``version`` or later applied."""
+    at = np.flatnonzero(readings.version >= version)
+    return float(readings.time_s[at[0]]) if at.size else None
