@@ -43,9 +43,9 @@ def _from_bag(bag: Path) -> tuple[list[str], list[float]]:
     return versions, [float(v) for v in mean]
 
 
-def run_once(out: Path, rate: float | None, machine: str) -> dict:
+def run_once(out: Path, rate: float | None, machine: str, lockstep: bool = False) -> dict:
     command = [sys.executable, "-m", "mt_accuracy_ros.cli", "demo", "--out", str(out),
-               "--machine", machine]
+               "--machine", machine] + (["--lockstep"] if lockstep else [])
     if rate is not None:
         command += ["--rate", str(rate)]
     started = time.monotonic()
@@ -84,13 +84,15 @@ def main(argv: list[str] | None = None) -> int:
                         help="CPU-burning processes alongside")
     parser.add_argument("--rate", type=float, default=None, help="the demo's --rate")
     parser.add_argument("--machine", default="kidani_hmc")
+    parser.add_argument("--lockstep", action="store_true", help="the demo's --lockstep")
     args = parser.parse_args(argv)
     burners = _burners(args.burners)
     rows = []
     try:
         with tempfile.TemporaryDirectory() as scratch:
             for k in range(args.runs):
-                result = run_once(Path(scratch) / f"run{k}", args.rate, args.machine)
+                result = run_once(Path(scratch) / f"run{k}", args.rate, args.machine,
+                                  args.lockstep)
                 rows.append(result)
                 print(f"run {k + 1}/{args.runs}: exit {result['code']}, end state "
                       + "/".join(f"{v:.2f}" for v in result["end_um"])
@@ -103,8 +105,10 @@ def main(argv: list[str] | None = None) -> int:
             process.kill()
     rate = args.rate if args.rate is not None else "default"
     print(f"\n`python -m bench.demo_runs --runs {args.runs} --burners {args.burners}"
-          + (f" --rate {args.rate}" if args.rate is not None else "") + "`"
-          f" ({args.machine}, rate {rate}, {args.burners} CPU burners)\n")
+          + (f" --rate {args.rate}" if args.rate is not None else "")
+          + (" --lockstep" if args.lockstep else "") + f" --machine {args.machine}`"
+          f" ({args.machine}, " + ("lockstep" if args.lockstep else f"rate {rate}")
+          + f", {args.burners} CPU burners)\n")
     print("| run | exit | effects the user added | end state e_x / e_y / e_z [um] | its mean "
           "(off the instrument's zero) [um] | refits (the monitor's) | within "
           "band | roll-backs | corrections applied / stale / lost | p99 [ms] | wall [s] | why not 0 |")

@@ -240,6 +240,28 @@ def _smooth(rng, low, high, knots=6):
     return lambda q: (spline(q) - np.polyval(line, q)) / rms
 
 
+def _periodic(rng, period: float, knots: int = 6):
+    """A measured-looking periodic error: a periodic cubic spline through random knots
+    over one period (zero mean, unit RMS) - a shape no one- or two-harmonic sine is."""
+    x = np.linspace(0.0, period, knots + 1)
+    y = rng.normal(0, 1, knots + 1)
+    y[-1] = y[0]
+    spline = CubicSpline(x, y, bc_type="periodic")
+    grid = np.linspace(0.0, period, 400, endpoint=False)
+    mean, rms = float(np.mean(spline(grid))), float(np.std(spline(grid))) or 1.0
+    return lambda q: (spline(np.mod(q, period)) - mean) / rms
+
+
+def worn_backlash(positions: np.ndarray, directions: np.ndarray, low: float, high: float,
+                  rng) -> np.ndarray:
+    """Backlash of a worn screw: the lost motion, signed by the direction of approach, is
+    largest where the screw works most (a bump somewhere along the travel, up to 1.6
+    times its size at the ends) - not the catalogue's one step over the whole travel."""
+    centre = rng.uniform(low + 0.25 * (high - low), low + 0.75 * (high - low))
+    width = 0.2 * (high - low)
+    return directions * (1.0 + 0.6 * np.exp(-0.5 * ((positions - centre) / width) ** 2))
+
+
 def _component(letter: str) -> int:
     return "XYZABC".index(letter)
 
@@ -290,11 +312,21 @@ def make_hidden(kind: str, survey: Survey, rng: np.random.Generator) -> Hidden:
         {f"{a.lower()}*{b.lower()}" for i, a in enumerate(sorted(linear))
          for b in sorted(linear)[i + 1:]}
 
+    # Where a geometric error of one axis pair lives: either position, or their product
+    # (an angle acting through the other axis' arm).
+    def pair_variables(a: str, b: str) -> set[str]:
+        a, b = sorted((a.lower(), b.lower()))
+        return {a, b, f"{a}*{b}"}
+
+    def squared_pair(name: str) -> set[str]:
+        """The variables of the pair a squareness (e.g. EC0Y: X and Y) joins."""
+        turned = name[1].translate(ROTATION_AXIS)
+        return pair_variables(*(c for c in "XYZ" if c != turned))
+
     if kind == "ballscrew_pitch":
         pitch = rng.uniform(0.004, 0.02)
-        phase = rng.uniform(0, 2 * np.pi)
-        e = ErrorSet({axis: [lambda q, s: _twist(_component(axis), np.sin(
-            2 * np.pi * q[axis] / pitch + phase) + 0.3 * np.sin(4 * np.pi * q[axis] / pitch))]})
+        shape = _periodic(rng, pitch)
+        e = ErrorSet({axis: [lambda q, s: _twist(_component(axis), shape(q[axis]))]})
         return Hidden(kind, {f"positioning_periodic:E{axis}{axis}"}, {axis.lower()}, e)
     if kind == "positioning":
         curve = _smooth(rng, *geometry.strokes[axis])
@@ -310,7 +342,10 @@ def make_hidden(kind: str, survey: Survey, rng: np.random.Generator) -> Hidden:
         curve = _smooth(rng, *geometry.strokes[axis])
         # ~1 urad per um at a 0.3 m arm: scaled to the TCP later.
         e = ErrorSet({axis: [lambda q, s: _twist(_component(rotation), curve(q[axis]))]})
-        return Hidden(kind, {f"angular:E{rotation}{axis}"}, positions_all, e)
+        # Strict: the axis' own position, or its product with another axis (the arm).
+        return Hidden(kind, {f"angular:E{rotation}{axis}"},
+                      {axis.lower()} | {v for v in positions_all
+                                        if "*" in v and axis.lower() in v.split("*")}, e)
     if kind == "squareness":
         name = str(rng.choice(["EC0Y", "EB0Z", "EA0Z"]))
         e = ErrorSet(location_fns={name[-1]: [lambda s: _twist(_component(name[1]),
@@ -319,7 +354,7 @@ def make_hidden(kind: str, survey: Survey, rng: np.random.Generator) -> Hidden:
         # machining point) a turned table and a tilted travel of the same pair differ by
         # a constant, which no zeroed instrument sees.
         return Hidden(kind, {f"squareness:{other}" for other in SAME_PAIR[name]},
-                      positions_all, e)
+                      squared_pair(name), e)
     if kind == "thermal_squareness":
         name = str(rng.choice(["EC0Y", "EB0Z", "EA0Z"]))
         difference = np.interp(survey.time_s, dense, rise("column") - rise("bed"))
@@ -329,10 +364,13 @@ def make_hidden(kind: str, survey: Survey, rng: np.random.Generator) -> Hidden:
         return Hidden(kind, {f"thermal_squareness:{name}:bed-column",
                              f"thermal_squareness:{name}:column-bed"},
                       thermal_names("bed") | thermal_names("column") | {"T_bed-column"} |
-                      positions_all, e)
+                      squared_pair(name), e)
     if kind == "structural_drift":
         beta = rng.normal(0, 1, 3)
         values = np.interp(survey.time_s, dense, rise("column"))
+        # A structure that stiffens as it warms: the growth bends away from a straight
+        # line in the rise (not the catalogue's beta x rise).
+        values = values - 0.12 * values ** 2 / max(np.max(np.abs(values)), 1e-9)
         return Hidden(kind, {"structural_thermal_drift:column"}, thermal_names("column"),
                       offset=lambda s: np.outer(values, beta))
     if kind == "lagged_growth":
@@ -378,13 +416,18 @@ def make_hidden(kind: str, survey: Survey, rng: np.random.Generator) -> Hidden:
         return Hidden(kind, {f"position_dependent_thermal:{axis}:{sensor}"},
                       {axis.lower()} | thermal_names(sensor), e)
     if kind == "backlash":
-        direction = survey.directions[axis]
-        e = ErrorSet({axis: [lambda q, s: _twist(_component(axis), -0.5 * direction)]})
+        lost = -0.5 * worn_backlash(survey.positions[axis], survey.directions[axis],
+                                    *geometry.strokes[axis], rng)
+        e = ErrorSet({axis: [lambda q, s: _twist(_component(axis), lost)]})
         return Hidden(kind, {f"reversal:{axis}"}, {f"dir_{axis.lower()}",
                                                    f"v_{axis.lower()}"}, e)
     if kind == "servo_lag":
         velocity = survey.velocities[axis]
-        e = ErrorSet({axis: [lambda q, s: _twist(_component(axis), -velocity)]})
+        fastest = max(np.max(np.abs(velocity)), 1e-12)
+        # A lag of another order: the following error grows faster than the feed (a
+        # velocity-dependent gain), not the catalogue's constant-gain -v.
+        lag = -(velocity + 0.6 * velocity * np.abs(velocity) / fastest)
+        e = ErrorSet({axis: [lambda q, s: _twist(_component(axis), lag)]})
         return Hidden(kind, {f"servo_lag:{axis}"}, {f"v_{axis.lower()}"}, e)
     if kind == "acceleration":
         acceleration = survey.accelerations[axis]
@@ -397,9 +440,13 @@ def make_hidden(kind: str, survey: Survey, rng: np.random.Generator) -> Hidden:
         component = str(rng.choice(list("xyz")))
         pa, pb = survey.positions[a] - centre[a], survey.positions[b] - centre[b]
 
+        half = 0.5 * (geometry.strokes[a][1] - geometry.strokes[a][0])
+
         def offset(s):
+            # A twisted way: the product of the two positions, its rate changing along a's
+            # travel (not the catalogue's plain p_a p_b).
             out = np.zeros((pa.size, 3))
-            out[:, "xyz".index(component)] = pa * pb
+            out[:, "xyz".index(component)] = pa * pb * (1.0 + 0.4 * np.tanh(2.0 * pa / half))
             return out
         return Hidden(kind, {f"cross_axis:{a}{b}"}, {f"{a.lower()}*{b.lower()}"}, offset=offset)
     if kind == "rotary_offset":
@@ -434,6 +481,9 @@ def make_hidden(kind: str, survey: Survey, rng: np.random.Generator) -> Hidden:
         return Hidden(kind, {f"rotary_error:E{component}{r_axis}"}, {r_axis.lower()}, e)
     raise ValueError(f"unknown hidden effect kind {kind!r}")
 
+
+#: The linear axis a rotation letter turns about (A about X, ...).
+ROTATION_AXIS = str.maketrans("ABC", "XYZ")
 
 #: The squareness names of one axis pair (the location error and the two travel slopes).
 SAME_PAIR = {"EC0Y": ("EC0Y", "EYX", "EXY"), "EB0Z": ("EB0Z", "EZX", "EXZ"),
