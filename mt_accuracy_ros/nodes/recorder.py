@@ -37,6 +37,9 @@ class Recorder(Node):
             "Bag directory to create (empty: rosbag2_<date>_<time>)", read_only=True))
         self.declare_parameter("topics", [""], plain_descriptor(
             "Topics to record (empty: every topic whose type is installed)", read_only=True))
+        self.declare_parameter("exclude_topics", [""], plain_descriptor(
+            "Topics never to record (e.g. a lockstep run's '/lockstep' pacing reports)",
+            read_only=True))
         self.declare_parameter("compression", "zstd", plain_descriptor(
             "Chunk compression: 'zstd' or 'none'", read_only=True))
         self.declare_parameter("chunk_size", 1024 * 1024, int_descriptor(
@@ -83,6 +86,8 @@ class Recorder(Node):
         return self._follower.validate(parameters)
 
     def _new_topic(self, name: str, type_name: str, offered: list[dict]):
+        if name in {t for t in self.get_parameter("exclude_topics").value if t}:
+            return None
         self.bag.add_topic(name, type_name, offered)
         return self._writer_for(name)
 
