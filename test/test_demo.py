@@ -86,7 +86,7 @@ def test_a_failed_end_state_says_whether_the_host_or_the_model_failed():
 @pytest.fixture(scope="module")
 def demo_run(tmp_path_factory):
     """The main job in lockstep (data time: the host's speed changes only the wall time,
-    about 60 s idle, 80 s beside two CPU burners), run once for the tests below."""
+    60-83 s idle, 114-129 s beside two CPU burners), run once for the tests below."""
     import contextlib
     import io
 
