@@ -298,3 +298,29 @@ def test_a_log_target_without_a_unit_is_refused_in_one_line(tmp_path, capsys):
     assert main(args + ["--target", "growth:um", "--json", str(tmp_path / "s.json")]) == 0
     summary = json.loads((tmp_path / "s.json").read_text())
     assert summary["target_unit"] == "um" and summary["target_unit_per_m"] == 1e6
+
+
+def test_a_log_with_equal_stamps_is_checked_and_one_that_goes_back_names_its_row(
+        tmp_path, capsys):
+    """Issue 40: a logger at 1 s resolution writes equal stamps, which were refused as
+    'the time column must increase'; only a stamp that goes back is refused, by row."""
+    from mt_accuracy_ros.cli import main
+
+    rng = np.random.default_rng(6)
+    n = 240
+    t1 = 20 + np.cumsum(rng.normal(0, 0.05, n))
+    growth = 3.0 * (t1 - t1[0]) + rng.normal(0, 0.05, n)        # um
+    stamps = np.floor(np.arange(n) * 0.5)                       # 0, 0, 1, 1, 2, 2, ...
+    rows = [f"{s:.0f},{a:.4f},{b:.4f}" for s, a, b in zip(stamps, t1, growth)]
+    (tmp_path / "log.csv").write_text("time_s,t1_C,growth_um\n" + "\n".join(rows) + "\n")
+    args = ["check", str(tmp_path / "log.csv"), "--target", "growth_um", "--inputs", "t1_C"]
+    assert main(args + ["--auto", "1", "--json", str(tmp_path / "s.json")]) == 0
+    summary = json.loads((tmp_path / "s.json").read_text())
+    assert summary["added"] and "t1_C" in summary["added"][0]
+    rows[100] = "3," + rows[100].split(",", 1)[1]               # 50 s -> 3 s: back in time
+    (tmp_path / "back.csv").write_text("time_s,t1_C,growth_um\n" + "\n".join(rows) + "\n")
+    capsys.readouterr()
+    assert main(["check", str(tmp_path / "back.csv"), "--target", "growth_um", "--inputs",
+                 "t1_C"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "goes back at data row 101" in err and "\n" not in err, err

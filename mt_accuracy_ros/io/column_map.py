@@ -293,11 +293,12 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     si = {role: np.asarray(v) * scales[role][0] + scales[role][1] for role, v in values.items()}
     if "time" in si:
         time_s = si["time"]
-        backwards = np.flatnonzero(np.diff(time_s) <= 0)
+        # Equal stamps are a logger's resolution; only a stamp that goes back is refused.
+        backwards = np.flatnonzero(np.diff(time_s) < 0)
         if backwards.size:
-            raise InputDataError(f"{path}: the time column {column_map.roles['time'][0]!r} does "
-                                 f"not increase at data row {int(backwards[0]) + 2} (sort the "
-                                 "file or fix the stamps)")
+            raise InputDataError(f"{path}: the time column {column_map.roles['time'][0]!r} goes "
+                                 f"back at data row {int(backwards[0]) + 2} (sort the file or "
+                                 "fix the stamps; equal stamps are fine)")
     else:
         time_s = np.arange(kept) * column_map.row_period_s
     pick = lambda kind: {r.split(".", 1)[1].upper() if kind != "temp" else r.split(".", 1)[1]:  # noqa: E731

@@ -90,8 +90,13 @@ def test_bad_files_are_one_line_errors(tmp_path):
         read_mapped_csv(_write(tmp_path / "words.csv", words), column_map)
     back = _rows()
     back[10] = back[10].replace("10,", "2,", 1)
-    with pytest.raises(InputDataError, match="does not increase at data row 11"):
+    with pytest.raises(InputDataError, match="goes back at data row 11"):
         read_mapped_csv(_write(tmp_path / "back.csv", back), column_map)
+    # Equal stamps (a logger at coarse resolution) are read, not refused (issue 40).
+    equal = _rows()
+    equal[10] = equal[10].replace("10,", "9,", 1)
+    survey = read_mapped_csv(_write(tmp_path / "equal.csv", equal), column_map)
+    assert survey.time_s[9] == survey.time_s[10] == 540.0 and survey.time_s.size == 25
     with pytest.raises(ParameterError, match="--col 'pos.X': expected ROLE=COLUMN"):
         parse_col_flags(["pos.X"], ColumnMap())
 

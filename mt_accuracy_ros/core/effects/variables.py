@@ -46,8 +46,9 @@ def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
 
         y_{k+1} = u_{k+1} - s tau + (y_k - u_k + s tau) exp(-dt / tau)
 
-    which is exact for that input (no step-size error). ``initial`` is y_0
-    (default u_0: steady state). ``tau_s`` = 0 returns u itself.
+    which is exact for that input (no step-size error). Over equal stamps (dt = 0) y
+    holds still. ``initial`` is y_0 (default u_0: steady state). ``tau_s`` = 0 returns
+    u itself.
 
     Raises
     ------
@@ -77,6 +78,9 @@ def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
     # closed form over stretches whose total decay stays above e^-500 (no underflow):
     # e_n = P_n (e_s + sum_j b_j / P_{j+1}), P the running product of the decays.
     gain = slope_tau * np.expm1(-dt / tau_s)
+    # Equal stamps (a coarse logger): no time passes, so y holds still and the lag takes
+    # the input's step (the limit of a vanishing dt; without this y jumped with u).
+    gain = np.where(dt > 0, gain, -np.diff(u))
     log_product = np.concatenate(([0.0], np.cumsum(-dt / tau_s)))
     lag = np.empty_like(u)
     lag[0] = start - u[0]

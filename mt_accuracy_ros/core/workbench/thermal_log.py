@@ -92,9 +92,15 @@ def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
     if int(good.sum()) < MIN_LOG_ROWS:
         raise InsufficientDataError(f"only {int(good.sum())} complete rows; a thermal log "
                                     f"needs >= {MIN_LOG_ROWS}")
+    rows = np.flatnonzero(good)
     t, y = t[good], y[good]
-    if not np.all(np.diff(t) > 0):
-        raise InputDataError("the time column must increase (sort the file or fix the stamps)")
+    # Equal stamps are a logger's resolution (0.1 s, a second), not an error: the lags
+    # hold still over them. Only a stamp that goes back is refused, by its row.
+    back = np.flatnonzero(np.diff(t) < 0)
+    if back.size:
+        k = int(back[0]) + 1
+        raise InputDataError(f"the time goes back at data row {int(rows[k]) + 1}: {t[k]:g} s "
+                             f"after {t[k - 1]:g} s (sort the file or fix the stamps)")
     n = t.size
     measured = np.zeros((n, 3))
     mask = np.zeros((n, 3), dtype=bool)

@@ -48,6 +48,11 @@ def test_lag_in_closed_form_equals_the_step_by_step_recurrence(tau_s):
     expected = np.empty_like(u_long)
     expected[0] = 18.0
     for k in range(u.size - 1):
+        if dt[k] == 0:
+            # No time passes between equal stamps: the lag's output cannot move
+            # (issue 40; it used to jump with the input).
+            expected[k + 1] = expected[k]
+            continue
         expected[k + 1] = u_long[k + 1] - slope_tau[k] + \
             (expected[k] - u_long[k] + slope_tau[k]) * decay[k]
     np.testing.assert_allclose(first_order_lag(t, u, tau_s, initial=18.0),

@@ -57,12 +57,32 @@ def test_a_log_is_one_measured_component_of_a_standing_machine_and_names_its_sen
     assert all_inputs_least_squares(obs, train) == pytest.approx(expected, rel=1e-9)
 
 
+def test_equal_stamps_of_a_coarse_logger_are_taken_and_the_lags_hold_still_over_them():
+    """Issue 40: a logger at 0.1 s resolution writes equal stamps; they were refused as
+    'not increasing'. A lag over a zero step is the identity (closed form: decay 1)."""
+    from mt_accuracy_ros.core.effects.variables import first_order_lag
+
+    time_s, growth, temperatures = _log(n=40)
+    coarse = time_s.copy()
+    coarse[1::2] = coarse[0::2][:coarse[1::2].size]   # every second stamp repeats
+    obs = log_observations(coarse, growth, temperatures)
+    assert obs.n == 40 and np.all(np.diff(obs.time_s) >= 0)
+    lagged = first_order_lag(coarse, temperatures["t1"], 600.0)
+    same = np.flatnonzero(np.diff(coarse) == 0)
+    # Over an equal stamp the state stays; the input's jump is not integrated.
+    np.testing.assert_allclose(lagged[same + 1], lagged[same], rtol=0, atol=1e-15)
+
+
 def test_bad_logs_are_refused_with_the_reason():
     time_s, growth, temperatures = _log(n=40)
     with pytest.raises(InputDataError, match="component"):
         log_observations(time_s, growth, temperatures, component="w")
-    with pytest.raises(InputDataError, match="must increase"):
+    with pytest.raises(InputDataError, match=r"goes back at data row 2: .* s after"):
         log_observations(time_s[::-1], growth, temperatures)
+    back = time_s.copy()
+    back[17] = back[16] - 1.0
+    with pytest.raises(InputDataError, match="goes back at data row 18"):
+        log_observations(back, growth, temperatures)
     bad = growth.copy()
     bad[:15] = np.nan
     with pytest.raises(InsufficientDataError, match="25 complete rows"):
