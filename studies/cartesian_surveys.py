@@ -26,6 +26,8 @@ import numpy as np
 import yaml
 from scipy.interpolate import CubicSpline
 
+from studies.shapes import worn_backlash
+
 
 @dataclass(frozen=True)
 class Layout:
@@ -204,16 +206,6 @@ def sag(rng, low, high, amplitude):
     line = np.polyfit(grid, raw(grid), 1)
     peak = float(np.max(np.abs(raw(grid) - np.polyval(line, grid)))) or 1.0
     return lambda q: amplitude * (raw(q) - np.polyval(line, q)) / peak
-
-
-def worn_backlash(positions: np.ndarray, directions: np.ndarray, low: float, high: float,
-                  rng) -> np.ndarray:
-    """Backlash of a worn screw: the lost motion, signed by the direction of approach, is
-    largest where the screw works most (a bump somewhere along the travel, up to 1.6
-    times its size at the ends) - not the catalogue's one step over the whole travel."""
-    centre = rng.uniform(low + 0.25 * (high - low), low + 0.75 * (high - low))
-    width = 0.2 * (high - low)
-    return directions * (1.0 + 0.6 * np.exp(-0.5 * ((positions - centre) / width) ** 2))
 
 
 #: ISO 230-1's names for the squareness of each axis pair: the later axis' location

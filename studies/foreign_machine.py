@@ -30,6 +30,8 @@ from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
+from studies.shapes import worn_backlash
+
 MACHINES = Path(__file__).resolve().parents[1] / "mt_accuracy_ros" / "machines"
 LETTERS = "XYZABC"
 
@@ -250,16 +252,6 @@ def _periodic(rng, period: float, knots: int = 6):
     grid = np.linspace(0.0, period, 400, endpoint=False)
     mean, rms = float(np.mean(spline(grid))), float(np.std(spline(grid))) or 1.0
     return lambda q: (spline(np.mod(q, period)) - mean) / rms
-
-
-def worn_backlash(positions: np.ndarray, directions: np.ndarray, low: float, high: float,
-                  rng) -> np.ndarray:
-    """Backlash of a worn screw: the lost motion, signed by the direction of approach, is
-    largest where the screw works most (a bump somewhere along the travel, up to 1.6
-    times its size at the ends) - not the catalogue's one step over the whole travel."""
-    centre = rng.uniform(low + 0.25 * (high - low), low + 0.75 * (high - low))
-    width = 0.2 * (high - low)
-    return directions * (1.0 + 0.6 * np.exp(-0.5 * ((positions - centre) / width) ** 2))
 
 
 def _component(letter: str) -> int:

@@ -136,3 +136,18 @@ def test_one_module_writes_html():
     writers = [p for p in PACKAGE.rglob("*.py")
                if "<html" in p.read_text().lower() or "<table" in p.read_text().lower()]
     assert writers == [], "HTML lives in templates/, rendered by report.py"
+
+
+def test_the_independent_generators_import_nothing_of_the_package():
+    """The proofs' data must not come from the code they judge (issue 39): the foreign
+    machine, the Cartesian surveys, the five-axis R-test and the shapes they share import
+    no module of mt_accuracy_ros, directly or through another study."""
+    studies = REPO_ROOT / "studies"
+    generators = ["foreign_machine.py", "cartesian_surveys.py", "five_axis_rtest.py",
+                  "shapes.py"]
+    assert _offending([studies / name for name in generators], ("mt_accuracy_ros",)) == {}
+    # Not vacuous: the trial runners beside them do use the package.
+    assert _offending([studies / "catalogue_trials.py"], ("mt_accuracy_ros",))
+    shared = {name for path in generators for name in imports_of(studies / path)
+              if name.startswith("studies")}
+    assert all(name.startswith("studies.shapes") for name in shared), shared

@@ -302,7 +302,10 @@ class EncoderPublisher(Node):
         except MtAccuracyError as exc:
             self.get_logger().error(f"simulation failed: {exc}")
             self.finished = True
-        if self._next_index + self._batch > total:
+        self._finish_at_the_end()
+
+    def _finish_at_the_end(self) -> None:
+        if self._next_index + self._batch > self.scenario.n_samples:
             self.finished = True
             if self.compensation.mode != "off":
                 self.compensation.publish_status()  # the whole run's figures, once more
@@ -330,10 +333,7 @@ class EncoderPublisher(Node):
         except MtAccuracyError as exc:
             self.get_logger().error(f"simulation failed: {exc}")
             self.finished = True
-        if self._next_index + self._batch > total:
-            self.finished = True
-            if self.compensation.mode != "off":
-                self.compensation.publish_status()
+        self._finish_at_the_end()
 
     def _corrections_in_flight(self, start_ns: int) -> tuple[str, str] | None:
         """The broadcaster says it has computed this batch's corrections: wait (at most
