@@ -8,6 +8,11 @@ import numpy as np
 
 import pytest
 
+#: Corrections stamped in the run's last compensation delay and batch (20 + 10 ms at
+#: 100 Hz): their time to apply (stamp + delay, at the controller's cycle) falls at or after
+#: the machine's last sample, so they may never apply (8998-9000 of 9000 in every run).
+LATE_AT_THE_END = 3
+
 from mt_accuracy_ros.commands.demo import delivery_losses
 
 
@@ -273,8 +278,10 @@ def test_demo_closes_the_loop_and_tells_the_end_state(demo_run):
     readings = read_references(out / "bag")
     band_m = 1e-6
     assert np.all(readings.uncertainty_m == band_m)
-    # Corrections applied: every one the broadcaster sent but the last (the run ends).
-    assert summary["compensation_applied"] >= summary["compensation_messages"] - 1 > 8000
+    # Corrections applied: every one the broadcaster sent, but those stamped in the run's
+    # last compensation delay, whose time to apply never comes.
+    assert summary["compensation_applied"] >= \
+        summary["compensation_messages"] - LATE_AT_THE_END > 8000
     assert np.all(readings.version[readings.time_s > 1.0] >= 1)
     # The added model live at the machine, at the same data time on any host: within a
     # second of the check the user acted on (32.9 s), and to the end of the run.

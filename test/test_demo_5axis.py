@@ -18,6 +18,11 @@ import json
 
 import numpy as np
 import pytest
+
+#: Corrections stamped in the run's last compensation delay and batch (20 + 10 ms at
+#: 100 Hz): their time to apply (stamp + delay, at the controller's cycle) falls at or after
+#: the machine's last sample, so they may never apply (8998-9000 of 9000 in every run).
+LATE_AT_THE_END = 3
 import yaml
 
 
@@ -41,7 +46,8 @@ def test_the_five_axis_graph_streams_encoders_and_compensates_the_tool_direction
     summary = json.loads((out / "summary.json").read_text())
     assert code == 0 and summary["failures"] == [], (summary["failures"], printed)
     assert summary["compensation_stale"] == 0 and \
-        summary["compensation_applied"] >= summary["compensation_messages"] - 1 > 8000
+        summary["compensation_applied"] >= \
+        summary["compensation_messages"] - LATE_AT_THE_END > 8000
     assert "virtual khan_chen_rpppr" in printed
     first = decode(next(read_messages(out / "bag", ["/scales"])))
     assert list(first.encoder_names) == ["a", "b"]

@@ -11,6 +11,11 @@ import json
 import numpy as np
 import pytest
 
+#: Corrections stamped in the run's last compensation delay and batch (20 + 10 ms at
+#: 100 Hz): their time to apply (stamp + delay, at the controller's cycle) falls at or after
+#: the machine's last sample, so they may never apply (8998-9000 of 9000 in every run).
+LATE_AT_THE_END = 3
+
 
 @pytest.fixture(scope="module")
 def vmc_run(tmp_path_factory):
@@ -53,7 +58,8 @@ def test_the_vmc_loop_closes_within_the_band_recomputed_from_the_bag(vmc_run):
     summary = json.loads((out / "summary.json").read_text())
     assert code == 0 and summary["failures"] == [], (summary["failures"], printed)
     assert summary["compensation_stale"] == 0 and \
-        summary["compensation_applied"] >= summary["compensation_messages"] - 1 > 8000
+        summary["compensation_applied"] >= \
+        summary["compensation_messages"] - LATE_AT_THE_END > 8000
     readings = read_references(out / "bag")
     # The user's model live from its decision (the check at 32.9 s of data) to the end.
     live_s = first_live_s(readings, 2)
