@@ -52,6 +52,14 @@ class Progress:
     model_version_published: int = -1
     model_version_settled: int = -1
 
+    def merged(self, other: "Progress") -> "Progress":
+        """Field by field the further of the two: a report never goes back."""
+        return Progress(*(max(a, b) for a, b in zip(
+            (self.handled_ns, self.last_check_ns, self.check_handled_ns,
+             self.model_version_published, self.model_version_settled),
+            (other.handled_ns, other.last_check_ns, other.check_handled_ns,
+             other.model_version_published, other.model_version_settled))))
+
 
 def parse_participants(entries: list[str]) -> dict[str, str]:
     """``["yaw_estimator:scales", ...]`` -> {node: stream}; a clear error otherwise."""
@@ -94,12 +102,7 @@ class LockstepGate:
         """A participant's report; reports going back in data time are kept monotone."""
         old = self.progress.get(node)
         if old is not None:
-            progress = Progress(
-                max(old.handled_ns, progress.handled_ns),
-                max(old.last_check_ns, progress.last_check_ns),
-                max(old.check_handled_ns, progress.check_handled_ns),
-                max(old.model_version_published, progress.model_version_published),
-                max(old.model_version_settled, progress.model_version_settled))
+            progress = old.merged(progress)
         self.progress[node] = progress
 
     def leave_out(self, node: str, reason: str) -> None:
@@ -183,17 +186,10 @@ class ProgressReporter:
     def report(self, *, handled_ns: int | None = None, last_check_ns: int | None = None,
                check_handled_ns: int | None = None, published: int | None = None,
                settled: int | None = None) -> None:
-        s = self.state
-        if handled_ns is not None:
-            s.handled_ns = max(s.handled_ns, int(handled_ns))
-        if last_check_ns is not None:
-            s.last_check_ns = max(s.last_check_ns, int(last_check_ns))
-        if check_handled_ns is not None:
-            s.check_handled_ns = max(s.check_handled_ns, int(check_handled_ns))
-        if published is not None:
-            s.model_version_published = max(s.model_version_published, int(published))
-        if settled is not None:
-            s.model_version_settled = max(s.model_version_settled, int(settled))
+        self.state = self.state.merged(Progress(
+            handled_ns or 0, last_check_ns or 0, check_handled_ns or 0,
+            -1 if published is None else int(published),
+            -1 if settled is None else int(settled)))
         self.publish()
 
     def publish(self) -> None:
@@ -222,12 +218,12 @@ def batch_end_ns(message) -> int:
     """The stamp just after a ``ScaleBatch``'s last sample: what handling it covers [ns]."""
     from ._common import stamp_to_nanoseconds
 
-    width = max(1, len(message.command_axes)) if len(message.command_axes) else \
-        max(1, len(message.channel_names))
-    values = len(message.command_positions) if len(message.command_axes) else \
-        len(message.positions)
+    if len(message.command_axes):
+        samples = len(message.command_positions) // len(message.command_axes)
+    else:
+        samples = len(message.positions) // max(1, len(message.channel_names))
     return stamp_to_nanoseconds(message.header.stamp) + int(round(
-        values // width * float(message.sample_period) * 1e9))
+        samples * float(message.sample_period) * 1e9))
 
 
 def report_after(reporter: ProgressReporter | None, callback):
