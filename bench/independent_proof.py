@@ -93,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"low SNR {level:g} sigma: named {hits} of {args.weak}", file=sys.stderr,
                   flush=True)
         log = log_leaving_range(3, Path(scratch) / "log.csv")
-        from mt_accuracy_ros.commands.check import check_csv
+        from mt_accuracy_ros.commands.check_log import check_csv
 
         with quiet:
             result = check_csv(log, "growth_um", "time_s", ["t*_C"], [], [], 3, 0.5, 0.05,

@@ -137,10 +137,15 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+#: "not added" lines a thermal log's check prints (the JSON holds them all).
+SHOWN_REFUSALS = 5
+
+
 def _check(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from .commands.check import check_bag, check_csv, write_outputs
+    from .commands.check import check_bag, write_outputs
+    from .commands.check_log import check_csv
     from .core.errors import MtAccuracyError
 
     data = Path(args.data)
@@ -191,7 +196,8 @@ def _check(args: argparse.Namespace) -> int:
                                component=args.component,
                                uncertainty_m=None if args.uncertainty_um is None
                                else args.uncertainty_um * 1e-6,
-                               structure_length_m=args.structure_length)
+                               structure_length_m=args.structure_length,
+                               run_column=args.run, zeroed_runs=args.zeroed_runs)
         else:
             if args.machine is not None:
                 print("mt-accuracy check: --machine is for surveys (a CSV with a column map); "
@@ -215,10 +221,22 @@ def _check(args: argparse.Namespace) -> int:
     unit = result["target_unit"] if log else "m"
     scale = result["target_unit_per_m"] if log else 1.0
     if log:
+        lines = result.get("not_added_lines", [])
+        for line in lines[:SHOWN_REFUSALS]:
+            print(line)
+        if len(lines) > SHOWN_REFUSALS:
+            print(f"... and {len(lines) - SHOWN_REFUSALS} more not added (the JSON's not_added)")
+        for line in result.get("notes", []):
+            print(f"note: {line}")
         print(f"held-out RMSE (rows after the first {result['train_rows']}) "
               f"{result['held_out_baseline_rmse'] * scale:.4g} {unit}; a constant's "
               f"{result['constant_held_out_rmse'] * scale:.4g} {unit}; least squares on every "
               f"input {result['all_inputs_least_squares_held_out_rmse'] * scale:.4g} {unit}")
+        for run in result.get("runs") or []:
+            print(f"  run {run['run']:>12s} ({run['part']}, {run['rows']} rows): constant "
+                  f"{run['constant_rmse'] * scale:.4g}, least squares "
+                  f"{run['least_squares_rmse'] * scale:.4g}, model "
+                  f"{run['model_rmse'] * scale:.4g} {unit} RMS")
     print(f"baseline RMSE {result['baseline_rmse'] * scale:.4g} {unit}")
     for entry in result["ranking"][:5]:
         flag = "*" if entry["significant"] else " "
@@ -364,7 +382,15 @@ def build_parser() -> argparse.ArgumentParser:
                        help="CSV log: structure between the sensors and the tool (bounds a "
                             "physical thermal gain; default 1 m)")
     check.add_argument("--train-fraction", type=float, default=0.5,
-                       help="CSV: fit on this leading fraction, judge on the rest")
+                       help="CSV: fit on this leading fraction, judge on the rest (with "
+                            "--run: at the run boundary nearest it)")
+    check.add_argument("--run", metavar="COLUMN",
+                       help="CSV log of many runs: rows of one run share this column's value "
+                            "(time restarts or jumps between runs; lags restart each run; "
+                            "whole runs judge one another)")
+    check.add_argument("--zeroed-runs", action="store_true",
+                       help="CSV log with --run: the instrument was zeroed at each run's "
+                            "start (each run has its own zero; default: absolute readings)")
     check.set_defaults(handler=_check)
     iso = commands.add_parser("iso230-2", help="ISO 230-2 figures of a laser interferometer's "
                               "positioning runs (CSV)")

@@ -30,6 +30,10 @@ class CsvTable:
     rows_read: int
     rows_dropped: int = 0
     drop_reasons: list[str] = field(default_factory=list)
+    #: (N,) the data row (1-based, the header not counted) of each kept row.
+    data_rows: np.ndarray | None = None
+    #: Missing values kept as NaN per gap column (see :func:`read_csv_table`).
+    gaps: dict[str, int] = field(default_factory=dict)
 
     @property
     def names(self) -> list[str]:
@@ -45,8 +49,17 @@ class CsvTable:
         return text
 
 
-def read_csv_table(path: str | Path, *, min_rows: int = 2) -> CsvTable:
-    """Read ``path``; raises :class:`InputDataError` naming the row or column at fault."""
+def read_csv_table(path: str | Path, *, min_rows: int = 2,
+                   text_columns: tuple[str, ...] = (),
+                   gap_columns: tuple[str, ...] = ()) -> CsvTable:
+    """Read ``path``; raises :class:`InputDataError` naming the row or column at fault.
+
+    ``text_columns`` are kept as text (a run's name: ``day3``, ``2024-05-01``); an empty
+    cell there drops its row like a missing number. ``gap_columns`` keep their rows when a
+    cell is missing, non-numeric or not finite (a dead thermocouple): the value is NaN,
+    and the caller decides (``CsvTable.gaps`` counts them per column). Every column
+    carries the data row (``CsvTable.data_rows``, 1-based after the header) its values
+    came from."""
     path = Path(path)
     try:
         with open(path, newline="", encoding="utf-8") as stream:
@@ -61,13 +74,32 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2) -> CsvTable:
     header = [name.strip() for name in rows[0]]
     if len(set(header)) != len(header) or any(not name for name in header):
         raise InputDataError(f"{path}: the header needs unique, non-empty column names")
-    values, dropped, reasons = [], 0, []
+    missing = [name for name in text_columns if name not in header]
+    if missing:
+        raise InputDataError(f"{path}: no column {missing[0]!r}; have {', '.join(header)}")
+    values, dropped, reasons, kept_rows, gaps = [], 0, [], [], {}
     for number, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):
             raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
                                  f"{len(header)}")
         parsed, problem = [], ""
         for name, cell in zip(header, row):
+            if name in text_columns:
+                if not cell.strip():
+                    problem = f"row {number} column {name}: empty"
+                    break
+                parsed.append(cell.strip())
+                continue
+            if name in gap_columns:
+                try:
+                    value = float(cell)
+                except ValueError:
+                    value = math.nan
+                if not math.isfinite(value):
+                    gaps[name] = gaps.get(name, 0) + 1
+                    value = math.nan
+                parsed.append(value)
+                continue
             try:
                 value = float(cell)
             except ValueError:
@@ -83,9 +115,29 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2) -> CsvTable:
                 reasons.append(problem)
             continue
         values.append(parsed)
+        kept_rows.append(number - 1)
     if len(values) < min_rows:
         raise InputDataError(f"{path}: {len(values)} usable rows; at least {min_rows} needed"
                              + (f" ({reasons[0]})" if reasons else ""))
-    data = np.asarray(values, dtype=np.float64)
-    return CsvTable(path, {name: data[:, j] for j, name in enumerate(header)},
-                    rows_read=len(rows) - 1, rows_dropped=dropped, drop_reasons=reasons)
+    columns = {}
+    for j, name in enumerate(header):
+        cells = [row[j] for row in values]
+        columns[name] = np.asarray(cells, dtype=object if name in text_columns else np.float64)
+    return CsvTable(path, columns, rows_read=len(rows) - 1, rows_dropped=dropped,
+                    drop_reasons=reasons, data_rows=np.asarray(kept_rows, dtype=np.intp),
+                    gaps=gaps)
+
+
+def csv_header(path: str | Path) -> list[str]:
+    """The column names of a CSV's first non-empty row (errors as :func:`read_csv_table`)."""
+    path = Path(path)
+    try:
+        with open(path, newline="", encoding="utf-8") as stream:
+            for row in csv.reader(stream):
+                if any(cell.strip() for cell in row):
+                    return [name.strip() for name in row]
+    except OSError as exc:
+        raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputDataError(f"{path}: not a text CSV file ({exc})") from exc
+    raise InputDataError(f"{path}: empty file")

@@ -698,12 +698,18 @@ def csv_report_sections(result: dict, plot: dict, directory: Path, stem: str) ->
     split = hours[np.argmin(plot["train"])] if not plot["train"].all() else hours[-1]
     for ax in (top, bottom):
         ax.axvline(split, color="0.5", ls="--", label="end of training" if ax is top else None)
+        for k, start in enumerate(plot.get("run_starts") if plot.get("run_starts") is not None
+                                  else []):
+            if k:
+                ax.axvline(hours[start], color="0.8", lw=0.6,
+                           label="run boundary" if ax is top and k == 1 else None)
     bottom.plot(hours, (plot["target"] - plot["before"]) * scale, "b-", lw=0.8,
                 label="residual before")
     bottom.plot(hours, (plot["target"] - plot["after"]) * scale, "r-", lw=0.8,
                 label="residual after")
     top.set(ylabel=f"{result['target']} [{unit}]")
-    bottom.set(xlabel="time since start [h]", ylabel=f"residual [{unit}]")
+    bottom.set(xlabel="time since start [h]" if plot.get("run_starts") is None else
+               "time, runs laid end to end [h]", ylabel=f"residual [{unit}]")
     _legend(top)
     _legend(bottom)
     figure = save_figure(fig, directory, f"{stem}_fit",
@@ -716,6 +722,11 @@ def csv_report_sections(result: dict, plot: dict, directory: Path, stem: str) ->
         f"{', '.join(result['added']) or 'nothing'} ({result['judged_on']}). A constant "
         f"leaves {result['constant_held_out_rmse'] * scale:.4g} {unit}; least squares on "
         f"every input {result['all_inputs_least_squares_held_out_rmse'] * scale:.4g} {unit}."])
+    baselines = Table(["on the held-out rows", f"RMSE [{unit}]"],
+                      caption="The same rows, unseen by every decision.")
+    for name, value in result.get("baselines_held_out_m", {}).items():
+        baselines.add(name, value * scale)
+    headline.tables.append(baselines)
     for line in result.get("warnings", []):
         headline.paragraphs.append(line[0].upper() + line[1:] + ".")
     if result.get("sensors_carrying_weight"):
@@ -728,5 +739,27 @@ def csv_report_sections(result: dict, plot: dict, directory: Path, stem: str) ->
         versions.add(step["model_version"], ", ".join(step["effects"]) or "-",
                      step["held_out_rmse"] * scale, step["cv_rmse"] * scale,
                      ", ".join(step.get("added", [])))
-    return [source, headline, localisation_section(check, directory, stem),
-            _evidence_section(check), Section("Model versions", tables=[versions])]
+    refused = Table(["candidate", "CV gain", "refused by"],
+                    caption="Candidates with a large CV gain that were not added, and why.")
+    for entry in result.get("not_added", []):
+        test = entry["test"]
+        if "before" in entry:
+            test += f": {entry['before'] * scale:.4g} -> {entry['after'] * scale:.4g} {unit}"
+        refused.add(entry["name"], f"{100 * entry['cv_reduction']:.0f} %", test)
+    sections = [source, headline, localisation_section(check, directory, stem),
+                _evidence_section(check),
+                Section("Model versions", tables=[versions] + ([refused] if refused.rows else []))]
+    if result.get("runs"):
+        runs = Table(["run", "part", "rows", f"constant [{unit}]",
+                      f"least squares, every input [{unit}]", f"model [{unit}]"],
+                     caption="RMS error of each run; the held-out runs judge, unseen.")
+        for run in result["runs"]:
+            runs.add(run["run"], run["part"], run["rows"], run["constant_rmse"] * scale,
+                     run["least_squares_rmse"] * scale, run["model_rmse"] * scale)
+        sections.append(Section("Runs", tables=[runs], paragraphs=[
+            f"{len(result['runs'])} runs; "
+            + ("each zeroed at its start (its own zero); " if result.get("zeroed_runs") else
+               "absolute readings across runs; ")
+            + "every lag restarts at its run's first reading, and time is counted from each "
+              "run's start."]))
+    return sections

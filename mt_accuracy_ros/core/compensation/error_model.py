@@ -348,7 +348,8 @@ class ErrorModel:
                   time_s: ArrayLike | None = None,
                   accelerations: dict[str, ArrayLike] | None = None,
                   spindle_speed_rad_s: ArrayLike | None = None, fresh: bool = False,
-                  referred: bool = True, work_point: ArrayLike | None = None
+                  referred: bool = True, work_point: ArrayLike | None = None,
+                  run_starts: ArrayLike | None = None
                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position error (N, 3) [m], orientation error (N, 3) [rad]) at command positions.
 
@@ -361,6 +362,8 @@ class ErrorModel:
         reversal effect where the axis stands still; without it sign(v) is used
         (0 at a standstill). ``time_s`` (N,) [s], ``accelerations`` [m/s^2] and
         ``spindle_speed_rad_s`` (N,) serve catalogue effects that need them.
+        ``run_starts`` (R,): the first row of each run of a record made of many runs
+        (lags restart there, :class:`~..effects.variables.Variables`).
 
         With a :attr:`datum` (and ``referred``), the position error is the error
         relative to the datum's as the instrument was zeroed there: e(q) - e(datum) at
@@ -409,7 +412,8 @@ class ErrorModel:
                                   dict(velocities or {}), dict(accelerations or {}),
                                   dict(directions or {}), temps,
                                   self.reference_temperatures_c, spindle_speed_rad_s,
-                                  lag_states=self._lag_states)
+                                  lag_states=None if run_starts is not None
+                                  else self._lag_states, run_starts=run_starts)
             context = Context(self.machine, variables, self._kinematics, orientation,
                               work_point=work_point)
             turned = np.zeros_like(orientation)

@@ -10,6 +10,8 @@ Families by group (each a small class with its physics in the docstring):
 * thermal (:mod:`.thermal`): drift, lag, gradient, heat sources,
   position-dependent expansion, thermal squareness (Zhu ch. 3-4);
 * motion (:mod:`.motion`): reversal, servo lag, acceleration per axis;
+* thermal logs only (:mod:`.log_models`): least squares on sets of sensors and on
+  the temperatures' principal components;
 * user (:mod:`.user`): expressions declared in the model, and families other
   packages install under the entry-point group ``mt_accuracy_ros.effects``.
 
@@ -24,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError
-from . import geometric, motion, thermal
+from . import geometric, log_models, motion, thermal
 from .base import Context, EffectFamily, along, per_component
 from .user import ENTRY_POINT_GROUP, UserExpression, load_plugins, user_declaration
 
@@ -35,7 +37,8 @@ __all__ = ["Context", "EffectFamily", "ENTRY_POINT_GROUP", "UserExpression", "al
 
 
 def builtin_families() -> list[EffectFamily]:
-    return geometric.families() + thermal.families() + motion.families()
+    return geometric.families() + thermal.families() + motion.families() + \
+        log_models.families()
 
 
 _PLUGINS: list[EffectFamily] | None = None

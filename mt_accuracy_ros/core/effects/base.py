@@ -57,8 +57,12 @@ class Context:
                  kinematics: KinematicModel | None = None,
                  orientation: NDArray[np.float64] | None = None, *,
                  orientation_lever_m: float | None = None,
-                 work_point: NDArray[np.float64] | None = None) -> None:
+                 work_point: NDArray[np.float64] | None = None,
+                 zero_rows: NDArray[np.intp] | None = None) -> None:
         self.machine = machine
+        #: (N,) the reading each reading's instrument was zeroed at (a log of zeroed runs:
+        #: its run's first), or None: a position design is then referred to that row.
+        self.zero_rows = None if zero_rows is None else np.asarray(zero_rows, dtype=np.intp)
         self.work_point = work_point
         #: Set when the readings measured the tool's direction: [m per rad] that makes a
         #: direction row's noise the position rows' (see the module docstring).
@@ -156,6 +160,9 @@ class Context:
         """(N, width, P): the family's TCP design, and (when the direction was measured)
         its direction design as the instrument sees it (module docstring)."""
         design = family.design(self, variant, setting)
+        if self.zero_rows is not None:
+            # A zeroed instrument reads e(t) - e(t_zero): so does every column.
+            design = design - design[self.zero_rows]
         if self.orientation_lever_m is None:
             return design
         turn = family.orientation_design(self, variant, setting)
@@ -165,6 +172,8 @@ class Context:
     def measured_separable(self, family: "EffectFamily", variant: str, setting: dict
                            ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
         """:meth:`EffectFamily.separable_design` with the sensitivity (N, width)."""
+        if self.zero_rows is not None:
+            return None     # referred to a zero row, a design is no longer one product
         separable = family.separable_design(self, variant, setting)
         if separable is None or self.orientation_lever_m is None:
             return separable
@@ -233,6 +242,9 @@ class EffectFamily:
     #: constant or input, 2 a function or a lag, 3 a searched period or a product. When
     #: the data cannot tell two candidates apart, the simpler is named (Occam).
     complexity = 2
+    #: A candidate only where the caller asks for it (a thermal log's command): a blend
+    #: of many sensors that would out-fit a named effect of a survey.
+    log_only = False
 
     def variant_complexity(self, variant: str) -> int:
         """:attr:`complexity` of one variant (a family whose variants differ in what they

@@ -87,6 +87,12 @@ def display_setting(setting: dict) -> str:
     for key, value in setting.items():
         if key in ("period_m", "period"):
             parts.append(f"period {float(value) * 1e3:.4g} mm")
+        elif key in ("centre", "scale"):
+            continue     # a principal-component setting's standardisation
+        elif key == "loadings":
+            parts.append(f"{len(value)} component(s)")
+        elif key == "sensors":
+            parts.append(f"of {str(value).count('+') + 1} sensors")
         elif key == "tau_s":
             parts.append(f"tau {float(value) / 60.0:.3g} min")
         elif isinstance(value, float):

@@ -59,7 +59,7 @@ class _SearchedTimeConstant:
         time_s = ctx.variables.time_s
         if time_s is None or np.size(time_s) < 2:
             return []
-        span = float(np.ptp(time_s))
+        span = ctx.variables.span_s()     # of the longest run: lags restart each run
         return [{"tau_s": tau} for tau in TIME_CONSTANTS_S if tau <= MAX_TAU_PER_SPAN * span]
 
     def describe_setting(self, setting):

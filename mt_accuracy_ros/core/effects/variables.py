@@ -12,7 +12,7 @@ name                meaning                                             unit
 ``v_x`` ...         command velocity                                    m/s, rad/s
 ``acc_x`` ...       command acceleration (given, or d v / d t)          m/s^2
 ``dir_x`` ...       direction of the last motion (+1 / -1, 0 unknown)   1
-``t``               time since the first reading                        s
+``t``               time since the first reading (of its run)           s
 ``T_<sensor>``      rise of that temperature over its reference         K
 ``spindle_speed``   spindle speed                                       rad/s
 ``spindle_rpm``     the same in rpm (the unit machine tools speak)      1/min
@@ -25,6 +25,11 @@ an input that is piecewise linear between readings. A lag of a temperature
 starts in steady state (equal to its input at the first reading) - not from
 zero, which would add a start-up ramp of the whole temperature; a lag of an
 operating input (spindle speed, axis feed) starts from rest, a cold machine.
+
+A record made of many **runs** (a log of many days, each a cold start; an
+experiment repeated) gives ``run_starts``: every lag restarts at its run's
+first reading as above, and ``t`` is the time since the run's start - the
+time between runs (a night, a restarted clock) means nothing to the machine.
 """
 from __future__ import annotations
 
@@ -96,6 +101,21 @@ def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
     return u + lag
 
 
+def run_starts_of(run_of_row: ArrayLike) -> NDArray[np.intp]:
+    """(R,) first row of each run from a run label per row (N,) whose runs are contiguous."""
+    labels = np.asarray(run_of_row)
+    if labels.size == 0:
+        return np.zeros(0, dtype=np.intp)
+    return np.concatenate(([0], np.flatnonzero(labels[1:] != labels[:-1]) + 1)).astype(np.intp)
+
+
+def subset_run_starts(run_starts: NDArray[np.intp], n: int, rows) -> NDArray[np.intp]:
+    """The run starts of ``rows`` (an index or mask into n rows, in time order)."""
+    label = np.zeros(n, dtype=np.intp)
+    label[np.asarray(run_starts)[1:]] = 1
+    return run_starts_of(np.cumsum(label)[rows])
+
+
 @dataclass
 class LagState:
     """Where a lag stood at its last sample, so that a stream continues it."""
@@ -114,6 +134,8 @@ class Variables:
     values the rises are taken from (default: each sensor's first reading).
     time_s : (N,) absolute or relative [s]. spindle_speed_rad_s : (N,) or None.
     lag_states : optional store that continues lags across calls (live nodes).
+    run_starts : optional (R,) increasing row indices, the first row of each run
+    (the first is 0): lags restart and ``t`` counts from each run's start.
     """
 
     positions: dict[str, NDArray[np.float64]]
@@ -125,6 +147,7 @@ class Variables:
     reference_temperatures_c: dict[str, float] = field(default_factory=dict)
     spindle_speed_rad_s: NDArray[np.float64] | None = None
     lag_states: dict | None = None
+    run_starts: NDArray[np.intp] | None = None
 
     def __post_init__(self) -> None:
         if not self.positions:
@@ -144,6 +167,20 @@ class Variables:
         if self.spindle_speed_rad_s is not None:
             self.spindle_speed_rad_s = np.broadcast_to(
                 np.asarray(self.spindle_speed_rad_s, dtype=np.float64).ravel(), (self.n,))
+        if self.run_starts is not None:
+            starts = np.asarray(self.run_starts, dtype=np.intp).ravel()
+            if self.n and (starts.size == 0 or starts[0] != 0 or np.any(np.diff(starts) <= 0)
+                           or starts[-1] >= self.n):
+                raise InputDataError(f"run starts {starts.tolist()[:8]}: increasing row "
+                                     f"indices from 0, below {self.n}")
+            self.run_starts = starts if starts.size > 1 else None
+
+    def run_slices(self) -> list[slice]:
+        """The rows of each run (one slice of every row without runs)."""
+        if self.run_starts is None:
+            return [slice(0, self.n)]
+        edges = list(self.run_starts) + [self.n]
+        return [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
 
     # ------------------------------------------------------------ primitives
     def rise(self, sensor: str) -> NDArray[np.float64]:
@@ -157,10 +194,24 @@ class Variables:
             reference = float(values[0])
         return values - reference
 
+    def span_s(self) -> float:
+        """The longest stretch of time one run covers [s] (the record's, without runs): what
+        a lag or a drift can be seen over."""
+        if self.time_s is None or self.n < 2:
+            return 0.0
+        return max(float(np.ptp(self.time_s[rows])) if rows.stop > rows.start else 0.0
+                   for rows in self.run_slices())
+
     def relative_time(self) -> NDArray[np.float64]:
+        """Time since the first reading [s] - of its run, when there are runs."""
         if self.time_s is None:
             raise InputDataError("this effect needs the readings' times")
-        return self.time_s - self.time_s[0]
+        if self.run_starts is None:
+            return self.time_s - self.time_s[0]
+        out = np.empty(self.n)
+        for rows in self.run_slices():
+            out[rows] = self.time_s[rows] - self.time_s[rows.start]
+        return out
 
     def velocity(self, axis: str) -> NDArray[np.float64]:
         if axis not in self.velocities:
@@ -194,6 +245,13 @@ class Variables:
             from_rest: bool = False) -> NDArray[np.float64]:
         """First-order lag of ``signal`` (see :func:`first_order_lag`), continued from
         ``lag_states[key, tau]`` when that state lies before these readings."""
+        if self.run_starts is not None and self.lag_states is None:
+            # Each run from its own first reading (a cold start, a new day).
+            t, out = self.relative_time(), np.empty(self.n)
+            for rows in self.run_slices():
+                out[rows] = first_order_lag(t[rows], signal[rows], tau_s,
+                                            initial=0.0 if from_rest else None)
+            return out
         t = self.relative_time() if self.lag_states is None else self.time_s
         state_key = (key, float(tau_s))
         state = self.lag_states.get(state_key) if self.lag_states is not None else None
@@ -251,4 +309,6 @@ class Variables:
                          pick(self.velocities), pick(self.accelerations), pick(self.directions),
                          pick(self.temperatures), dict(self.reference_temperatures_c),
                          None if self.spindle_speed_rad_s is None else
-                         self.spindle_speed_rad_s[rows])
+                         self.spindle_speed_rad_s[rows],
+                         run_starts=None if self.run_starts is None else
+                         subset_run_starts(self.run_starts, self.n, rows))

@@ -37,7 +37,7 @@ from ..effects.user import UserExpression
 from .localisation import Localisation, localise
 from .distributions import chi2_sf
 from .selection import Selector, Term
-from ..effects.variables import Variables
+from ..effects.variables import Variables, run_starts_of
 
 AXES3 = "XYZ"
 
@@ -76,6 +76,12 @@ class Observations:
     retroreflector); the model is evaluated there. None (the default): the readings
     are taken at the machining point, where the tool is (Kidani eqs. 2.9-2.10);
     :func:`work_points` builds it from per-reading targets.
+
+    ``run_of_row`` (N,): a record made of many **runs** (a log of many days, each run
+    contiguous): every lag restarts at its run's first reading and time counts from
+    it. ``zeroed_runs``: the instrument was zeroed at each run's first reading, so
+    every run has its own zero - measured and model are then both referred to it
+    (:meth:`zeroed`); otherwise the readings are absolute across runs.
     """
 
     positions: dict[str, NDArray[np.float64]]
@@ -96,6 +102,30 @@ class Observations:
     orientation_measured: NDArray[np.bool_] | None = None
     orientation_uncertainty_rad: float = 2e-6
     work_point: NDArray[np.float64] | None = None
+    run_of_row: NDArray[np.int64] | None = None
+    zeroed_runs: bool = False
+
+    @property
+    def run_starts(self) -> NDArray[np.intp] | None:
+        """(R,) first row of each run (None: one run)."""
+        if self.run_of_row is None:
+            return None
+        starts = run_starts_of(self.run_of_row)
+        return starts if starts.size > 1 or self.zeroed_runs else None
+
+    @property
+    def zero_rows(self) -> NDArray[np.intp] | None:
+        """(N,) the row each reading's instrument zero was taken at (its run's first), or
+        None when the readings are absolute."""
+        if not self.zeroed_runs or self.run_of_row is None:
+            return None
+        starts = run_starts_of(self.run_of_row)
+        return starts[np.searchsorted(starts, np.arange(self.n), side="right") - 1]
+
+    def zeroed(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``values`` (N, ...) referred to each run's zero row (unchanged when absolute)."""
+        zero = self.zero_rows
+        return values if zero is None else values - values[zero]
 
     def subset(self, rows) -> "Observations":
         pick = lambda d: {k: np.asarray(v)[rows] for k, v in d.items()}  # noqa: E731
@@ -115,7 +145,9 @@ class Observations:
                             self.orientation_uncertainty_rad,
                             self.work_point if self.work_point is None or
                             np.ndim(self.work_point) == 1
-                            else np.asarray(self.work_point)[rows])
+                            else np.asarray(self.work_point)[rows],
+                            None if self.run_of_row is None else self.run_of_row[rows],
+                            self.zeroed_runs)
 
     def set_directions(self, errors: list, uncertainties: list[float]) -> str:
         """Take the tool direction of the readings that measured it: ``errors`` (N,) of a
@@ -157,7 +189,7 @@ class Observations:
         return Variables(dict(self.positions), self.time_s, dict(self.velocities),
                          dict(self.accelerations), dict(self.directions),
                          dict(self.temperatures), dict(reference_temperatures_c or {}),
-                         self.spindle_speed_rad_s)
+                         self.spindle_speed_rad_s, run_starts=self.run_starts)
 
     def model_inputs(self) -> dict:
         """Keyword arguments of :meth:`ErrorModel.tcp_error` beyond positions."""
@@ -167,6 +199,8 @@ class Observations:
                   "spindle_speed_rad_s": self.spindle_speed_rad_s}
         if self.work_point is not None:
             inputs["work_point"] = self.work_point
+        if self.run_starts is not None:
+            inputs["run_starts"] = self.run_starts
         return inputs
 
 
@@ -206,6 +240,8 @@ class Candidate:
     declaration: dict | None = None   # a user effect's declaration
     #: Why physics refuses this fit ("" if it does not): never named, never added.
     refusal: str = ""
+    #: The held-out block test's p-value, adjusted for every candidate tried (max-T).
+    adjusted_p: float = 1.0
 
     @property
     def name(self) -> str:
@@ -226,7 +262,7 @@ class Candidate:
                 "share_of_excess": self.share_of_excess, "explanation": self.explanation,
                 "parameters": self.parameters,
                 "parameter_uncertainties": self.parameter_uncertainties,
-                "refusal": self.refusal}
+                "refusal": self.refusal, "adjusted_p": self.adjusted_p}
 
 
 @dataclass
@@ -317,7 +353,7 @@ def residuals(model: ErrorModel, obs: Observations, *, absolute: bool = False
     """
     predicted = obs.predicted_m if obs.predicted_m is not None else \
         model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[0]
-    residual = obs.measured_m - predicted
+    residual = obs.measured_m - obs.zeroed(predicted)
     for c in range(3):
         measured = obs.measured_mask[:, c]
         if measured.any() and not absolute:
@@ -342,7 +378,7 @@ def candidate_terms(model: ErrorModel, ctx: Context,
     terms = []
     for family in family_list if family_list is not None else \
             catalogue_families(user_effects_to_fit(model)):
-        if family.name == "geometric":
+        if family.name == "geometric" or (family.log_only and family_list is None):
             continue
         for variant in family.variants(ctx):
             term = Term(family, variant, family.settings(ctx, variant))
@@ -405,18 +441,20 @@ def _candidate(scored, explanation_of, significant: bool) -> Candidate:
                      dict(zip(names, map(float, errors))), dict(scored.setting),
                      float(1.0 - scored.adjusted_p) if significant else 0.0,
                      float(scored.share_of_excess), term.family.group, declaration,
-                     scored.refusal)
+                     scored.refusal, float(scored.adjusted_p))
 
 
 def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.05,
              folds: int = 5, max_effects: int = 4, alpha: float = 0.05,
              min_share: float = 0.25, family_list: list[EffectFamily] | None = None,
-             localise_residual: bool = True, forward: bool = False) -> Diagnosis:
+             localise_residual: bool = True, forward: bool = False,
+             blocks: NDArray[np.intp] | None = None) -> Diagnosis:
     """Localise the residual and select the missing effects (see the module docstring).
 
     ``forward``: validate as the model will be used on a log - each block predicted by
-    a fit on the earlier blocks only (:class:`~.selection.Selector`)."""
-    if obs.n < 4 * folds:
+    a fit on the earlier blocks only (:class:`~.selection.Selector`); ``blocks`` (N,)
+    gives those blocks (whole runs of a log of many runs) instead of equal cuts."""
+    if blocks is None and obs.n < 4 * folds:
         raise InsufficientDataError(f"{obs.n} reference readings; need >= {4 * folds}")
     frame = residual_frame(model, obs)
     ctx, residual, mask = frame.ctx, frame.residual, frame.mask
@@ -425,7 +463,8 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     noise_sigma = obs.uncertainty_m / 2.0   # the instrument's k = 2 uncertainty
     variables = ctx.variables
     selector = Selector(ctx, residual, mask, noise_sigma, folds=folds, alpha=alpha,
-                        min_reduction=min_reduction, min_share=min_share, forward=forward)
+                        min_reduction=min_reduction, min_share=min_share, forward=forward,
+                        blocks=blocks)
     terms = candidate_terms(model, ctx, family_list)
     _check_user_terms(terms, selector, model, ctx)
     steps = selector.run(terms, max_terms=max_effects)
@@ -509,7 +548,8 @@ def residual_frame(model: ErrorModel, obs: Observations, *, absolute: bool = Fal
         orientation = model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[1]
     lever = obs.orientation_lever_m if directions else None
     ctx = Context(model.machine, variables, model._kinematics, orientation,
-                  orientation_lever_m=lever, work_point=obs.work_point)
+                  orientation_lever_m=lever, work_point=obs.work_point,
+                  zero_rows=obs.zero_rows)
     position_residual = residual
     if directions:
         # The tool's direction as a second measured quantity, scaled to the position's
@@ -691,3 +731,28 @@ def diagnose_yaw(included: dict[str, float], obs: YawObservations, *,
     ranking.sort(key=lambda c: c.cv_rmse_after)
     return Diagnosis(in_sample, baseline_cv, float(np.max(np.abs(residual))),
                      float(np.mean(np.abs(residual) > obs.uncertainty_rad)), ranking)
+
+
+def selection_refusal(candidate: Candidate, min_reduction: float, alpha: float = 0.05,
+                      min_share: float = 0.25, block_test: bool = True) -> str:
+    """Which of the selection's tests (:mod:`.selection`) refuses ``candidate`` on its own
+    against the current model, with its numbers; "" when it passes them all.
+    ``block_test=False`` leaves the held-out block test out (a log's caller judges on
+    whole later runs instead)."""
+    if candidate.refusal:
+        return f"physics refuses its fit ({candidate.refusal})"
+    if block_test and not candidate.adjusted_p < alpha:
+        return (f"the held-out block test: p = {candidate.adjusted_p:.3g} after adjusting for "
+                f"every candidate tried (max-T), above {alpha:g}")
+    if candidate.error_reduction < min_reduction:
+        return (f"it cuts the CV error by {100 * candidate.error_reduction:.1f} %, below "
+                f"{100 * min_reduction:.0f} %")
+    if candidate.share_of_excess < min_share:
+        return (f"it removes {100 * candidate.share_of_excess:.0f} % of the error above the "
+                f"noise, below {100 * min_share:.0f} %")
+    values = np.array(list(candidate.parameters.values()), dtype=float)
+    errors = np.array([candidate.parameter_uncertainties.get(k, np.nan)
+                       for k in candidate.parameters], dtype=float)
+    if not np.any(np.abs(values) > 3.0 * errors):
+        return "no parameter is above 3 standard errors"
+    return ""

@@ -100,7 +100,8 @@ class Localisation:
         if best is None or best.share < 0.1:
             return ""
         v = best.variable
-        hint = _HINTS.get(v[:2] if v.startswith(("v_", "T_")) else v.split("_")[0], "")
+        hint = _HINTS.get(v[:2] if v.startswith(("v_", "T_")) else
+                          v if v in _HINTS else v.split("_")[0], "")
         if "@" in v and not v.startswith("T_"):
             hint = "heat from that source reaching the structure with a thermal lag"
         if "*" in v:
@@ -156,6 +157,7 @@ _HINTS = {"v_": "a following (servo) error or a speed-dependent effect",
           "dir": "backlash or friction at the reversal",
           "acc": "a structure deflecting under inertial load",
           "t": "a slow drift no sensor follows (thermal, or a settling structure)",
+          "t_run": "a warm-up in every run that no sensor follows (thermal, or settling)",
           "spindle": "spindle heat", "x": "a geometric error depending on that axis",
           "y": "a geometric error depending on that axis",
           "z": "a geometric error depending on that axis",
@@ -166,6 +168,8 @@ _HINTS = {"v_": "a following (servo) error or a speed-dependent effect",
 def _describe(variable: str) -> str:
     if variable == "t":
         return "time"
+    if variable == "t_run":
+        return "the time since its run's start"
     if variable.startswith("T_") and "@" in variable:
         name, late = variable[2:].split("@")
         return f"the {name} temperature {late} late"
@@ -202,11 +206,15 @@ def candidate_variables(variables: Variables, structure_sensors: list[str]) -> d
         values = variables.get(name)
         if np.all(np.isfinite(values)) and np.ptp(values) > 0:
             out[name] = values
+    if "t" in out and variables.run_starts is not None:
+        # Time across runs (a night, a restarted clock) means nothing to the machine: only
+        # the time since each run's start can be followed.
+        out["t_run"] = out.pop("t")
     if variables.time_s is not None and variables.n > 2:
         # A structure following its sensor late lives in the sensor's lag, not in the
         # sensor: the lags of every structure sensor at a few time constants - only those
         # the record is long enough to see (a 40 min lag of a 90 s record is a ramp).
-        span = float(np.ptp(variables.time_s))
+        span = variables.span_s()     # the longest run's: every lag restarts with its run
         lags = [tau for tau in LOCALISATION_LAGS_S if tau <= span]
         for sensor in structure_sensors:
             for tau in lags:
@@ -349,9 +357,10 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
     # Time is a proxy, never a cause: a physical variable explaining nearly as much
     # (within 5 %) is named before it.
     for i, share in enumerate(shares):
-        if share.variable != "t":
+        if share.variable not in ("t", "t_run"):
             continue
-        rival = next((j for j in range(i + 1, len(shares)) if shares[j].variable != "t" and
+        rival = next((j for j in range(i + 1, len(shares))
+                      if shares[j].variable not in ("t", "t_run") and
                       shares[j].share >= 0.95 * share.share), None)
         if rival is not None:
             shares.insert(i, shares.pop(rival))

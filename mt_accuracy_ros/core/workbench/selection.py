@@ -147,7 +147,11 @@ def penalty_of(term: "Term", setting: dict) -> float:
 def design_setting(term: "Term", setting: dict) -> tuple:
     """The part of ``setting`` that makes the design (a penalty does not): a cache key."""
     key = getattr(term.family, "penalty_setting", None)
-    return tuple(sorted((k, v) for k, v in setting.items() if k != key))
+
+    def frozen(value):
+        return tuple(frozen(v) for v in value) if isinstance(value, (list, tuple)) else value
+
+    return tuple(sorted((k, frozen(v)) for k, v in setting.items() if k != key))
 
 
 def penalise(gram: NDArray[np.float64], start: int, stop: int, strength: float
@@ -307,15 +311,23 @@ class Selector:
     def __init__(self, ctx: Context, residual: NDArray[np.float64], mask: NDArray[np.bool_],
                  noise_sigma: float, *, folds: int = 5, n_blocks: int = 20,
                  alpha: float = 0.05, min_reduction: float = 0.05, min_share: float = 0.25,
-                 tie: float = 0.02, forward: bool = False) -> None:
+                 tie: float = 0.02, forward: bool = False,
+                 blocks: NDArray[np.intp] | None = None) -> None:
         n = residual.shape[0]
-        if n < 4 * folds:
+        if blocks is None and n < 4 * folds:
             raise InsufficientDataError(f"{n} reference readings; need >= {4 * folds}")
         #: Forward chaining (a log whose model will predict the future): the record is cut
         #: into folds + 1 blocks, each block is predicted by a fit on the blocks *before*
         #: it only, and the first block is never judged (nothing precedes it).
         self.forward = bool(forward)
         folds = folds + 1 if self.forward else folds
+        if blocks is not None:
+            # Given blocks (a log of many runs: whole runs, never cut): 0, 1, ... in order.
+            blocks = np.asarray(blocks, dtype=np.intp)
+            if blocks.shape != (n,) or blocks[0] != 0 or np.any(np.diff(blocks) < 0) or \
+                    np.any(np.diff(blocks) > 1) or blocks[-1] < 1:
+                raise ValueError("blocks: (N,) non-decreasing 0, 1, ... with at least two")
+            folds = int(blocks[-1]) + 1
         self.ctx = ctx
         width = self.width = ctx.width
         if residual.shape != (n, width) or mask.shape != (n, width):
@@ -338,7 +350,7 @@ class Selector:
         self.component_of_row = self.rows % width
         self._ones = np.ones(n)
         self.allowances = consistency_allowances(residual, mask, noise_sigma)
-        self.fold_of_sample = time_blocks(n, folds)
+        self.fold_of_sample = time_blocks(n, folds) if blocks is None else blocks
         self.fold_of_row = self.fold_of_sample[self.sample_of_row]
         self.folds = folds
         # Rows are in time order and folds contiguous: each fold is one slice of rows.

@@ -27,6 +27,7 @@ from ..compensation.error_model import ErrorModel
 from ..errors import InputDataError, InsufficientDataError
 from ..kinematics.machine import generic_cartesian
 from .diagnosis import Observations
+from .log_runs import run_starts, stitched_time
 
 #: Structure between a log's sensors and its displacement sensor when the user does
 #: not say [m]: a machine tool's column and spindle head. It bounds what physics
@@ -58,8 +59,10 @@ def noise_from_differences(values: NDArray[np.float64]) -> float:
 def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
                      temperatures: dict[str, NDArray[np.float64]], *,
                      spindle_speed_rad_s: NDArray[np.float64] | None = None,
-                     component: str = "z", uncertainty_m: float | None = None
-                     ) -> Observations:
+                     component: str = "z", uncertainty_m: float | None = None,
+                     run_of_row: NDArray[np.intp] | None = None,
+                     run_names: list[str] | None = None, zeroed_runs: bool = False,
+                     data_rows: NDArray[np.intp] | None = None) -> Observations:
     """A thermal log as reference readings of one component at a standing position.
 
     Parameters
@@ -77,6 +80,17 @@ def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
     uncertainty_m : float, optional
         The sensor's k = 2 uncertainty [m]; default twice the noise read off the
         target's successive differences (:func:`noise_from_differences`).
+    run_of_row : ndarray, shape (N,), optional
+        The run of each row (:func:`~.log_runs.run_labels`): time restarts or jumps
+        between runs, lags restart at each run's first reading, and ``time_s`` becomes
+        the runs laid end to end (:func:`~.log_runs.stitched_time`).
+    run_names : list of str, optional
+        The runs' names, for the errors.
+    zeroed_runs : bool
+        The instrument was zeroed at each run's start: each run's readings are referred
+        to its first (so are the model's, :meth:`~.diagnosis.Observations.zeroed`).
+    data_rows : ndarray, shape (N,), optional
+        Each row's number in the file, for the errors.
 
     Rows with a non-finite time, target, temperature or speed are left out (the
     caller counts them); fewer than :data:`MIN_LOG_ROWS` left is an error.
@@ -93,14 +107,34 @@ def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
         raise InsufficientDataError(f"only {int(good.sum())} complete rows; a thermal log "
                                     f"needs >= {MIN_LOG_ROWS}")
     rows = np.flatnonzero(good)
+    file_rows = rows + 1 if data_rows is None else np.asarray(data_rows)[good]
     t, y = t[good], y[good]
-    # Equal stamps are a logger's resolution (0.1 s, a second), not an error: the lags
-    # hold still over them. Only a stamp that goes back is refused, by its row.
-    back = np.flatnonzero(np.diff(t) < 0)
-    if back.size:
-        k = int(back[0]) + 1
-        raise InputDataError(f"the time goes back at data row {int(rows[k]) + 1}: {t[k]:g} s "
-                             f"after {t[k - 1]:g} s (sort the file or fix the stamps)")
+    runs = None
+    if run_of_row is not None:
+        runs = np.asarray(run_of_row, dtype=np.intp)[good]
+        names = run_names or [str(k) for k in range(int(runs.max()) + 1)]
+        # A run's rows dropped away entirely leaves a hole in the numbering: renumber.
+        runs = np.concatenate(([0], np.cumsum(np.diff(runs) != 0))).astype(np.intp)
+        names = [names[k] for k in np.asarray(run_of_row)[good][run_starts(runs)]]
+        counts = np.bincount(runs)
+        if np.any(counts < 2):
+            k = int(np.flatnonzero(counts < 2)[0])
+            raise InputDataError(f"run {names[k]!r} keeps {int(counts[k])} complete row "
+                                 "(the others had a missing value): a run needs at least 2")
+        t = stitched_time(t, runs, names, file_rows)
+        if zeroed_runs:
+            y = y - y[run_starts(runs)][runs]
+    else:
+        if zeroed_runs:
+            raise InputDataError("zeroed runs need a run column (--run COLUMN)")
+        # Equal stamps are a logger's resolution (0.1 s, a second), not an error: the lags
+        # hold still over them. Only a stamp that goes back is refused, by its row.
+        back = np.flatnonzero(np.diff(t) < 0)
+        if back.size:
+            k = int(back[0]) + 1
+            raise InputDataError(f"the time goes back at data row {int(file_rows[k])}: "
+                                 f"{t[k]:g} s after {t[k - 1]:g} s (sort the file or fix the "
+                                 "stamps; a log of many runs: --run COLUMN)")
     n = t.size
     measured = np.zeros((n, 3))
     mask = np.zeros((n, 3), dtype=bool)
@@ -118,7 +152,8 @@ def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
         temperatures={k: np.asarray(v, dtype=np.float64)[good] for k, v in temperatures.items()},
         uncertainty_m=float(uncertainty_m),
         spindle_speed_rad_s=None if spindle_speed_rad_s is None else
-        np.asarray(spindle_speed_rad_s, dtype=np.float64)[good])
+        np.asarray(spindle_speed_rad_s, dtype=np.float64)[good],
+        run_of_row=runs, zeroed_runs=bool(zeroed_runs and runs is not None))
 
 
 def log_model(obs: Observations, structure_length_m: float = DEFAULT_STRUCTURE_LENGTH_M
@@ -134,16 +169,17 @@ def log_prediction(model: ErrorModel, obs: Observations) -> NDArray[np.float64]:
     """The model's displacement (N,) [m] in the measured component at every row (lags run
     from the first row)."""
     c = int(np.flatnonzero(obs.measured_mask[0])[0])
-    return model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[0][:, c]
+    return obs.zeroed(model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[0][:, c])
 
 
 def held_out_residual(model: ErrorModel, obs: Observations, train: NDArray[np.bool_]
                       ) -> NDArray[np.float64]:
     """measured - model (N,) [m], its zero (a displacement sensor's own) set on the
-    training rows only: the later rows judge the model as it would have predicted them."""
+    training rows only: the later rows judge the model as it would have predicted them.
+    Zeroed runs have their zero at each run's start already: none is set."""
     c = int(np.flatnonzero(obs.measured_mask[0])[0])
     residual = obs.measured_m[:, c] - log_prediction(model, obs)
-    return residual - float(np.mean(residual[train]))
+    return residual if obs.zeroed_runs else residual - float(np.mean(residual[train]))
 
 
 def held_out_rmse(model: ErrorModel, obs: Observations, train: NDArray[np.bool_]) -> float:
@@ -157,8 +193,16 @@ def all_inputs_least_squares(obs: Observations, train: NDArray[np.bool_]) -> flo
     fitted on the training rows, its held-out RMSE [m] (nan without temperatures)."""
     if not obs.temperatures:
         return float("nan")
+    rest = all_inputs_least_squares_residual(obs, train)
+    return float(np.sqrt(np.mean(rest[~train] ** 2)))
+
+
+def all_inputs_least_squares_residual(obs: Observations, train: NDArray[np.bool_]
+                                      ) -> NDArray[np.float64]:
+    """measured - least squares on every temperature (N,) [m], fitted on the training rows
+    (an offset too, unless the runs were zeroed: their zero is known)."""
     c = int(np.flatnonzero(obs.measured_mask[0])[0])
-    x = np.column_stack([np.ones(obs.n)] + [v - v[0] for v in obs.temperatures.values()])
+    x = np.column_stack([v - v[0] for v in obs.temperatures.values()])
+    x = obs.zeroed(x) if obs.zeroed_runs else np.column_stack([np.ones(obs.n), x])
     coefficients, *_ = np.linalg.lstsq(x[train], obs.measured_m[train, c], rcond=None)
-    rest = obs.measured_m[~train, c] - x[~train] @ coefficients
-    return float(np.sqrt(np.mean(rest ** 2)))
+    return obs.measured_m[:, c] - x @ coefficients

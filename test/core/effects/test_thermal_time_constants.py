@@ -5,13 +5,23 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from mt_accuracy_ros.core.effects.variables import Variables
 from mt_accuracy_ros.core.effects.thermal import (MAX_TAU_PER_SPAN, TIME_CONSTANTS_S, HeatSource,
                                                   ThermalLag)
 
 
-def _ctx(span_s: float | None):
+def _ctx(span_s: float | None, run_starts=None):
     time_s = None if span_s is None else np.linspace(100.0, 100.0 + span_s, 50)
-    return SimpleNamespace(variables=SimpleNamespace(time_s=time_s))
+    return SimpleNamespace(variables=Variables({"X": np.zeros(50)}, time_s,
+                                               run_starts=run_starts))
+
+
+def test_a_log_of_runs_searches_what_its_longest_run_sees():
+    # 3 h cut into runs of 1 h 15 min and the rest: lags up to the longest run, not 3 h.
+    ctx = _ctx(3 * 3600.0, run_starts=[0, 25])
+    longest = max(np.ptp(ctx.variables.time_s[:25]), np.ptp(ctx.variables.time_s[25:]))
+    taus = [s["tau_s"] for s in ThermalLag().settings(ctx, "column")]
+    assert taus == [t for t in TIME_CONSTANTS_S if t <= longest] and max(taus) < 3 * 3600.0
 
 
 def test_only_time_constants_the_record_supports_are_searched():

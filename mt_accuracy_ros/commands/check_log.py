@@ -1,0 +1,371 @@
+"""`mt-accuracy check LOG.csv --target COLUMN`: a thermal log, one run or many.
+
+The log's later rows (after ``--train-fraction``; with runs, after the run
+boundary nearest it) are **never seen** by any decision: they judge every model
+version, the constant and least squares on every sensor, on the same rows.
+Every decision is made inside the training rows:
+
+1. the selection ranks candidates by forward validation (each block predicted
+   by a fit on the blocks before it; with runs, blocks are whole runs);
+2. a candidate that passes the selection's tests must then predict the last
+   block of the training rows (the last training runs) from a fit on the
+   blocks before it better than the model without it - the held-out judge,
+   played inside the training rows. A candidate refused there is reported
+   with both numbers, and the next one that passes the tests is judged the
+   same way;
+3. every candidate with a large CV gain that is not added is reported with
+   the test that refused it and its numbers.
+"""
+from __future__ import annotations
+
+import fnmatch
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import InputDataError
+
+#: A candidate whose forward-CV error reduction is at least this is "a large gain":
+#: when it is not added, the output says which test refused it.
+LARGE_GAIN = 0.2
+
+#: Candidates judged on the last training block per step, at most.
+MAX_JUDGED = 6
+
+#: Forward-validation blocks over the training rows (whole runs when there are runs).
+MAX_BLOCKS = 6
+
+
+def _validation_split(training, blocks):
+    """(fit rows, validation rows, what the validation rows are) of the training rows: the
+    last forward block (whole runs), or the last sixth of the rows without runs."""
+    if blocks is not None:
+        last = blocks == blocks[-1]
+    else:
+        last = np.arange(training.n) >= training.n - max(4, training.n // MAX_BLOCKS)
+    return ~last, last
+
+
+def validation_rmse(terms, frame, component: int, fit, judge, zeroed: bool) -> float:
+    """RMS error on ``judge`` rows of ``terms`` [(family, variant, setting)] fitted jointly
+    (with an offset unless the runs were zeroed) on ``fit`` rows to the residual of
+    ``frame`` (:class:`~..core.workbench.diagnosis.ResidualFrame`) [m]."""
+    from ..core.workbench.selection import penalised_fit
+
+    y = frame.residual[:, component]
+    columns = [] if zeroed else [np.ones((y.size, 1))]
+    penalties, start = [], 0 if zeroed else 1
+    for family, variant, setting in terms:
+        design = frame.ctx.measured_design(family, variant, setting)[:, component, :]
+        key = getattr(family, "penalty_setting", None)
+        if key:
+            penalties.append((start, start + design.shape[1], float(setting.get(key, 0.0))))
+        columns.append(design)
+        start += design.shape[1]
+    if not columns:
+        return float(np.sqrt(np.mean(y[judge] ** 2)))
+    x = np.column_stack(columns)
+    coefficients, _, _ = penalised_fit(x[fit], y[fit], penalties)
+    return float(np.sqrt(np.mean((y[judge] - x[judge] @ coefficients) ** 2)))
+
+
+def _log_families(training, obs_structure: list[str], target):
+    """The catalogue's families plus the log-only ones, their sensor sets chosen on the
+    training rows: every structure sensor, and key sensors of correlated groups."""
+    from ..core.effects import families as catalogue_families
+    from ..core.effects.log_models import (SensorLeastSquares, TemperatureComponents,
+                                           sensor_groups)
+
+    chosen: dict[str, str] = {}
+    if len(obs_structure) >= 2:
+        chosen["+".join(obs_structure)] = "every structure sensor"
+    groups = sensor_groups({s: training.temperatures[s] for s in obs_structure}, target)
+    for variant, how in groups.items():
+        chosen.setdefault(variant, how)
+    return [f for f in catalogue_families() if not f.log_only] + \
+        [SensorLeastSquares(chosen), TemperatureComponents()]
+
+
+def per_run_figures(names: list[str], run_of_row, train, residuals: dict[str, np.ndarray]
+                    ) -> list[dict]:
+    """One row per run: its rows, whether the selection saw it, and each model's RMSE on
+    it [m] (``residuals``: name -> (N,) residual)."""
+    out = []
+    for k, name in enumerate(names):
+        rows = run_of_row == k
+        entry = {"run": name, "rows": int(rows.sum()),
+                 "part": "training" if bool(train[rows].all()) else "held out"}
+        for label, residual in residuals.items():
+            entry[label] = float(np.sqrt(np.mean(residual[rows] ** 2)))
+        out.append(entry)
+    return out
+
+
+def check_csv(path: Path, target: str, time_column: str, inputs: list[str], drivers: list[str],
+              add: list[str], auto: int, train_fraction: float, min_reduction: float,
+              model_terms: list[str], row_period_s: float | None = None,
+              component: str = "z", uncertainty_m: float | None = None,
+              structure_length_m: float | None = None, run_column: str | None = None,
+              zeroed_runs: bool = False) -> dict:
+    """A thermal log (one displacement column, temperature inputs, a spindle speed; one run
+    or many) on the survey engine (:mod:`~mt_accuracy_ros.core.workbench.thermal_log`).
+
+    Its time is the time column, or - without one - the row order at ``row_period_s``
+    seconds a row. ``run_column``: rows of one run share its value (time restarts or
+    jumps between runs; lags restart each run); ``zeroed_runs``: the instrument was
+    zeroed at each run's start. Decisions are made on the training rows only (module
+    docstring); everything is SI in the JSON (metres); printed lines speak the target
+    column's unit.
+    """
+    from ..core.effects.thermal import sensor_weights
+    from ..core.workbench.diagnosis import (add_effect, diagnose, residual_frame,
+                                            selection_refusal)
+    from ..core.workbench.log_runs import (leave_out_dead_sensors, mixed_units_problem,
+                                           run_blocks, run_labels, run_starts, split_at_run)
+    from ..core.workbench.thermal_log import (DEFAULT_STRUCTURE_LENGTH_M,
+                                              all_inputs_least_squares_residual,
+                                              held_out_residual, held_out_rmse, log_model,
+                                              log_observations)
+    from ..io.csv_table import csv_header, read_csv_table
+    from .check import _column_and_unit, _model_yaml, candidate_named, error_figures
+
+    if not 0.2 <= train_fraction <= 0.9:
+        raise InputDataError(f"--train-fraction {train_fraction}: between 0.2 and 0.9 (the "
+                             "rows after it judge the model)")
+    if zeroed_runs and not run_column:
+        raise InputDataError("--zeroed-runs needs --run COLUMN (the instrument was zeroed at "
+                             "each run's start)")
+    header = csv_header(path)
+    fixed = {flag.split(":", 1)[0].strip() for flag in [target, *drivers]} | \
+        {time_column, run_column}
+    # A temperature column may have holes (a dead thermocouple): kept as NaN, decided below.
+    table = read_csv_table(path, text_columns=(run_column,) if run_column else (),
+                           gap_columns=tuple(n for n in header if n not in fixed))
+    names = table.names
+    columns = table.columns
+    target_column, target_scale, unit = _column_and_unit(target, names, "length", "target")
+    if time_column in names:
+        time_s = columns[time_column]
+    elif row_period_s is not None:
+        time_s = np.arange(len(columns[names[0]]), dtype=np.float64) * float(row_period_s)
+    else:
+        raise InputDataError(f"{path}: no time column {time_column!r} (give --time-column, or "
+                             f"--row-period SECONDS for one row every SECONDS); columns: "
+                             f"{', '.join(names)}")
+    selected = [n for n in names if any(fnmatch.fnmatch(n, p) for p in inputs)
+                and n not in (target_column, time_column, run_column)]
+    if not selected:
+        raise InputDataError(f"{path}: no input column matches {inputs}")
+    speed = None
+    for driver in drivers:
+        column, scale, _ = _column_and_unit(driver, names, "speed", "driver")
+        if speed is not None:
+            raise InputDataError("one --driver: the spindle speed (the heat source the "
+                                 "catalogue models, heat_source:spindle_speed)")
+        speed = columns[column] * scale
+    run_of_row, run_names = None, None
+    target_m = columns[target_column] * target_scale
+    temperatures = {n: columns[n] for n in selected}
+    notes = []
+    if run_column:
+        run_of_row, run_names = run_labels(columns[run_column], table.data_rows, run_column)
+    temperatures, dead_notes = leave_out_dead_sensors(temperatures, run_of_row, run_names)
+    notes += dead_notes
+    if not temperatures:
+        raise InputDataError(f"{path}: every input sensor is dead (no reading in most rows)")
+    if run_column:
+        problem = mixed_units_problem(target_m, temperatures, run_of_row, run_names,
+                                      zeroed_runs)
+        if problem:
+            raise InputDataError(problem)
+    obs = log_observations(time_s, target_m, temperatures, spindle_speed_rad_s=speed,
+                           component=component, uncertainty_m=uncertainty_m,
+                           run_of_row=run_of_row, run_names=run_names, zeroed_runs=zeroed_runs,
+                           data_rows=table.data_rows)
+    runs = obs.run_of_row is not None
+    if runs:
+        # Rows with a hole in a sensor (not dead) are left out: the runs that remain.
+        complete = np.all([np.isfinite(v) for v in temperatures.values()], axis=0)
+        kept_runs = np.asarray(run_of_row)[complete]
+        run_names = [run_names[k] for k in kept_runs[run_starts(obs.run_of_row)]]
+        train = split_at_run(obs.run_of_row, train_fraction)
+    else:
+        train = np.arange(obs.n) < int(train_fraction * obs.n)
+    training = obs.subset(np.flatnonzero(train))
+    blocks = run_blocks(training.run_of_row, MAX_BLOCKS) if runs else None
+    if blocks is not None and blocks[-1] < 1:
+        blocks = None
+    empty = model = log_model(obs, structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
+    to_unit = 1.0 / target_scale
+    holes = obs.n < len(target_m)
+    if holes:
+        notes.append(f"{len(target_m) - obs.n} rows left out: a sensor had no reading there")
+    if runs and blocks is None:
+        notes.append("one training run: forward validation cuts it into blocks of rows")
+    folds = min(5, training.n // 4)
+    if blocks is None and folds < 2:
+        raise InputDataError(f"{training.n} training rows (--train-fraction {train_fraction:g} "
+                             f"of {obs.n}): the selection needs at least 8")
+    c = "xyz".index(component)
+    structure = sorted(n for n, v in training.temperatures.items()
+                       if np.ptp(v) > 1e-3)
+    family_list = _log_families(training, structure, training.measured_m[:, c])
+    family_of = {f.name: f for f in family_list}
+
+    def diagnosis_of(current):
+        return diagnose(current, training, min_reduction=min_reduction, forward=True,
+                        folds=folds, blocks=blocks, family_list=family_list)
+
+    for name in model_terms:   # the starting model's terms, fitted on the training rows
+        model = add_effect(model, candidate_named(diagnosis_of(model), name, "start with",
+                                                  "log"), training)
+    start_model = model
+    frame = residual_frame(start_model, training)
+    fit_rows, judge_rows = _validation_split(training, blocks)
+    judged_runs = sorted({run_names[k] for k in training.run_of_row[judge_rows]},
+                         key=run_names.index) if runs else []
+    judged_what = (f"run{'s' if len(judged_runs) > 1 else ''} {', '.join(judged_runs)}"
+                   if runs else f"the last {int(judge_rows.sum())} training rows")
+    diagnosis = diagnosis_of(model)
+    first = diagnosis
+    baseline = held_out_rmse(model, obs, train)
+    accepted_terms: list = []
+    validation = validation_rmse(accepted_terms, frame, c, fit_rows, judge_rows,
+                                 obs.zeroed_runs)
+    steps = [{"model_version": model.version, "effects": sorted(model.effects),
+              "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text(),
+              "held_out_rmse": baseline, "cv_rmse": diagnosis.baseline_cv_rmse,
+              "validation_rmse": validation}]
+    queue = list(add)
+    warnings, not_added, refused_names, refusals = [], [], set(), []
+
+    def term_of(candidate):
+        return (family_of[candidate.effect], candidate.variant, candidate.setting)
+
+    while True:
+        if queue:
+            candidate = candidate_named(diagnosis, queue.pop(0), "add", "log")
+            after_validation = validation_rmse(accepted_terms + [term_of(candidate)], frame, c,
+                                               fit_rows, judge_rows, obs.zeroed_runs)
+            if after_validation > validation:
+                warnings.append(f"warning: {candidate.name} (asked for) raised the error on "
+                                f"{judged_what} from {validation * to_unit:.4g} to "
+                                f"{after_validation * to_unit:.4g} {unit}")
+        elif auto and len(steps) - 1 < auto:
+            candidate, after_validation = None, validation
+            # Those the block test confirms first, then - on a log whose runs differ so
+            # much that it confirms none - the rest that pass every other test.
+            usable = [o for o in diagnosis.ranking if o.name not in refused_names and
+                      not selection_refusal(o, min_reduction, block_test=False)]
+            usable.sort(key=lambda o: bool(selection_refusal(o, min_reduction)))
+            for option in usable[:MAX_JUDGED]:
+                value = validation_rmse(accepted_terms + [term_of(option)], frame, c, fit_rows,
+                                        judge_rows, obs.zeroed_runs)
+                if value < validation:
+                    candidate, after_validation = option, value
+                    break
+                refused_names.add(option.name)
+                not_added.append({"name": option.name, "cv_reduction": option.error_reduction,
+                                  "test": f"predicting {judged_what} from the training rows "
+                                          "before them",
+                                  "before": validation, "after": value})
+                refusals.append(f"not added: {option.name} (CV {100 * option.error_reduction:.0f}"
+                                f" % better) - predicting {judged_what} from the training rows "
+                                f"before them, its error would rise from "
+                                f"{validation * to_unit:.4g} to {value * to_unit:.4g} {unit}")
+            if candidate is None:
+                break
+        else:
+            break
+        accepted_terms.append(term_of(candidate))
+        validation = after_validation
+        model = add_effect(model, candidate, training)
+        diagnosis = diagnosis_of(model)
+        steps[-1]["added"] = [candidate.name]
+        steps[-1]["parameters"] = {candidate.name: candidate.parameters}
+        steps[-1]["parameter_uncertainties"] = {candidate.name:
+                                                candidate.parameter_uncertainties}
+        steps.append({"model_version": model.version, "effects": sorted(model.effects),
+                      "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text(),
+                      "held_out_rmse": held_out_rmse(model, obs, train),
+                      "cv_rmse": diagnosis.baseline_cv_rmse, "validation_rmse": validation})
+    added = [name for s in steps for name in s.get("added", [])]
+    # Every large CV gain not added, with the test that refused it and its numbers.
+    judged = {entry["name"] for entry in not_added}
+    for option in first.ranking:
+        if option.error_reduction < LARGE_GAIN or option.name in added or \
+                option.name in judged or len(not_added) >= 12:
+            continue
+        reason = selection_refusal(option, min_reduction)
+        if reason.startswith("the held-out block test") and added:
+            reason += f"; {', '.join(added)} was added instead"
+        reason = reason or (
+            f"once {', '.join(added)} was added it no longer passed (what was added explains "
+            "it)" if added else "not tried: --auto 0 adds nothing by itself" if not auto
+            else f"not judged: beyond the first {MAX_JUDGED} candidates of a step")
+        not_added.append({"name": option.name, "cv_reduction": option.error_reduction,
+                          "test": reason})
+        refusals.append(f"not added: {option.name} (CV {100 * option.error_reduction:.0f} % "
+                        f"better) - {reason}")
+    constant = held_out_rmse(empty, obs, train)
+    judge = ~train
+    before_residual = held_out_residual(start_model, obs, train)
+    after_residual = held_out_residual(model, obs, train)
+    constant_residual = held_out_residual(empty, obs, train)
+    squares_residual = all_inputs_least_squares_residual(obs, train)
+    squares = float(np.sqrt(np.mean(squares_residual[judge] ** 2)))
+    final = steps[-1]["held_out_rmse"]
+    if final > constant:
+        warnings.append(f"warning: the model's held-out RMSE {final * to_unit:.4g} {unit} is "
+                        f"worse than a constant's ({constant * to_unit:.4g} {unit})")
+    if final > squares * (1.0 + 1e-9):
+        warnings.append(f"warning: least squares on every input ({squares * to_unit:.4g} "
+                        f"{unit}) beats the model ({final * to_unit:.4g} {unit}) held out")
+    ridge = [(name, step["parameters"][name]) for step in steps for name in step.get("added", [])
+             if name.startswith(("all_sensors_ridge", "sensor_least_squares"))] + \
+        [(c_.name, c_.parameters) for c_ in first.ranking if c_.effect == "all_sensors_ridge"]
+    carried = dict(sensor_weights(ridge[0][1], obs.temperatures)[:6]) if ridge else {}
+    result = {
+        "data": str(path), "kind": "thermal_log", "target": target_column,
+        "target_unit": unit, "target_unit_per_m": to_unit, "component": component, "rows": obs.n,
+        "rows_read": table.rows_read, "rows_dropped": table.rows_dropped,
+        "rows_note": table.summary(), "readings": obs.n,
+        "train_rows": int(train.sum()), "band": obs.uncertainty_m,
+        "machine": model.machine.name,
+        "validation": ("forward by whole runs: each block of runs predicted by a fit on the "
+                       "runs before it" if blocks is not None else
+                       "forward: each block predicted by a fit on the blocks before it"),
+        "decided_on": f"the training rows only; a term must also predict {judged_what} from "
+                      "the training rows before them",
+        "figures_before_held_out_m": error_figures(before_residual[judge]),
+        "figures_after_held_out_m": error_figures(after_residual[judge]),
+        "baseline_rmse": first.baseline_rmse, "baseline_cv_rmse": first.baseline_cv_rmse,
+        "held_out_baseline_rmse": baseline,
+        "ranking": [c_.as_dict() for c_ in first.ranking[:30]],
+        "named": [c_.as_dict() for c_ in first.selected],
+        "verdict": first.verdict(),
+        "localisation": first.localisation.as_dict() if first.localisation else {},
+        "added": added, "final_rmse": final, "steps": steps,
+        "final_diagnosis": diagnosis.text(), "final_verdict": diagnosis.verdict(),
+        "not_added": not_added, "not_added_lines": refusals,
+        "constant_held_out_rmse": constant, "warnings": warnings,
+        "notes": notes,
+        "judged_on": "held-out rows after the training rows, unseen by every decision",
+        "all_inputs_least_squares_held_out_rmse": squares,
+        "baselines_held_out_m": {"constant": constant, "least squares on every input": squares,
+                                 "model": final},
+        "sensors_carrying_weight": carried,
+        "model_yaml": _model_yaml(model),
+        "runs": None, "zeroed_runs": obs.zeroed_runs,
+        "_plot": {"time": obs.time_s, "target": obs.measured_m[:, c],
+                  "before": obs.measured_m[:, c] - before_residual,
+                  "after": obs.measured_m[:, c] - after_residual, "train": train,
+                  "unit_scale": to_unit, "unit": unit,
+                  "run_starts": None if obs.run_starts is None else obs.run_starts,
+                  "run_names": run_names}}
+    if runs:
+        result["runs"] = per_run_figures(run_names, obs.run_of_row, train, {
+            "constant_rmse": constant_residual, "least_squares_rmse": squares_residual,
+            "model_rmse": after_residual})
+    return result
+
