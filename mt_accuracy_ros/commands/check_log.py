@@ -69,6 +69,59 @@ def validation_rmse(terms, frame, component: int, fit, judge, zeroed: bool) -> f
     return float(np.sqrt(np.mean((y[judge] - x[judge] @ coefficients) ** 2)))
 
 
+#: Families that are a whole model of a log in one term: they contest the step-by-step
+#: model as a whole (:func:`forward_rmse`).
+WHOLE_MODELS = ("sensor_least_squares", "all_sensors_ridge", "temperature_components")
+
+
+def forward_rmse(terms, frame, component: int, blocks, zeroed: bool) -> float:
+    """Forward validation of ``terms`` fitted jointly: each block (whole runs) predicted by a
+    fit on the blocks before it, the squared errors pooled [m]."""
+    squared, count = 0.0, 0
+    for b in range(1, int(blocks[-1]) + 1):
+        judge = blocks == b
+        value = validation_rmse(terms, frame, component, blocks < b, judge, zeroed)
+        squared += value ** 2 * int(judge.sum())
+        count += int(judge.sum())
+    return float(np.sqrt(squared / max(count, 1)))
+
+
+def joint_refit(candidates, terms, frame, component: int, zeroed: bool) -> list:
+    """The ``candidates`` with their parameters (and k = 1 uncertainties) refitted jointly
+    on every training row of ``frame`` (their ``terms`` as in :func:`validation_rmse`)."""
+    import dataclasses
+
+    from ..core.workbench.selection import penalised_fit
+
+    y = frame.residual[:, component]
+    columns = [] if zeroed else [np.ones((y.size, 1))]
+    penalties, start, spans = [], 0 if zeroed else 1, []
+    for family, variant, setting in terms:
+        design = frame.ctx.measured_design(family, variant, setting)[:, component, :]
+        key = getattr(family, "penalty_setting", None)
+        if key:
+            penalties.append((start, start + design.shape[1], float(setting.get(key, 0.0))))
+        columns.append(design)
+        spans.append((start, start + design.shape[1]))
+        start += design.shape[1]
+    values, errors, _ = penalised_fit(np.column_stack(columns), y, penalties)
+    out = []
+    for candidate, (family, variant, setting), (a, b) in zip(candidates, terms, spans):
+        names = family.parameter_names(variant, setting)
+        # The design holds this component's columns only: the others stay zero.
+        own = [n for n in names]
+        parameters = {n: 0.0 for n in own}
+        uncertainties = {n: 0.0 for n in own}
+        design = frame.ctx.measured_design(family, variant, setting)[:, component, :]
+        used = np.flatnonzero(np.any(design != 0, axis=0))
+        for j in used:
+            parameters[names[j]] = float(values[a + j])
+            uncertainties[names[j]] = float(errors[a + j])
+        out.append(dataclasses.replace(candidate, parameters=parameters,
+                                       parameter_uncertainties=uncertainties))
+    return out
+
+
 def _log_families(training, obs_structure: list[str], target):
     """The catalogue's families plus the log-only ones, their sensor sets chosen on the
     training rows: every structure sensor, and key sensors of correlated groups."""
@@ -222,6 +275,8 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     start_model = model
     frame = residual_frame(start_model, training)
     fit_rows, judge_rows = _validation_split(training, blocks)
+    forward_blocks = blocks if blocks is not None else \
+        np.repeat(np.arange(MAX_BLOCKS), -(-training.n // MAX_BLOCKS))[:training.n]
     judged_runs = sorted({run_names[k] for k in training.run_of_row[judge_rows]},
                          key=run_names.index) if runs else []
     judged_what = (f"run{'s' if len(judged_runs) > 1 else ''} {', '.join(judged_runs)}"
@@ -230,6 +285,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     first = diagnosis
     baseline = held_out_rmse(model, obs, train)
     accepted_terms: list = []
+    accepted: list = []
     validation = validation_rmse(accepted_terms, frame, c, fit_rows, judge_rows,
                                  obs.zeroed_runs)
     steps = [{"model_version": model.version, "effects": sorted(model.effects),
@@ -278,8 +334,13 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         else:
             break
         accepted_terms.append(term_of(candidate))
+        accepted.append(candidate)
         validation = after_validation
-        model = add_effect(model, candidate, training)
+        # Every added term refitted jointly on the training rows (a term fitted to the
+        # residual of the ones before it leaves their share of the shared signal wrong).
+        model = start_model
+        for refitted in joint_refit(accepted, accepted_terms, frame, c, obs.zeroed_runs):
+            model = add_effect(model, refitted, training)
         diagnosis = diagnosis_of(model)
         steps[-1]["added"] = [candidate.name]
         steps[-1]["parameters"] = {candidate.name: candidate.parameters}
@@ -289,6 +350,40 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                       "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text(),
                       "held_out_rmse": held_out_rmse(model, obs, train),
                       "cv_rmse": diagnosis.baseline_cv_rmse, "validation_rmse": validation})
+    # Whole models against one another, by the same forward validation over every
+    # training run: the step-by-step model, and each model a thermal engineer fits in one
+    # go (least squares or ridge on every sensor, principal components).
+    contest = {"step by step": forward_rmse(accepted_terms, frame, c, forward_blocks,
+                                            obs.zeroed_runs)}
+    rivals = {}
+    if auto and not add:
+        for option in first.ranking:
+            if option.effect in WHOLE_MODELS and not option.refusal and \
+                    option.name not in contest:
+                contest[option.name] = forward_rmse([term_of(option)], frame, c,
+                                                    forward_blocks, obs.zeroed_runs)
+                rivals[option.name] = option
+    winner = min(contest, key=lambda k: (contest[k], k != "step by step"))
+    step_by_step = [name for s in steps for name in s.get("added", [])]
+    if winner != "step by step":
+        notes.append(f"{winner} predicts the training runs forward better "
+                     f"({contest[winner] * to_unit:.4g} {unit}) than the step-by-step model "
+                     f"({contest['step by step'] * to_unit:.4g} {unit}): it is the model")
+        (refitted,) = joint_refit([rivals[winner]], [term_of(rivals[winner])], frame, c,
+                                  obs.zeroed_runs)
+        model = add_effect(start_model, refitted, training)
+        steps = steps[:1]
+        steps[0]["added"] = [winner]
+        steps[0]["parameters"] = {winner: refitted.parameters}
+        steps[0]["parameter_uncertainties"] = {winner: refitted.parameter_uncertainties}
+        diagnosis = diagnosis_of(model)
+        steps.append({"model_version": model.version, "effects": sorted(model.effects),
+                      "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text(),
+                      "held_out_rmse": held_out_rmse(model, obs, train),
+                      "cv_rmse": diagnosis.baseline_cv_rmse,
+                      "validation_rmse": validation_rmse([term_of(rivals[winner])], frame, c,
+                                                         fit_rows, judge_rows,
+                                                         obs.zeroed_runs)})
     added = [name for s in steps for name in s.get("added", [])]
     # Every large CV gain not added, with the test that refused it and its numbers.
     judged = {entry["name"] for entry in not_added}
@@ -298,7 +393,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
             continue
         reason = selection_refusal(option, min_reduction)
         if reason.startswith("the held-out block test") and added:
-            reason += f"; {', '.join(added)} was added instead"
+            reason += f"; {', '.join(added)} {'were' if len(added) > 1 else 'was'} added instead"
         reason = reason or (
             f"once {', '.join(added)} was added it no longer passed (what was added explains "
             "it)" if added else "not tried: --auto 0 adds nothing by itself" if not auto
@@ -349,7 +444,8 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         "final_diagnosis": diagnosis.text(), "final_verdict": diagnosis.verdict(),
         "not_added": not_added, "not_added_lines": refusals,
         "constant_held_out_rmse": constant, "warnings": warnings,
-        "notes": notes,
+        "notes": notes, "step_by_step_added": step_by_step,
+        "model_contest_forward_rmse": contest, "model_chosen": winner,
         "judged_on": "held-out rows after the training rows, unseen by every decision",
         "all_inputs_least_squares_held_out_rmse": squares,
         "baselines_held_out_m": {"constant": constant, "least squares on every input": squares,

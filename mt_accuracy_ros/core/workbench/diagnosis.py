@@ -356,7 +356,8 @@ def residuals(model: ErrorModel, obs: Observations, *, absolute: bool = False
     residual = obs.measured_m - obs.zeroed(predicted)
     for c in range(3):
         measured = obs.measured_mask[:, c]
-        if measured.any() and not absolute:
+        # Zeroed runs know their zero (each run's first reading): no mean to take out.
+        if measured.any() and not absolute and not obs.zeroed_runs:
             residual[measured, c] -= residual[measured, c].mean()
     residual[~obs.measured_mask] = 0.0
     return residual

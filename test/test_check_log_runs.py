@@ -1,0 +1,220 @@
+"""`mt-accuracy check LOG.csv --run COLUMN [--zeroed-runs]`: real logs of many runs (issue 40).
+
+The held-out runs judge, unseen by every decision; lags and time restart each run; the
+baselines (a constant, least squares on every input) are given on the same rows."""
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.cli import main
+from mt_accuracy_ros.commands.check_log import check_csv
+
+FL_ARGS = ["--target", "ch5_um", "--inputs", "t*_C", "--driver", "spindle_rpm", "--auto", "3"]
+
+
+def _fl_runs(data_dir: Path, out: Path, zeroed: bool, hours: float = 8.0) -> Path:
+    """FL_THERMAL cut into runs of ``hours``: its clock restarts each run; zeroed, every
+    displacement channel is referred to its run's first reading."""
+    rows = list(csv.reader(open(data_dir / "fl_thermal" / "fl_thermal.csv")))
+    header, data = rows[0], np.array(rows[1:], dtype=float)
+    run = (data[:, 0] // (hours * 3600.0)).astype(int)
+    cut = data.copy()
+    for r in np.unique(run):
+        rows_r = np.flatnonzero(run == r)
+        cut[rows_r, 0] -= data[rows_r[0], 0]
+        if zeroed:
+            for j, name in enumerate(header):
+                if name.startswith("ch"):
+                    cut[rows_r, j] -= data[rows_r[0], j]
+    lines = [",".join(["day"] + header)]
+    lines += [f"day{r + 1}," + ",".join(f"{v:.10g}" for v in row) for r, row in zip(run, cut)]
+    out.write_text("\n".join(lines) + "\n")
+    return out
+
+
+@pytest.mark.parametrize("zeroed, expected_um", [(False, 4.41), (True, 7.46)])
+def test_fl_thermal_in_runs_beats_a_constant_and_least_squares_held_out(
+        data_dir, tmp_path, capsys, zeroed, expected_um):
+    log = _fl_runs(data_dir, tmp_path / "runs.csv", zeroed)
+    # Stitched by its restarting clock the log was refused; now the hint names --run.
+    assert main(["check", str(log)] + FL_ARGS) == 2
+    err = capsys.readouterr().err.strip()
+    assert "the time goes back at data row 1921" in err and "--run COLUMN" in err
+    args = ["check", str(log)] + FL_ARGS + ["--run", "day", "--json", str(tmp_path / "s.json"),
+                                            "--report", str(tmp_path / "r.html")]
+    assert main(args + (["--zeroed-runs"] if zeroed else [])) == 0
+    out = capsys.readouterr().out
+    summary = json.loads((tmp_path / "s.json").read_text())
+    # 46 h in six runs; the split falls on the run boundary nearest half the rows.
+    assert [r["run"] for r in summary["runs"]] == [f"day{k}" for k in range(1, 7)]
+    assert [r["part"] for r in summary["runs"]] == ["training"] * 3 + ["held out"] * 3
+    assert summary["train_rows"] == 3 * 1920 and summary["zeroed_runs"] is zeroed
+    assert summary["validation"].startswith("forward by whole runs")
+    baselines = summary["baselines_held_out_m"]
+    assert baselines["model"] * 1e6 == pytest.approx(expected_um, abs=0.01)
+    assert baselines["model"] < baselines["constant"] and \
+        baselines["model"] < baselines["least squares on every input"]
+    # Each run's figures add up to the held-out figure over the held-out runs.
+    held = [r for r in summary["runs"] if r["part"] == "held out"]
+    pooled = np.sqrt(sum(r["model_rmse"] ** 2 * r["rows"] for r in held) /
+                     sum(r["rows"] for r in held))
+    assert pooled == pytest.approx(baselines["model"], rel=1e-9)
+    # Time across runs means nothing: the localisation never follows it.
+    variables = {s["variable"] for s in summary["localisation"].get("shares", [])}
+    assert variables and "t" not in variables
+    assert "day4 (held out, 1920 rows): constant" in out
+    titles = [s["title"] for s in summary["report"]["sections"]]
+    assert titles[-1] == "Runs" and "Headline" in titles
+
+
+def _two_sensor_log(path: Path, seed: int, runs: int = 8, rows: int = 80,
+                    shift_k: float = 0.25) -> Path:
+    """Runs that warm up; sensor A follows the structure with a slow wander (0.12 K), sensor
+    B exactly - until its calibration shifts by ``shift_k`` from run 6 on."""
+    rng = np.random.default_rng(seed)
+    lines = ["run,time_s,tA_C,tB_C,growth_um"]
+    for r in range(runs):
+        t = np.arange(rows) * 60.0
+        truth = 20 + rng.uniform(0.6, 1.0) * (1 - np.exp(-t / 1800.0))
+        wander, steps = np.zeros(rows), rng.normal(0, 0.12 * np.sqrt(1 - 0.95 ** 2), rows)
+        for k in range(1, rows):
+            wander[k] = 0.95 * wander[k - 1] + steps[k]
+        a = truth + wander
+        b = truth + (shift_k if r >= 5 else 0.0) + rng.normal(0, 0.01, rows)
+        g = 4.0 * (truth - 20) + rng.normal(0, 0.05, rows)
+        lines += [f"r{r + 1},{x:.0f},{y:.4f},{z:.4f},{w:.4f}" for x, y, z, w in zip(t, a, b, g)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _decisions(summary: dict) -> dict:
+    return {"added": summary["added"], "not_added": summary["not_added"],
+            "contest": summary["model_contest_forward_rmse"],
+            "steps": [(s["effects"], s["cv_rmse"], s["validation_rmse"])
+                      for s in summary["steps"]]}
+
+
+def test_a_candidate_refused_on_the_last_training_run_gives_way_to_the_next(tmp_path):
+    """B explains the earlier runs exactly and ranks first; predicting the last training
+    run (its calibration shifted) from the runs before it, it is worse than nothing and is
+    refused with both numbers; A, judged the same way next, is added. The held-out runs
+    decide nothing: changing them changes no decision, only the held-out figures."""
+    log = _two_sensor_log(tmp_path / "log.csv", seed=4)
+    summary = check_csv(log, "growth_um", "time_s", ["t*_C"], [], [], 1, 0.75, 0.05, [],
+                        run_column="run")
+    first = summary["not_added"][0]
+    assert first["name"] == "structural_thermal_drift:tB_C"
+    assert first["test"] == "predicting run r6 from the training rows before them"
+    assert first["after"] > first["before"]
+    assert summary["step_by_step_added"] == ["thermal_lag:tA_C"]
+    # Whole models then contest by forward validation over every training run.
+    contest = summary["model_contest_forward_rmse"]
+    assert summary["model_chosen"] == min(contest, key=contest.get)
+    assert summary["added"] == (["thermal_lag:tA_C"] if summary["model_chosen"] ==
+                                "step by step" else [summary["model_chosen"]])
+    assert summary["train_rows"] == 6 * 80
+    assert summary["final_rmse"] < 0.7 * summary["constant_held_out_rmse"]
+    # Garbage in the held-out runs (r7, r8): every decision the same, the judge not.
+    lines = log.read_text().splitlines()
+    spoiled = [line if not line.startswith(("r7,", "r8,")) else
+               ",".join(line.split(",")[:-1] + [str(float(line.split(",")[-1]) + 30.0)])
+               for line in lines]
+    (tmp_path / "spoiled.csv").write_text("\n".join(spoiled) + "\n")
+    again = check_csv(tmp_path / "spoiled.csv", "growth_um", "time_s", ["t*_C"], [], [], 1,
+                      0.75, 0.05, [], run_column="run")
+    assert _decisions(again) == _decisions(summary)
+    assert again["final_rmse"] > 10 * summary["final_rmse"]
+
+
+def test_zeroed_runs_refer_the_model_to_each_runs_zero(tmp_path):
+    """A gauge zeroed at each run's start reads g (T - T_start) + noise: the drift asked for
+    recovers g, the constant's held-out error is the readings' own RMS (the zero is known,
+    no mean is taken out), and without --zeroed-runs the same file is judged otherwise."""
+    rng = np.random.default_rng(5)
+    lines = ["day,time_s,t1_C,gauge_um"]
+    gain = 3.0
+    for d in range(6):
+        t = np.arange(60) * 120.0
+        temperature = 20 + rng.normal(0, 1) + 2.0 * (1 - np.exp(-t / 3000.0)) + \
+            rng.normal(0, 0.005, 60)
+        gauge = gain * (temperature - temperature[0]) + rng.normal(0, 0.02, 60)
+        gauge -= gauge[0]
+        lines += [f"d{d},{a:.0f},{b:.5f},{c:.5f}" for a, b, c in zip(t, temperature, gauge)]
+    (tmp_path / "z.csv").write_text("\n".join(lines) + "\n")
+    summary = check_csv(tmp_path / "z.csv", "gauge_um", "time_s", ["t1_C"], [],
+                        ["structural_thermal_drift:t1_C"], 0, 0.5, 0.05, [],
+                        run_column="day", zeroed_runs=True)
+    parameters = summary["steps"][0]["parameters"]["structural_thermal_drift:t1_C"]
+    assert parameters["bz"] * 1e6 == pytest.approx(gain, abs=0.02)
+    gauge = np.array([float(x.split(",")[-1]) for x in lines[1:]]) * 1e-6
+    held = np.arange(gauge.size) >= summary["train_rows"]
+    assert summary["constant_held_out_rmse"] == pytest.approx(
+        float(np.sqrt(np.mean(gauge[held] ** 2))), rel=1e-12)
+    assert summary["final_rmse"] < 0.05 * summary["constant_held_out_rmse"]
+
+
+@pytest.mark.parametrize("rows, flags, message", [
+    (["a,0,20,1", "a,60,21,2", "b,0,20,1", "b,60,21,2", "a,120,22,3"], [],
+     "the day column has a gap: run 'a' at data rows 1-2, again at data row 5"),
+    (["a,0,20,1", "a,60,21,2", "b,0,20,1", "c,0,20,1", "c,60,21,2"], [],
+     "run 'b' of the day column has 1 row (data row 3): a run needs at least 2"),
+    ([f"a,{60 * k},{20 + k / 10},{k}" for k in range(20)] + ["b,0,20,1"] +
+     [f"b,{60 * k},{20 + k / 10},{k}" for k in range(1, 12)] + ["b,30,21,2"] +
+     [f"b,{60 * k},{20 + k / 10},{k}" for k in range(13, 20)], [],
+     "the time goes back inside run 'b' at data row 33: 30 s after 660 s"),
+])
+def test_bad_runs_get_one_line_naming_the_row(tmp_path, capsys, rows, flags, message):
+    (tmp_path / "bad.csv").write_text("day,time_s,t1_C,gauge_um\n" + "\n".join(rows) + "\n")
+    assert main(["check", str(tmp_path / "bad.csv"), "--target", "gauge_um", "--inputs",
+                 "t1_C", "--run", "day"] + flags) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "\n" not in err
+
+
+def test_mixed_units_across_runs_and_zeroed_without_runs_are_refused(tmp_path, capsys):
+    rng = np.random.default_rng(0)
+    lines = ["day,time_s,t1_C,gauge_um"]
+    for d in range(4):
+        scale = 1e-3 if d == 2 else 1.0              # day 3 written in mm
+        for k in range(30):
+            lines.append(f"d{d},{k * 60},{20 + 0.05 * k + rng.normal(0, 0.01):.4f},"
+                         f"{(2.0 * 0.05 * k + rng.normal(0, 0.05)) * scale:.6f}")
+    (tmp_path / "mixed.csv").write_text("\n".join(lines) + "\n")
+    base = ["check", str(tmp_path / "mixed.csv"), "--target", "gauge_um", "--inputs", "t1_C"]
+    assert main(base + ["--run", "day"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("mt-accuracy check: run 'd2': its target spans") and \
+        "mixed units across runs" in err and "\n" not in err
+    assert main(base + ["--zeroed-runs"]) == 2
+    assert "--zeroed-runs needs --run COLUMN" in capsys.readouterr().err
+
+
+def test_an_independent_multi_day_log_with_a_dead_and_a_drifting_sensor(tmp_path, capsys):
+    """studies.multirun_logs (no code of the package): eight cold starts, a different duty
+    cycle each day, a drifting sensor, a dead one on day 5. The dead sensor is left out
+    and named, its rows kept; the model beats a constant held out, and - when least
+    squares on every input beats it - the output says so."""
+    from studies.multirun_logs import write_log
+
+    truth = write_log(tmp_path / "days.csv", seed=3)
+    assert main(["check", str(tmp_path / "days.csv"), "--target", "gauge_um", "--inputs",
+                 "T*_C", "--driver", "spindle_rpm", "--auto", "3", "--run", "day",
+                 "--json", str(tmp_path / "s.json")]) == 0
+    out = capsys.readouterr().out
+    summary = json.loads((tmp_path / "s.json").read_text())
+    assert truth["dead_day"] == 4
+    assert summary["notes"][0].startswith("sensor T_front_C: no reading in")
+    assert "(run day5) - dead, left out of every model (its rows kept)" in summary["notes"][0]
+    assert summary["rows"] == summary["rows_read"]                # no row lost
+    assert len(summary["runs"]) == 8
+    baselines = summary["baselines_held_out_m"]
+    assert baselines["model"] < 0.5 * baselines["constant"]
+    squares = baselines["least squares on every input"]
+    assert (baselines["model"] <= squares * (1 + 1e-9)) != \
+        ("least squares on every input" in out and "beats the model" in out)
+    assert "note: sensor T_front_C" in out
