@@ -174,7 +174,7 @@ def candidate_named(diagnosis, name: str, why: str, where: str):
 
 
 def check_observations(model, obs, add: list[str], auto: int, min_reduction: float,
-                       predict=None) -> dict:
+                       predict=None, blocks=None) -> dict:
     """The workbench loop on observations: diagnose, add what is asked or named, again.
 
     ``predict(model)`` -> (position (N, 3), orientation (N, 3)) predictions made
@@ -190,7 +190,8 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     def evaluate(current):
         if predict is not None:
             obs.predicted_m, obs.predicted_orientation = predict(current)
-        return diagnose(current, obs, min_reduction=min_reduction)
+        return diagnose(current, obs, min_reduction=min_reduction, blocks=blocks,
+                        folds=5 if blocks is None else int(blocks[-1]) + 1)
 
     diagnosis = evaluate(model)
     first = diagnosis
@@ -406,9 +407,23 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
     obs = Observations(survey.positions, measured, mask, survey.time_s, survey.velocities,
                        survey.temperatures, column_map.uncertainty_m,
                        directions=survey.directions, accelerations=survey.accelerations,
-                       spindle_speed_rad_s=survey.spindle_speed_rad_s)
+                       spindle_speed_rad_s=survey.spindle_speed_rad_s,
+                       run_of_row=survey.run_of_row)
     warning = outside_travel(model.machine, survey.positions)
-    result = check_observations(model, obs, add, auto, min_reduction)
+    blocks = None
+    if survey.run_of_row is not None:
+        from ..core.workbench.log_runs import run_blocks
+
+        # Whole runs are the folds (at most 5): a run is never cut between fit and judge.
+        blocks = run_blocks(survey.run_of_row, 5)
+        if blocks is not None and blocks[-1] < 2:
+            blocks = None      # two runs cannot cross-validate a selection
+    result = check_observations(model, obs, add, auto, min_reduction, blocks=blocks)
+    if survey.run_names is not None:
+        result["runs"] = [{"run": name, "rows": int(np.sum(survey.run_of_row == k))}
+                          for k, name in enumerate(survey.run_names)]
+        result["validation"] = "by whole runs" if blocks is not None else \
+            "time blocks (fewer than three runs)"
     if not model.machine.abbe_arms_known:
         notes, refusal = arm_verdicts(result.get("named", []), column_map.tool_offset_m)
         if refusal:

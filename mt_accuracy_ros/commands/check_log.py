@@ -394,10 +394,19 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         reason = selection_refusal(option, min_reduction)
         if reason.startswith("the held-out block test") and added:
             reason += f"; {', '.join(added)} {'were' if len(added) > 1 else 'was'} added instead"
-        reason = reason or (
-            f"once {', '.join(added)} was added it no longer passed (what was added explains "
-            "it)" if added else "not tried: --auto 0 adds nothing by itself" if not auto
-            else f"not judged: beyond the first {MAX_JUDGED} candidates of a step")
+        if not reason:
+            later = next((o for o in diagnosis.ranking if o.name == option.name), None)
+            if not added:
+                reason = "not tried: --auto 0 adds nothing by itself" if not auto else \
+                    f"not judged: beyond the first {MAX_JUDGED} candidates of a step"
+            elif later is None:
+                reason = f"{', '.join(added)} covers it (no longer a candidate)"
+            else:
+                left = selection_refusal(later, min_reduction, block_test=False)
+                reason = (f"after {', '.join(added)}: {left}" if left else
+                          f"after {', '.join(added)} it gains {100 * later.error_reduction:.0f} "
+                          "% and was not judged (--auto used up, or candidates ranked before "
+                          "it)")
         not_added.append({"name": option.name, "cv_reduction": option.error_reduction,
                           "test": reason})
         refusals.append(f"not added: {option.name} (CV {100 * option.error_reduction:.0f} % "

@@ -16,9 +16,15 @@ A **column map** (YAML, or ``--col ROLE=COLUMN[:UNIT]`` flags) says::
                                                            #   from the last axis (Abbe arm)
     work_axes: [Y, X]                                      # optional: the axes carrying the
                                                            #   workpiece, bed outwards
+    run: {column: day}                                     # optional: a survey of many runs
+                                                           #   (rows of one run share a value)
 
 Flags: ``time``, ``pos.X``, ``err.x``, ``temp.<sensor>``, ``vel.X``, ``acc.X``,
-``dir.X``, ``spindle`` as ROLE, e.g. ``--col pos.X=x_mm:mm --col err.x=dev_x:um``.
+``dir.X``, ``spindle``, ``run`` as ROLE, e.g. ``--col pos.X=x_mm:mm --col err.x=dev_x:um``.
+
+A ``run`` column (text or numbers) cuts the survey into runs: each run's rows lie
+together, its time may restart, lags restart at its first reading and whole runs are
+the validation folds (:mod:`~..core.workbench.log_runs`).
 
 Everything is converted to SI (REP-103; temperatures stay in degC). A
 missing column, an unknown unit, a column that is not numeric, too few
@@ -80,7 +86,7 @@ class ColumnMap:
             return "speed"
         if kind == "temp":
             return "temperature"
-        if kind == "dir":
+        if kind in ("dir", "run"):
             return "unitless"
         rotary = axis.upper() in "ABC" and kind != "err"
         return {"pos": "angle" if rotary else "length", "err": "length",
@@ -98,7 +104,7 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
         raise ParameterError(f"{source}: expected a mapping (time, positions, errors, ...)")
     known = {"time", "row_period_s", "positions", "errors", "temperatures", "velocities",
              "accelerations", "directions", "spindle_speed", "uncertainty", "machine",
-             "tool_offset", "work_axes"}
+             "tool_offset", "work_axes", "run"}
     unknown = set(data) - known
     if unknown:
         raise ParameterError(f"{source}: unknown key(s) {', '.join(sorted(unknown))}; known: "
@@ -123,6 +129,8 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
         out.roles["time"] = entry(data["time"], "time")
     if "spindle_speed" in data:
         out.roles["spindle"] = entry(data["spindle_speed"], "spindle_speed")
+    if "run" in data:
+        out.roles["run"] = entry(data["run"], "run")
     if "row_period_s" in data:
         out.row_period_s = float(data["row_period_s"])
         if not (out.row_period_s > 0 and math.isfinite(out.row_period_s)):
@@ -212,6 +220,9 @@ class MappedSurvey:
     rows_read: int
     rows_dropped: int
     drop_reasons: list[str]
+    #: (N,) run index of each row and the runs' names (a survey of many runs), or None.
+    run_of_row: np.ndarray | None = None
+    run_names: list[str] | None = None
 
     def summary(self, name: str) -> str:
         kept = self.rows_read - self.rows_dropped
@@ -236,7 +247,7 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
         if kind in ("pos", "vel", "acc", "dir") and (len(key) != 1 or key not in "XYZABC"):
             raise ParameterError(f"{role}: name the axis with its letter (X Y Z A B C)")
     scales = {role: _scale(column_map, role, unit) for role, (_, unit) in
-              column_map.roles.items()}
+              column_map.roles.items() if role != "run"}
     try:
         with open(path, newline="", encoding="utf-8") as stream:
             rows = [r for r in csv.reader(stream) if any(c.strip() for c in r)]
@@ -256,7 +267,7 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     values = {role: [] for role in column_map.roles}
     bad_in_column = {role: 0 for role in column_map.roles}
     first_bad = {}
-    dropped, reasons = 0, []
+    dropped, reasons, kept_rows = 0, [], []
     for number, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):
             raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
@@ -264,6 +275,11 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
         parsed, problem = {}, ""
         for role, j in index.items():
             cell = row[j].strip()
+            if role == "run":
+                if not cell:
+                    problem = problem or f"row {number} column {header[j]}: empty run"
+                parsed[role] = cell
+                continue
             try:
                 value = float(cell)
             except ValueError:
@@ -280,6 +296,7 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
             continue
         for role, value in parsed.items():
             values[role].append(value)
+        kept_rows.append(number - 1)
     total = len(rows) - 1
     for role, bad in bad_in_column.items():
         if total and bad > total / 2:
@@ -290,7 +307,16 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     if kept < min_rows:
         raise InputDataError(f"{path}: {kept} usable rows; at least {min_rows} needed"
                              + (f" ({reasons[0]})" if reasons else ""))
-    si = {role: np.asarray(v) * scales[role][0] + scales[role][1] for role, v in values.items()}
+    si = {role: np.asarray(v) * scales[role][0] + scales[role][1] for role, v in values.items()
+          if role != "run"}
+    run_of_row = run_names = None
+    if "run" in values:
+        from ..core.workbench.log_runs import run_labels, stitched_time
+
+        data_rows = np.asarray(kept_rows, dtype=np.intp)
+        run_of_row, run_names = run_labels(values["run"], data_rows, column_map.roles["run"][0])
+        if "time" in si:
+            si["time"] = stitched_time(si["time"], run_of_row, run_names, data_rows)
     if "time" in si:
         time_s = si["time"]
         # Equal stamps are a logger's resolution; only a stamp that goes back is refused.
@@ -305,4 +331,5 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
                          v for r, v in si.items() if r.startswith(kind + ".")}
     errors = {r.split(".", 1)[1]: v for r, v in si.items() if r.startswith("err.")}
     return MappedSurvey(time_s, pick("pos"), errors, pick("temp"), pick("vel"), pick("acc"),
-                        pick("dir"), si.get("spindle"), total, dropped, reasons)
+                        pick("dir"), si.get("spindle"), total, dropped, reasons, run_of_row,
+                        run_names)

@@ -149,3 +149,52 @@ def test_the_tool_offset_is_the_abbe_arm_of_an_angular_error_on_the_generic_mach
     np.testing.assert_allclose(ctx.jacobian("EBX"),
                                np.column_stack([q["Z"] - 0.1, 0 * q["X"], 0 * q["X"]]),
                                atol=1e-15)
+
+
+def test_a_survey_of_many_runs_restarts_its_clock_and_lags_each_run(tmp_path):
+    """`run:` in the column map (issue 40): each day's clock restarts; without the run the
+    file is refused at the restart, with it the days lie end to end, a heat source's lag
+    restarts from rest each morning, and whole runs are the folds."""
+    from mt_accuracy_ros.commands.check import check_mapped_csv
+
+    rng = np.random.default_rng(2)
+    lines = ["day,t_min,x_mm,S_rpm,dx_um"]
+    for day in range(4):
+        t = np.arange(90) * 4.0                                    # min, every 4 min
+        speed = np.where((t // 40) % 2 == 0, 8000.0, 2000.0) * (0.7 + 0.1 * day)
+        # Spindle heat through a 20 min lag from a cold start, each day on its own (the
+        # exact recurrence for a piecewise-constant input, written here by hand).
+        growth = np.zeros(t.size)
+        for k in range(1, t.size):
+            decay = np.exp(-(t[k] - t[k - 1]) / 20.0)
+            growth[k] = growth[k - 1] * decay + (1 - decay) * 0.001 * speed[k - 1]
+        x = rng.uniform(0, 500, t.size)
+        dx = growth + rng.normal(0, 0.05, t.size)
+        lines += [f"d{day + 1},{a:.1f},{b:.3f},{c:.0f},{d:.4f}"
+                  for a, b, c, d in zip(t, x, speed, dx)]
+    (tmp_path / "days.csv").write_text("\n".join(lines) + "\n")
+    base = {"time": {"column": "t_min", "unit": "min"},
+            "positions": {"X": {"column": "x_mm", "unit": "mm"}},
+            "errors": {"x": {"column": "dx_um", "unit": "um"}},
+            "spindle_speed": {"column": "S_rpm", "unit": "rpm"},
+            "uncertainty": {"value": 0.1, "unit": "um"}}
+    with pytest.raises(InputDataError, match="goes back at data row 91"):
+        read_mapped_csv(tmp_path / "days.csv", column_map_from_dict(base))
+    column_map = column_map_from_dict({**base, "run": "day"})
+    survey = read_mapped_csv(tmp_path / "days.csv", column_map)
+    assert survey.run_names == ["d1", "d2", "d3", "d4"]
+    assert np.all(np.diff(survey.time_s) > 0) and survey.time_s[90] == 60.0 * (89 * 4 + 4)
+    result = check_mapped_csv(tmp_path / "days.csv", column_map, None, [], 1, 0.05)
+    assert result["validation"] == "by whole runs"
+    assert [r["rows"] for r in result["runs"]] == [90] * 4
+    assert result["named"][0]["name"] == "heat_source:spindle_speed"
+    assert result["named"][0]["setting"]["tau_s"] == pytest.approx(1200.0, rel=0.3)
+    # The same days stitched into one record (no run): the lag runs on over the night
+    # and every morning's cold start is missed.
+    stitched = [lines[0]] + [
+        ",".join([f"{float(row.split(',')[1]) + 360.0 * (int(row.split(',')[0][1:]) - 1):.1f}"]
+                 + row.split(",")[2:]) for row in lines[1:]]
+    (tmp_path / "one.csv").write_text("\n".join(["t_min,x_mm,S_rpm,dx_um"] + stitched[1:])
+                                      + "\n")
+    one = check_mapped_csv(tmp_path / "one.csv", column_map_from_dict(base), None, [], 1, 0.05)
+    assert result["final_rmse"] < 0.5 * one["final_rmse"]

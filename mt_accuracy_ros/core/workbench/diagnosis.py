@@ -745,6 +745,8 @@ def selection_refusal(candidate: Candidate, min_reduction: float, alpha: float =
     if block_test and not candidate.adjusted_p < alpha:
         return (f"the held-out block test: p = {candidate.adjusted_p:.3g} after adjusting for "
                 f"every candidate tried (max-T), above {alpha:g}")
+    if candidate.error_reduction < 0:
+        return f"it raises the CV error by {-100 * candidate.error_reduction:.1f} %"
     if candidate.error_reduction < min_reduction:
         return (f"it cuts the CV error by {100 * candidate.error_reduction:.1f} %, below "
                 f"{100 * min_reduction:.0f} %")
