@@ -34,6 +34,19 @@ class CsvTable:
     data_rows: np.ndarray | None = None
     #: Missing values kept as NaN per gap column (see :func:`read_csv_table`).
     gaps: dict[str, int] = field(default_factory=dict)
+    #: (kept row index, column, reason) of each missing value of a gap column.
+    gap_reasons: list[tuple[int, str, str]] = field(default_factory=list)
+
+    def drop_gaps_of(self, columns: set[str]) -> None:
+        """Count the rows with a missing value in ``columns`` as dropped, with reasons (the
+        caller leaves them out)."""
+        rows: dict[int, str] = {}
+        for row, column, reason in self.gap_reasons:
+            if column in columns:
+                rows.setdefault(row, reason)
+        self.rows_dropped += len(rows)
+        for row in sorted(rows)[:max(0, KEPT_REASONS - len(self.drop_reasons))]:
+            self.drop_reasons.append(rows[row])
 
     @property
     def names(self) -> list[str]:
@@ -77,7 +90,7 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
     missing = [name for name in text_columns if name not in header]
     if missing:
         raise InputDataError(f"{path}: no column {missing[0]!r}; have {', '.join(header)}")
-    values, dropped, reasons, kept_rows, gaps = [], 0, [], [], {}
+    values, dropped, reasons, kept_rows, gaps, gap_reasons = [], 0, [], [], {}, []
     for number, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):
             raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
@@ -97,6 +110,11 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
                     value = math.nan
                 if not math.isfinite(value):
                     gaps[name] = gaps.get(name, 0) + 1
+                    why = "is not a number" if math.isnan(value) and \
+                        cell.strip().lower() != "nan" else "is not finite"
+                    gap_reasons.append((len(values), name, f"row {number} column {name}: "
+                                        f"{cell.strip()[:20]!r} {why}" if why.endswith("number")
+                                        else f"row {number} column {name}: {cell.strip()} {why}"))
                     value = math.nan
                 parsed.append(value)
                 continue
@@ -125,7 +143,7 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
         columns[name] = np.asarray(cells, dtype=object if name in text_columns else np.float64)
     return CsvTable(path, columns, rows_read=len(rows) - 1, rows_dropped=dropped,
                     drop_reasons=reasons, data_rows=np.asarray(kept_rows, dtype=np.intp),
-                    gaps=gaps)
+                    gaps=gaps, gap_reasons=gap_reasons)
 
 
 def csv_header(path: str | Path) -> list[str]:

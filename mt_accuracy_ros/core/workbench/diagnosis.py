@@ -504,9 +504,11 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     if localise_residual:
         strokes = {a: model.machine.axes[a].stroke for a in model.machine.axis_order}
         localisation = localise(position_residual, position_mask, variables,
-                                ctx.structure_sensors(), noise_sigma, strokes, folds)
+                                ctx.structure_sensors(), noise_sigma, strokes, folds,
+                                ctx.zero_rows)
         localisation_after = localise(remaining[:, :3], position_mask, variables,
-                                      ctx.structure_sensors(), noise_sigma, strokes, folds) \
+                                      ctx.structure_sensors(), noise_sigma, strokes, folds,
+                                      ctx.zero_rows) \
             if selected and above else localisation
     direction_rmse = None
     if directions:

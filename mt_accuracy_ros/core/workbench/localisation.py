@@ -310,11 +310,16 @@ def _variable_shares(candidates: dict[str, NDArray], measured: dict, folds: int)
 
 def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: Variables,
              structure_sensors: list[str], noise_sigma: float,
-             strokes: dict[str, tuple[float, float]] | None = None, folds: int = 5
-             ) -> Localisation:
-    """Shares of the residual (N, 3) explained by each variable, and periodogram peaks."""
+             strokes: dict[str, tuple[float, float]] | None = None, folds: int = 5,
+             zero_rows: NDArray[np.intp] | None = None) -> Localisation:
+    """Shares of the residual (N, 3) explained by each variable, and periodogram peaks.
+    ``zero_rows`` (N,): readings of an instrument zeroed at those rows (a log of zeroed
+    runs) - every variable is referred to them as the residual is."""
     shares, peaks = [], []
     candidates = candidate_variables(variables, structure_sensors)
+    if zero_rows is not None:
+        candidates = {name: values - values[zero_rows] for name, values in candidates.items()
+                      if np.ptp(values - values[zero_rows]) > 0}
     rms = {}
     measured = {}     # component -> (rows, centred residual, its variance)
     for c, component in enumerate(COMPONENTS):

@@ -174,16 +174,20 @@ def mixed_units_problem(target: NDArray[np.float64], temperatures: dict[str, NDA
     return ""
 
 
-#: A sensor without a reading in more than this share of the rows (or of one run) is
-#: dead: it is left out, not its rows.
-DEAD_SHARE = 0.02
+#: A sensor without a reading in more than this share of the rows is dead: it is left
+#: out, not its rows (a few glitches leave their rows out instead).
+DEAD_SHARE = 0.2
+
+#: ... or in more than this share of one run (an open thermocouple for a day).
+DEAD_RUN_SHARE = 0.5
 
 
 def leave_out_dead_sensors(temperatures: dict[str, NDArray[np.float64]],
                            run_of_row: NDArray[np.intp] | None, names: list[str] | None
                            ) -> tuple[dict[str, NDArray[np.float64]], list[str]]:
     """(the sensors kept, one note per sensor left out). A sensor with no reading (NaN) in
-    more than :data:`DEAD_SHARE` of the rows, or of one run, is dead - a broken
+    more than :data:`DEAD_SHARE` of the rows, or :data:`DEAD_RUN_SHARE` of one run, is
+    dead - a broken
     thermocouple - and is left out of every model; its rows stay. A few holes leave
     their rows out instead (the caller's complete-row rule)."""
     kept, notes = {}, []
@@ -197,7 +201,7 @@ def leave_out_dead_sensors(temperatures: dict[str, NDArray[np.float64]],
         if run_of_row is not None:
             share = np.bincount(run_of_row, weights=bad, minlength=len(names)) / \
                 np.bincount(run_of_row, minlength=len(names))
-            runs = [names[k] for k in np.flatnonzero(share > DEAD_SHARE)]
+            runs = [names[k] for k in np.flatnonzero(share > DEAD_RUN_SHARE)]
             dead = dead or bool(runs)
             where = f" (run{'s' if len(runs) > 1 else ''} {', '.join(runs)})" if runs else ""
         if dead:
