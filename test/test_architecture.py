@@ -77,8 +77,8 @@ def test_the_command_floor_is_one_room():
     top = sorted(p.name for p in PACKAGE.glob("*.py"))
     assert top == ["__init__.py", "allocator.py", "cli.py"]
     commands = sorted(p.stem for p in (PACKAGE / "commands").glob("*.py"))
-    assert commands == ["__init__", "check", "demo", "iso230", "model_tools", "processes",
-                        "rotary_tools", "topic_tools"]
+    assert commands == ["__init__", "check", "check_log", "demo", "iso230", "model_tools",
+                        "processes", "rotary_tools", "topic_tools"]
     # Nodes run on real machines: none of them imports a command.
     assert _offending(_sources("nodes"), ("mt_accuracy_ros.commands", "mt_accuracy_ros.cli")) \
         == {}
@@ -140,11 +140,12 @@ def test_one_module_writes_html():
 
 def test_the_independent_generators_import_nothing_of_the_package():
     """The proofs' data must not come from the code they judge (issue 39): the foreign
-    machine, the Cartesian surveys, the five-axis R-test and the shapes they share import
+    machine, the Cartesian surveys, the five-axis R-test, the multi-day thermal logs
+    (issue 40) and the shapes they share import
     no module of mt_accuracy_ros, directly or through another study."""
     studies = REPO_ROOT / "studies"
     generators = ["foreign_machine.py", "cartesian_surveys.py", "five_axis_rtest.py",
-                  "shapes.py"]
+                  "multirun_logs.py", "shapes.py"]
     assert _offending([studies / name for name in generators], ("mt_accuracy_ros",)) == {}
     # Not vacuous: the trial runners beside them do use the package.
     assert _offending([studies / "catalogue_trials.py"], ("mt_accuracy_ros",))
