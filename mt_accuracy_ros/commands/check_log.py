@@ -18,6 +18,7 @@ Every decision is made inside the training rows:
 """
 from __future__ import annotations
 
+import dataclasses
 import fnmatch
 from pathlib import Path
 
@@ -154,40 +155,65 @@ def per_run_figures(names: list[str], run_of_row, train, residuals: dict[str, np
     return out
 
 
-def check_csv(path: Path, target: str, time_column: str, inputs: list[str], drivers: list[str],
-              add: list[str], auto: int, train_fraction: float, min_reduction: float,
-              model_terms: list[str], row_period_s: float | None = None,
-              component: str = "z", uncertainty_m: float | None = None,
-              structure_length_m: float | None = None, run_column: str | None = None,
-              zeroed_runs: bool = False) -> dict:
-    """A thermal log (one displacement column, temperature inputs, a spindle speed; one run
-    or many) on the survey engine (:mod:`~mt_accuracy_ros.core.workbench.thermal_log`).
+def large_gains_not_added(first, final, added: list[str], judged: set[str], auto: int,
+                          min_reduction: float, room: int) -> list[dict]:
+    """Each candidate of the first diagnosis with a CV gain of :data:`LARGE_GAIN` or more
+    that was neither added nor judged already, with the test that refused it (its
+    numbers), looked up where the ``final`` diagnosis stands; at most ``room``."""
+    from ..core.workbench.diagnosis import selection_refusal
 
-    Its time is the time column, or - without one - the row order at ``row_period_s``
-    seconds a row. ``run_column``: rows of one run share its value (time restarts or
-    jumps between runs; lags restart each run); ``zeroed_runs``: the instrument was
-    zeroed at each run's start. Decisions are made on the training rows only (module
-    docstring); everything is SI in the JSON (metres); printed lines speak the target
-    column's unit.
-    """
-    from ..core.effects.thermal import sensor_weights
-    from ..core.workbench.diagnosis import (add_effect, diagnose, residual_frame,
-                                            selection_refusal)
+    out = []
+    for option in first.ranking:
+        if len(out) >= room:
+            break
+        if option.error_reduction < LARGE_GAIN or option.name in added or option.name in judged:
+            continue
+        reason = selection_refusal(option, min_reduction)
+        if reason.startswith("the held-out block test") and added:
+            reason += f"; {', '.join(added)} {'were' if len(added) > 1 else 'was'} added instead"
+        if not reason:
+            later = next((o for o in final.ranking if o.name == option.name), None)
+            if not added:
+                reason = "not tried: --auto 0 adds nothing by itself" if not auto else \
+                    f"not judged: beyond the first {MAX_JUDGED} candidates of a step"
+            elif later is None:
+                reason = f"{', '.join(added)} covers it (no longer a candidate)"
+            else:
+                left = selection_refusal(later, min_reduction, block_test=False)
+                reason = (f"after {', '.join(added)}: {left}" if left else
+                          f"after {', '.join(added)} it gains {100 * later.error_reduction:.0f} "
+                          "% and was not judged (--auto used up, or candidates ranked before "
+                          "it)")
+        out.append({"name": option.name, "cv_reduction": option.error_reduction,
+                    "test": reason})
+    return out
+
+
+@dataclasses.dataclass
+class LogData:
+    """A log read and checked: its table, its observations, and what was said about it."""
+
+    table: object
+    obs: object
+    target_column: str
+    unit: str
+    to_unit: float
+    run_names: list[str] | None
+    notes: list[str]
+
+
+def read_log(path: Path, target: str, time_column: str, inputs: list[str],
+             drivers: list[str], row_period_s: float | None, component: str,
+             uncertainty_m: float | None, run_column: str | None, zeroed_runs: bool
+             ) -> LogData:
+    """The log's columns as observations (SI), its runs checked, dead sensors left out;
+    one-line errors naming the row, run or column (see :func:`check_csv`)."""
     from ..core.workbench.log_runs import (leave_out_dead_sensors, mixed_units_problem,
-                                           run_blocks, run_labels, run_starts, split_at_run)
-    from ..core.workbench.thermal_log import (DEFAULT_STRUCTURE_LENGTH_M,
-                                              all_inputs_least_squares_residual,
-                                              held_out_residual, held_out_rmse, log_model,
-                                              log_observations)
+                                           run_labels, run_starts)
+    from ..core.workbench.thermal_log import log_observations
     from ..io.csv_table import csv_header, read_csv_table
-    from .check import _column_and_unit, _model_yaml, candidate_named, error_figures
+    from .check import _column_and_unit
 
-    if not 0.2 <= train_fraction <= 0.9:
-        raise InputDataError(f"--train-fraction {train_fraction}: between 0.2 and 0.9 (the "
-                             "rows after it judge the model)")
-    if zeroed_runs and not run_column:
-        raise InputDataError("--zeroed-runs needs --run COLUMN (the instrument was zeroed at "
-                             "each run's start)")
     header = csv_header(path)
     fixed = {flag.split(":", 1)[0].strip() for flag in [target, *drivers]} | \
         {time_column, run_column}
@@ -237,12 +263,51 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                            component=component, uncertainty_m=uncertainty_m,
                            run_of_row=run_of_row, run_names=run_names, zeroed_runs=zeroed_runs,
                            data_rows=table.data_rows)
-    runs = obs.run_of_row is not None
-    if runs:
+    if obs.run_of_row is not None:
         # Rows with a hole in a sensor (not dead) are left out: the runs that remain.
         complete = np.all([np.isfinite(v) for v in temperatures.values()], axis=0)
         kept_runs = np.asarray(run_of_row)[complete]
         run_names = [run_names[k] for k in kept_runs[run_starts(obs.run_of_row)]]
+    return LogData(table, obs, target_column, unit, 1.0 / target_scale, run_names, notes)
+
+
+def check_csv(path: Path, target: str, time_column: str, inputs: list[str], drivers: list[str],
+              add: list[str], auto: int, train_fraction: float, min_reduction: float,
+              model_terms: list[str], row_period_s: float | None = None,
+              component: str = "z", uncertainty_m: float | None = None,
+              structure_length_m: float | None = None, run_column: str | None = None,
+              zeroed_runs: bool = False) -> dict:
+    """A thermal log (one displacement column, temperature inputs, a spindle speed; one run
+    or many) on the survey engine (:mod:`~mt_accuracy_ros.core.workbench.thermal_log`).
+
+    Its time is the time column, or - without one - the row order at ``row_period_s``
+    seconds a row. ``run_column``: rows of one run share its value (time restarts or
+    jumps between runs; lags restart each run); ``zeroed_runs``: the instrument was
+    zeroed at each run's start. Decisions are made on the training rows only (module
+    docstring); everything is SI in the JSON (metres); printed lines speak the target
+    column's unit.
+    """
+    from ..core.effects.thermal import sensor_weights
+    from ..core.workbench.diagnosis import (add_effect, diagnose, residual_frame,
+                                            selection_refusal)
+    from ..core.workbench.log_runs import run_blocks, split_at_run
+    from ..core.workbench.thermal_log import (DEFAULT_STRUCTURE_LENGTH_M,
+                                              all_inputs_least_squares_residual,
+                                              held_out_residual, held_out_rmse, log_model)
+    from .check import _model_yaml, candidate_named, error_figures
+
+    if not 0.2 <= train_fraction <= 0.9:
+        raise InputDataError(f"--train-fraction {train_fraction}: between 0.2 and 0.9 (the "
+                             "rows after it judge the model)")
+    if zeroed_runs and not run_column:
+        raise InputDataError("--zeroed-runs needs --run COLUMN (the instrument was zeroed at "
+                             "each run's start)")
+    log = read_log(path, target, time_column, inputs, drivers, row_period_s, component,
+                   uncertainty_m, run_column, zeroed_runs)
+    table, obs, run_names, notes = log.table, log.obs, log.run_names, log.notes
+    target_column, unit, to_unit = log.target_column, log.unit, log.to_unit
+    runs = obs.run_of_row is not None
+    if runs:
         train = split_at_run(obs.run_of_row, train_fraction)
     else:
         train = np.arange(obs.n) < int(train_fraction * obs.n)
@@ -251,7 +316,6 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     if blocks is not None and blocks[-1] < 1:
         blocks = None
     empty = model = log_model(obs, structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
-    to_unit = 1.0 / target_scale
     if runs and blocks is None:
         notes.append("one training run: forward validation cuts it into blocks of rows")
     folds = min(5, training.n // 4)
@@ -385,31 +449,11 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                                                          obs.zeroed_runs)})
     added = [name for s in steps for name in s.get("added", [])]
     # Every large CV gain not added, with the test that refused it and its numbers.
-    judged = {entry["name"] for entry in not_added}
-    for option in first.ranking:
-        if option.error_reduction < LARGE_GAIN or option.name in added or \
-                option.name in judged or len(not_added) >= 12:
-            continue
-        reason = selection_refusal(option, min_reduction)
-        if reason.startswith("the held-out block test") and added:
-            reason += f"; {', '.join(added)} {'were' if len(added) > 1 else 'was'} added instead"
-        if not reason:
-            later = next((o for o in diagnosis.ranking if o.name == option.name), None)
-            if not added:
-                reason = "not tried: --auto 0 adds nothing by itself" if not auto else \
-                    f"not judged: beyond the first {MAX_JUDGED} candidates of a step"
-            elif later is None:
-                reason = f"{', '.join(added)} covers it (no longer a candidate)"
-            else:
-                left = selection_refusal(later, min_reduction, block_test=False)
-                reason = (f"after {', '.join(added)}: {left}" if left else
-                          f"after {', '.join(added)} it gains {100 * later.error_reduction:.0f} "
-                          "% and was not judged (--auto used up, or candidates ranked before "
-                          "it)")
-        not_added.append({"name": option.name, "cv_reduction": option.error_reduction,
-                          "test": reason})
-        refusals.append(f"not added: {option.name} (CV {100 * option.error_reduction:.0f} % "
-                        f"better) - {reason}")
+    for entry in large_gains_not_added(first, diagnosis, added, {e["name"] for e in not_added},
+                                       auto, min_reduction, room=12 - len(not_added)):
+        not_added.append(entry)
+        refusals.append(f"not added: {entry['name']} (CV {100 * entry['cv_reduction']:.0f} % "
+                        f"better) - {entry['test']}")
     constant = held_out_rmse(empty, obs, train)
     judge = ~train
     before_residual = held_out_residual(start_model, obs, train)
