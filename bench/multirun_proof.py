@@ -17,40 +17,23 @@ input, and of the workbench's model, the terms added and the model chosen.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 
 from mt_accuracy_ros.commands.check_log import check_csv
-from studies.multirun_logs import write_log
+from studies.multirun_logs import cut_into_runs, write_log
 
 ROOT = Path(__file__).resolve().parents[1]
 FL = ROOT / "data" / "fl_thermal" / "fl_thermal.csv"
 
 
 def cut_fl(out: Path, hours: float, zeroed: bool) -> Path:
-    """FL_THERMAL cut into runs of ``hours`` (clock restarted; zeroed: channels referred to
-    each run's first reading)."""
-    rows = list(csv.reader(open(FL)))
-    header, data = rows[0], np.array(rows[1:], dtype=float)
-    run = (data[:, 0] // (hours * 3600.0)).astype(int)
-    cut = data.copy()
-    for r in np.unique(run):
-        rows_r = np.flatnonzero(run == r)
-        cut[rows_r, 0] -= data[rows_r[0], 0]
-        if zeroed:
-            for j, name in enumerate(header):
-                if name.startswith("ch"):
-                    cut[rows_r, j] -= data[rows_r[0], j]
-    lines = [",".join(["day"] + header)]
-    lines += [f"d{r + 1}," + ",".join(f"{v:.10g}" for v in row) for r, row in zip(run, cut)]
-    out.write_text("\n".join(lines) + "\n")
-    return out
+    """FL_THERMAL cut into runs of ``hours`` (:func:`studies.multirun_logs.cut_into_runs`)."""
+    return cut_into_runs(FL, out, hours, zeroed)
 
 
 def run_case(name: str, path: Path, target: str, inputs: str, run: str | None,

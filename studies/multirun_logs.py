@@ -140,3 +140,26 @@ def write_log(path: Path, seed: int, *, days: int = 8, zeroed: bool = False,
             lines.append(",".join(cells))
     Path(path).write_text("\n".join(lines) + "\n")
     return truth
+
+
+def cut_into_runs(source: Path, out: Path, hours: float, zeroed: bool) -> Path:
+    """A recorded log (``time_s`` first, displacement channels ``ch*``) cut into runs of
+    ``hours``, written with a ``day`` column (``day1``, ...): each run's clock restarts at 0
+    and, ``zeroed``, every displacement channel is referred to its run's first reading."""
+    import csv
+
+    rows = list(csv.reader(open(source)))
+    header, data = rows[0], np.array(rows[1:], dtype=float)
+    run = (data[:, 0] // (hours * 3600.0)).astype(int)
+    cut = data.copy()
+    for r in np.unique(run):
+        rows_r = np.flatnonzero(run == r)
+        cut[rows_r, 0] -= data[rows_r[0], 0]
+        if zeroed:
+            for j, name in enumerate(header):
+                if name.startswith("ch"):
+                    cut[rows_r, j] -= data[rows_r[0], j]
+    lines = [",".join(["day"] + header)]
+    lines += [f"day{r + 1}," + ",".join(f"{v:.10g}" for v in row) for r, row in zip(run, cut)]
+    Path(out).write_text("\n".join(lines) + "\n")
+    return Path(out)

@@ -4,7 +4,6 @@ The held-out runs judge, unseen by every decision; lags and time restart each ru
 baselines (a constant, least squares on every input) are given on the same rows."""
 from __future__ import annotations
 
-import csv
 import json
 from pathlib import Path
 
@@ -20,21 +19,9 @@ FL_ARGS = ["--target", "ch5_um", "--inputs", "t*_C", "--driver", "spindle_rpm", 
 def _fl_runs(data_dir: Path, out: Path, zeroed: bool, hours: float = 8.0) -> Path:
     """FL_THERMAL cut into runs of ``hours``: its clock restarts each run; zeroed, every
     displacement channel is referred to its run's first reading."""
-    rows = list(csv.reader(open(data_dir / "fl_thermal" / "fl_thermal.csv")))
-    header, data = rows[0], np.array(rows[1:], dtype=float)
-    run = (data[:, 0] // (hours * 3600.0)).astype(int)
-    cut = data.copy()
-    for r in np.unique(run):
-        rows_r = np.flatnonzero(run == r)
-        cut[rows_r, 0] -= data[rows_r[0], 0]
-        if zeroed:
-            for j, name in enumerate(header):
-                if name.startswith("ch"):
-                    cut[rows_r, j] -= data[rows_r[0], j]
-    lines = [",".join(["day"] + header)]
-    lines += [f"day{r + 1}," + ",".join(f"{v:.10g}" for v in row) for r, row in zip(run, cut)]
-    out.write_text("\n".join(lines) + "\n")
-    return out
+    from studies.multirun_logs import cut_into_runs
+
+    return cut_into_runs(data_dir / "fl_thermal" / "fl_thermal.csv", out, hours, zeroed)
 
 
 @pytest.mark.parametrize("zeroed, expected_um", [(False, 4.41), (True, 7.46)])

@@ -47,6 +47,24 @@ def _validation_split(training, blocks):
     return ~last, last
 
 
+def joint_design(terms, frame, component: int, zeroed: bool):
+    """(design (N, P), ridge penalties [(start, stop, strength)], each term's column span)
+    of ``terms`` [(family, variant, setting)] on ``component`` of ``frame`` - with an
+    offset column first unless the runs were zeroed (their zero is known)."""
+    n = frame.residual.shape[0]
+    columns = [] if zeroed else [np.ones((n, 1))]
+    penalties, spans, start = [], [], 0 if zeroed else 1
+    for family, variant, setting in terms:
+        design = frame.ctx.measured_design(family, variant, setting)[:, component, :]
+        key = getattr(family, "penalty_setting", None)
+        if key:
+            penalties.append((start, start + design.shape[1], float(setting.get(key, 0.0))))
+        columns.append(design)
+        spans.append((start, start + design.shape[1]))
+        start += design.shape[1]
+    return (np.column_stack(columns) if columns else np.zeros((n, 0))), penalties, spans
+
+
 def validation_rmse(terms, frame, component: int, fit, judge, zeroed: bool) -> float:
     """RMS error on ``judge`` rows of ``terms`` [(family, variant, setting)] fitted jointly
     (with an offset unless the runs were zeroed) on ``fit`` rows to the residual of
@@ -54,18 +72,9 @@ def validation_rmse(terms, frame, component: int, fit, judge, zeroed: bool) -> f
     from ..core.workbench.selection import penalised_fit
 
     y = frame.residual[:, component]
-    columns = [] if zeroed else [np.ones((y.size, 1))]
-    penalties, start = [], 0 if zeroed else 1
-    for family, variant, setting in terms:
-        design = frame.ctx.measured_design(family, variant, setting)[:, component, :]
-        key = getattr(family, "penalty_setting", None)
-        if key:
-            penalties.append((start, start + design.shape[1], float(setting.get(key, 0.0))))
-        columns.append(design)
-        start += design.shape[1]
-    if not columns:
+    x, penalties, _ = joint_design(terms, frame, component, zeroed)
+    if x.shape[1] == 0:
         return float(np.sqrt(np.mean(y[judge] ** 2)))
-    x = np.column_stack(columns)
     coefficients, _, _ = penalised_fit(x[fit], y[fit], penalties)
     return float(np.sqrt(np.mean((y[judge] - x[judge] @ coefficients) ** 2)))
 
@@ -90,34 +99,18 @@ def forward_rmse(terms, frame, component: int, blocks, zeroed: bool) -> float:
 def joint_refit(candidates, terms, frame, component: int, zeroed: bool) -> list:
     """The ``candidates`` with their parameters (and k = 1 uncertainties) refitted jointly
     on every training row of ``frame`` (their ``terms`` as in :func:`validation_rmse`)."""
-    import dataclasses
-
     from ..core.workbench.selection import penalised_fit
 
-    y = frame.residual[:, component]
-    columns = [] if zeroed else [np.ones((y.size, 1))]
-    penalties, start, spans = [], 0 if zeroed else 1, []
-    for family, variant, setting in terms:
-        design = frame.ctx.measured_design(family, variant, setting)[:, component, :]
-        key = getattr(family, "penalty_setting", None)
-        if key:
-            penalties.append((start, start + design.shape[1], float(setting.get(key, 0.0))))
-        columns.append(design)
-        spans.append((start, start + design.shape[1]))
-        start += design.shape[1]
-    values, errors, _ = penalised_fit(np.column_stack(columns), y, penalties)
+    x, penalties, spans = joint_design(terms, frame, component, zeroed)
+    values, errors, _ = penalised_fit(x, frame.residual[:, component], penalties)
     out = []
     for candidate, (family, variant, setting), (a, b) in zip(candidates, terms, spans):
         names = family.parameter_names(variant, setting)
-        # The design holds this component's columns only: the others stay zero.
-        own = [n for n in names]
-        parameters = {n: 0.0 for n in own}
-        uncertainties = {n: 0.0 for n in own}
-        design = frame.ctx.measured_design(family, variant, setting)[:, component, :]
-        used = np.flatnonzero(np.any(design != 0, axis=0))
-        for j in used:
-            parameters[names[j]] = float(values[a + j])
-            uncertainties[names[j]] = float(errors[a + j])
+        # The fit saw this component's columns only: parameters of the others stay zero.
+        used = np.any(x[:, a:b] != 0, axis=0)
+        parameters = {n: float(values[a + j]) if used[j] else 0.0 for j, n in enumerate(names)}
+        uncertainties = {n: float(errors[a + j]) if used[j] else 0.0
+                         for j, n in enumerate(names)}
         out.append(dataclasses.replace(candidate, parameters=parameters,
                                        parameter_uncertainties=uncertainties))
     return out

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from .base import Context, EffectFamily, per_component
 from .physics import thermal_gain_limit_m_per_k
+from .thermal import sensor_set_design, sensor_set_parameters
 
 #: Largest number of principal components offered.
 MAX_COMPONENTS = 4
@@ -125,11 +126,10 @@ class SensorLeastSquares(EffectFamily):
         return 3 if variant.count("+") >= 3 else 2
 
     def parameter_names(self, variant, setting):
-        return [f"b{c}_{sensor}" for sensor in variant.split("+") for c in "xyz"]
+        return sensor_set_parameters(variant)
 
     def design(self, ctx, variant, setting):
-        return np.concatenate([per_component(ctx.variables.rise(sensor))
-                               for sensor in variant.split("+")], axis=2)
+        return sensor_set_design(ctx, variant)
 
     def parameter_limits(self, ctx, variant, setting):
         bound = thermal_gain_limit_m_per_k(ctx.machine)

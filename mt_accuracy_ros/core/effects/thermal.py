@@ -285,6 +285,17 @@ RIDGE_STRENGTHS = (1e-3, 1e-2, 1e-1, 1.0, 10.0)
 MIN_RIDGE_SENSORS = 6
 
 
+def sensor_set_parameters(variant: str) -> list[str]:
+    """Parameters of a set of sensors ``a+b+...``: one gain per sensor and direction."""
+    return [f"b{c}_{sensor}" for sensor in variant.split("+") for c in "xyz"]
+
+
+def sensor_set_design(ctx: Context, variant: str) -> np.ndarray:
+    """(N, 3, 3S) design of a set of sensors ``a+b+...``: each rise on x, y and z."""
+    return np.concatenate([per_component(ctx.variables.rise(sensor))
+                           for sensor in variant.split("+")], axis=2)
+
+
 class AllSensorsRidge(EffectFamily):
     """Every structure sensor at once, shrunk by ridge regression (Zhu eq. 3.12 with all
     sensors as regressors; Tikhonov regularisation against their collinearity).
@@ -314,11 +325,10 @@ class AllSensorsRidge(EffectFamily):
         return [{"ridge": value} for value in RIDGE_STRENGTHS]
 
     def parameter_names(self, variant, setting):
-        return [f"b{c}_{sensor}" for sensor in variant.split("+") for c in "xyz"]
+        return sensor_set_parameters(variant)
 
     def design(self, ctx, variant, setting):
-        return np.concatenate([per_component(ctx.variables.rise(sensor))
-                               for sensor in variant.split("+")], axis=2)
+        return sensor_set_design(ctx, variant)
 
     def parameter_limits(self, ctx, variant, setting):
         return _free_expansion_limits(ctx, self.parameter_names(variant, setting))
