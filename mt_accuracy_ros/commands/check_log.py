@@ -422,7 +422,8 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     winner = min(contest, key=lambda k: (contest[k], k != "step by step"))
     step_by_step = [name for s in steps for name in s.get("added", [])]
     if winner != "step by step":
-        notes.append(f"{winner} predicts the training runs forward better "
+        notes.append(f"{winner} predicts the training {'runs' if blocks is not None else 'rows'} "
+                     "forward better "
                      f"({contest[winner] * to_unit:.4g} {unit}) than the step-by-step model "
                      f"({contest['step by step'] * to_unit:.4g} {unit}): it is the model")
         (refitted,) = joint_refit([rivals[winner]], [term_of(rivals[winner])], frame, c,

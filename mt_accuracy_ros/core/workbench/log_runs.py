@@ -164,7 +164,8 @@ def mixed_units_problem(target: NDArray[np.float64], temperatures: dict[str, NDA
                         "run's - mixed units across runs? (mm among um: 1000x); convert it")
     if len(slices) >= 2:
         for sensor, values in temperatures.items():
-            levels = np.array([float(np.nanmedian(values[s])) if np.isfinite(values[s]).any() else np.nan for s in slices])
+            levels = np.array([float(np.nanmedian(values[s])) if np.isfinite(values[s]).any()
+                               else np.nan for s in slices])
             for k, level in enumerate(levels):
                 others = float(np.nanmedian(np.delete(levels, k)))
                 if abs(level - others) >= TEMPERATURE_SLIP_K:
