@@ -216,10 +216,11 @@ def _check(args: argparse.Namespace) -> int:
             print(result[key])
     for line in result.get("warnings", []):
         print(line)
-    # A thermal log speaks its target's unit; the JSON stays SI.
+    # A thermal log speaks its target's unit, a survey or a bag micrometres (a metrologist's
+    # unit); the JSON stays SI.
     log = result["kind"] == "thermal_log"
-    unit = result["target_unit"] if log else "m"
-    scale = result["target_unit_per_m"] if log else 1.0
+    unit = result["target_unit"] if log else "um"
+    scale = result["target_unit_per_m"] if log else 1e6
     if log:
         lines = result.get("not_added_lines", [])
         for line in lines[:SHOWN_REFUSALS]:

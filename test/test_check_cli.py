@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 
@@ -151,6 +152,10 @@ def test_survey_csv_from_a_data_logger_names_a_pitch_error(tmp_path, capsys):
     axis = expected[-1]
     assert f"of {axis} travel" in out and f"pitch error of {axis}" in out
     assert summary["figures_after_m"]["rmse"] < 0.5 * summary["figures_before_m"]["rmse"]
+    # Engineering units on every printed line (issue 42): micrometres, never metres.
+    assert f"final RMSE {summary['final_rmse'] * 1e6:.4g} um" in out
+    assert f"baseline RMSE {summary['baseline_rmse'] * 1e6:.4g} um" in out
+    assert not re.search(r"\de-0\d", out) and " m\n" not in out and " m " not in out
     assert expected in summary["model_yaml"]
     from browser import validate_html
 

@@ -15,12 +15,13 @@ UNITS = {"length": ("µm", 1e6), "angle": ("µrad", 1e6), "gain_k": ("µm/K", 1e
          "angle_k": ("µrad/K", 1e6), "expansion": ("µm/m/K", 1e6), "time": ("ms", 1e3),
          "per_acceleration": ("µm/(m/s²)", 1e6), "per_area": ("µm/m²", 1e6),
          "lever": ("mm", 1e3), "spindle_gain": ("µm/krpm", 1e6),
-         "feed_gain": ("µm/(m/min)", 1e6)}
+         "feed_gain": ("µm/(m/min)", 1e6), "per_score": ("µm per unit score", 1e6)}
 
 _LENGTH_FAMILIES = {"positioning", "straightness", "positioning_periodic",
                     "straightness_periodic"}
 _THERMAL_GAIN_FAMILIES = {"structural_thermal_drift", "thermal_lag", "thermal_gradient",
-                          "all_sensors_ridge", "spindle_thermal_growth"}
+                          "all_sensors_ridge", "spindle_thermal_growth",
+                          "sensor_least_squares"}
 
 
 #: The kind of quantity each family's parameters are, where one kind fits them all.
@@ -29,7 +30,9 @@ _KIND_OF_FAMILY = {**{f: "length" for f in _LENGTH_FAMILIES},
                    "angular": "angle", "angular_periodic": "angle", "squareness": "angle",
                    "position_dependent_thermal": "expansion", "thermal_squareness": "angle_k",
                    "reversal": "length", "servo_lag": "time", "acceleration": "per_acceleration",
-                   "cross_axis": "per_area", "abbe_offset": "lever"}
+                   "cross_axis": "per_area", "abbe_offset": "lever",
+                   # a principal component's score is standardised: its gain is a length
+                   "temperature_components": "per_score"}
 
 
 def parameter_unit(family: str, variant: str, name: str) -> tuple[str, float]:
