@@ -72,7 +72,7 @@ def evaluate_run(path: Path, flags: list[str], axis: str = "X",
                                result.targets, result.mean_up, result.mean_down, result.s_up,
                                result.s_down, result.reversal,
                                result.repeatability_bidirectional)],
-            "notes": notes, "_result": result}
+            "refused_rows": run.refused, "notes": notes, "_result": result}
 
 
 def print_run(result: dict) -> None:
@@ -86,6 +86,8 @@ def print_run(result: dict) -> None:
         print(f"  {row['target_mm']:12.3f} {row['mean_up_um']:9.3f} {row['mean_down_um']:9.3f} "
               f"{row['s_up_um']:8.3f} {row['s_down_um']:8.3f} {row['reversal_um']:9.3f} "
               f"{row['repeatability_um']:9.3f}")
+    for reason in result.get("refused_rows", []):
+        print(f"refused: {reason}")
     for note in result["notes"]:
         print(f"note: {note}")
 

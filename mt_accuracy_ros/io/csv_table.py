@@ -64,7 +64,8 @@ class CsvTable:
 
 def read_csv_table(path: str | Path, *, min_rows: int = 2,
                    text_columns: tuple[str, ...] = (),
-                   gap_columns: tuple[str, ...] = ()) -> CsvTable:
+                   gap_columns: tuple[str, ...] = (),
+                   keep_reasons: int = KEPT_REASONS) -> CsvTable:
     """Read ``path``; raises :class:`InputDataError` naming the row or column at fault.
 
     ``text_columns`` are kept as text (a run's name: ``day3``, ``2024-05-01``); an empty
@@ -129,7 +130,7 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
             parsed.append(value)
         if problem:
             dropped += 1
-            if len(reasons) < KEPT_REASONS:
+            if len(reasons) < keep_reasons:
                 reasons.append(problem)
             continue
         values.append(parsed)

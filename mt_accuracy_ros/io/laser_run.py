@@ -11,10 +11,17 @@ role                    meaning                                         default 
 ``target``              target position P_i                             mm
 ``measured``            actual position (deviation = measured - target) mm
 ``deviation``           positional deviation x_ij (instead of measured) um
-``direction``           approach: +1 / -1                               -
-``run``                 run number j                                    -
+``direction``           approach: +1 / -1, or as instruments write it   -
+                        (``+``/``-``, ``up``/``down``, ``fwd``/``bwd``,
+                        ``forward``/``backward``, ``↑``/``↓``)
+``run``                 run j: a number or a name                       -
 ``temperature``         the material (scale) temperature                degC
 ======================  ==============================================  ==========
+
+A header names its unit as the survey map's units do: ``target_mm``, ``target [mm]``,
+``Target (mm)``, ``deviation_µm``, ``temperature [degF]``. A row whose cell is not a
+number, or whose direction is no direction, is refused and named with its reason (every
+one, ``LaserRun.refused``).
 
 Without a direction column, each reading's approach is the sign of the move that
 brought the axis to its target (a target read twice in a row at a turnaround: the
@@ -29,8 +36,13 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError
+import re
+
 from .column_map import si_scale
-from .csv_table import read_csv_table
+from .csv_table import csv_header, read_csv_table
+
+#: Reasons the one-line rows note carries (``LaserRun.refused`` holds every one).
+SUMMARY_REASONS = 3
 
 ROLES = ("target", "measured", "deviation", "direction", "run", "temperature")
 DEFAULT_UNIT = {"target": "mm", "measured": "mm", "deviation": "um", "temperature": "degC"}
@@ -54,6 +66,36 @@ class LaserRun:
     temperature_c: np.ndarray | None
     columns: dict[str, str] = field(default_factory=dict)
     rows_note: str = ""
+    #: Every refused row: "row N column C: why".
+    refused: list[str] = field(default_factory=list)
+
+
+#: How instruments write an approach direction (lower case; numbers by their sign).
+DIRECTION_WORDS = {"+": 1.0, "up": 1.0, "fwd": 1.0, "forward": 1.0, "↑": 1.0, "pos": 1.0,
+                   "positive": 1.0, "-": -1.0, "down": -1.0, "bwd": -1.0, "backward": -1.0,
+                   "back": -1.0, "↓": -1.0, "neg": -1.0, "negative": -1.0}
+
+
+def direction_of(cell: str) -> float | None:
+    """+1 / -1 for a direction as written (a word, an arrow, a signed number), or None."""
+    text = cell.strip().lower()
+    if text in DIRECTION_WORDS:
+        return DIRECTION_WORDS[text]
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    return float(np.sign(value)) if np.isfinite(value) and value != 0 else None
+
+
+def header_unit(name: str) -> tuple[str, str]:
+    """(base, unit) of a header: ``target_mm``, ``target [mm]``, ``Target (mm)`` -> (target,
+    mm); without a unit -> (name, "")."""
+    found = re.fullmatch(r"\s*(.+?)\s*[\[(]\s*([^\])]+?)\s*[\])]\s*", name)
+    if found:
+        return found.group(1), found.group(2)
+    base, _, suffix = name.rpartition("_") if "_" in name else (name, "", "")
+    return (base, suffix) if base else (name, "")
 
 
 def _split_flag(flag: str) -> tuple[str, str, str]:
@@ -67,7 +109,7 @@ def _split_flag(flag: str) -> tuple[str, str, str]:
 
 def _guess(role: str, names: list[str]) -> tuple[str, str] | None:
     for name in names:
-        base, _, suffix = name.rpartition("_") if "_" in name else (name, "", "")
+        base, suffix = header_unit(name)
         for candidate in GUESSES[role]:
             if name.lower() == candidate:
                 return name, ""
@@ -107,8 +149,7 @@ def read_laser_run(path: str | Path, flags: list[str] | None = None, *,
                    resolution_m: float = 1e-6) -> LaserRun:
     """Read ``path`` (see the module docstring); raises :class:`InputDataError` naming
     the column or role at fault."""
-    table = read_csv_table(path)
-    names = table.names
+    names = csv_header(path)
     roles: dict[str, tuple[str, str]] = {}
     for flag in flags or []:
         role, column, unit = _split_flag(flag)
@@ -130,6 +171,26 @@ def read_laser_run(path: str | Path, flags: list[str] | None = None, *,
         raise InputDataError(f"{Path(path).name}: need a target column and a measured-position "
                              f"or deviation column (--col target=COLUMN:mm --col "
                              f"deviation=COLUMN:um); columns: {', '.join(names)}")
+    text = tuple(roles[r][0] for r in ("direction", "run") if r in roles)
+    table = read_csv_table(path, text_columns=text, keep_reasons=10 ** 9)
+    refused = list(table.drop_reasons)
+    table.drop_reasons = refused[:SUMMARY_REASONS]
+    if "direction" in roles:
+        column = roles["direction"][0]
+        read = [direction_of(str(cell)) for cell in table.columns[column]]
+        bad = [k for k, d in enumerate(read) if d is None]
+        for k in bad:
+            refused.append(f"row {int(table.data_rows[k]) + 1} column {column}: "
+                           f"{str(table.columns[column][k])[:20]!r} is not a direction (+/-, "
+                           "up/down, fwd/bwd, forward/backward, ↑/↓, +1/-1)")
+        keep = np.array([d is not None for d in read], dtype=bool)
+        if not keep.any():
+            raise InputDataError(f"direction column {column!r}: no row has a direction (+/-, "
+                                 "up/down, fwd/bwd, forward/backward, ↑/↓, +1/-1)")
+        table.columns = {name: values[keep] for name, values in table.columns.items()}
+        table.data_rows = table.data_rows[keep]
+        table.rows_dropped += len(bad)
+        table.drop_reasons = refused[:SUMMARY_REASONS]
 
     def values(role):
         column, unit = roles[role]
@@ -152,18 +213,18 @@ def read_laser_run(path: str | Path, flags: list[str] | None = None, *,
             f"is over a tenth of the target spacing {spacing * 1e3:.4g} mm - check the units "
             f"of {roles['target'][0]!r} and {roles[which][0]!r} (COLUMN:UNIT)")
     if "direction" in roles:
-        raw = table.columns[roles["direction"][0]]
-        direction = np.sign(np.asarray(raw, dtype=np.float64))
-        if np.any(direction == 0):
-            raise InputDataError(f"direction column {roles['direction'][0]!r}: +1 or -1 "
-                                 "on every row")
+        direction = np.array([direction_of(str(cell)) for cell in
+                              table.columns[roles["direction"][0]]], dtype=np.float64)
     else:
         direction = infer_directions(target)
     if "run" in roles:
-        run_values = np.asarray(table.columns[roles["run"][0]], dtype=np.float64)
-        _, run = np.unique(run_values, return_inverse=True)
+        # Runs by name or number, in the order the file first reaches them.
+        labels = [str(cell).strip() for cell in table.columns[roles["run"][0]]]
+        order = {label: k for k, label in enumerate(dict.fromkeys(labels))}
+        run = np.array([order[label] for label in labels], dtype=np.int64)
     else:
         run = infer_runs(direction)
     temperature = values("temperature") if "temperature" in roles else None
     return LaserRun(target, deviation, direction, np.asarray(run, dtype=np.int64), temperature,
-                    {role: column for role, (column, _) in roles.items()}, table.summary())
+                    {role: column for role, (column, _) in roles.items()}, table.summary(),
+                    refused)
