@@ -183,6 +183,12 @@ def test_export_writes_what_a_control_loads_and_refuses_what_cannot_hold_the_mod
     assert main(["export", str(model), "--out", str(tmp_path / "f"), "--controller",
                  "fanuc"]) == 0
     assert (tmp_path / "f" / "PITCH_ERROR.TXT").read_text().splitlines()[2].startswith("N3620")
+    assert main(["export", str(model), "--out", str(tmp_path / "i"), "--controller",
+                 "twincat", "--unilateral"]) == 0
+    lists = sorted(p.name for p in (tmp_path / "i").iterdir())
+    assert lists == ["achskw1.lis", "achskw2.lis", "achskw3.lis"]
+    text = (tmp_path / "i" / "achskw1.lis").read_text()
+    assert "kw.ssfk.bilateral           0" in text and ".neg" not in text
 
 
 def _rewrite(path, column, change):

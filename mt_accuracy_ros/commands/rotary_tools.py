@@ -140,6 +140,7 @@ def _export(args: argparse.Namespace) -> int:
     from ..core.compensation.cnc_export import (bilateral_tables, round_trip, write_bilateral_csv,
                                                write_isg_csv)
     from ..core.compensation.controller_tables import (CONTROLLERS, fanuc_pitch,
+                                                       isg_leadscrew_lists,
                                                        period_problems, periodic_periods,
                                                        siemens_eec, spacing_for,
                                                        table_points, uncovered_effects,
@@ -177,6 +178,9 @@ def _export(args: argparse.Namespace) -> int:
                 notes.append("the value at each reference point is zero (SINUMERIK's rule): "
                              "shifted by " + ", ".join(f"{a} {v * 1e6:.3g} um"
                                                        for a, v in moved.items()))
+        elif args.controller == "twincat":
+            lists, _ = isg_leadscrew_lists(model, spacing, bilateral=not args.unilateral)
+            texts.update(lists)
         else:
             text, _ = fanuc_pitch(model, spacing, step_limit=int(
                 args.fanuc_step_limit or controller["step_limit"]),
@@ -297,9 +301,14 @@ def add_parser(commands) -> None:
                              "within --band-um and samples every period at 8 points)")
     export.add_argument("--band-um", type=float, default=1.0,
                         help="the instrument's band the tables must hold the model within")
-    export.add_argument("--controller", choices=["siemens", "fanuc"], default=None,
+    export.add_argument("--unilateral", action="store_true",
+                        help="--controller twincat: one table for both directions (default "
+                             "bilateral: the reversal error in the table)")
+    export.add_argument("--controller", choices=["siemens", "fanuc", "twincat"], default=None,
                         help="write the positioning tables a control loads: SINUMERIK EEC "
-                             "(AX_EEC.INI) or FANUC pitch error compensation (parameter tape)")
+                             "(AX_EEC.INI), FANUC pitch error compensation (parameter tape) "
+                             "or the ISG / TwinCAT leadscrew error compensation list "
+                             "(achskw<n>.lis, kw.ssfk)")
     export.add_argument("--max-points", type=int, default=None,
                         help="points per axis the control holds (SINUMERIK MD38000; default "
                              "200 for siemens, 128 for fanuc)")

@@ -1,4 +1,5 @@
-"""Positioning-error tables a control loads: SINUMERIK EEC and FANUC pitch error data.
+"""Positioning-error tables a control loads: SINUMERIK EEC, FANUC pitch error data and the
+ISG / TwinCAT leadscrew error compensation list.
 
 Both controls compensate each linear axis' **positioning error** E_AA(q) (ISO 230-1)
 from a table of equidistant points, interpolated between them; straightness, tilt
@@ -54,6 +55,8 @@ POINTS_PER_PERIOD = 8
 #: SINUMERIK: MD38000 $MA_MM_ENC_COMP_MAX_POINTS of the control (808D: 200); FANUC:
 #: the compensation points one axis may use between its extremes (128 is common).
 CONTROLLERS = {"siemens": {"max_points": 200, "name": "SINUMERIK EEC"},
+               "twincat": {"max_points": 1499, "name": "ISG / TwinCAT leadscrew error "
+                                                      "compensation (kw.ssfk)"},
                "fanuc": {"max_points": 128, "name": "FANUC pitch error compensation",
                          "detection_unit_m": 1e-6, "magnification": 1, "step_limit": 7}}
 
@@ -321,6 +324,96 @@ def fanuc_pitch(model: ErrorModel, spacing_m: float, *, detection_unit_m: float 
             lines.append(f"N{10000 + n}P{a.increments[n]}")
     lines.append("%")
     return "\n".join(lines) + "\n", axes
+
+
+# ----------------------------------------------------------------------- ISG / TwinCAT
+#: Entries of one leadscrew error compensation table the control holds by default
+#: (P-COMP-00059 ``kw.ssfk.max_points``; ``kw_nr_max`` must stay below it).
+ISG_MAX_POINTS = 1500
+
+#: The list's length unit with ``kw.ssfk.unit`` = 1 (metric) [m].
+ISG_UNIT_M = 1e-7
+
+
+@dataclass
+class IsgAxis:
+    """One axis' leadscrew error compensation list: interval and start [0.1 um], values
+    per direction [0.1 um] (``neg`` None when unilateral)."""
+
+    axis_number: int
+    axis_name: str
+    interval: int
+    start: int
+    pos: list[int]
+    neg: list[int] | None
+
+
+def isg_leadscrew_lists(model: ErrorModel, spacing_m: float, *, bilateral: bool = True,
+                        max_points: int = ISG_MAX_POINTS,
+                        axis_numbers: dict[str, int] | None = None
+                        ) -> tuple[dict[str, str], dict[str, IsgAxis]]:
+    """The ISG / TwinCAT CNC leadscrew error compensation list (``kw.ssfk``) of every
+    linear axis: {file name: text} and the content per axis.
+
+    Written to the ISG kernel's published rules (axis compensation, "Leadscrew error
+    compensation (kw.ssfk.*)", P-COMP-00017..00025): the list header ``kopf.achs_nr``
+    and ``kopf.log_achs_name``; ``kw.ssfk.unit`` 1 (metric: every length in 0.1 um);
+    equidistant points - ``kw.ssfk.interval`` apart from ``kw.ssfk.kw_startpos`` -,
+    ``kw.ssfk.kw_nr_max`` of them (below P-COMP-00059, default 1500);
+    ``kw.ssfk.bilateral`` 1 with a value per direction (``table[i].pos`` moving
+    positive, ``table[i].neg`` moving negative: the reversal error lives in the table,
+    as ISG recommends instead of a separate backlash compensation) or 0 with one value
+    for both; ``kw.ssfk.modulo`` 0 for a linear axis. A value is the axis' positioning
+    error at the point, actual minus programmed position (ISG's example list: measured
+    19856.5 um at 19866.7 um programmed gives ``pos`` -102), rounded to 0.1 um. Comment
+    lines start with ``# ``.
+
+    Raises
+    ------
+    ParameterError
+        A spacing that is not a whole number of 0.1 um, or more points than the control
+        holds (the spacing that fits is named).
+    """
+    interval = spacing_m / ISG_UNIT_M
+    if not spacing_m > 0 or abs(interval - round(interval)) > 1e-6 * max(1.0, interval):
+        raise ParameterError(f"spacing {spacing_m * 1e3:g} mm is not a whole number of 0.1 um "
+                             "(kw.ssfk.interval)")
+    texts, axes = {}, {}
+    for number, axis in enumerate(linear_axes(model), start=1):
+        number = (axis_numbers or {}).get(axis, number)
+        stroke = model.machine.axes[axis].stroke
+        points = table_points(stroke, spacing_m)
+        if points.size >= max_points:
+            needed = (stroke[1] - stroke[0]) / (max_points - 2)
+            raise ParameterError(
+                f"axis {axis}: {points.size} leadscrew compensation points at "
+                f"{spacing_m * 1e3:g} mm; the control holds fewer than {max_points} "
+                f"(kw.ssfk.max_points): use a spacing of {needed * 1e3:.4g} mm or more")
+        error = positioning_error(model, axis, points)
+        half = 0.5 * model.backlash_m(axis)
+        # Moving positive the axis lags its reversal half behind; moving negative, ahead.
+        pos = np.round((error - half if bilateral else error) / ISG_UNIT_M).astype(np.int64)
+        neg = np.round((error + half) / ISG_UNIT_M).astype(np.int64) if bilateral else None
+        record = IsgAxis(number, axis, int(round(interval)),
+                         int(round(points[0] / ISG_UNIT_M)), [int(v) for v in pos],
+                         None if neg is None else [int(v) for v in neg])
+        lines = [f"# mt-accuracy: leadscrew error compensation of {model.machine.name}, "
+                 f"axis {axis}",
+                 "# values: actual - programmed position, 0.1 um (kw.ssfk.unit 1)",
+                 f"kopf.achs_nr                {number}",
+                 f"kopf.log_achs_name          {axis}",
+                 "kw.ssfk.unit                1",
+                 f"kw.ssfk.interval            {record.interval}",
+                 f"kw.ssfk.kw_startpos         {record.start}",
+                 f"kw.ssfk.kw_nr_max           {points.size}",
+                 f"kw.ssfk.bilateral           {1 if bilateral else 0}",
+                 "kw.ssfk.modulo              0"]
+        lines += [f"kw.ssfk.table[{i}].pos {v}" for i, v in enumerate(record.pos)]
+        if record.neg is not None:
+            lines += [f"kw.ssfk.table[{i}].neg {v}" for i, v in enumerate(record.neg)]
+        texts[f"achskw{number}.lis"] = "\n".join(lines) + "\n"
+        axes[axis] = record
+    return texts, axes
 
 
 def uncovered_effects(model: ErrorModel) -> list[str]:

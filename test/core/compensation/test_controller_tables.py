@@ -138,3 +138,56 @@ def test_a_user_effect_reaches_the_controller_tables():
         _read_siemens(siemens_eec(flat, 0.0025)[0])["X1"]["values"].items())])
     points = 0.0025 * np.arange(values.size)
     np.testing.assert_allclose(values - flat_values, 5e-6 * points, atol=1e-9)
+
+
+def _read_isg(text):
+    """ISG leadscrew error compensation list, read from its rules: '# ' comment lines,
+    'name value' lines; kw.ssfk.unit 1 = 0.1 um; equidistant points interval apart from
+    kw_startpos, kw_nr_max of them; table[i].pos (and .neg when bilateral)."""
+    values = {}
+    for line in text.splitlines():
+        if not line.strip() or line.startswith("# "):
+            continue
+        name, value = line.split()
+        values[name] = value
+    assert values["kw.ssfk.unit"] == "1" and values["kw.ssfk.modulo"] == "0"
+    n = int(values["kw.ssfk.kw_nr_max"])
+    unit = 1e-7
+    points = (int(values["kw.ssfk.kw_startpos"]) +
+              int(values["kw.ssfk.interval"]) * np.arange(n)) * unit
+    pos = np.array([int(values[f"kw.ssfk.table[{i}].pos"]) for i in range(n)]) * unit
+    bilateral = values["kw.ssfk.bilateral"] == "1"
+    neg = np.array([int(values[f"kw.ssfk.table[{i}].neg"]) for i in range(n)]) * unit \
+        if bilateral else pos
+    assert bilateral or not any(k.endswith(".neg") for k in values)
+    return values, points, pos, neg
+
+
+@pytest.mark.parametrize("bilateral", [True, False])
+def test_isg_twincat_leadscrew_list_round_trip(bilateral):
+    """Both list forms through a reader written here: the table holds E_XX within the band
+    (and rounding to 0.1 um); bilateral, the directions differ by the reversal."""
+    from mt_accuracy_ros.core.compensation.controller_tables import isg_leadscrew_lists
+
+    model = _model()
+    model = model.with_effect("reversal:X", {"family": "reversal", "variant": "X",
+                                             "setting": {}, "coefficients": {"backlash_m": 3e-6}})
+    backlash = model.backlash_m("X")
+    assert backlash == pytest.approx(3e-6)
+    choice = spacing_for(model, BAND)
+    texts, axes = isg_leadscrew_lists(model, choice.spacing_m, bilateral=bilateral)
+    assert list(texts)[0] == "achskw1.lis"
+    values, points, pos, neg = _read_isg(texts["achskw1.lis"])
+    assert values["kopf.log_achs_name"] == "X" and values["kopf.achs_nr"] == "1"
+    assert points[1] - points[0] == pytest.approx(choice.spacing_m, abs=1e-12)
+    x = np.linspace(0.0, 0.39, 5001)
+    for table, shift in ((pos, -backlash / 2), (neg, backlash / 2)) if bilateral else \
+            ((pos, 0.0),):
+        left = _truth(x) + shift - np.interp(x, points, table)
+        assert np.max(np.abs(left)) <= BAND / 2 + 0.5e-7
+    if bilateral:
+        assert np.allclose(neg - pos, backlash, atol=1.01e-7)
+    with pytest.raises(ParameterError, match="holds fewer than 1500"):
+        isg_leadscrew_lists(model, 0.0001)
+    with pytest.raises(ParameterError, match="not a whole number of 0.1 um"):
+        isg_leadscrew_lists(model, 0.00100005)
