@@ -189,6 +189,13 @@ def test_export_writes_what_a_control_loads_and_refuses_what_cannot_hold_the_mod
     assert lists == ["achskw1.lis", "achskw2.lis", "achskw3.lis"]
     text = (tmp_path / "i" / "achskw1.lis").read_text()
     assert "kw.ssfk.bilateral           0" in text and ".neg" not in text
+    assert main(["export", str(model), "--out", str(tmp_path / "l"), "--controller",
+                 "linuxcnc", "--comp-file-type", "1"]) == 0
+    out = capsys.readouterr().out
+    assert sorted(p.name for p in (tmp_path / "l").iterdir()) == ["X.comp", "Y.comp", "Z.comp"]
+    assert "[JOINT_0] COMP_FILE = X.comp COMP_FILE_TYPE = 1" in out
+    assert all(len(line.split()) == 3 for line in
+               (tmp_path / "l" / "X.comp").read_text().splitlines())
 
 
 def _rewrite(path, column, change):

@@ -141,6 +141,7 @@ def _export(args: argparse.Namespace) -> int:
                                                write_isg_csv)
     from ..core.compensation.controller_tables import (CONTROLLERS, fanuc_pitch,
                                                        isg_leadscrew_lists,
+                                                       linuxcnc_comp_files,
                                                        period_problems, periodic_periods,
                                                        siemens_eec, spacing_for,
                                                        table_points, uncovered_effects,
@@ -178,6 +179,11 @@ def _export(args: argparse.Namespace) -> int:
                 notes.append("the value at each reference point is zero (SINUMERIK's rule): "
                              "shifted by " + ", ".join(f"{a} {v * 1e6:.3g} um"
                                                        for a, v in moved.items()))
+        elif args.controller == "linuxcnc":
+            files, ini = linuxcnc_comp_files(model, spacing, file_type=args.comp_file_type)
+            texts.update(files)
+            notes.append("add to the INI file (a joint with COMP_FILE uses no BACKLASH): " +
+                         "; ".join(v.replace("\n", " ") for v in ini.values()))
         elif args.controller == "twincat":
             lists, _ = isg_leadscrew_lists(model, spacing, bilateral=not args.unilateral)
             texts.update(lists)
@@ -304,11 +310,16 @@ def add_parser(commands) -> None:
     export.add_argument("--unilateral", action="store_true",
                         help="--controller twincat: one table for both directions (default "
                              "bilateral: the reversal error in the table)")
-    export.add_argument("--controller", choices=["siemens", "fanuc", "twincat"], default=None,
+    export.add_argument("--comp-file-type", type=int, choices=[0, 1], default=0,
+                        help="--controller linuxcnc: COMP_FILE_TYPE 0 (actual positions, "
+                             "default) or 1 (trims)")
+    export.add_argument("--controller", choices=["siemens", "fanuc", "twincat", "linuxcnc"],
+                        default=None,
                         help="write the positioning tables a control loads: SINUMERIK EEC "
                              "(AX_EEC.INI), FANUC pitch error compensation (parameter tape) "
                              "or the ISG / TwinCAT leadscrew error compensation list "
-                             "(achskw<n>.lis, kw.ssfk)")
+                             "(achskw<n>.lis, kw.ssfk) or LinuxCNC's joint compensation "
+                             "files (<axis>.comp, COMP_FILE)")
     export.add_argument("--max-points", type=int, default=None,
                         help="points per axis the control holds (SINUMERIK MD38000; default "
                              "200 for siemens, 128 for fanuc)")

@@ -1,5 +1,5 @@
-"""Positioning-error tables a control loads: SINUMERIK EEC, FANUC pitch error data and the
-ISG / TwinCAT leadscrew error compensation list.
+"""Positioning-error tables a control loads: SINUMERIK EEC, FANUC pitch error data, the
+ISG / TwinCAT leadscrew error compensation list and LinuxCNC's joint compensation files.
 
 Both controls compensate each linear axis' **positioning error** E_AA(q) (ISO 230-1)
 from a table of equidistant points, interpolated between them; straightness, tilt
@@ -57,6 +57,8 @@ POINTS_PER_PERIOD = 8
 CONTROLLERS = {"siemens": {"max_points": 200, "name": "SINUMERIK EEC"},
                "twincat": {"max_points": 1499, "name": "ISG / TwinCAT leadscrew error "
                                                       "compensation (kw.ssfk)"},
+               "linuxcnc": {"max_points": 256, "name": "LinuxCNC joint compensation "
+                                                       "(COMP_FILE)"},
                "fanuc": {"max_points": 128, "name": "FANUC pitch error compensation",
                          "detection_unit_m": 1e-6, "magnification": 1, "step_limit": 7}}
 
@@ -414,6 +416,60 @@ def isg_leadscrew_lists(model: ErrorModel, spacing_m: float, *, bilateral: bool 
         texts[f"achskw{number}.lis"] = "\n".join(lines) + "\n"
         axes[axis] = record
     return texts, axes
+
+
+# ----------------------------------------------------------------------- LinuxCNC
+#: Compensation triplets LinuxCNC's motion module holds per joint (EMCMOT_COMP_SIZE).
+LINUXCNC_MAX_POINTS = 256
+
+
+def linuxcnc_comp_files(model: ErrorModel, spacing_m: float, *, file_type: int = 0,
+                        unit_m: float = 1e-3) -> tuple[dict[str, str], dict[str, str]]:
+    """LinuxCNC joint compensation files (``[JOINT_n]`` ``COMP_FILE``) of every linear axis:
+    ({file name: text}, {axis: the INI lines that load it}).
+
+    Written to LinuxCNC's rules (INI configuration, ``COMP_FILE`` / ``COMP_FILE_TYPE``,
+    and the loader's reading of them): one line per point, three numbers separated by
+    spaces in machine units (``unit_m``: mm by default, as ``LINEAR_UNITS``), nothing
+    else - the loader stops at the first line that is not three numbers, so the file
+    has no header or comment; nominals strictly ascending from the smallest; at most
+    256 points a joint. The first number is the nominal (commanded) position. Type 0:
+    then the actual position moving positive and moving negative (nominal + the error
+    of that direction). Type 1: the trims the control adds to the command, nominal -
+    actual, moving positive and negative. A joint with a ``COMP_FILE`` uses no
+    ``BACKLASH``: the reversal error is in the two columns.
+
+    Raises
+    ------
+    ParameterError
+        A file type other than 0 or 1, or more than 256 points (the spacing that fits is
+        named).
+    """
+    if file_type not in (0, 1):
+        raise ParameterError(f"COMP_FILE_TYPE {file_type!r}: 0 (actual positions) or 1 "
+                             "(trims)")
+    texts, ini = {}, {}
+    for number, axis in enumerate(linear_axes(model)):
+        stroke = model.machine.axes[axis].stroke
+        points = table_points(stroke, spacing_m)
+        if points.size > LINUXCNC_MAX_POINTS:
+            needed = (stroke[1] - stroke[0]) / (LINUXCNC_MAX_POINTS - 1)
+            raise ParameterError(
+                f"axis {axis}: {points.size} compensation points at {spacing_m * 1e3:g} mm; "
+                f"LinuxCNC holds {LINUXCNC_MAX_POINTS} a joint: use a spacing of "
+                f"{needed * 1e3:.4g} mm or more")
+        error = positioning_error(model, axis, points)
+        half = 0.5 * model.backlash_m(axis)
+        forward, reverse = error - half, error + half
+        if file_type == 0:
+            second, third = points + forward, points + reverse
+        else:
+            second, third = -forward, -reverse
+        name = f"{axis}.comp"
+        texts[name] = "".join(f"{p / unit_m:.6f} {a / unit_m:.6f} {b / unit_m:.6f}\n"
+                              for p, a, b in zip(points, second, third))
+        ini[axis] = f"[JOINT_{number}]\nCOMP_FILE = {name}\nCOMP_FILE_TYPE = {file_type}"
+    return texts, ini
 
 
 def uncovered_effects(model: ErrorModel) -> list[str]:

@@ -191,3 +191,48 @@ def test_isg_twincat_leadscrew_list_round_trip(bilateral):
         isg_leadscrew_lists(model, 0.0001)
     with pytest.raises(ParameterError, match="not a whole number of 0.1 um"):
         isg_leadscrew_lists(model, 0.00100005)
+
+
+def _read_linuxcnc(text, file_type):
+    """LinuxCNC's loader, from its rules: three numbers a line (it stops at the first line
+    that is not), nominals strictly ascending, at most 256; type 0 gives actual positions
+    (the trim the control adds is nominal - actual), type 1 the trims themselves."""
+    nominal, forward_trim, reverse_trim = [], [], []
+    for line in text.splitlines():
+        parts = line.split()
+        if len(parts) != 3:
+            break
+        nom, fwd, rev = (float(p) * 1e-3 for p in parts)        # machine units: mm
+        assert not nominal or nom > nominal[-1]
+        nominal.append(nom)
+        forward_trim.append(nom - fwd if file_type == 0 else fwd)
+        reverse_trim.append(nom - rev if file_type == 0 else rev)
+    assert 2 <= len(nominal) <= 256 and len(nominal) == len(text.splitlines())
+    return np.array(nominal), np.array(forward_trim), np.array(reverse_trim)
+
+
+@pytest.mark.parametrize("file_type", [0, 1])
+def test_linuxcnc_comp_file_round_trip(file_type):
+    """Each COMP_FILE_TYPE through a reader written here: the machine commanded nominal +
+    trim lands within the band of nominal, either way it moves (the reversal is in the
+    file: a joint with COMP_FILE uses no BACKLASH)."""
+    from mt_accuracy_ros.core.compensation.controller_tables import linuxcnc_comp_files
+
+    model = _model().with_effect("reversal:X", {
+        "family": "reversal", "variant": "X", "setting": {},
+        "coefficients": {"backlash_m": 4e-6}})
+    # 256 points a joint: over the HMC's strokes a coarser spacing than the band wants,
+    # said by the choice with the error it leaves.
+    choice = spacing_for(model, BAND, max_points=256)
+    assert choice.limited_by and choice.spacing_m > 0.01 / POINTS_PER_PERIOD
+    texts, ini = linuxcnc_comp_files(model, choice.spacing_m, file_type=file_type)
+    assert set(texts) == {"X.comp", "Y.comp", "Z.comp"}
+    assert ini["X"] == f"[JOINT_0]\nCOMP_FILE = X.comp\nCOMP_FILE_TYPE = {file_type}"
+    nominal, forward_trim, reverse_trim = _read_linuxcnc(texts["X.comp"], file_type)
+    x = np.linspace(0.0, 0.39, 5001)
+    for trims, lag in ((forward_trim, -2e-6), (reverse_trim, 2e-6)):
+        # Where the axis lands: command + trim, plus its error at the command.
+        landed = np.interp(x, nominal, trims) + _truth(x) + lag
+        assert np.max(np.abs(landed)) <= choice.errors_m["X"] + 1e-9
+    with pytest.raises(ParameterError, match="LinuxCNC holds 256 a joint"):
+        linuxcnc_comp_files(model, 0.001)
