@@ -328,6 +328,24 @@ def fanuc_pitch(model: ErrorModel, spacing_m: float, *, detection_unit_m: float 
     return "\n".join(lines) + "\n", axes
 
 
+def directional_errors(model: ErrorModel, axis: str, spacing_m: float, most_points: int,
+                       limit: str) -> tuple[NDArray, NDArray, NDArray]:
+    """(points, error moving positive, error moving negative) (n,) [m] of ``axis``'s
+    positioning error on a table of ``spacing_m``: moving positive the axis lags its
+    reversal half behind, moving negative it leads by as much. More than ``most_points``
+    points is refused, saying ``limit`` and the spacing that fits."""
+    stroke = model.machine.axes[axis].stroke
+    points = table_points(stroke, spacing_m)
+    if points.size > most_points:
+        needed = (stroke[1] - stroke[0]) / (most_points - 1)
+        raise ParameterError(f"axis {axis}: {points.size} compensation points at "
+                             f"{spacing_m * 1e3:g} mm; {limit}: use a spacing of "
+                             f"{needed * 1e3:.4g} mm or more")
+    error = positioning_error(model, axis, points)
+    half = 0.5 * model.backlash_m(axis)
+    return points, error - half, error + half
+
+
 # ----------------------------------------------------------------------- ISG / TwinCAT
 #: Entries of one leadscrew error compensation table the control holds by default
 #: (P-COMP-00059 ``kw.ssfk.max_points``; ``kw_nr_max`` must stay below it).
@@ -383,19 +401,12 @@ def isg_leadscrew_lists(model: ErrorModel, spacing_m: float, *, bilateral: bool 
     texts, axes = {}, {}
     for number, axis in enumerate(linear_axes(model), start=1):
         number = (axis_numbers or {}).get(axis, number)
-        stroke = model.machine.axes[axis].stroke
-        points = table_points(stroke, spacing_m)
-        if points.size >= max_points:
-            needed = (stroke[1] - stroke[0]) / (max_points - 2)
-            raise ParameterError(
-                f"axis {axis}: {points.size} leadscrew compensation points at "
-                f"{spacing_m * 1e3:g} mm; the control holds fewer than {max_points} "
-                f"(kw.ssfk.max_points): use a spacing of {needed * 1e3:.4g} mm or more")
-        error = positioning_error(model, axis, points)
-        half = 0.5 * model.backlash_m(axis)
-        # Moving positive the axis lags its reversal half behind; moving negative, ahead.
-        pos = np.round((error - half if bilateral else error) / ISG_UNIT_M).astype(np.int64)
-        neg = np.round((error + half) / ISG_UNIT_M).astype(np.int64) if bilateral else None
+        points, forward, reverse = directional_errors(
+            model, axis, spacing_m, max_points - 1,
+            f"the control holds fewer than {max_points} (kw.ssfk.max_points)")
+        both = (forward + reverse) / 2.0
+        pos = np.round((forward if bilateral else both) / ISG_UNIT_M).astype(np.int64)
+        neg = np.round(reverse / ISG_UNIT_M).astype(np.int64) if bilateral else None
         record = IsgAxis(number, axis, int(round(interval)),
                          int(round(points[0] / ISG_UNIT_M)), [int(v) for v in pos],
                          None if neg is None else [int(v) for v in neg])
@@ -450,17 +461,9 @@ def linuxcnc_comp_files(model: ErrorModel, spacing_m: float, *, file_type: int =
                              "(trims)")
     texts, ini = {}, {}
     for number, axis in enumerate(linear_axes(model)):
-        stroke = model.machine.axes[axis].stroke
-        points = table_points(stroke, spacing_m)
-        if points.size > LINUXCNC_MAX_POINTS:
-            needed = (stroke[1] - stroke[0]) / (LINUXCNC_MAX_POINTS - 1)
-            raise ParameterError(
-                f"axis {axis}: {points.size} compensation points at {spacing_m * 1e3:g} mm; "
-                f"LinuxCNC holds {LINUXCNC_MAX_POINTS} a joint: use a spacing of "
-                f"{needed * 1e3:.4g} mm or more")
-        error = positioning_error(model, axis, points)
-        half = 0.5 * model.backlash_m(axis)
-        forward, reverse = error - half, error + half
+        points, forward, reverse = directional_errors(
+            model, axis, spacing_m, LINUXCNC_MAX_POINTS,
+            f"LinuxCNC holds {LINUXCNC_MAX_POINTS} a joint")
         if file_type == 0:
             second, third = points + forward, points + reverse
         else:
