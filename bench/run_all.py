@@ -13,6 +13,7 @@ BENCHES = [
     ["bench.thesis_results"],
     ["bench.thermal_report"],
     ["bench.graph_throughput"],
+    ["bench.fleet_workers"],
 ]
 
 

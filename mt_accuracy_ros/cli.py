@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 
@@ -100,6 +101,7 @@ def _play(args: argparse.Namespace) -> int:
 
 def _simulate(args: argparse.Namespace) -> int:
     import json
+    import math
     import time
     from pathlib import Path
 
@@ -113,6 +115,11 @@ def _simulate(args: argparse.Namespace) -> int:
     except MtAccuracyError as exc:
         print(f"mt-accuracy simulate: {exc}", file=sys.stderr)
         return 2
+    if args.reference_period is not None and not (math.isfinite(args.reference_period)
+                                                  and args.reference_period > 0):
+        print("mt-accuracy simulate: --reference-period must be a finite number of seconds "
+              "> 0", file=sys.stderr)
+        return 2
     out = Path(args.out)
     if (out / "bag").exists():
         print(f"mt-accuracy simulate: {out / 'bag'} already exists", file=sys.stderr)
@@ -123,7 +130,8 @@ def _simulate(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     files = [] if args.no_csv else write_csv(result, out, stride=args.csv_stride)
     if not args.no_bag:
-        write_bag(result, out / "bag", progress=not args.quiet)
+        write_bag(result, out / "bag", progress=not args.quiet,
+                  reference_period_s=args.reference_period)
         files.append(out / "bag")
     summary = {"scenario": str(args.scenario), "samples": int(result.time_s.size),
                "channels": result.scale_channels, "effects_on": sorted(scenario.enabled),
@@ -264,6 +272,22 @@ def _check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _fleet(args: argparse.Namespace) -> int:
+    from .commands.fleet import print_summary, run_fleet, write_fleet_outputs
+
+    # A bad input is one line on stderr and exit 2, by main().
+    summary = run_fleet(args.inputs, model=args.model, columns=args.columns,
+                        scheduler=args.scheduler, workers=args.workers, auto=args.auto,
+                        min_reduction=args.min_reduction, progress=not args.quiet)
+    write_fleet_outputs(summary, args.json, args.report)
+    print_summary(summary)
+    if args.report:
+        print(f"report: {args.report}")
+    # Refused files are findings of the fleet, not a failure of the command; nothing
+    # read at all is.
+    return 0 if summary["day_count"] else 1
+
+
 def _iso230_2(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -338,6 +362,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--no-bag", action="store_true")
     sim.add_argument("--no-csv", action="store_true")
     sim.add_argument("--csv-stride", type=int, default=1, help="write every N-th sample")
+    sim.add_argument("--reference-period", type=float, default=None, metavar="S",
+                     help="bag: a reference probe's TCP error every S seconds of data time "
+                          "(the uncompensated machine; what mt-accuracy check and fleet read)")
     sim.add_argument("-q", "--quiet", action="store_true")
     sim.set_defaults(handler=_simulate)
     check = commands.add_parser("check", help="model vs measurement: rank missing effects, add them")
@@ -393,6 +420,31 @@ def build_parser() -> argparse.ArgumentParser:
                        help="CSV log with --run: the instrument was zeroed at each run's "
                             "start (each run has its own zero; default: absolute readings)")
     check.set_defaults(handler=_check)
+    fleet = commands.add_parser("fleet", help="diagnose many machines' bags and surveys on "
+                                "Dask: error over time, shared effects, drift ranked")
+    fleet.add_argument("inputs", nargs="+", metavar="INPUT",
+                       help="a directory (a folder per machine), a glob (the folder holding "
+                            "each match names its machine) or a manifest YAML (machines: "
+                            "{NAME: {data: [globs], model:, machine:, columns:}})")
+    fleet.add_argument("--scheduler", metavar="ADDRESS",
+                       help="an existing Dask scheduler (tcp://host:8786) whose workers have "
+                            "this package; default: a local cluster of --workers processes")
+    fleet.add_argument("--workers", type=int, default=os.cpu_count() or 1,
+                       help="worker processes of the local cluster (default: one per core)")
+    fleet.add_argument("--model", default=None,
+                       help="model of the machines that have none of their own (bags: "
+                            "default 'demo'; a folder's model.yaml or the manifest's model: "
+                            "wins)")
+    fleet.add_argument("--columns", metavar="FILE.yaml",
+                       help="column map of the surveys whose machine has none of its own")
+    fleet.add_argument("--auto", type=int, default=3, metavar="N",
+                       help="name up to N effects per machine-day (default 3)")
+    fleet.add_argument("--min-reduction", type=float, default=0.05,
+                       help="smallest CV error reduction that counts")
+    fleet.add_argument("--json", help="JSON summary path (every machine-day's result)")
+    fleet.add_argument("--report", help="HTML fleet report path")
+    fleet.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    fleet.set_defaults(handler=_fleet)
     iso = commands.add_parser("iso230-2", help="ISO 230-2 figures of a laser interferometer's "
                               "positioning runs (CSV)")
     iso.add_argument("run", help="CSV: one reading per row, in the order measured")

@@ -18,7 +18,7 @@ from mt_accuracy_ros.core.compensation.error_model import ErrorModel, model_from
 from mt_accuracy_ros.core.kinematics.machine import machine_from_dict
 from mt_accuracy_ros.core.workbench.diagnosis import Observations, add_effect, diagnose
 from mt_accuracy_ros.sim.instruments import calibrate_machine
-from mt_accuracy_ros.sim.machine_tool import _direction_held, simulate
+from mt_accuracy_ros.sim.machine_tool import direction_held, simulate
 from mt_accuracy_ros.sim.scenario import scenario_from_dict
 
 #: Hidden-effect magnitudes at scale 1 (the simulator's parameters); scaled per trial.
@@ -77,7 +77,7 @@ def survey(hidden: dict[str, dict], seed: int, points: int = 80):
                        np.ones_like(measured, dtype=bool), result.time_s[picks_all],
                        {a: result.velocity[a][picks_all] for a in "XYZ"}, temps, 1e-6)
     # The CNC knows each axis' last direction of motion (reversal at a standstill).
-    obs.directions = {a: _direction_held(result.velocity[a])[picks_all] for a in "XYZ"}
+    obs.directions = {a: direction_held(result.velocity[a])[picks_all] for a in "XYZ"}
     return result, obs, truth
 
 

@@ -77,8 +77,8 @@ def test_the_command_floor_is_one_room():
     top = sorted(p.name for p in PACKAGE.glob("*.py"))
     assert top == ["__init__.py", "allocator.py", "cli.py"]
     commands = sorted(p.stem for p in (PACKAGE / "commands").glob("*.py"))
-    assert commands == ["__init__", "check", "check_log", "demo", "iso230", "model_tools",
-                        "processes", "rotary_tools", "topic_tools"]
+    assert commands == ["__init__", "check", "check_log", "demo", "fleet", "iso230",
+                        "model_tools", "processes", "rotary_tools", "topic_tools"]
     # Nodes run on real machines: none of them imports a command.
     assert _offending(_sources("nodes"), ("mt_accuracy_ros.commands", "mt_accuracy_ros.cli")) \
         == {}
@@ -88,10 +88,17 @@ def test_core_is_split_by_domain_and_each_subpackage_says_what_it_holds():
     flat = sorted(p.name for p in (PACKAGE / "core").glob("*.py") if p.name != "__init__.py")
     assert flat == ["errors.py", "validation.py"]
     for sub in ("scales", "kinematics", "thermal", "compensation", "effects", "workbench",
-                "inputs"):
+                "inputs", "fleet"):
         init = PACKAGE / "core" / sub / "__init__.py"
         doc = ast.get_docstring(ast.parse(init.read_text()))
         assert doc and len(doc.splitlines()) >= 3, f"{init} needs a docstring saying what it holds"
+
+
+def test_only_the_fleet_command_imports_dask():
+    """Issue 42: Dask is for ``mt-accuracy fleet``; no other command, node or core module
+    needs it installed (nor pays its import)."""
+    hits = _offending(sorted(PACKAGE.rglob("*.py")), ("dask", "distributed"))
+    assert set(hits) == {"mt_accuracy_ros/commands/fleet.py"}
 
 
 def test_simulator_imports_no_node_and_no_ros_client():

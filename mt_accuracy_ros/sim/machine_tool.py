@@ -314,7 +314,7 @@ def _effect_masks(scenario: Scenario, time_s: NDArray[np.float64]) -> dict[str, 
     return masks
 
 
-def _direction_held(velocity: NDArray[np.float64]) -> NDArray[np.float64]:
+def direction_held(velocity: NDArray[np.float64]) -> NDArray[np.float64]:
     """sign(v), holding the last direction of motion while the axis stands still."""
     moving = np.abs(velocity) > 1e-9
     index = np.where(moving, np.arange(velocity.size), 0)
@@ -347,7 +347,7 @@ def _axis_motion(scenario: Scenario, program, time_s: NDArray, masks: dict) -> t
         if not machine.axes[axis].is_rotary:
             reversal = scenario.parameters("reversal")
             if axis in reversal["axes"] and scenario.ever_enabled("reversal"):
-                q -= _direction_held(v) * 0.5 * float(reversal["backlash_m"]) * masks["reversal"]
+                q -= direction_held(v) * 0.5 * float(reversal["backlash_m"]) * masks["reversal"]
             lag = scenario.parameters("servo_lag")
             if axis in lag["axes"] and scenario.ever_enabled("servo_lag"):
                 q -= v * float(lag["lag_s"]) * masks["servo_lag"]

@@ -82,3 +82,49 @@ def test_circle_leaving_the_stroke_is_refused():
 
     with pytest.raises(ScenarioError, match="outside the X stroke"):
         scenario_from_yaml("machine: kidani_hmc\nprogram: {type: circle, radius_m: 0.3}\n")
+
+
+def test_reference_readings_are_the_machines_tcp_error_within_the_probe_noise(tmp_path, capsys):
+    """``simulate --reference-period``: a probe's reading of the uncompensated TCP error
+    every period, read back by the MCAP ROS 2 decoder Foxglove uses; within the probe's
+    noise of the simulator's truth and with the CNC's last direction of each axis."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    from mt_accuracy_ros.cli import main
+    from mt_accuracy_ros.sim.export import PROBE_UNCERTAINTY_M
+
+    text = SCENARIO.replace("duration_s: 3", "duration_s: 30")
+    (tmp_path / "s.yaml").write_text(text)
+    assert main(["simulate", str(tmp_path / "s.yaml"), "--out", str(tmp_path / "out"), "-q",
+                 "--no-csv", "--reference-period", "0.25"]) == 0
+    result = simulate(scenario_from_yaml(text))
+    readings = []
+    for path in sorted((tmp_path / "out" / "bag").glob("*.mcap")):
+        with open(path, "rb") as stream:
+            reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+            for _, _, record, m in reader.iter_decoded_messages(topics=["/reference/tcp_error"]):
+                readings.append((record.log_time, m))
+    assert len(readings) == 120
+    start_ns = int(round(result.scenario.start_time_s * 1e9))
+    picks = np.array([(stamp - start_ns) * 2000 // 10**9 for stamp, _ in readings])
+    np.testing.assert_array_equal(picks, np.arange(0, 60000, 500))
+    truth = result.tcp_error(picks)
+    seen = np.array([[m.error.x, m.error.y, m.error.z] for _, m in readings])
+    noise = seen - truth
+    assert np.abs(noise).max() < 5 * PROBE_UNCERTAINTY_M / 2      # 5 sigma of the probe
+    assert 0.3e-6 < noise.std() < 0.7e-6                             # its sigma, 0.5 um
+    assert np.abs(truth).max() > 5 * PROBE_UNCERTAINTY_M             # the machine's error shows
+    first = readings[7][1]
+    axes = list(result.scenario.machine.axis_order)
+    assert list(first.command_axes) == [a.lower() for a in axes]
+    assert list(first.command_positions) == [result.command[a][picks[7]] for a in axes]
+    velocity = np.array([result.velocity["X"][p] for p in picks])
+    directions = np.array([m.command_directions[axes.index("X")] for _, m in readings])
+    moving = np.abs(velocity) > 1e-9
+    np.testing.assert_array_equal(directions[moving], np.sign(velocity[moving]))
+    assert all(m.uncertainty == PROBE_UNCERTAINTY_M and list(m.measured) == [True] * 3
+               for _, m in readings)
+    assert main(["simulate", str(tmp_path / "s.yaml"), "--out", str(tmp_path / "o2"),
+                 "--reference-period", "0"]) == 2
+    assert "--reference-period must be" in capsys.readouterr().err
