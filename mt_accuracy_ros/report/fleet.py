@@ -36,6 +36,14 @@ def _over_time_figure(summary: dict, directory: Path, stem: str):
                 label=f"{name}{' (drifts)' if name in drifting else ''}")
         ax.plot(x, [d["final_rmse_m"] * UM for d in days], "x--", color=colour, linewidth=1.0,
                 label=f"{name}, with its named effects")
+    dated = [d for e in summary["machines"].values() for d in _dates(e["days"]) if d]
+    if dated:
+        from matplotlib.dates import DateFormatter, DayLocator
+
+        # Whole days on the axis, never hours: at most about ten ticks.
+        span = (max(dated) - min(dated)).days
+        ax.xaxis.set_major_locator(DayLocator(interval=max(1, -(-span // 10))))
+        ax.xaxis.set_major_formatter(DateFormatter("%Y-%m-%d"))
     ax.set_xlabel("day (UTC)")
     ax.set_ylabel("RMS error of the model [um]")
     ax.set_ylim(bottom=0.0)
