@@ -440,16 +440,14 @@ def _column_and_unit(flag: str, names: list[str], quantity: str, what: str
                      ) -> tuple[str, float, str]:
     """``COLUMN[:UNIT]`` -> (column, SI scale, unit); the unit from the flag, else the
     column's suffix (``ch5_um``, ``spindle_rpm``)."""
-    from ..io.column_map import UNITS
+    from ..io.column_map import UNITS, unit_from_name
 
     column, unit = (flag.rsplit(":", 1) + [""])[:2] if ":" in flag else (flag, "")
     column, unit = column.strip(), unit.strip()
     if column not in names:
         raise InputDataError(f"no {what} column {column!r}; have {', '.join(names)}")
     table = UNITS[quantity]
-    if not unit:
-        suffix = column.rsplit("_", 1)[-1] if "_" in column else ""
-        unit = suffix if suffix in table else ""
+    unit = unit or unit_from_name(column, quantity)
     if unit not in table or not unit:
         raise InputDataError(f"{what} {column!r}: give its unit as {column}:UNIT (one of "
                              f"{', '.join(u for u in table if u)}); none could be read off "

@@ -198,13 +198,23 @@ def si_scale(quantity: str, unit: str, what: str) -> tuple[float, float]:
     return table[unit], 0.0
 
 
-def _scale(column_map: ColumnMap, role: str, unit: str):
-    """(scale, offset) that take the column to SI; raises naming the role's unit."""
+def unit_from_name(column: str, quantity: str) -> str:
+    """The unit a column's name ends in (``x_mm``, ``dev_um``, ``T3_degC``) if it is one of
+    ``quantity``'s, else "" (the quantity's default then applies)."""
+    suffix = column.rsplit("_", 1)[-1] if "_" in column else ""
+    known = TEMPERATURE if quantity == "temperature" else UNITS.get(quantity, {})
+    return suffix if suffix and suffix in known else ""
+
+
+def _scale(column_map: ColumnMap, role: str, unit: str, column: str = ""):
+    """(scale, offset) that take the column to SI; raises naming the role's unit. Without a
+    unit in the map the column's name may say it (``x_mm``): a millimetre column is never
+    read as metres."""
     quantity = column_map.quantity(role)
     if not quantity:
         raise ParameterError(f"column role {role!r} unknown; roles: time, pos.X, err.x, "
                              "temp.<sensor>, vel.X, acc.X, dir.X, spindle")
-    return si_scale(quantity, unit, role)
+    return si_scale(quantity, unit or unit_from_name(column, quantity), role)
 
 
 @dataclass
@@ -246,7 +256,7 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
             raise ParameterError(f"{role}: the TCP error components are err.x, err.y, err.z")
         if kind in ("pos", "vel", "acc", "dir") and (len(key) != 1 or key not in "XYZABC"):
             raise ParameterError(f"{role}: name the axis with its letter (X Y Z A B C)")
-    scales = {role: _scale(column_map, role, unit) for role, (_, unit) in
+    scales = {role: _scale(column_map, role, unit, column) for role, (column, unit) in
               column_map.roles.items() if role != "run"}
     try:
         with open(path, newline="", encoding="utf-8") as stream:

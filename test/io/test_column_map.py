@@ -41,6 +41,24 @@ def test_units_are_converted_to_si(tmp_path):
     assert column_map_from_dict(MAP).uncertainty_m == pytest.approx(1.4e-6)
 
 
+def test_a_map_without_units_reads_them_off_the_column_names(tmp_path):
+    """A millimetre column named ``x_mm`` is never read as metres: without a unit in the
+    map, a known unit at the end of the column's name is taken; a name without one keeps
+    the quantity's SI default."""
+    path = tmp_path / "named.csv"
+    path.write_text("t_min,x_mm,y,dev_um,T_K\n" +
+                    "\n".join(f"{k},{10 * k},{k},{k},{293.15 + k}" for k in range(25)) + "\n")
+    survey = read_mapped_csv(path, column_map_from_dict({
+        "time": "t_min", "positions": {"X": "x_mm", "Y": "y"}, "errors": {"x": "dev_um"},
+        "temperatures": {"bed": "T_K"}}))
+    k = np.arange(25)
+    np.testing.assert_allclose(survey.time_s, 60.0 * k)
+    np.testing.assert_allclose(survey.positions["X"], 0.01 * k)
+    np.testing.assert_allclose(survey.positions["Y"], 1.0 * k)        # no unit: metres
+    np.testing.assert_allclose(survey.errors["x"], 1e-6 * k)
+    np.testing.assert_allclose(survey.temperatures["bed"], 20.0 + k)
+
+
 def test_flags_and_row_order_as_time(tmp_path):
     column_map = parse_col_flags(["pos.X=x:mm", "err.x=dx:um"])
     column_map.row_period_s = 15.0
