@@ -259,6 +259,8 @@ def _check(args: argparse.Namespace) -> int:
         if readings:
             setting = entry.get("setting_display", "")
             print(f"       {readings} (U, k = 2){'; ' + setting if setting else ''}")
+    for entry in result.get("dropped", []):
+        print(entry["sentence"])
     if result.get("localisation", {}).get("sentence"):
         print(f"where: {result['localisation']['sentence']}")
     if result.get("verdict"):

@@ -224,6 +224,7 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
             "baseline_cv_rmse": first.baseline_cv_rmse,
             "ranking": [c.as_dict() for c in first.ranking[:30]],
             "named": [c.as_dict() for c in first.selected],
+            "dropped": first.dropped,
             "verdict": first.verdict(),
             "localisation": first.localisation.as_dict() if first.localisation else {},
             "added": [name for s in steps for name in s.get("added", [])],

@@ -290,6 +290,9 @@ class Diagnosis:
     #: The model's fitted effects refitted on the same readings (a
     #: :class:`~.refit.Refit`, set by the monitor's check; None if not made).
     refit: object | None = None
+    #: Effects the selection named and took out again once a later one explained them:
+    #: [{"name", "by", "sentence"}] in the order dropped (issue 41).
+    dropped: list[dict] = field(default_factory=list)
 
     @property
     def found(self) -> Candidate | None:
@@ -515,12 +518,16 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
         rows = mask[:, 3:]
         direction_rmse = float(np.sqrt(np.sum(residual[:, 3:][rows] ** 2) /
                                        max(1, int(obs.orientation_measured.sum())))) / lever
+    dropped = [{"name": gone.term.name, "by": by.term.name,
+                "sentence": f"dropped {gone.term.name}: {by.term.name} explains it"}
+               for gone, by in selector.dropped]
     return Diagnosis(in_sample, first.base_cv_rmse if first else in_sample,
                      float(np.max(np.abs(position_residual[position_mask]), initial=0.0)),
                      float(np.mean(np.abs(position_residual[position_mask]) > obs.uncertainty_m))
                      if position_mask.any() else 0.0,
                      ranking, selected, localisation, unexplained, above, noise_sigma,
-                     float(final_cv), localisation_after, direction_rmse, unexplained_direction)
+                     float(final_cv), localisation_after, direction_rmse, unexplained_direction,
+                     dropped=dropped)
 
 
 @dataclass

@@ -384,6 +384,8 @@ class Selector:
         #: How many of a step's best candidates keep their per-reading errors.
         self.keep_errors = 3
         self.selected: list[tuple[Term, dict]] = []
+        #: Terms taken out again because a later one explains them: (dropped, by) (issue 41).
+        self.dropped: list[tuple[Scored, Scored]] = []
 
     # ------------------------------------------------------------ designs
     def design_rows(self, term: Term, setting: dict) -> NDArray[np.float64]:
@@ -984,10 +986,37 @@ class Selector:
         _, first, second = min(options, key=lambda o: o[0])
         return first, second
 
+    def no_longer_needed(self, steps: list[Step], newest: Scored) -> list[Scored]:
+        """After ``newest`` was added: every earlier term re-tested held out against the
+        model of all the others, as if it were a candidate now; the ones that no longer
+        pass the selection's tests (its out-of-fold gain, block test, share and strength)
+        are taken out of :attr:`selected` and their steps (issue 41: a product named
+        first as the two slopes it looked like keeps neither once it is in)."""
+        dropped = []
+        for step in steps:
+            earlier = step.added
+            if earlier is None or earlier is newest:
+                continue
+            others = [(t, st) for t, st in self.selected if t.name != earlier.term.name]
+            kept = self.selected
+            self.selected = others
+            try:
+                retest = self.step([earlier.term])
+            finally:
+                self.selected = kept
+            if retest.added is None:
+                self.selected = others
+                step.added = None
+                self.dropped.append((earlier, newest))
+                dropped.append(earlier)
+        return dropped
+
     def run(self, terms: list[Term], max_terms: int = 4, beam: int = 3) -> list[Step]:
         """Steps until nothing passes or ``max_terms`` were added; every added term refit
         jointly at the end (``Scored.coefficients`` of the added ones are the joint fit).
-        A step where no single term passes tries pairs (:meth:`pair_lookahead`)."""
+        A step where no single term passes tries pairs (:meth:`pair_lookahead`). After
+        each addition every earlier term must still earn its place
+        (:meth:`no_longer_needed`); one that does not is dropped (:attr:`dropped`)."""
         steps = []
         self.keep_errors = max(1, beam)
         remaining = list(terms)
@@ -1012,6 +1041,8 @@ class Selector:
                 break
             self.selected.append((step.added.term, step.added.setting))
             remaining = [t for t in remaining if t.name != step.added.term.name]
+            if len(self.selected) > 1:
+                self.no_longer_needed(steps, step.added)
         while True:
             added = [s.added for s in steps if s.added is not None]
             if not added:
