@@ -987,29 +987,57 @@ class Selector:
         return first, second
 
     def no_longer_needed(self, steps: list[Step], newest: Scored) -> list[Scored]:
-        """After ``newest`` was added: every earlier term re-tested held out against the
-        model of all the others, as if it were a candidate now; the ones that no longer
-        pass the selection's tests (its out-of-fold gain, block test, share and strength)
-        are taken out of :attr:`selected` and their steps (issue 41: a product named
-        first as the two slopes it looked like keeps neither once it is in)."""
+        """After ``newest`` was added: each earlier term re-tested held out, as if it were
+        a candidate now, against the terms selected before it *and* ``newest``; one that
+        no longer passes the selection's tests (its out-of-fold gain, block test, share
+        and strength) is explained by ``newest`` and taken out of :attr:`selected` and
+        its step (issue 41: a product first named as a simpler stand-in keeps none of
+        them once it is in). Only what the newest term explains is dropped: a term that
+        several later ones explain together stays (they may be stand-ins of it)."""
         dropped = []
         for step in steps:
             earlier = step.added
             if earlier is None or earlier is newest:
                 continue
-            others = [(t, st) for t, st in self.selected if t.name != earlier.term.name]
+            names = [t.name for t, _ in self.selected]
+            position = names.index(earlier.term.name)
+            against = self.selected[:position] + [s for s in self.selected
+                                                  if s[0].name == newest.term.name]
             kept = self.selected
-            self.selected = others
+            self.selected = against
             try:
                 retest = self.step([earlier.term])
             finally:
                 self.selected = kept
-            if retest.added is None:
-                self.selected = others
+            without = [s for s in kept if s[0].name != earlier.term.name]
+            if retest.added is None and self._may_drop(kept, without):
+                self.selected = without
                 step.added = None
                 self.dropped.append((earlier, newest))
                 dropped.append(earlier)
         return dropped
+
+    def _out_of_fold_mse(self, selected: list[tuple[Term, dict]]) -> float:
+        kept = self.selected
+        self.selected = selected
+        try:
+            return self._baseline()[3]
+        finally:
+            self.selected = kept
+
+    def _may_drop(self, kept: list[tuple[Term, dict]], without: list[tuple[Term, dict]]
+                  ) -> bool:
+        """A term the newest explains goes only if the model without it predicts the
+        held-out readings as well (out-of-fold MSE within the Occam tie) and physics still
+        accepts every remaining term in their joint fit (two correlated sensors may each
+        carry half of a growth that one alone could not)."""
+        if self._out_of_fold_mse(without) > self._out_of_fold_mse(kept) * (1.0 + self.tie):
+            return False
+        if not without:
+            return True
+        coefficients, _, _ = self.fit_full(without)
+        return not any(self.physics_refusal(term, setting, c)
+                       for (term, setting), c in zip(without, coefficients))
 
     def run(self, terms: list[Term], max_terms: int = 4, beam: int = 3) -> list[Step]:
         """Steps until nothing passes or ``max_terms`` were added; every added term refit
