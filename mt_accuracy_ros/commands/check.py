@@ -187,13 +187,16 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c.setdefault(sensor, float(values[0]))
 
-    def evaluate(current):
+    def evaluate(current, first_look: bool = False):
         if predict is not None:
             obs.predicted_m, obs.predicted_orientation = predict(current)
+        # Pairs of effects hiding each other are sought in the first look only: after
+        # the named effects are added, what they leave is judged one effect at a time.
         return diagnose(current, obs, min_reduction=min_reduction, blocks=blocks,
-                        folds=5 if blocks is None else int(blocks[-1]) + 1)
+                        folds=5 if blocks is None else int(blocks[-1]) + 1,
+                        pair_lookahead=first_look)
 
-    diagnosis = evaluate(model)
+    diagnosis = evaluate(model, first_look=True)
     first = diagnosis
     residual_before = residuals(model, obs)
     steps, step_residuals = [], []

@@ -452,12 +452,16 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
              folds: int = 5, max_effects: int = 4, alpha: float = 0.05,
              min_share: float = 0.25, family_list: list[EffectFamily] | None = None,
              localise_residual: bool = True, forward: bool = False,
-             blocks: NDArray[np.intp] | None = None) -> Diagnosis:
+             blocks: NDArray[np.intp] | None = None, pair_lookahead: bool = True
+             ) -> Diagnosis:
     """Localise the residual and select the missing effects (see the module docstring).
 
     ``forward``: validate as the model will be used on a log - each block predicted by
     a fit on the earlier blocks only (:class:`~.selection.Selector`); ``blocks`` (N,)
-    gives those blocks (whole runs of a log of many runs) instead of equal cuts."""
+    gives those blocks (whole runs of a log of many runs) instead of equal cuts.
+    ``pair_lookahead``: when no single effect passes, try two at once (two effects
+    hiding each other show at the start; a re-diagnosis of the same readings after the
+    named effects were added judges what they leave one effect at a time)."""
     if blocks is None and obs.n < 4 * folds:
         raise InsufficientDataError(f"{obs.n} reference readings; need >= {4 * folds}")
     frame = residual_frame(model, obs)
@@ -471,7 +475,7 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
                         blocks=blocks)
     terms = candidate_terms(model, ctx, family_list)
     _check_user_terms(terms, selector, model, ctx)
-    steps = selector.run(terms, max_terms=max_effects)
+    steps = selector.run(terms, max_terms=max_effects, beam=3 if pair_lookahead else 0)
     first = steps[0] if steps else None
 
     def explain(scored):

@@ -260,6 +260,8 @@ class _BaseStatistics:
 #: 1e5 readings); the least recently used beyond this are computed again when needed.
 #: (96 MB holds every design at 1e4 readings; at 1e5 it keeps the peak under 500 MB.)
 DESIGN_CACHE_BYTES = 96 * 2 ** 20
+#: The separable terms' sensitivities, bounded alike.
+SENSITIVITY_CACHE_BYTES = 48 * 2 ** 20
 
 
 class _DesignCache:
@@ -364,7 +366,10 @@ class Selector:
         self.all_rows = self.rows.size == mask.size
         self.present_bounds = [(int(self.present_of_row[a]), int(self.present_of_row[b - 1]) + 1)
                                for a, b in self.fold_bounds]
-        self._sensitivities: dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
+        #: Per separable term: its sensitivity at each measured row and, after them, its
+        #: square summed per reading - bounded like the designs (at 1e5 readings each is
+        #: megabytes, and a catalogue has a hundred separable terms; issue 41).
+        self._sensitivities = _DesignCache(SENSITIVITY_CACHE_BYTES)
         # Rows judged: all, or (forward) those after the first block.
         first_judged = self.fold_bounds[1][0] if self.forward else 0
         self.judged_row = np.arange(self.rows.size) >= first_judged
@@ -417,26 +422,39 @@ class Selector:
             if separable is None:
                 return None
             sensitivity, basis = separable
-            if term.name not in self._sensitivities:
-                self._sensitivities[term.name] = self._sensitivity_rows(sensitivity)
+            if self._sensitivities.get(term.name) is None:
+                self._sensitivities.put(term.name, self._sensitivity_rows(sensitivity))
             basis = np.ascontiguousarray(basis if self.all_rows else basis[self.present])
             self._designs.put(key, basis)
         return basis
 
-    def _sensitivity_rows(self, sensitivity: NDArray[np.float64]):
-        """(the sensitivity at each measured row (R,), its square summed per reading (S,))."""
+    def _sensitivity_rows(self, sensitivity: NDArray[np.float64]) -> NDArray[np.float64]:
+        """(R + S,): the sensitivity at each measured row (R = the rows fitted), then its
+        square summed per reading (S) - one array, for the bounded cache."""
         if self.all_rows:
-            # A view of the context's sensitivity: no copy per variant.
-            return sensitivity.reshape(-1), np.einsum("nc,nc->n", sensitivity, sensitivity)
+            flat = sensitivity.reshape(-1)
+            return np.concatenate([flat, np.einsum("nc,nc->n", sensitivity, sensitivity)])
         flat = sensitivity.reshape(-1)[self.rows]
-        return flat, np.add.reduceat(flat * flat, self.row_starts)
+        return np.concatenate([flat, np.add.reduceat(flat * flat, self.row_starts)])
+
+    def sensitivity(self, term: Term) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(along each measured row (R,), its square summed per reading (S,)) of a separable
+        ``term``, from the cache or made again (its sensitivity is the same at every
+        setting)."""
+        both = self._sensitivities.get(term.name)
+        if both is None:
+            sensitivity, _ = self.ctx.measured_separable(term.family, term.variant,
+                                                         term.settings[-1])
+            both = self._sensitivity_rows(sensitivity)
+            self._sensitivities.put(term.name, both)
+        return both[:self.y.size], both[self.y.size:]
 
     def _separable_prediction(self, term: Term, basis: NDArray[np.float64],
                               coefficients: NDArray[np.float64], a: int = 0,
                               b: int | None = None) -> NDArray[np.float64]:
         """X @ coefficients over rows a:b of a separable design."""
         b = self.y.size if b is None else b
-        along_rows = self._sensitivities[term.name][0][a:b]
+        along_rows = self.sensitivity(term)[0][a:b]
         start, stop = (self.present_of_row[a], self.present_of_row[b - 1] + 1) if b > a \
             else (0, 0)
         values = basis[start:stop] @ coefficients
@@ -511,7 +529,7 @@ class Selector:
         if known is None:
             setting = term.settings[-1]
             if self.basis_rows(term, setting) is not None:
-                size = np.abs(self._sensitivities[term.name][0])
+                size = np.abs(self.sensitivity(term)[0])
             else:
                 size = np.max(np.abs(self.design_rows(term, setting)), axis=1)
             # Rounding (a lever's cross product) is not a component the effect moves.
@@ -564,7 +582,7 @@ class Selector:
         # Kept in the design cache (bounded: at 1e5 readings one is megabytes per variant).
         # Per candidate (family and variant): a family's sensitivity is its own to say.
         key = ("contracted", term.name, stats.serial)
-        along_rows, squared = self._sensitivities[term.name]
+        along_rows, squared = self.sensitivity(term)
         contracted = self._designs.get(key)
         if contracted is None:
             if self.all_rows:
@@ -867,6 +885,8 @@ class Selector:
             candidate.parameter_names = term.family.parameter_names(term.variant, setting)
             candidate.refusal = self.physics_refusal(term, setting, candidate.coefficients)
             scored.append(candidate)
+            if len(scored) % 32 == 0:
+                self._release_errors(scored)
         # The best of many candidates is no chance winner: each p-value is adjusted for
         # every candidate tried, by the distribution of the *largest* t over them all
         # (Westfall-Young max-T, blocks' signs flipped together). Bonferroni assumed the
@@ -911,6 +931,35 @@ class Selector:
             if s is not added:
                 s.per_sample_sq = None
         return Step(float(np.sqrt(base_mse)), scored, added)
+
+    def _release_errors(self, scored: list[Scored]) -> None:
+        """Free the per-reading errors (N floats each) of candidates that can no longer be
+        among the first ``keep_errors`` of the ranking nor its Occam choice: kept are the
+        best ``keep_errors`` by out-of-fold error, overall and among the plausible, and the
+        plausible ones within the tie of the best that no other beats in both simplicity
+        and error (memory stays bounded over a catalogue at 1e5 readings; issue 41)."""
+        holding = [s for s in scored if s.per_sample_sq is not None]
+        if len(holding) <= 2 * self.keep_errors:
+            return
+        by_error = sorted(holding, key=lambda s: s.cv_rmse)
+        plausible = [s for s in by_error if not s.refusal]
+        keep = {id(s) for s in by_error[:self.keep_errors]}
+        keep |= {id(s) for s in plausible[:self.keep_errors]}
+        if plausible:
+            # The Occam choice is the simplest of those tied with the best: a candidate
+            # another beats in both simplicity and error can never be it (whatever the
+            # final best), so of the tied only the front of (complexity, error) is kept.
+            limit = plausible[0].cv_rmse ** 2 * (1.0 + self.tie)
+            lowest = float("inf")
+            for c in sorted((s for s in plausible if s.cv_rmse ** 2 <= limit),
+                            key=lambda s: (s.term.family.variant_complexity(s.term.variant),
+                                           s.cv_rmse)):
+                if c.cv_rmse < lowest:
+                    keep.add(id(c))
+                    lowest = c.cv_rmse
+        for s in holding:
+            if id(s) not in keep:
+                s.per_sample_sq = None
 
     def _block_gains(self, base_sq: NDArray[np.float64], per_sample: NDArray[np.float64]
                      ) -> NDArray[np.float64]:
