@@ -104,16 +104,26 @@ def _machine_section(name: str, entry: dict) -> Section:
     return section
 
 
-def _common_section(summary: dict) -> Section:
-    section = Section("Effects common to many machines")
-    if not summary["common_effects"]:
-        section.paragraphs.append("No effect was named on more than one machine.")
+def _listing(title: str, items: list, empty: str, columns: list[str], row, css_class: str = ""
+             ) -> Section:
+    """A section of one table, a row per item (``row(item)`` -> cells), or ``empty``."""
+    section = Section(title)
+    if not items:
+        section.paragraphs.append(empty)
         return section
-    table = Table(["effect", "machines", "which"])
-    for item in summary["common_effects"]:
-        table.add(item["effect"], len(item["machines"]), ", ".join(item["machines"]))
+    table = Table(columns)
+    for item in items:
+        table.add(*row(item), css_class=css_class)
     section.tables.append(table)
     return section
+
+
+def _common_section(summary: dict) -> Section:
+    return _listing("Effects common to many machines", summary["common_effects"],
+                    "No effect was named on more than one machine.",
+                    ["effect", "machines", "which"],
+                    lambda item: (item["effect"], len(item["machines"]),
+                                  ", ".join(item["machines"])))
 
 
 def _drift_section(summary: dict) -> Section:
@@ -132,16 +142,10 @@ def _drift_section(summary: dict) -> Section:
 
 
 def _refused_section(summary: dict) -> Section:
-    section = Section("Refused data")
-    if not summary["refused"]:
-        section.paragraphs.append("Every file was read and checked.")
-        return section
-    table = Table(["machine", "day", "file", "reason"])
-    for item in summary["refused"]:
-        table.add(item["machine"], item["day"], Path(item["file"]).name, item["reason"],
-                  css_class="fail")
-    section.tables.append(table)
-    return section
+    return _listing("Refused data", summary["refused"], "Every file was read and checked.",
+                    ["machine", "day", "file", "reason"],
+                    lambda item: (item["machine"], item["day"], Path(item["file"]).name,
+                                  item["reason"]), css_class="fail")
 
 
 def write_fleet_report(summary: dict, path: Path) -> Report:
