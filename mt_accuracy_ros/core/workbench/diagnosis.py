@@ -443,7 +443,7 @@ def _candidate(scored, explanation_of, significant: bool) -> Candidate:
     return Candidate(term.family.name, dict(zip(names, map(float, values))), scored.cv_rmse,
                      scored.reduction, significant, explanation_of(scored), term.variant,
                      dict(zip(names, map(float, errors))), dict(scored.setting),
-                     float(1.0 - scored.adjusted_p) if significant else 0.0,
+                     float(1.0 - min(scored.adjusted_p, scored.coefficient_p)) if significant else 0.0,
                      float(scored.share_of_excess), term.family.group, declaration,
                      scored.refusal, float(scored.adjusted_p))
 
