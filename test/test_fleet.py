@@ -139,3 +139,24 @@ def test_an_existing_scheduler_and_a_manifest_with_a_survey(plant, tmp_path):
     assert survey_day["day"] == "2026-11-20" and survey_day["readings"] == 300
     (expected,) = trial.hidden[0].accepted
     assert expected in survey_day["named"]
+
+
+def test_the_command_says_bad_input_in_one_line_and_fails_when_nothing_was_read(
+        tmp_path, capsys):
+    """A manifest with an unknown key: one line on stderr, exit 2, no cluster started. A
+    fleet whose every file is refused: the refusals are printed and the exit status is 1
+    (nothing was diagnosed)."""
+    from mt_accuracy_ros.cli import main
+
+    (tmp_path / "fleet.yaml").write_text("machines: {m1: {data: [x], colour: red}}\n")
+    assert main(["fleet", str(tmp_path / "fleet.yaml"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("mt-accuracy fleet: ") and "unknown key 'colour'" in err
+    assert "\n" not in err
+
+    data = Path(__file__).resolve().parent.parent / "data" / "rosbag2_samples" / "talker"
+    shutil.copytree(data, tmp_path / "plant" / "cell-9" / "talker")
+    assert main(["fleet", str(tmp_path / "plant"), "--workers", "1", "--quiet"]) == 1
+    out = capsys.readouterr().out
+    assert "fleet: 1 machines, 1 machine-days on 1 workers" in out
+    assert "refused: cell-9 " in out and "no /reference/tcp_error topic" in out
