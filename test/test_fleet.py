@@ -156,7 +156,8 @@ def test_the_command_says_bad_input_in_one_line_and_fails_when_nothing_was_read(
 
     data = Path(__file__).resolve().parent.parent / "data" / "rosbag2_samples" / "talker"
     shutil.copytree(data, tmp_path / "plant" / "cell-9" / "talker")
-    assert main(["fleet", str(tmp_path / "plant"), "--workers", "1", "--quiet"]) == 1
-    out = capsys.readouterr().out
+    code = main(["fleet", str(tmp_path / "plant"), "--workers", "1", "--quiet"])
+    out, err = capsys.readouterr()
+    assert code == 1, err
     assert "fleet: 1 machines, 1 machine-days on 1 workers" in out
     assert "refused: cell-9 " in out and "no /reference/tcp_error topic" in out

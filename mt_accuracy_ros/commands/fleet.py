@@ -266,9 +266,11 @@ def run_fleet(inputs: list[str], *, model: str | None = None, columns: str | Non
     return summary
 
 
-def print_summary(summary: dict, out=sys.stdout) -> None:
+def print_summary(summary: dict, out=None) -> None:
     """The fleet in lines: each machine's days, the drift ranking, shared effects,
-    refused files. Lengths in micrometres."""
+    refused files. Lengths in micrometres. ``out``: a text stream (default: the
+    ``sys.stdout`` of the moment, not of the import)."""
+    out = sys.stdout if out is None else out
     um = 1e6
     print(f"fleet: {summary['machine_count']} machines, {summary['tasks']} machine-days on "
           f"{summary['ran_on']['workers']} workers ({summary['ran_on']['scheduler']}) in "
