@@ -281,7 +281,8 @@ class _BaseStatistics:
 
 #: Designs kept for reuse (every candidate's columns at every setting would hold GBs for
 #: 1e5 readings); the least recently used beyond this are computed again when needed.
-#: (96 MB holds every design at 1e4 readings; at 1e5 it keeps the peak under 500 MB.)
+#: (96 MB holds every design at 1e4 readings; at 1e5 the peak is still above 500 MB:
+#: docs/benchmarks.md says what else holds it.)
 DESIGN_CACHE_BYTES = 96 * 2 ** 20
 #: The separable terms' sensitivities, bounded alike.
 SENSITIVITY_CACHE_BYTES = 48 * 2 ** 20
@@ -953,8 +954,8 @@ class Selector:
             # time series, whose full-data standard errors assume an independence the
             # readings do not have (there, only predicting later blocks counts).
             settings_tried = sum(max(1, len(t.settings)) for t in terms)
-            best.coefficient_p = coefficient_p_value(coefficients[-1], standard[-1],
-                                                     self.y.size) * settings_tried
+            best.coefficient_p = min(1.0, coefficient_p_value(
+                coefficients[-1], standard[-1], self.y.size) * settings_tried)
             held_out = best.adjusted_p < self.alpha or \
                 (not self.forward and best is plausible_best and
                  best.coefficient_p < self.alpha)
