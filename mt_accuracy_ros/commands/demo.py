@@ -93,6 +93,10 @@ def paced(rate_factor: float) -> dict:
 REFERENCE_PERIOD_S = 0.37
 
 
+#: The monitor checks the model every this many reference readings (11.1 s of data).
+MONITOR_CHECK_EVERY = 30
+
+
 #: The lockstep participants and what each must have handled before the machine
 #: streams on (nodes/_lockstep.py): with them every node sees the same data in the same
 #: order and every decision falls at the same data time, whatever the host's speed.
@@ -113,6 +117,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                                       SystematicProfile, VolumetricCompensation)
 
     from ..nodes._common import COMPENSATION_QOS, LATCHED_QOS, RESULT_QOS, stamp_to_nanoseconds
+    from .check_timing import check_timeliness, timeliness_line
     from .model_tools import set_remote_parameter
     from .processes import start_node
 
@@ -163,7 +168,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
              # readings predict better (auto_refit): a drift named over the first 2 K
              # of warming is refitted over the whole warm-up.
              start_node("model_monitor", {"model": str(model), "window": 300,
-                                          "check_every": 30, "auto_refit": True,
+                                          "check_every": MONITOR_CHECK_EVERY, "auto_refit": True,
                                           "max_effects": 5 if five_axis else 3, **step},
                         quiet=True),
              start_node("temperature_publisher",
@@ -200,9 +205,13 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         if message.deterioration and not any(a[1] == message.axis for a in alarms):
             alarms.append((data_s(message.header.stamp), message.axis))
 
-    listener.create_subscription(ModelCheck, "model_check",
-                                 lambda m: checks.append((data_s(m.header.stamp), m)),
-                                 RESULT_QOS)
+    check_arrivals: list[float] = []   # data time each check came [s] (wall x rate)
+
+    def on_check(message: ModelCheck) -> None:
+        checks.append((data_s(message.header.stamp), message))
+        check_arrivals.append(now_s())
+
+    listener.create_subscription(ModelCheck, "model_check", on_check, RESULT_QOS)
     for axis in ("x", "y", "z"):
         listener.create_subscription(SystematicProfile, f"systematic/{axis}", on_profile,
                                      RESULT_QOS)
@@ -374,10 +383,13 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                        orientations=orientations if len(orientations) == len(references)
                        else None)
     print("  the run is over; writing the report", flush=True)
+    # In lockstep the machine waits for every check: only a paced run can be late.
+    timing = None if lockstep else check_timeliness(
+        [t for t, _ in checks], check_arrivals, MONITOR_CHECK_EVERY * REFERENCE_PERIOD_S)
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
                          references, losses, story, delivery, scenario,
                          [text for _, text in diagnostics_text], start_ns=start_ns,
-                         dead_nodes=dead_nodes)
+                         dead_nodes=dead_nodes, check_timing=timing)
     # The headline first: what the instrument measured on the compensated machine.
     for line in story["lines"]:
         print(line)
@@ -392,6 +404,8 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         print(f"  WARNING {line}")
     for text in summary["model_alarms"]:
         print(f"  ALARM {text}")
+    if "check_timing" in summary:
+        print("  " + timeliness_line(summary["check_timing"], rate_factor))
     print(f"  report: {out / 'report.html'}   bag: {bag}   final model: {out / 'model.yaml'}")
     failures = summary["failures"]
     for failure in failures:
@@ -658,7 +672,8 @@ def table_tilts(machine, effects: list[str]) -> list[str]:
 def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
                references, losses: list[str], story: dict, delivery: dict,
                scenario: str = "demo", model_alarms: list[str] | None = None,
-               start_ns: int = 0, dead_nodes: list[str] | None = None) -> dict:
+               start_ns: int = 0, dead_nodes: list[str] | None = None,
+               check_timing: dict | None = None) -> dict:
     from ..io.bag_reader import bag_info
     from ..nodes._scenario import resolve_scenario
 
@@ -745,6 +760,10 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
     # Everything the command prints as a warning or a failure is in the summary and the
     # report too (issue 39): the dead nodes, a late real-time path, every loss.
     summary["dead_nodes"] = list(dead_nodes or [])
+    if check_timing is not None:
+        summary["checks_late"] = check_timing["late"]
+        summary["check_latency_max_s"] = check_timing["latency_max_s"]
+        summary["check_timing"] = check_timing
     late = late_warning(summary)
     if late:
         losses.append(late)

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from .base import Context, EffectFamily, along
-from .spectral import frequency_grid, grid_periodogram, weight_sums
+from .spectral import direct_basis, frequency_grid, grid_periodogram, weight_sums
 
 #: ISO 230-1 component letters of a linear axis' errors, by kind.
 _KIND_COMPONENTS = {"positioning": "self", "straightness": "XYZ", "angular": "ABC"}
@@ -168,14 +168,20 @@ class ComponentError(EffectFamily):
         # the residual: a selection's later steps reuse them.
         key = ("periodogram_weights", variant, trains.shape, hash(trains.tobytes()),
                hash(mask.tobytes()), hash(frequencies.tobytes()))
+        # The exponentials of an axis' positions serve every variant on that axis.
+        basis_key = ("periodogram_basis", variant[2], hash(frequencies.tobytes()))
+        if basis_key not in ctx.cache:
+            ctx.cache[basis_key] = direct_basis(q, frequencies)
+        basis = ctx.cache[basis_key]
         if key not in ctx.cache:
             # Readings outside a training set get zero weight.
             weight = np.sum(np.where(mask, jac ** 2, 0.0), axis=1)
             ctx.cache[key] = weight_sums(q, np.where(trains, weight[None, :], 0.0).T,
-                                         frequencies)
+                                         frequencies, basis=basis)
         # The period is chosen by the fundamental alone: with its harmonic too, readings
         # taken on the fly (positions on a near-lattice) let aliases fit as well.
-        explained, _ = grid_periodogram(q, targets.T, None, frequencies, weights=ctx.cache[key])
+        explained, _ = grid_periodogram(q, targets.T, None, frequencies, weights=ctx.cache[key],
+                                        basis=basis)
         return [settings[int(i)] for i in np.argmax(explained, axis=0)]
 
     def explanation(self, variant: str, setting: dict) -> str:

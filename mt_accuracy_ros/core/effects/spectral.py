@@ -145,10 +145,25 @@ def _grid(frequencies) -> tuple[float, NDArray[np.intp], int]:
     return step, k, 2 * int(k[-1]) + 1
 
 
-def _sums_at(q, values, frequencies, harmonic: bool):
+def direct_basis(q, frequencies) -> NDArray[np.complex128] | None:
+    """exp(-2 pi i f q_n), shape (P, N), where :func:`grid_periodogram` takes the sums
+    directly (few readings); None where it spreads them onto a lattice. A selection
+    computes it once per axis and passes it to every later periodogram of that axis: the
+    exponentials, not the products, are most of a direct periodogram's cost."""
+    q = np.asarray(q, float)
+    frequencies = np.asarray(frequencies, float)
+    if q.size * frequencies.size > _DIRECT_MAX_PRODUCT:
+        return None
+    return np.exp(-2j * np.pi * frequencies[:, None] * q[None, :])
+
+
+def _sums_at(q, values, frequencies, harmonic: bool, basis=None):
     """Z_v(f) (P, M) - and Z_v(2f) when ``harmonic`` - for every column of ``values`` (N, M):
-    directly for few readings, else by :func:`grid_transform` (same lattice either way)."""
+    directly for few readings, else by :func:`grid_transform` (same lattice either way).
+    ``basis``: :func:`direct_basis` of these readings and frequencies, if already made."""
     step, k, count = _grid(frequencies)
+    if basis is not None:
+        return (basis @ values, (basis * basis) @ values) if harmonic else (basis @ values,)
     if q.size * k.size <= _DIRECT_MAX_PRODUCT:
         # Few readings: the sums directly (fewer operations than the lattice's FFT).
         return _exponential_sums(q, frequencies, values, harmonic)
@@ -156,16 +171,17 @@ def _sums_at(q, values, frequencies, harmonic: bool):
     return (spectra[k], spectra[2 * k]) if harmonic else (spectra[k],)
 
 
-def weight_sums(q, weight, frequencies) -> tuple[NDArray, NDArray, NDArray]:
+def weight_sums(q, weight, frequencies, *, basis=None) -> tuple[NDArray, NDArray, NDArray]:
     """What :func:`grid_periodogram` needs of the weights alone - sum w (M,), Z_w(f) and
-    Z_w(2f) (P, M) - to reuse while only the target changes (a selection's later steps)."""
+    Z_w(2f) (P, M) - to reuse while only the target changes (a selection's later steps).
+    ``basis``: :func:`direct_basis` of ``q`` and ``frequencies``, if already made."""
     q = np.asarray(q, float)
     weight2 = np.asarray(weight, float).reshape(q.size, -1)
-    zw1, zw2 = _sums_at(q, weight2, frequencies, harmonic=True)
+    zw1, zw2 = _sums_at(q, weight2, frequencies, harmonic=True, basis=basis)
     return weight2.sum(axis=0), zw1, zw2
 
 
-def grid_periodogram(q, target, weight, frequencies, *, weights=None):
+def grid_periodogram(q, target, weight, frequencies, *, weights=None, basis=None):
     """The weighted periodogram at ``frequencies`` = k * step (a :func:`frequency_grid`),
     for every column of ``target`` and ``weight`` at once.
 
@@ -178,6 +194,8 @@ def grid_periodogram(q, target, weight, frequencies, *, weights=None):
     weights : tuple, optional
         :func:`weight_sums` of ``weight`` at these readings and frequencies (then
         ``weight`` is not read again).
+    basis : ndarray, optional
+        :func:`direct_basis` of ``q`` and ``frequencies`` (the same numbers, sooner).
 
     Returns
     -------
@@ -187,8 +205,9 @@ def grid_periodogram(q, target, weight, frequencies, *, weights=None):
     single = target.ndim == 1
     q = np.asarray(q, float)
     target2 = target.reshape(target.shape[0], -1)
-    sum_w, zw1, zw2 = weights if weights is not None else weight_sums(q, weight, frequencies)
-    (zt1,) = _sums_at(q, target2, frequencies, harmonic=False)
+    sum_w, zw1, zw2 = weights if weights is not None else weight_sums(q, weight, frequencies,
+                                                                      basis=basis)
+    (zt1,) = _sums_at(q, target2, frequencies, harmonic=False, basis=basis)
     m = target2.shape[1]
     out_e = np.empty((frequencies.size, m))
     out_a = np.empty((frequencies.size, m))

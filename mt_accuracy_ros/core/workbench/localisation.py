@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..scales.knn import cross_validate_k_many
-from ..effects.spectral import frequency_grid, grid_periodogram
+from ..effects.spectral import direct_basis, frequency_grid, grid_periodogram
 from ..effects.variables import Variables
 
 COMPONENTS = "xyz"
@@ -333,6 +333,8 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
         if variance > 0:
             measured[component] = (rows, r, variance)
     shares = _variable_shares(candidates, measured, folds)
+    # The exponentials of an axis' positions serve each component read at the same rows.
+    bases: dict[tuple, NDArray | None] = {}
     for c, component in enumerate(COMPONENTS):
         if component not in measured:
             continue
@@ -344,8 +346,13 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
             span = float(np.ptp(q))
             if span <= 0:
                 continue
-            periods = 1.0 / frequency_grid(span)
-            explained, amplitude = grid_periodogram(q, r, np.ones(r.size), 1.0 / periods)
+            frequencies = frequency_grid(span)
+            periods = 1.0 / frequencies
+            key = (axis, np.asarray(rows).tobytes())
+            if key not in bases:
+                bases[key] = direct_basis(q, frequencies)
+            explained, amplitude = grid_periodogram(q, r, np.ones(r.size), frequencies,
+                                                    basis=bases[key])
             best = int(np.argmax(explained))
             # The best of hundreds of periods explains much in-sample even of a smooth drift
             # (regular readings of a periodic program alias time into position); held-out

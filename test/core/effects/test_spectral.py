@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mt_accuracy_ros.core.effects.spectral import (frequency_grid, grid_periodogram,
-                                                   periodogram)
+from mt_accuracy_ros.core.effects.spectral import (direct_basis, frequency_grid,
+                                                   grid_periodogram, periodogram, weight_sums)
 from mt_accuracy_ros.core.workbench.selection import solve_normal
 
 
@@ -37,6 +37,25 @@ def test_grid_periodogram_equals_the_exact_one(seed):
     assert np.max(np.abs(fast_amplitude - exact_amplitude)) < 1e-4 * exact_amplitude.max()
     assert np.argmax(fast) == np.argmax(exact)
     assert 1.0 / f[np.argmax(fast)] == pytest.approx(0.01, abs=1e-4)
+
+
+def test_a_shared_basis_gives_the_same_periodogram_and_the_exact_one():
+    # Few readings: the direct sums. A basis made once per axis and passed to every
+    # periodogram of it must change nothing - not a bit - and still be the exact one.
+    q, target, weight = _readings(3, n=150)
+    f = frequency_grid(0.39)
+    basis = direct_basis(q, f)
+    assert basis is not None and basis.shape == (f.size, q.size)
+    plain = grid_periodogram(q, target, weight, f)
+    shared = grid_periodogram(q, target, weight, f, basis=basis)
+    cached = grid_periodogram(q, target, None, f, basis=basis,
+                              weights=weight_sums(q, weight, f, basis=basis))
+    for a, b, c in zip(plain, shared, cached):
+        assert np.array_equal(a, b) and np.array_equal(a, c)
+    exact, _ = periodogram(q, target, weight, 1.0 / f)
+    assert np.max(np.abs(shared[0] - exact)) < 1e-9 * exact.max()
+    # Many readings: the lattice, no basis.
+    assert direct_basis(*_readings(3)[:1], f) is None
 
 
 def test_exact_periodogram_is_the_least_squares_fit():
