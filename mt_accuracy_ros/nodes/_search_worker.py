@@ -54,25 +54,33 @@ def _set_thread_scheduling(thread_id: int, idle: bool, niceness: int) -> bool:
 _WARNED = False
 
 
-def check(model, obs: Observations, min_reduction: float, max_effects: int):
+def check(model, obs: Observations, min_reduction: float, max_effects: int,
+          gate_refit: bool = False):
     """:func:`diagnose`, and - when the model holds fitted effects - their refit on the
     same readings (:func:`refit_effects`), carried as ``diagnosis.refit`` (None when
-    there is nothing to refit)."""
+    there is nothing to refit). With ``gate_refit`` (the node would make a recommended
+    refit live at once), the controller gate's verdict on it too (``refit.gate_problem``)."""
     diagnosis = diagnose(model, obs, min_reduction=min_reduction, max_effects=max_effects)
     if refittable_effects(model):
         try:
             diagnosis.refit = refit_effects(model, obs, min_reduction=min_reduction)
         except MtAccuracyError:
             diagnosis.refit = None
+        refit = diagnosis.refit
+        if gate_refit and refit is not None and refit.recommended:
+            from ..core.compensation.limits import gate_problem
+
+            refit.gate_problem = gate_problem(refit.apply(model, obs))
     return diagnosis
 
 
-def search(model, obs: Observations, min_reduction: float, max_effects: int):
+def search(model, obs: Observations, min_reduction: float, max_effects: int,
+           gate_refit: bool = False):
     """The monitor's check (:func:`check`) - in the worker process, idle class first."""
     import threading
 
     if _WORKER_SCHEDULING is None or _WORKER_SCHEDULING[0] <= 0:
-        return check(model, obs, min_reduction, max_effects)
+        return check(model, obs, min_reduction, max_effects, gate_refit)
     idle_s, niceness = _WORKER_SCHEDULING
     me = threading.get_native_id()
     _set_thread_scheduling(me, True, niceness)
@@ -80,19 +88,20 @@ def search(model, obs: Observations, min_reduction: float, max_effects: int):
     promote.daemon = True
     promote.start()
     try:
-        return check(model, obs, min_reduction, max_effects)
+        return check(model, obs, min_reduction, max_effects, gate_refit)
     finally:
         promote.cancel()
         _set_thread_scheduling(me, False, niceness)
 
 
-def search_serialized(inputs: bytes, min_reduction: float, max_effects: int):
+def search_serialized(inputs: bytes, min_reduction: float, max_effects: int,
+                      gate_refit: bool = False):
     """:func:`search` of pickled (model, observations): the monitor pickles them once, to
     know they can go to the worker, and the pool then only copies the bytes."""
     import pickle
 
     model, obs = pickle.loads(inputs)   # noqa: S301 - our own monitor's bytes
-    return search(model, obs, min_reduction, max_effects)
+    return search(model, obs, min_reduction, max_effects, gate_refit)
 
 
 def _search_worker(idle_s: float, niceness: int) -> None:

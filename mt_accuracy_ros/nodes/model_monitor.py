@@ -223,12 +223,14 @@ class ModelMonitor(Node):
                 self._since_check = int(self.get_parameter("check_every").value)
         return accept()
 
-    def _make_live(self, model, reason: str, *, rollback: bool = False) -> str | None:
+    def _make_live(self, model, reason: str, *, rollback: bool = False,
+                   gated: str | None = None) -> str | None:
         """The one gate every model version passes: refused (the live one stays, an ERROR on
         /diagnostics) when its corrections exceed the controller's limits; otherwise
-        published, and - unless it is a roll-back - judged at the machine next."""
+        published, and - unless it is a roll-back - judged at the machine next.
+        ``gated``: the gate's verdict on this very model, evaluated by the search worker."""
         live = self.inputs.model
-        problem = "" if rollback else gate_problem(model)
+        problem = "" if rollback else (gated if gated is not None else gate_problem(model))
         if problem:
             text = (f"model version refused before going live ({reason}): {problem}; "
                     f"version {live.version} stays")
@@ -336,7 +338,12 @@ class ModelMonitor(Node):
                             for c in moved)
         reason = (f"refitted {', '.join(refit.names)} on {refit.readings} readings ({who})"
                   + (f": {changes}" if changes else ""))
-        problem = self._make_live(refit.apply(model, obs), reason)
+        # The worker's verdict holds for the model it refitted: the live version. (Profiles
+        # the estimator renewed since move its corrections by their own change; the
+        # broadcaster gates every version again with the profiles it holds.)
+        gated = refit.gate_problem if refit.gate_problem is not None and \
+            self._last_check is not None and self._last_check[0] == model.version else None
+        problem = self._make_live(refit.apply(model, obs), reason, gated=gated)
         if problem:
             return problem
         self.get_logger().info(f"{reason}; {refit.sentence()}")
@@ -683,12 +690,15 @@ class ModelMonitor(Node):
                          "remains")
         self._direction_check.publish(check)
 
-    def _search_settings(self) -> tuple[float, int]:
+    def _search_settings(self) -> tuple[float, int, bool]:
+        # Gate a recommended refit in the worker when this node would make it live as soon
+        # as the check is back: the version live now has been judged, auto_refit is on.
+        gate_refit = bool(self.get_parameter("auto_refit").value) and self._judging is None
         return (float(self.get_parameter("min_reduction").value),
-                int(self.get_parameter("max_effects").value))
+                int(self.get_parameter("max_effects").value), gate_refit)
 
     def _diagnose(self, model, obs):
-        return search(model, obs, *self._search_settings())
+        return search(model, obs, *self._search_settings()[:2])
 
     def _report_progress(self, last_check_ns: int | None = None) -> None:
         """Lockstep: every reading before the check under way is handled (all received,

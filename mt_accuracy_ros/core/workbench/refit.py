@@ -111,6 +111,11 @@ class Refit:
     min_reduction: float = 0.05
     alpha: float = REFIT_ALPHA
     moved_sigma: float = MOVED_SIGMA
+    #: The controller gate's verdict on :meth:`apply` of the model it was fitted to
+    #: ("" passes, else the reason; None: not evaluated). The search worker evaluates it
+    #: beside the refit, so that the node making it live need not (seconds of CPU on a
+    #: five-axis machine, which would hold its executor and delay the next check).
+    gate_problem: str | None = None
 
     @property
     def reduction(self) -> float:

@@ -172,3 +172,20 @@ def test_from_the_datum_a_drift_is_pinned_by_how_far_the_machine_moved():
     # The model's datum error at the reference temperature is zero for a pure drift, so
     # the referred design is the plain one: the two fits' in-sample slopes agree closely.
     assert a.parameters["by"] == pytest.approx(BETA[1], abs=3 * a.parameter_uncertainties["by"])
+
+
+def test_the_search_worker_gates_a_recommended_refit_as_the_node_would():
+    # The monitor's worker evaluates the controller gate on the refit it recommends, so
+    # the node need not: its verdict must be the gate's own on the model made live.
+    from mt_accuracy_ros.core.compensation.limits import gate_problem
+    from mt_accuracy_ros.nodes._search_worker import check
+
+    obs = _survey(2)
+    model = _early_model(obs)
+    model.effects["structural_thermal_drift:column"]["coefficients"]["bx"] += 0.5e-6
+    diagnosis = check(model, obs, 0.05, 3, gate_refit=True)
+    refit = diagnosis.refit
+    assert refit is not None and refit.recommended
+    assert refit.gate_problem == gate_problem(refit.apply(model, obs)) == ""
+    # Not asked (the node would not make it live at once): not evaluated.
+    assert check(model, obs, 0.05, 3).refit.gate_problem is None
