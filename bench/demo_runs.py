@@ -73,6 +73,8 @@ def run_once(out: Path, rate: float | None, machine: str, lockstep: bool = False
             "lost": summary.get("compensation_lost"),
             "p99_ms": summary.get("compensation_latency_p99_ms"),
             "rolled_back": sum("rolled back" in a for a in summary.get("model_alarms", [])),
+            # Each check's latency [s of data] against the next one's due time (paced runs).
+            "checks": summary.get("check_timing"),
             "failed": [line.strip()[len("FAILED: "):] for line in done.stdout.splitlines()
                        if line.strip().startswith("FAILED: ")]}
 
@@ -98,6 +100,10 @@ def main(argv: list[str] | None = None) -> int:
                       + "/".join(f"{v:.2f}" for v in result["end_um"])
                       + " um (mean " + "/".join(f"{v:+.2f}" for v in result["end_mean_um"])
                       + f"), refits: {result['refits']}, stale {result['stale']}{result['stale_window']}, lost {result['lost']}, "
+                      + (f"checks late {result['checks']['late']} of {result['checks']['checks']} "
+                         f"(max {result['checks']['latency_max_s']:.1f} s), "
+                         if result["checks"] else "")
+                      + 
                       f"{result['wall_s']:.0f} s",
                       file=sys.stderr, flush=True)
     finally:
@@ -111,14 +117,21 @@ def main(argv: list[str] | None = None) -> int:
           + f", {args.burners} CPU burners)\n")
     print("| run | exit | effects the user added | end state e_x / e_y / e_z [um] | its mean "
           "(off the instrument's zero) [um] | refits (the monitor's) | within "
-          "band | roll-backs | corrections applied / stale / lost | p99 [ms] | wall [s] | why not 0 |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+          "band | roll-backs | corrections applied / stale / lost | p99 [ms] | checks late / "
+          "made, each one's latency [s of data] | wall [s] | why not 0 |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for k, r in enumerate(rows, 1):
         print(f"| {k} | {r['code']} | {r['added']} | "
               + " / ".join(f"{v:.2f}" for v in r["end_um"]) + " | "
               + " / ".join(f"{v:+.2f}" for v in r["end_mean_um"])
               + f" | {r['refits']} | {'yes' if r['within'] else 'no'} | {r['rolled_back']} | {r['applied']} / "
-              f"{r['stale']}{r['stale_window']} / {r['lost']} | {r['p99_ms']:.0f} | {r['wall_s']:.0f} | "
+              f"{r['stale']}{r['stale_window']} / {r['lost']} | {r['p99_ms']:.0f} | "
+              + (f"{r['checks']['late']} / {r['checks']['checks']}: "
+                 + ", ".join(f"{v:.1f}" for v in r["checks"]["latency_s"])
+                 + f" (due after {r['checks']['period_s']:.1f}); search CPU [s] "
+                 + ", ".join(f"{v:.2f}" for v in r["checks"].get("search_cpu_s", []))
+                 if r["checks"] else "-")
+              + f" | {r['wall_s']:.0f} | "
               f"{'; '.join(r['failed']) or '-'} |")
     return 0
 

@@ -24,6 +24,10 @@ def test_every_check_on_time_and_none_at_all():
     timing = check_timeliness([10.0, 21.1], [12.0, 24.1], period_s=11.1)
     assert timing["late"] == 0
     assert timeliness_line(timing, 3.0).endswith("every check on time")
+    timing.update(search_wall_s=[0.5, 0.7], search_cpu_s=[0.25, 0.35])
+    assert timeliness_line(timing, 3.0).endswith(
+        "every check on time; each search took 0.30 s of CPU (median; at most 0.35 s) in "
+        "0.60 s wall")
     empty = check_timeliness([], [], period_s=11.1)
     assert empty["checks"] == 0 and math.isnan(empty["latency_max_s"])
     assert timeliness_line(empty, 3.0) == "model checks: none published"

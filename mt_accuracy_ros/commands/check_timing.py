@@ -52,6 +52,11 @@ def timeliness_line(timing: dict, rate_factor: float) -> str:
             f"{timing['latency_max_s']:.1f} s of data after its last reading "
             f"({timing['latency_max_s'] / rate_factor:.1f} s wall at {rate_factor:g}x); the "
             f"next is due {timing['period_s']:.1f} s after: ")
+    cpu = timing.get("search_cpu_s") or []
+    tail = (f"; each search took {np.median(cpu):.2f} s of CPU (median; at most "
+            f"{max(cpu):.2f} s) in {np.median(timing['search_wall_s']):.2f} s wall"
+            if cpu else "")
     if timing["late"]:
-        return head + f"{timing['late']} of {timing['checks']} LATE (the next was postponed)"
-    return head + "every check on time"
+        return head + f"{timing['late']} of {timing['checks']} LATE (the next was " \
+            f"postponed){tail}"
+    return head + "every check on time" + tail

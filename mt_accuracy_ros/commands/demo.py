@@ -244,8 +244,13 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                                  LATCHED_QOS)
     diagnostics_text: list[tuple[float, str]] = []
 
+    searches: list[tuple[float, float]] = []   # each check's search: (wall, CPU) [s]
+
     def on_model_status(message: DiagnosticArray) -> None:
         for status in message.status:
+            values = {v.key: v.value for v in status.values}
+            if status.name.endswith(": model") and "search_cpu_s" in values:
+                searches.append((float(values["search_wall_s"]), float(values["search_cpu_s"])))
             # The model's alarms, and an input that stopped (its node died): ERRORs.
             if status.name.endswith((": model", ": inputs")) and \
                     status.level == DiagnosticStatus.ERROR:
@@ -386,6 +391,9 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     # In lockstep the machine waits for every check: only a paced run can be late.
     timing = None if lockstep else check_timeliness(
         [t for t, _ in checks], check_arrivals, MONITOR_CHECK_EVERY * REFERENCE_PERIOD_S)
+    if timing is not None:
+        timing["search_wall_s"] = [round(w, 3) for w, _ in searches]
+        timing["search_cpu_s"] = [round(c, 3) for _, c in searches]
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
                          references, losses, story, delivery, scenario,
                          [text for _, text in diagnostics_text], start_ns=start_ns,
