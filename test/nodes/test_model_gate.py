@@ -169,24 +169,31 @@ def record():
     policy = os.sched_getscheduler(0)
     nice = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
     seen.append(("idle" if policy == os.SCHED_IDLE else "normal", nice))
+class Searched:   # what the stub search returns (the worker notes its cost on it)
+    def __str__(self):
+        return "searched"
 def slow_diagnosis(model, obs, **settings):
     record(); time.sleep(0.8); record()
-    return "searched"
+    return Searched()
 monitor.diagnose = slow_diagnosis
 monitor.refittable_effects = lambda model: []   # the stub model holds nothing to refit
 base = os.nice(0)
 monitor._search_worker({idle_s}, 10)
-print(monitor.search(None, None, 0.05, 3))
+result = monitor.search(None, None, 0.05, 3)
+print(result)
 record()
 print(seen)
 print(min(19, base + 10))
 import sys
 print("rclpy" in sys.modules)
+# The check's cost noted for /diagnostics: 0.8 s of wall, nearly no CPU (it slept).
+print(result.search_wall_s >= 0.79 and result.search_cpu_s < 0.5)
 """
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                          timeout=60, check=True).stdout.splitlines()
     assert out[0] == "searched"
     seen = eval(out[1])  # noqa: S307 - our own probe's list of tuples
     assert out[3] == "False"   # the worker never imports rclpy
+    assert out[4] == "True"
     assert [c for c, _ in seen] == classes
     assert all(nice == int(out[2]) for _, nice in seen)   # 10 above the caller's niceness
