@@ -242,6 +242,37 @@ class MappedSurvey:
         return text
 
 
+def _parse_row(path: Path, row: list[str], number: int, header: list[str],
+               index: dict[str, int], values: dict[str, list], bad_in_column: dict[str, int],
+               first_bad: dict) -> str:
+    """Append row ``number``'s mapped cells to ``values`` (SI scaling comes later); the
+    reason it is dropped instead ("" when kept: then every role got its value)."""
+    if len(row) != len(header):
+        raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
+                             f"{len(header)}")
+    parsed, problem = {}, ""
+    for role, j in index.items():
+        cell = row[j].strip()
+        if role == "run":
+            if not cell:
+                problem = problem or f"row {number} column {header[j]}: empty run"
+            parsed[role] = cell
+            continue
+        try:
+            value = float(cell)
+        except ValueError:
+            value = math.nan
+        if not math.isfinite(value):
+            bad_in_column[role] += 1
+            first_bad.setdefault(role, (number, cell))
+            problem = problem or f"row {number} column {header[j]}: {cell[:20]!r}"
+        parsed[role] = value
+    if not problem:
+        for role, value in parsed.items():
+            values[role].append(value)
+    return problem
+
+
 def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 20
                     ) -> MappedSurvey:
     """The mapped columns of ``path`` in SI units, rows with a bad mapped cell dropped."""
@@ -258,56 +289,44 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
             raise ParameterError(f"{role}: name the axis with its letter (X Y Z A B C)")
     scales = {role: _scale(column_map, role, unit, column) for role, (column, unit) in
               column_map.roles.items() if role != "run"}
-    try:
-        with open(path, newline="", encoding="utf-8") as stream:
-            rows = [r for r in csv.reader(stream) if any(c.strip() for c in r)]
-    except OSError as exc:
-        raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise InputDataError(f"{path}: not a text CSV file ({exc})") from exc
-    if not rows:
-        raise InputDataError(f"{path}: empty file")
-    header = [h.strip() for h in rows[0]]
-    index = {}
-    for role, (column, _) in column_map.roles.items():
-        if column not in header:
-            raise InputDataError(f"{path}: no column {column!r} (for {role}); columns: "
-                                 f"{', '.join(header)}")
-        index[role] = header.index(column)
     values = {role: [] for role in column_map.roles}
     bad_in_column = {role: 0 for role in column_map.roles}
     first_bad = {}
     dropped, reasons, kept_rows = 0, [], []
-    for number, row in enumerate(rows[1:], start=2):
-        if len(row) != len(header):
-            raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
-                                 f"{len(header)}")
-        parsed, problem = {}, ""
-        for role, j in index.items():
-            cell = row[j].strip()
-            if role == "run":
-                if not cell:
-                    problem = problem or f"row {number} column {header[j]}: empty run"
-                parsed[role] = cell
-                continue
-            try:
-                value = float(cell)
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                bad_in_column[role] += 1
-                first_bad.setdefault(role, (number, cell))
-                problem = problem or f"row {number} column {header[j]}: {cell[:20]!r}"
-            parsed[role] = value
-        if problem:
-            dropped += 1
-            if len(reasons) < 5:
-                reasons.append(problem)
-            continue
-        for role, value in parsed.items():
-            values[role].append(value)
-        kept_rows.append(number - 1)
-    total = len(rows) - 1
+    # Row by row, never the whole file as strings: a survey of 100,000 rows held as lists
+    # of cells took ~100 MB before the first number was parsed. Blank lines are skipped
+    # and not counted: "row N" is the N-th non-blank row, the header being row 1.
+    header, index, number = None, {}, 0
+    try:
+        with open(path, newline="", encoding="utf-8") as stream:
+            for row in csv.reader(stream):
+                if not any(c.strip() for c in row):
+                    continue
+                number += 1
+                if header is None:
+                    header = [h.strip() for h in row]
+                    for role, (column, _) in column_map.roles.items():
+                        if column not in header:
+                            raise InputDataError(
+                                f"{path}: no column {column!r} (for {role}); columns: "
+                                f"{', '.join(header)}")
+                        index[role] = header.index(column)
+                    continue
+                problem = _parse_row(path, row, number, header, index, values, bad_in_column,
+                                     first_bad)
+                if problem:
+                    dropped += 1
+                    if len(reasons) < 5:
+                        reasons.append(problem)
+                    continue
+                kept_rows.append(number - 1)
+    except OSError as exc:
+        raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputDataError(f"{path}: not a text CSV file ({exc})") from exc
+    if header is None:
+        raise InputDataError(f"{path}: empty file")
+    total = number - 1
     for role, bad in bad_in_column.items():
         if total and bad > total / 2:
             number, cell = first_bad[role]
