@@ -35,6 +35,7 @@ dropped and counted (:class:`~.csv_table.CsvTable` style).
 from __future__ import annotations
 
 import csv
+import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -242,6 +243,42 @@ class MappedSurvey:
         return text
 
 
+#: Rows parsed at once: a chunk whose every mapped cell is a finite number is converted
+#: column by column; one with a bad row is parsed row by row (the same values, and each
+#: bad row named).
+CSV_CHUNK_ROWS = 4096
+
+
+def _parse_clean_chunk(chunk: list[list[str]], header: list[str], index: dict[str, int],
+                       values: dict[str, list]) -> bool:
+    """Append ``chunk``'s mapped cells to ``values`` column by column and return True -
+    or append nothing and return False when a row has the wrong number of fields, a
+    numeric cell is not a finite number or a run cell is empty (then
+    :func:`_parse_row` takes each row)."""
+    width = len(header)
+    if any(len(r) != width for r in chunk):
+        return False
+    parsed = {}
+    for role, j in index.items():
+        cells = [r[j] for r in chunk]
+        if role == "run":
+            cells = [c.strip() for c in cells]
+            if not all(cells):
+                return False
+            parsed[role] = cells
+            continue
+        try:
+            column = np.array(cells, dtype=np.float64)
+        except ValueError:
+            return False
+        if not np.all(np.isfinite(column)):
+            return False
+        parsed[role] = column.tolist()
+    for role, column in parsed.items():
+        values[role].extend(column)
+    return True
+
+
 def _parse_row(path: Path, row: list[str], number: int, header: list[str],
                index: dict[str, int], values: dict[str, list], bad_in_column: dict[str, int],
                first_bad: dict) -> str:
@@ -293,33 +330,44 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     bad_in_column = {role: 0 for role in column_map.roles}
     first_bad = {}
     dropped, reasons, kept_rows = 0, [], []
-    # Row by row, never the whole file as strings: a survey of 100,000 rows held as lists
+    # In chunks, never the whole file as strings: a survey of 100,000 rows held as lists
     # of cells took ~100 MB before the first number was parsed. Blank lines are skipped
     # and not counted: "row N" is the N-th non-blank row, the header being row 1.
     header, index, number = None, {}, 0
     try:
         with open(path, newline="", encoding="utf-8") as stream:
-            for row in csv.reader(stream):
-                if not any(c.strip() for c in row):
-                    continue
-                number += 1
-                if header is None:
+            reader = csv.reader(stream)
+            for row in reader:
+                if "".join(row).strip():
                     header = [h.strip() for h in row]
-                    for role, (column, _) in column_map.roles.items():
-                        if column not in header:
-                            raise InputDataError(
-                                f"{path}: no column {column!r} (for {role}); columns: "
-                                f"{', '.join(header)}")
-                        index[role] = header.index(column)
+                    number = 1
+                    break
+            if header is not None:
+                for role, (column, _) in column_map.roles.items():
+                    if column not in header:
+                        raise InputDataError(f"{path}: no column {column!r} (for {role}); "
+                                             f"columns: {', '.join(header)}")
+                    index[role] = header.index(column)
+            while header is not None:
+                chunk = [r for r in itertools.islice(reader, CSV_CHUNK_ROWS)
+                         if "".join(r).strip()]
+                if not chunk:
+                    break
+                first = number + 1
+                number += len(chunk)
+                if _parse_clean_chunk(chunk, header, index, values):
+                    kept_rows.extend(range(first - 1, number - 1))
                     continue
-                problem = _parse_row(path, row, number, header, index, values, bad_in_column,
-                                     first_bad)
-                if problem:
-                    dropped += 1
-                    if len(reasons) < 5:
-                        reasons.append(problem)
-                    continue
-                kept_rows.append(number - 1)
+                # A chunk with a bad row: row by row, each row's reason kept.
+                for offset, row in enumerate(chunk):
+                    problem = _parse_row(path, row, first + offset, header, index, values,
+                                         bad_in_column, first_bad)
+                    if problem:
+                        dropped += 1
+                        if len(reasons) < 5:
+                            reasons.append(problem)
+                        continue
+                    kept_rows.append(first + offset - 1)
     except OSError as exc:
         raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
     except (UnicodeDecodeError, csv.Error) as exc:

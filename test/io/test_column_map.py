@@ -216,3 +216,41 @@ def test_a_survey_of_many_runs_restarts_its_clock_and_lags_each_run(tmp_path):
                                       + "\n")
     one = check_mapped_csv(tmp_path / "one.csv", column_map_from_dict(base), None, [], 1, 0.05)
     assert result["final_rmse"] < 0.5 * one["final_rmse"]
+
+
+def test_chunks_read_as_row_by_row_across_boundaries_blank_lines_and_bad_rows(
+        tmp_path, monkeypatch):
+    # Clean chunks are converted column by column; the result must equal reading every
+    # row alone (the path a chunk with a bad row takes), bit for bit, messages included.
+    from mt_accuracy_ros.io import column_map as module
+
+    rng = np.random.default_rng(7)
+    rows = [f"{k / 7:.9g},{rng.normal(0, 100):.12g},{rng.uniform(-90, 90)!r},"
+            f"{rng.normal(0, 3):.6e},{68 + rng.normal():.4f},{293.15 + rng.normal():.5f},"
+            f"{600},{3000},ok" for k in range(2500)]
+    rows[1234] = rows[1234].replace(",600,", ",nan,")           # a bad row in chunk 2
+    rows[2001] = rows[2001].replace(",3000,", ",,")               # an empty cell
+    rows.insert(1500, "")                                          # blank lines: not rows
+    rows.insert(1700, ",,,,,,,,")
+    path = _write(tmp_path / "long.csv", rows)
+    monkeypatch.setattr(module, "CSV_CHUNK_ROWS", 1000)
+    chunked = read_mapped_csv(path, column_map_from_dict(MAP))
+    monkeypatch.setattr(module, "_parse_clean_chunk", lambda *args: False)
+    alone = read_mapped_csv(path, column_map_from_dict(MAP))
+    assert chunked.rows_read == alone.rows_read == 2500
+    assert chunked.rows_dropped == alone.rows_dropped == 2
+    assert chunked.drop_reasons == alone.drop_reasons
+    assert "row 1236 column f" in alone.drop_reasons[0]
+    for name in ("time_s", "positions", "errors", "temperatures", "velocities",
+                 "spindle_speed_rad_s"):
+        a, b = getattr(chunked, name), getattr(alone, name)
+        if isinstance(a, dict):
+            assert a.keys() == b.keys()
+            assert all(np.array_equal(a[k], b[k]) for k in a)
+        else:
+            assert np.array_equal(a, b)
+    # A row with the wrong number of fields is refused by its number on either path.
+    rows = _rows(30)
+    rows[20] += ",extra"
+    with pytest.raises(InputDataError, match="row 22 has 10 fields"):
+        read_mapped_csv(_write(tmp_path / "c.csv", rows), column_map_from_dict(MAP))

@@ -281,11 +281,13 @@ class _BaseStatistics:
 
 #: Designs kept for reuse (every candidate's columns at every setting would hold GBs for
 #: 1e5 readings); the least recently used beyond this are computed again when needed.
-#: (96 MB holds every design at 1e4 readings; at 1e5 the peak is still above 500 MB:
-#: docs/benchmarks.md says what else holds it.)
-DESIGN_CACHE_BYTES = 96 * 2 ** 20
+#: Measured (docs/benchmarks.md, A/B on one core): 96 MB and 48 MB for the sensitivities
+#: were no faster than 32 and 16 MB at 1e4 or 1e5 readings - a design is cheap to make
+#: again beside the page faults and heap growth of holding it - and held 150-180 MB more
+#: at 1e5 (635-641 MB peak against 456-481 MB).
+DESIGN_CACHE_BYTES = 32 * 2 ** 20
 #: The separable terms' sensitivities, bounded alike.
-SENSITIVITY_CACHE_BYTES = 48 * 2 ** 20
+SENSITIVITY_CACHE_BYTES = 16 * 2 ** 20
 
 
 class _DesignCache:
