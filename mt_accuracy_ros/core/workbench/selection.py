@@ -411,6 +411,7 @@ class Selector:
         self.alpha, self.min_reduction, self.min_share = alpha, min_reduction, min_share
         self.tie = tie
         self._designs = _DesignCache(DESIGN_CACHE_BYTES)
+        self._components: dict[str, NDArray[np.bool_]] = {}
         self._serial = 0
         #: How many of a step's best candidates keep their per-reading errors.
         self.keep_errors = 3
@@ -550,8 +551,9 @@ class Selector:
         so its error there is the base model's: pooling those components into its test
         dilutes an effect that lives in one component (issue 28) - it is judged on the
         components it moves."""
-        key = ("components", term.name)
-        known = self._designs.get(key)
+        # Three booleans per term: kept apart from the designs' cache, whose evictions
+        # would otherwise make a design again only to know where it acts.
+        known = self._components.get(term.name)
         if known is None:
             setting = term.settings[-1]
             if self.basis_rows(term, setting) is not None:
@@ -560,12 +562,12 @@ class Selector:
                 size = np.max(np.abs(self.design_rows(term, setting)), axis=1)
             # Rounding (a lever's cross product) is not a component the effect moves.
             size = size / max(float(np.max(size, initial=0.0)), 1e-300)
-            moved = np.array([float(np.max(size[self.component_of_row == c], initial=0.0))
-                              for c in range(self.width)]) > 1e-9
-            known = moved & self.mask.any(axis=0)
+            largest = np.zeros(self.width)
+            np.maximum.at(largest, self.component_of_row, size)
+            known = (largest > 1e-9) & self.mask.any(axis=0)
             if not known.any():
                 known = self.mask.any(axis=0)
-            self._designs.put(key, known)
+            self._components[term.name] = known
         return known
 
     def _block_products(self, left: NDArray[np.float64], right: NDArray[np.float64]
