@@ -103,8 +103,7 @@ def main(argv: list[str] | None = None) -> int:
                       + (f"checks late {result['checks']['late']} of {result['checks']['checks']} "
                          f"(max {result['checks']['latency_max_s']:.1f} s), "
                          if result["checks"] else "")
-                      + 
-                      f"{result['wall_s']:.0f} s",
+                      + f"{result['wall_s']:.0f} s",
                       file=sys.stderr, flush=True)
     finally:
         for process in burners:

@@ -64,17 +64,6 @@ def check(model, obs: Observations, min_reduction: float, max_effects: int,
 
     started_wall, started_cpu = time.perf_counter(), time.process_time()
     diagnosis = diagnose(model, obs, min_reduction=min_reduction, max_effects=max_effects)
-    _check_rest(diagnosis, model, obs, min_reduction, gate_refit)
-    # What the check cost, for /diagnostics: wall [s] and this process' CPU [s] (their
-    # gap is the time other processes held the cores).
-    diagnosis.search_wall_s = time.perf_counter() - started_wall
-    diagnosis.search_cpu_s = time.process_time() - started_cpu
-    return diagnosis
-
-
-def _check_rest(diagnosis, model, obs: Observations, min_reduction: float,
-                gate_refit: bool) -> None:
-    """The refit of a check (:func:`check`), and its gate when asked."""
     if refittable_effects(model):
         try:
             diagnosis.refit = refit_effects(model, obs, min_reduction=min_reduction)
@@ -85,6 +74,11 @@ def _check_rest(diagnosis, model, obs: Observations, min_reduction: float,
             from ..core.compensation.limits import gate_problem
 
             refit.gate_problem = gate_problem(refit.apply(model, obs))
+    # What the check cost, for /diagnostics: wall [s] and this process' CPU [s] (their
+    # gap is the time other processes held the cores).
+    diagnosis.search_wall_s = time.perf_counter() - started_wall
+    diagnosis.search_cpu_s = time.process_time() - started_cpu
+    return diagnosis
 
 
 def search(model, obs: Observations, min_reduction: float, max_effects: int,

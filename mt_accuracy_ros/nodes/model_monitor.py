@@ -632,8 +632,8 @@ class ModelMonitor(Node):
             KeyValue(key="missing_effect", value=found.effect if found else ""),
             KeyValue(key="refit", value=refit.sentence() if refit is not None else ""),
             # The check's cost: wall and CPU seconds of the search (the worker's).
-            KeyValue(key="search_wall_s", value=f"{getattr(diagnosis, 'search_wall_s', float('nan')):.3f}"),
-            KeyValue(key="search_cpu_s", value=f"{getattr(diagnosis, 'search_cpu_s', float('nan')):.3f}"),
+            KeyValue(key="search_wall_s", value=f"{diagnosis.search_wall_s:.3f}"),
+            KeyValue(key="search_cpu_s", value=f"{diagnosis.search_cpu_s:.3f}"),
             KeyValue(key="readings", value=str(obs.n))])
         if found is not None and self.get_parameter("auto_add").value and \
                 found.name not in self.rolled_back:

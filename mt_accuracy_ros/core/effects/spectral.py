@@ -161,12 +161,12 @@ def _sums_at(q, values, frequencies, harmonic: bool, basis=None):
     """Z_v(f) (P, M) - and Z_v(2f) when ``harmonic`` - for every column of ``values`` (N, M):
     directly for few readings, else by :func:`grid_transform` (same lattice either way).
     ``basis``: :func:`direct_basis` of these readings and frequencies, if already made."""
-    step, k, count = _grid(frequencies)
+    if basis is None:
+        # Few readings: the sums directly (fewer operations than the lattice's FFT).
+        basis = direct_basis(q, frequencies)
     if basis is not None:
         return (basis @ values, (basis * basis) @ values) if harmonic else (basis @ values,)
-    if q.size * k.size <= _DIRECT_MAX_PRODUCT:
-        # Few readings: the sums directly (fewer operations than the lattice's FFT).
-        return _exponential_sums(q, frequencies, values, harmonic)
+    step, k, count = _grid(frequencies)
     spectra = grid_transform(q, values, step, count)
     return (spectra[k], spectra[2 * k]) if harmonic else (spectra[k],)
 

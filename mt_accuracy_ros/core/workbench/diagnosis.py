@@ -290,6 +290,9 @@ class Diagnosis:
     #: The model's fitted effects refitted on the same readings (a
     #: :class:`~.refit.Refit`, set by the monitor's check; None if not made).
     refit: object | None = None
+    #: What the monitor's check cost, set by its search worker: wall and CPU [s].
+    search_wall_s: float = float("nan")
+    search_cpu_s: float = float("nan")
     #: Effects the selection named and took out again once a later one explained them:
     #: [{"name", "by", "sentence"}] in the order dropped (issue 41).
     dropped: list[dict] = field(default_factory=list)
