@@ -49,7 +49,54 @@ def run_case(name: str, path: Path, target: str, inputs: str, run: str | None,
             "chosen": result["model_chosen"], "notes": result["notes"],
             "beats_constant": b["model"] < b["constant"],
             "beats_least_squares": b["model"] < b["least squares on every input"],
-            "per_run": result["runs"], "seconds": time.perf_counter() - start}
+            "per_run": result["runs"], "contest": result["model_contest"],
+            "seconds": time.perf_counter() - start}
+
+
+#: Ways to rank the whole models from their forward blocks, all on training rows only. The
+#: package uses the first; the others are what a reader would try next (a block fitted on
+#: little data says little about the model fitted on every training run).
+RULES = {
+    "pooled (the package's)": lambda blocks: sum(b["rmse"] ** 2 * b["judged_rows"]
+                                                 for b in blocks) /
+    sum(b["judged_rows"] for b in blocks),
+    "weighted by rows fitted": lambda blocks: sum(b["rmse"] ** 2 * b["judged_rows"] *
+                                                  b["trained_rows"] for b in blocks) /
+    sum(b["judged_rows"] * b["trained_rows"] for b in blocks),
+    "last block only": lambda blocks: blocks[-1]["rmse"] ** 2,
+}
+
+
+def rule_outcomes(cases: list[dict]) -> dict:
+    """For each rule of :data:`RULES`, the whole model it would choose in each case and that
+    model's held-out RMSE [um] (the package computes every contestant's held-out figure
+    after its decision, so no refit is needed here)."""
+    out = {}
+    for rule, score in RULES.items():
+        picks = []
+        for case in cases:
+            best = min(case["contest"], key=lambda e: (score(e["forward_blocks"]),
+                                                       e["name"] != "step by step"))
+            picks.append({"case": case["case"], "zeroed": case["zeroed"],
+                          "chosen": best["name"], "held_out_um": best["held_out_rmse"] * 1e6})
+        out[rule] = picks
+    # Not a rule: the contestant the held-out rows favour, what no rule on training rows
+    # alone can beat with these candidates.
+    out["in hindsight (the held-out rows' favourite)"] = [
+        {"case": case["case"], "zeroed": case["zeroed"],
+         "chosen": (best := min(case["contest"], key=lambda e: e["held_out_rmse"]))["name"],
+         "held_out_um": best["held_out_rmse"] * 1e6} for case in cases]
+    return out
+
+
+def tally(values: list[float], cases: list[dict]) -> str:
+    """better / equal / worse than least squares on every input, and beats a constant."""
+    ls = [c["least_squares_um"] for c in cases]
+    equal = sum(abs(v - b) <= 1e-3 * b for v, b in zip(values, ls))
+    better = sum(v < b * (1 - 1e-3) for v, b in zip(values, ls))
+    constant = sum(v < c["constant_um"] for v, c in zip(values, cases))
+    return (f"better {better}, equal {equal}, worse {len(cases) - better - equal} than least "
+            f"squares; beats a constant {constant} of {len(cases)}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -97,9 +144,31 @@ def main(argv: list[str] | None = None) -> int:
         print(f"\n{label}: beats a constant {beat_c} of {len(chosen)}; against least squares "
               f"on every input: better {beat_ls}, equal {tie}, worse "
               f"{len(chosen) - beat_ls - tie}")
+    rules = rule_outcomes(cases)
+    print("\nThe contest decided by other rules (training rows only; held-out RMSE [um] of the "
+          "model each rule would choose):\n")
+    print("| log | zeroed | least squares | " + " | ".join(rules) + " |")
+    print("|---|---|---|" + "---|" * len(rules))
+    for k, c in enumerate(cases):
+        print(f"| {c['case']} | {'yes' if c['zeroed'] else 'no'} | {c['least_squares_um']:.2f} | "
+              + " | ".join(f"{picks[k]['held_out_um']:.2f} ({_short(picks[k]['chosen'])})"
+                           for picks in rules.values()) + " |")
+    for label, prefix in (("FL_THERMAL", "FL"), ("independent", "indep")):
+        chosen = [k for k, c in enumerate(cases) if c["case"].startswith(prefix)]
+        for rule, picks in rules.items():
+            print(f"\n{label}, {rule}: " + tally([picks[k]["held_out_um"] for k in chosen],
+                                                [cases[k] for k in chosen]))
     if args.out:
-        Path(args.out).write_text(json.dumps(cases, indent=1, default=float))
+        Path(args.out).write_text(json.dumps({"cases": cases, "rules": rules}, indent=1,
+                                             default=float))
     return 0
+
+
+def _short(name: str) -> str:
+    """A contestant's name for a table cell: its family and how many sensors it uses."""
+    family, _, variant = name.partition(":")
+    sensors = variant.count("+") + 1 if "+" in variant else 0
+    return f"{family}, {sensors} sensors" if sensors > 2 else name
 
 
 if __name__ == "__main__":

@@ -147,6 +147,8 @@ def _simulate(args: argparse.Namespace) -> int:
 
 #: "not added" lines a thermal log's check prints (the JSON holds them all).
 SHOWN_REFUSALS = 5
+#: Whole models of a thermal log shown with their forward and held-out figures.
+SHOWN_CONTESTANTS = 5
 
 
 def _check(args: argparse.Namespace) -> int:
@@ -241,6 +243,14 @@ def _check(args: argparse.Namespace) -> int:
               f"{result['held_out_baseline_rmse'] * scale:.4g} {unit}; a constant's "
               f"{result['constant_held_out_rmse'] * scale:.4g} {unit}; least squares on every "
               f"input {result['all_inputs_least_squares_held_out_rmse'] * scale:.4g} {unit}")
+        contest = result.get("model_contest", [])
+        if len(contest) > 1:
+            print("whole models contested (forward over the training blocks -> held out; "
+                  "the held-out figure decided nothing):")
+            for entry in contest[:SHOWN_CONTESTANTS]:
+                print(f"  {'*' if entry['chosen'] else ' '} {entry['name'][:60]:60s} "
+                      f"{entry['forward_rmse'] * scale:.4g} -> "
+                      f"{entry['held_out_rmse'] * scale:.4g} {unit}")
         for run in result.get("runs") or []:
             print(f"  run {run['run']:>12s} ({run['part']}, {run['rows']} rows): constant "
                   f"{run['constant_rmse'] * scale:.4g}, least squares "

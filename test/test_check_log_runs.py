@@ -53,6 +53,14 @@ def test_fl_thermal_in_runs_beats_a_constant_and_least_squares_held_out(
     pooled = np.sqrt(sum(r["model_rmse"] ** 2 * r["rows"] for r in held) /
                      sum(r["rows"] for r in held))
     assert pooled == pytest.approx(baselines["model"], rel=1e-9)
+    # Every whole model contested, with its forward and (deciding nothing) held-out figure.
+    (chosen,) = [e for e in summary["model_contest"] if e["chosen"]]
+    assert chosen["held_out_rmse"] == pytest.approx(baselines["model"], rel=1e-9)
+    assert "whole models contested (forward over the training blocks -> held out" in out
+    assert f"  * {chosen['name'][:60]:60s} {chosen['forward_rmse'] * 1e6:.4g} -> " \
+        f"{chosen['held_out_rmse'] * 1e6:.4g} um" in out
+    assert "Whole models contested by forward validation" in \
+        (tmp_path / "r.html").read_text()
     # Time across runs means nothing: the localisation never follows it.
     variables = {s["variable"] for s in summary["localisation"].get("shares", [])}
     assert variables and "t" not in variables
@@ -84,6 +92,8 @@ def _two_sensor_log(path: Path, seed: int, runs: int = 8, rows: int = 80,
 def _decisions(summary: dict) -> dict:
     return {"added": summary["added"], "not_added": summary["not_added"],
             "contest": summary["model_contest_forward_rmse"],
+            "contest_blocks": [(e["name"], e["forward_blocks"], e["chosen"])
+                               for e in summary["model_contest"]],
             "steps": [(s["effects"], s["cv_rmse"], s["validation_rmse"])
                       for s in summary["steps"]]}
 
@@ -108,6 +118,24 @@ def test_a_candidate_refused_on_the_last_training_run_gives_way_to_the_next(tmp_
                                 "step by step" else [summary["model_chosen"]])
     assert summary["train_rows"] == 6 * 80
     assert summary["final_rmse"] < 0.7 * summary["constant_held_out_rmse"]
+    # Each whole model's forward figure pools its blocks (each run predicted by a fit on
+    # the runs before it); its held-out figure is given after the decision.
+    entries = {e["name"]: e for e in summary["model_contest"]}
+    assert set(entries) == set(contest) and \
+        [e["forward_rmse"] for e in summary["model_contest"]] == sorted(contest.values())
+    for name, entry in entries.items():
+        blocks = entry["forward_blocks"]
+        assert [b["trained_rows"] for b in blocks] == [80 * k for k in range(1, 6)]
+        assert [b["judged_rows"] for b in blocks] == [80] * 5
+        pooled = np.sqrt(sum(b["rmse"] ** 2 for b in blocks) / len(blocks))
+        assert pooled == pytest.approx(contest[name], rel=1e-12)
+    (chosen,) = [e for e in summary["model_contest"] if e["chosen"]]
+    assert chosen["name"] == summary["model_chosen"]
+    assert chosen["held_out_rmse"] == pytest.approx(summary["final_rmse"], rel=1e-9)
+    # Least squares on every sensor as the workbench fits it (a term in the model, judged
+    # through the model) equals the plain baseline (one lstsq on the raw columns).
+    assert entries["sensor_least_squares:tA_C+tB_C"]["held_out_rmse"] == pytest.approx(
+        summary["all_inputs_least_squares_held_out_rmse"], rel=1e-9)
     # Garbage in the held-out runs (r7, r8): every decision the same, the judge not.
     lines = log.read_text().splitlines()
     spoiled = [line if not line.startswith(("r7,", "r8,")) else
@@ -118,6 +146,8 @@ def test_a_candidate_refused_on_the_last_training_run_gives_way_to_the_next(tmp_
                       0.75, 0.05, [], run_column="run")
     assert _decisions(again) == _decisions(summary)
     assert again["final_rmse"] > 10 * summary["final_rmse"]
+    assert all(a["held_out_rmse"] > 10 * b["held_out_rmse"] for a, b in
+               zip(again["model_contest"], summary["model_contest"]))
 
 
 def test_zeroed_runs_refer_the_model_to_each_runs_zero(tmp_path):

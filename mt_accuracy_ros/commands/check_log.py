@@ -80,20 +80,28 @@ def validation_rmse(terms, frame, component: int, fit, judge, zeroed: bool) -> f
 
 
 #: Families that are a whole model of a log in one term: they contest the step-by-step
-#: model as a whole (:func:`forward_rmse`).
+#: model as a whole (:func:`forward_blocks`, :func:`pooled_rmse`).
 WHOLE_MODELS = ("sensor_least_squares", "all_sensors_ridge", "temperature_components")
 
 
-def forward_rmse(terms, frame, component: int, blocks, zeroed: bool) -> float:
-    """Forward validation of ``terms`` fitted jointly: each block (whole runs) predicted by a
-    fit on the blocks before it, the squared errors pooled [m]."""
-    squared, count = 0.0, 0
+def forward_blocks(terms, frame, component: int, blocks, zeroed: bool) -> list[dict]:
+    """Forward validation of ``terms`` fitted jointly, block by block: each block (whole
+    runs) predicted by a fit on the blocks before it. One dict per judged block: the
+    rows fitted and judged, and the RMS error on the judged ones [m]."""
+    out = []
     for b in range(1, int(blocks[-1]) + 1):
-        judge = blocks == b
-        value = validation_rmse(terms, frame, component, blocks < b, judge, zeroed)
-        squared += value ** 2 * int(judge.sum())
-        count += int(judge.sum())
+        judge, fit = blocks == b, blocks < b
+        out.append({"trained_rows": int(fit.sum()), "judged_rows": int(judge.sum()),
+                    "rmse": validation_rmse(terms, frame, component, fit, judge, zeroed)})
+    return out
+
+
+def pooled_rmse(per_block: list[dict]) -> float:
+    """The blocks' squared errors pooled over every judged row [m]."""
+    count = sum(b["judged_rows"] for b in per_block)
+    squared = sum(b["rmse"] ** 2 * b["judged_rows"] for b in per_block)
     return float(np.sqrt(squared / max(count, 1)))
+
 
 
 def joint_refit(candidates, terms, frame, component: int, zeroed: bool) -> list:
@@ -331,7 +339,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     start_model = model
     frame = residual_frame(start_model, training)
     fit_rows, judge_rows = _validation_split(training, blocks)
-    forward_blocks = blocks if blocks is not None else \
+    validation_blocks = blocks if blocks is not None else \
         np.repeat(np.arange(MAX_BLOCKS), -(-training.n // MAX_BLOCKS))[:training.n]
     judged_runs = sorted({run_names[k] for k in training.run_of_row[judge_rows]},
                          key=run_names.index) if runs else []
@@ -409,17 +417,25 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     # Whole models against one another, by the same forward validation over every
     # training run: the step-by-step model, and each model a thermal engineer fits in one
     # go (least squares or ridge on every sensor, principal components).
-    contest = {"step by step": forward_rmse(accepted_terms, frame, c, forward_blocks,
-                                            obs.zeroed_runs)}
+    per_block = {"step by step": forward_blocks(accepted_terms, frame, c, validation_blocks,
+                                                obs.zeroed_runs)}
     rivals = {}
     if auto and not add:
         for option in first.ranking:
             if option.effect in WHOLE_MODELS and not option.refusal and \
-                    option.name not in contest:
-                contest[option.name] = forward_rmse([term_of(option)], frame, c,
-                                                    forward_blocks, obs.zeroed_runs)
+                    option.name not in per_block:
+                per_block[option.name] = forward_blocks([term_of(option)], frame, c,
+                                                        validation_blocks, obs.zeroed_runs)
                 rivals[option.name] = option
+    contest = {name: pooled_rmse(blocks_of) for name, blocks_of in per_block.items()}
     winner = min(contest, key=lambda k: (contest[k], k != "step by step"))
+    # Each contestant's figure on the held-out rows, for the reader only: it is computed
+    # after the decision and decides nothing (how well forward validation chose).
+    contest_held_out = {"step by step": steps[-1]["held_out_rmse"]}
+    for name, option in rivals.items():
+        (refitted,) = joint_refit([option], [term_of(option)], frame, c, obs.zeroed_runs)
+        contest_held_out[name] = held_out_rmse(add_effect(start_model, refitted, training),
+                                               obs, train)
     step_by_step = [name for s in steps for name in s.get("added", [])]
     if winner != "step by step":
         notes.append(f"{winner} predicts the training {'runs' if blocks is not None else 'rows'} "
@@ -492,6 +508,11 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         "constant_held_out_rmse": constant, "warnings": warnings,
         "notes": notes, "step_by_step_added": step_by_step,
         "model_contest_forward_rmse": contest, "model_chosen": winner,
+        "model_contest": [{"name": name, "forward_rmse": contest[name],
+                           "forward_blocks": per_block[name],
+                           "held_out_rmse": contest_held_out[name],
+                           "chosen": name == winner}
+                          for name in sorted(contest, key=contest.get)],
         "judged_on": "held-out rows after the training rows, unseen by every decision",
         "all_inputs_least_squares_held_out_rmse": squares,
         "baselines_held_out_m": {"constant": constant, "least squares on every input": squares,

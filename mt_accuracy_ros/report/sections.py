@@ -746,9 +746,21 @@ def csv_report_sections(result: dict, plot: dict, directory: Path, stem: str) ->
         if "before" in entry:
             test += f": {entry['before'] * scale:.4g} -> {entry['after'] * scale:.4g} {unit}"
         refused.add(entry["name"], f"{100 * entry['cv_reduction']:.0f} %", test)
+    contest = Table(["whole model", f"forward, training blocks [{unit}]",
+                     f"each block [{unit}] (rows fitted)", f"held out [{unit}]", "chosen"],
+                    caption="Whole models contested by forward validation over the training "
+                            "blocks; the held-out column is computed after the decision and "
+                            "decided nothing.")
+    for entry in result.get("model_contest", []):
+        contest.add(entry["name"], entry["forward_rmse"] * scale,
+                    ", ".join(f"{b['rmse'] * scale:.3g} ({b['trained_rows']})"
+                              for b in entry["forward_blocks"]),
+                    entry["held_out_rmse"] * scale, "yes" if entry["chosen"] else "")
     sections = [source, headline, localisation_section(check, directory, stem),
                 _evidence_section(check),
-                Section("Model versions", tables=[versions] + ([refused] if refused.rows else []))]
+                Section("Model versions", tables=[versions] +
+                        ([refused] if refused.rows else []) +
+                        ([contest] if len(contest.rows) > 1 else []))]
     if result.get("runs"):
         runs = Table(["run", "part", "rows", f"constant [{unit}]",
                       f"least squares, every input [{unit}]", f"model [{unit}]"],
