@@ -183,7 +183,11 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     ``add`` the named ones first.
     """
     from ..core.workbench.diagnosis import add_effect, add_effects, diagnose, residuals
+    from ..core.workbench.localisation import LocalisationMemo
 
+    # What the named effects leave is localised in the first look and again in the look
+    # at the model with them added: one localisation serves both.
+    localisations = LocalisationMemo()
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c.setdefault(sensor, float(values[0]))
 
@@ -194,7 +198,7 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
         # the named effects are added, what they leave is judged one effect at a time.
         return diagnose(current, obs, min_reduction=min_reduction, blocks=blocks,
                         folds=5 if blocks is None else int(blocks[-1]) + 1,
-                        pair_lookahead=first_look)
+                        pair_lookahead=first_look, localisations=localisations)
 
     diagnosis = evaluate(model, first_look=True)
     first = diagnosis

@@ -34,7 +34,7 @@ from .statistics import DEFAULT_DIRECTION_UNCERTAINTY_RAD, stated_uncertainty
 from ..errors import InsufficientDataError, ParameterError
 from ..effects import Context, EffectFamily, families as catalogue_families, is_catalogue_entry
 from ..effects.user import UserExpression
-from .localisation import Localisation, localise
+from .localisation import Localisation, LocalisationMemo, localise
 from .distributions import chi2_sf
 from .selection import Selector, Term
 from ..effects.variables import Variables, run_starts_of
@@ -455,8 +455,8 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
              folds: int = 5, max_effects: int = 4, alpha: float = 0.05,
              min_share: float = 0.25, family_list: list[EffectFamily] | None = None,
              localise_residual: bool = True, forward: bool = False,
-             blocks: NDArray[np.intp] | None = None, pair_lookahead: bool = True
-             ) -> Diagnosis:
+             blocks: NDArray[np.intp] | None = None, pair_lookahead: bool = True,
+             localisations: LocalisationMemo | None = None) -> Diagnosis:
     """Localise the residual and select the missing effects (see the module docstring).
 
     ``forward``: validate as the model will be used on a log - each block predicted by
@@ -464,7 +464,9 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     gives those blocks (whole runs of a log of many runs) instead of equal cuts.
     ``pair_lookahead``: when no single effect passes, try two at once (two effects
     hiding each other show at the start; a re-diagnosis of the same readings after the
-    named effects were added judges what they leave one effect at a time)."""
+    named effects were added judges what they leave one effect at a time).
+    ``localisations``: a memo of ``obs``' localisations, for a caller that diagnoses the
+    same readings again (a residual seen before is not localised again)."""
     if blocks is None and obs.n < 4 * folds:
         raise InsufficientDataError(f"{obs.n} reference readings; need >= {4 * folds}")
     frame = residual_frame(model, obs)
@@ -513,12 +515,13 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     localisation = localisation_after = None
     if localise_residual:
         strokes = {a: model.machine.axes[a].stroke for a in model.machine.axis_order}
-        localisation = localise(position_residual, position_mask, variables,
-                                ctx.structure_sensors(), noise_sigma, strokes, folds,
-                                ctx.zero_rows)
-        localisation_after = localise(remaining[:, :3], position_mask, variables,
-                                      ctx.structure_sensors(), noise_sigma, strokes, folds,
-                                      ctx.zero_rows) \
+        where = localise if localisations is None else localisations.localise
+        localisation = where(position_residual, position_mask, variables,
+                             ctx.structure_sensors(), noise_sigma, strokes, folds,
+                             ctx.zero_rows)
+        localisation_after = where(remaining[:, :3], position_mask, variables,
+                                   ctx.structure_sensors(), noise_sigma, strokes, folds,
+                                   ctx.zero_rows) \
             if selected and above else localisation
     direction_rmse = None
     if directions:

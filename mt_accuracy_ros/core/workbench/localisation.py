@@ -379,3 +379,47 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
         break
     peaks.sort(key=lambda p: -p.share)
     return Localisation(shares, peaks, rms, noise_sigma)
+
+
+class LocalisationMemo:
+    """The localisations of one set of readings, kept for a residual seen again.
+
+    ``check --auto`` localises what the named effects leave twice: in the first look
+    (the selection's joint fit of them) and in the look at the model with them added.
+    Both are the same residual to rounding (1e-15 of its RMS on a 10,000-reading
+    survey), and a localisation costs a kNN search over every variable. A residual
+    equal to a kept one - on the same rows, with the same settings, each component
+    within ``relative_tolerance`` of its RMS about its mean (the mean is no part of a
+    localisation) - gets the kept localisation. One memo serves one set of readings.
+    """
+
+    def __init__(self, relative_tolerance: float = 1e-9, size: int = 4) -> None:
+        self.relative_tolerance = float(relative_tolerance)
+        self.size = int(size)
+        self._kept: list[tuple] = []
+        #: How many localisations were served from the memo (for tests and benches).
+        self.reused = 0
+
+    def localise(self, residual: NDArray[np.float64], mask: NDArray[np.bool_],
+                 variables: Variables, structure_sensors: list[str], noise_sigma: float,
+                 strokes: dict[str, tuple[float, float]] | None = None, folds: int = 5,
+                 zero_rows: NDArray[np.intp] | None = None) -> Localisation:
+        """:func:`localise`, or the kept result of an equal residual."""
+        settings = (variables.n, tuple(variables.names()), tuple(structure_sensors),
+                    float(noise_sigma), tuple(sorted((strokes or {}).items())), int(folds),
+                    None if zero_rows is None else np.asarray(zero_rows).tobytes())
+        mask = np.asarray(mask, dtype=bool)
+        centred = [residual[mask[:, c], c] - residual[mask[:, c], c].mean()
+                   if mask[:, c].any() else np.zeros(0) for c in range(mask.shape[1])]
+        for kept_settings, kept_mask, kept_centred, result in self._kept:
+            if kept_settings == settings and np.array_equal(kept_mask, mask) and all(
+                    a.size == b.size and (a.size == 0 or float(np.max(np.abs(a - b))) <=
+                                          self.relative_tolerance *
+                                          float(np.sqrt(np.mean(b ** 2))))
+                    for a, b in zip(centred, kept_centred)):
+                self.reused += 1
+                return result
+        result = localise(residual, mask, variables, structure_sensors, noise_sigma, strokes,
+                          folds, zero_rows)
+        self._kept = (self._kept + [(settings, mask.copy(), centred, result)])[-self.size:]
+        return result
