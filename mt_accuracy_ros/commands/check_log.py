@@ -103,7 +103,6 @@ def pooled_rmse(per_block: list[dict]) -> float:
     return float(np.sqrt(squared / max(count, 1)))
 
 
-
 def joint_refit(candidates, terms, frame, component: int, zeroed: bool) -> list:
     """The ``candidates`` with their parameters (and k = 1 uncertainties) refitted jointly
     on every training row of ``frame`` (their ``terms`` as in :func:`validation_rmse`)."""
@@ -432,19 +431,18 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     # Each contestant's figure on the held-out rows, for the reader only: it is computed
     # after the decision and decides nothing (how well forward validation chose).
     contest_held_out = {"step by step": steps[-1]["held_out_rmse"]}
+    rival_models = {}
     for name, option in rivals.items():
         (refitted,) = joint_refit([option], [term_of(option)], frame, c, obs.zeroed_runs)
-        contest_held_out[name] = held_out_rmse(add_effect(start_model, refitted, training),
-                                               obs, train)
+        rival_models[name] = (refitted, add_effect(start_model, refitted, training))
+        contest_held_out[name] = held_out_rmse(rival_models[name][1], obs, train)
     step_by_step = [name for s in steps for name in s.get("added", [])]
     if winner != "step by step":
         notes.append(f"{winner} predicts the training {'runs' if blocks is not None else 'rows'} "
                      "forward better "
                      f"({contest[winner] * to_unit:.4g} {unit}) than the step-by-step model "
                      f"({contest['step by step'] * to_unit:.4g} {unit}): it is the model")
-        (refitted,) = joint_refit([rivals[winner]], [term_of(rivals[winner])], frame, c,
-                                  obs.zeroed_runs)
-        model = add_effect(start_model, refitted, training)
+        refitted, model = rival_models[winner]
         steps = steps[:1]
         steps[0]["added"] = [winner]
         steps[0]["parameters"] = {winner: refitted.parameters}
