@@ -151,6 +151,15 @@ SHOWN_REFUSALS = 5
 SHOWN_CONTESTANTS = 5
 
 
+def _carrier(of: dict) -> str:
+    """Which sensor model a log's sensor weights belong to, in a few words."""
+    if not of:
+        return "the sensor model"
+    family = of["name"].split(":", 1)[0]
+    return (f"the {'model' if of['in_model'] else 'candidate'} {family} over "
+            f"{of['sensors']} sensor{'s' if of['sensors'] > 1 else ''}")
+
+
 def _check(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -248,7 +257,9 @@ def _check(args: argparse.Namespace) -> int:
             print("whole models contested (forward over the training blocks -> held out; "
                   "the held-out figure decided nothing):")
             for entry in contest[:SHOWN_CONTESTANTS]:
-                print(f"  {'*' if entry['chosen'] else ' '} {entry['name'][:60]:60s} "
+                name = entry["name"] if entry["name"] != "step by step" else \
+                    f"step by step ({', '.join(entry['terms']) or 'nothing added'})"
+                print(f"  {'*' if entry['chosen'] else ' '} {name[:60]:60s} "
                       f"{entry['forward_rmse'] * scale:.4g} -> "
                       f"{entry['held_out_rmse'] * scale:.4g} {unit}")
         for run in result.get("runs") or []:
@@ -276,9 +287,9 @@ def _check(args: argparse.Namespace) -> int:
     if result.get("verdict"):
         print(f"verdict: {result['verdict']}")
     if result.get("sensors_carrying_weight"):
-        print("the all-sensor model leans on: " + ", ".join(
-            f"{sensor} {100 * share:.0f} %" for sensor, share in
-            result["sensors_carrying_weight"].items()))
+        print(f"{_carrier(result.get('sensors_carrying_weight_of', {}))} leans on: " +
+              ", ".join(f"{sensor} {100 * share:.0f} %" for sensor, share in
+                        result["sensors_carrying_weight"].items()))
     print(f"added: {', '.join(result['added']) or 'nothing'}; final "
           f"{'held-out ' if log else ''}RMSE {result['final_rmse'] * scale:.4g} {unit}")
     return 0

@@ -47,7 +47,7 @@ def test_csv_path_on_real_fl_thermal_improves_held_out_error(data_dir, tmp_path,
     assert weights and 0.99 * sum(weights.values()) <= 1.0 and all(
         name.endswith("_C") for name in weights)
     out = capsys.readouterr().out
-    assert "final held-out RMSE 4.518 um" in out and "the all-sensor model leans on:" in out
+    assert "final held-out RMSE 4.518 um" in out and "the candidate all_sensors_ridge over 16 sensors leans on:" in out
     assert "warning: thermal_gradient:t2_C-t3_C (asked for) raised the error on the last 926 " \
         "training rows from 6.951 to 9.33 um" in out
     html = (tmp_path / "r.html").read_text()

@@ -57,7 +57,9 @@ def test_fl_thermal_in_runs_beats_a_constant_and_least_squares_held_out(
     (chosen,) = [e for e in summary["model_contest"] if e["chosen"]]
     assert chosen["held_out_rmse"] == pytest.approx(baselines["model"], rel=1e-9)
     assert "whole models contested (forward over the training blocks -> held out" in out
-    assert f"  * {chosen['name'][:60]:60s} {chosen['forward_rmse'] * 1e6:.4g} -> " \
+    assert chosen["name"] == "step by step" and chosen["terms"] == summary["added"]
+    label = f"step by step ({', '.join(summary['added'])})"
+    assert f"  * {label[:60]:60s} {chosen['forward_rmse'] * 1e6:.4g} -> " \
         f"{chosen['held_out_rmse'] * 1e6:.4g} um" in out
     assert "Whole models contested by forward validation" in \
         (tmp_path / "r.html").read_text()
@@ -264,3 +266,37 @@ def test_the_same_log_gives_the_same_answer_in_any_process(tmp_path):
         answers.append((summary["model_chosen"], summary["model_contest_forward_rmse"],
                         summary["final_rmse"], summary["added"]))
     assert answers[0] == answers[1]
+
+
+def test_a_whole_model_the_step_by_step_model_is_made_of_is_contested_once(tmp_path, capsys):
+    """The growth is 5 tA - 4 tB: the step-by-step model is least squares on both sensors,
+    which is also a whole model of its own. It contests once (as the step-by-step model,
+    its terms named), and the sensor weights say whose they are."""
+    rng = np.random.default_rng(2)
+    lines = ["run,time_s,tA_C,tB_C,growth_um"]
+    for r in range(8):
+        t = np.arange(80) * 60.0
+        a = 20 + rng.uniform(0.5, 1.5) * (1 - np.exp(-t / 1500)) + rng.normal(0, 0.01, 80)
+        b = 20 + rng.uniform(0.2, 1.2) * (1 - np.exp(-t / 4000)) + rng.normal(0, 0.01, 80)
+        g = 5.0 * (a - 20) - 4.0 * (b - 20) + rng.normal(0, 0.05, 80)
+        lines += [f"r{r + 1},{x:.0f},{y:.4f},{z:.4f},{w:.4f}" for x, y, z, w in zip(t, a, b, g)]
+    (tmp_path / "log.csv").write_text("\n".join(lines) + "\n")
+    assert main(["check", str(tmp_path / "log.csv"), "--target", "growth_um", "--inputs", "t*_C",
+                 "--run", "run", "--train-fraction", "0.75", "--auto", "2",
+                 "--json", str(tmp_path / "s.json")]) == 0
+    out = capsys.readouterr().out
+    summary = json.loads((tmp_path / "s.json").read_text())
+    both = "sensor_least_squares:tA_C+tB_C"
+    assert summary["step_by_step_added"] == [both] and summary["model_chosen"] == "step by step"
+    names = [e["name"] for e in summary["model_contest"]]
+    assert both not in names and names.count("step by step") == 1
+    assert summary["model_contest"][0]["terms"] == [both]
+    # One contestant: no contest to print.
+    assert len(names) == 1 and "whole models contested" not in out
+    # Its coefficients are the generator's, in um/K (the JSON is SI: m/K).
+    parameters = summary["steps"][0]["parameters"][both]
+    assert (parameters["bz_tA_C"], parameters["bz_tB_C"]) == pytest.approx((5e-6, -4e-6),
+                                                                            abs=0.1e-6)
+    assert summary["sensors_carrying_weight_of"] == {"name": both, "sensors": 2,
+                                                     "in_model": True}
+    assert "the model sensor_least_squares over 2 sensors leans on: tA_C" in out

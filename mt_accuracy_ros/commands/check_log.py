@@ -421,8 +421,9 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     rivals = {}
     if auto and not add:
         for option in first.ranking:
+            # (A rival the step-by-step model consists of is that model: not run twice.)
             if option.effect in WHOLE_MODELS and not option.refusal and \
-                    option.name not in per_block:
+                    option.name not in per_block and accepted_terms != [term_of(option)]:
                 per_block[option.name] = forward_blocks([term_of(option)], frame, c,
                                                         validation_blocks, obs.zeroed_runs)
                 rivals[option.name] = option
@@ -480,6 +481,9 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
              if name.startswith(("all_sensors_ridge", "sensor_least_squares"))] + \
         [(c_.name, c_.parameters) for c_ in first.ranking if c_.effect == "all_sensors_ridge"]
     carried = dict(sensor_weights(ridge[0][1], obs.temperatures)[:6]) if ridge else {}
+    # Whose weights these are: a sensor model in the model, or the ridge candidate.
+    carrier = {"name": ridge[0][0], "sensors": ridge[0][0].split(":", 1)[1].count("+") + 1,
+               "in_model": ridge[0][0] in added} if ridge else {}
     result = {
         "data": str(path), "kind": "thermal_log", "target": target_column,
         "target_unit": unit, "target_unit_per_m": to_unit, "component": component, "rows": obs.n,
@@ -506,7 +510,8 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         "constant_held_out_rmse": constant, "warnings": warnings,
         "notes": notes, "step_by_step_added": step_by_step,
         "model_contest_forward_rmse": contest, "model_chosen": winner,
-        "model_contest": [{"name": name, "forward_rmse": contest[name],
+        "model_contest": [{"name": name, "terms": step_by_step if name == "step by step"
+                           else [name], "forward_rmse": contest[name],
                            "forward_blocks": per_block[name],
                            "held_out_rmse": contest_held_out[name],
                            "chosen": name == winner}
@@ -515,7 +520,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         "all_inputs_least_squares_held_out_rmse": squares,
         "baselines_held_out_m": {"constant": constant, "least squares on every input": squares,
                                  "model": final},
-        "sensors_carrying_weight": carried,
+        "sensors_carrying_weight": carried, "sensors_carrying_weight_of": carrier,
         "model_yaml": _model_yaml(model),
         "runs": None, "zeroed_runs": obs.zeroed_runs,
         "_plot": {"time": obs.time_s, "target": obs.measured_m[:, c],
