@@ -328,3 +328,65 @@ def test_a_log_with_equal_stamps_is_checked_and_one_that_goes_back_names_its_row
                  "t1_C"]) == 2
     err = capsys.readouterr().err.strip()
     assert "goes back at data row 101" in err and "\n" not in err, err
+
+
+def _shop_logs(tmp_path):
+    """The same six-day log twice: as a German spreadsheet exports it (`;`, decimal commas,
+    Windows-1252, date-times, one sensor in kelvin, units in brackets) and plainly
+    (commas, seconds, °C, units as suffixes). The growth is 6 T1 - 2 T2 [um/K]."""
+    import datetime as dt
+
+    rng = np.random.default_rng(11)
+    shop = ["Zeitstempel;T1 [°C];T2 [K];Messuhr [µm]"]
+    plain = ["time_s,T1_C,T2_C,dial_um"]
+    start = dt.datetime(2026, 3, 20, 6, 0, 0)
+    for day in range(6):
+        for k in range(120):
+            stamp = start + dt.timedelta(days=day, minutes=2 * k)
+            t1 = 20 + rng.uniform(1.5, 2.5) * (1 - np.exp(-k / 40)) + rng.normal(0, 0.02)
+            t2 = 20 + rng.uniform(0.5, 1.5) * (1 - np.exp(-k / 90)) + rng.normal(0, 0.02)
+            g = 6 * (t1 - 20) - 2 * (t2 - 20) + rng.normal(0, 0.2)
+            t1, t2, g = round(t1, 3), round(t2, 3), round(g, 2)
+            shop.append(f"{stamp:%d.%m.%Y %H:%M:%S};{t1:.3f};{t2 + 273.15:.3f};{g:.2f}"
+                        .replace(".", ",").replace(",", ".", 2))
+            seconds = (stamp - start).total_seconds()
+            plain.append(f"{seconds:.0f},{t1:.3f},{t2:.3f},{g:.2f}")
+    (tmp_path / "shop.csv").write_bytes(("\r\n".join(shop) + "\r\n").encode("cp1252"))
+    (tmp_path / "plain.csv").write_text("\n".join(plain) + "\n")
+    return tmp_path / "shop.csv", tmp_path / "plain.csv"
+
+
+def test_a_log_as_a_spreadsheet_exports_it_reads_as_its_plain_twin(tmp_path, capsys):
+    """`;` with decimal commas, Windows-1252, date-times and a sensor in kelvin: read as the
+    plain log, the same decisions and figures (the kelvin column converted to °C, the
+    date-times to seconds), and the output says how the file was read."""
+    from mt_accuracy_ros.cli import main
+
+    shop, plain = _shop_logs(tmp_path)
+    assert main(["check", str(shop), "--target", "Messuhr [µm]", "--auto", "2",
+                 "--inputs", "T*"]) == 2
+    assert "no time column 'time_s' (give --time-column Zeitstempel" in capsys.readouterr().err
+    summaries = []
+    for path, args in ((shop, ["--target", "Messuhr [µm]", "--time-column", "Zeitstempel",
+                               "--inputs", "T*"]),
+                       (plain, ["--target", "dial_um", "--inputs", "T*_C"])):
+        assert main(["check", str(path), *args, "--auto", "2",
+                     "--json", str(tmp_path / f"{path.stem}.json")]) == 0
+        summaries.append(json.loads((tmp_path / f"{path.stem}.json").read_text()))
+    out = capsys.readouterr().out
+    assert "shop.csv: 720 of 720 rows used (read as semicolon-separated, with decimal " \
+        "commas, in Windows-1252 (not UTF-8))" in out
+    assert "note: time from the date-times of Zeitstempel" in out
+    assert "note: temperatures converted to °C: T2 [K] (K)" in out
+    shop_summary, plain_summary = summaries
+    assert [n.replace("T1 [°C]", "T1_C").replace("T2 [K]", "T2_C")
+            for n in shop_summary["added"]] == plain_summary["added"]
+    for key in ("final_rmse", "constant_held_out_rmse",
+                "all_inputs_least_squares_held_out_rmse"):
+        assert shop_summary[key] == pytest.approx(plain_summary[key], rel=1e-9)
+    # The gains are the generator's: 6 and -2 um/K.
+    name = shop_summary["added"][0]
+    assert name == "sensor_least_squares:T1 [°C]+T2 [K]"
+    gains = shop_summary["steps"][0]["parameters"][name]
+    assert (gains["bz_T1 [°C]"], gains["bz_T2 [K]"]) == pytest.approx((6e-6, -2e-6),
+                                                                      abs=0.2e-6)

@@ -36,6 +36,9 @@ MAX_JUDGED = 6
 #: Forward-validation blocks over the training rows (whole runs when there are runs).
 MAX_BLOCKS = 6
 
+#: Words of a column name that suggest it holds the time (for the error's hint).
+TIME_WORDS = ("time", "date", "stamp", "zeit", "datum", "heure")
+
 
 def _validation_split(training, blocks):
     """(fit rows, validation rows, what the validation rows are) of the training rows: the
@@ -202,6 +205,22 @@ class LogData:
     notes: list[str]
 
 
+def _in_celsius(temperatures: dict[str, np.ndarray]) -> tuple[dict[str, np.ndarray], list]:
+    """Temperatures in °C (as sensor_msgs/Temperature), each from the unit its column's
+    name gives (``T1_K``, ``T2 [°F]``; °C when it gives none), and a note of those
+    converted."""
+    from ..io.column_map import TEMPERATURE, unit_from_name
+
+    out, converted = {}, []
+    for name, values in temperatures.items():
+        unit = unit_from_name(name, "temperature") or "degC"
+        scale, offset = TEMPERATURE[unit]
+        out[name] = values * scale + offset if (scale, offset) != (1.0, 0.0) else values
+        if unit not in ("degC", "C"):
+            converted.append(f"{name} ({unit})")
+    return out, ([f"temperatures converted to °C: {', '.join(converted)}"] if converted else [])
+
+
 def read_log(path: Path, target: str, time_column: str, inputs: list[str],
              drivers: list[str], row_period_s: float | None, component: str,
              uncertainty_m: float | None, run_column: str | None, zeroed_runs: bool
@@ -219,7 +238,8 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
         {time_column, run_column}
     # A temperature column may have holes (a dead thermocouple): kept as NaN, decided below.
     table = read_csv_table(path, text_columns=(run_column,) if run_column else (),
-                           gap_columns=tuple(n for n in header if n not in fixed))
+                           gap_columns=tuple(n for n in header if n not in fixed),
+                           time_columns=(time_column,))
     names = table.names
     columns = table.columns
     target_column, target_scale, unit = _column_and_unit(target, names, "length", "target")
@@ -228,9 +248,10 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     elif row_period_s is not None:
         time_s = np.arange(len(columns[names[0]]), dtype=np.float64) * float(row_period_s)
     else:
-        raise InputDataError(f"{path}: no time column {time_column!r} (give --time-column, or "
-                             f"--row-period SECONDS for one row every SECONDS); columns: "
-                             f"{', '.join(names)}")
+        timely = [n for n in names if any(w in n.lower() for w in TIME_WORDS)]
+        raise InputDataError(f"{path}: no time column {time_column!r} (give --time-column"
+                             f"{' ' + timely[0] if timely else ''}, or --row-period SECONDS "
+                             f"for one row every SECONDS); columns: {', '.join(names)}")
     selected = [n for n in names if any(fnmatch.fnmatch(n, p) for p in inputs)
                 and n not in (target_column, time_column, run_column)]
     if not selected:
@@ -244,8 +265,10 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
         speed = columns[column] * scale
     run_of_row, run_names = None, None
     target_m = columns[target_column] * target_scale
-    temperatures = {n: columns[n] for n in selected}
-    notes = []
+    temperatures, notes = _in_celsius({n: columns[n] for n in selected})
+    if time_column in table.date_time_columns:
+        notes.append(f"time from the date-times of {time_column} (seconds since its first, "
+                     "a stamp without a zone taken as UTC)")
     if run_column:
         run_of_row, run_names = run_labels(columns[run_column], table.data_rows, run_column)
     temperatures, dead_notes = leave_out_dead_sensors(temperatures, run_of_row, run_names)

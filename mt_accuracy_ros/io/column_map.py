@@ -34,15 +34,17 @@ dropped and counted (:class:`~.csv_table.CsvTable` style).
 """
 from __future__ import annotations
 
-import csv
+import contextlib
 import itertools
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..core.errors import InputDataError, ParameterError
+from .csv_dialect import csv_rows, sniff_dialect
 
 _LENGTH = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "micron": 1e-6, "nm": 1e-9,
            "in": 0.0254, "inch": 0.0254}
@@ -199,10 +201,18 @@ def si_scale(quantity: str, unit: str, what: str) -> tuple[float, float]:
     return table[unit], 0.0
 
 
+#: Units as spreadsheets write them in a header, and the names this module knows them by.
+UNIT_SPELLINGS = {"°C": "degC", "℃": "degC", "°F": "degF", "μm": "µm"}
+
+
 def unit_from_name(column: str, quantity: str) -> str:
-    """The unit a column's name ends in (``x_mm``, ``dev_um``, ``T3_degC``) if it is one of
-    ``quantity``'s, else "" (the quantity's default then applies)."""
-    suffix = column.rsplit("_", 1)[-1] if "_" in column else ""
+    """The unit a column's name ends in (``x_mm``, ``dev_um``, ``T3_degC``) or gives in
+    brackets at its end (``dial [µm]``, ``T1 (°C)``) if it is one of ``quantity``'s, else
+    "" (the quantity's default then applies)."""
+    bracketed = re.search(r"[\[(]\s*([^\])]+?)\s*[\])]\s*$", column)
+    suffix = bracketed.group(1) if bracketed else \
+        (column.rsplit("_", 1)[-1] if "_" in column else "")
+    suffix = UNIT_SPELLINGS.get(suffix, suffix)
     known = TEMPERATURE if quantity == "temperature" else UNITS.get(quantity, {})
     return suffix if suffix and suffix in known else ""
 
@@ -234,10 +244,14 @@ class MappedSurvey:
     #: (N,) run index of each row and the runs' names (a survey of many runs), or None.
     run_of_row: np.ndarray | None = None
     run_names: list[str] | None = None
+    #: How the file was written, when it is not a plain UTF-8 comma-separated CSV.
+    dialect_note: str = ""
 
     def summary(self, name: str) -> str:
         kept = self.rows_read - self.rows_dropped
         text = f"{name}: {kept} of {self.rows_read} rows used"
+        if self.dialect_note:
+            text += f" ({self.dialect_note})"
         if self.rows_dropped:
             text += f"; {self.rows_dropped} dropped ({'; '.join(self.drop_reasons[:3])})"
         return text
@@ -250,7 +264,7 @@ CSV_CHUNK_ROWS = 4096
 
 
 def _parse_clean_chunk(chunk: list[list[str]], header: list[str], index: dict[str, int],
-                       values: dict[str, list]) -> bool:
+                       values: dict[str, list], decimal_comma: bool = False) -> bool:
     """Append ``chunk``'s mapped cells to ``values`` column by column and return True -
     or append nothing and return False when a row has the wrong number of fields, a
     numeric cell is not a finite number or a run cell is empty (then
@@ -267,6 +281,8 @@ def _parse_clean_chunk(chunk: list[list[str]], header: list[str], index: dict[st
                 return False
             parsed[role] = cells
             continue
+        if decimal_comma:
+            cells = [c.replace(",", ".") for c in cells]
         try:
             column = np.array(cells, dtype=np.float64)
         except ValueError:
@@ -281,7 +297,7 @@ def _parse_clean_chunk(chunk: list[list[str]], header: list[str], index: dict[st
 
 def _parse_row(path: Path, row: list[str], number: int, header: list[str],
                index: dict[str, int], values: dict[str, list], bad_in_column: dict[str, int],
-               first_bad: dict) -> str:
+               first_bad: dict, decimal_comma: bool = False) -> str:
     """Append row ``number``'s mapped cells to ``values`` (SI scaling comes later); the
     reason it is dropped instead ("" when kept: then every role got its value)."""
     if len(row) != len(header):
@@ -296,7 +312,7 @@ def _parse_row(path: Path, row: list[str], number: int, header: list[str],
             parsed[role] = cell
             continue
         try:
-            value = float(cell)
+            value = float(cell.replace(",", ".") if decimal_comma else cell)
         except ValueError:
             value = math.nan
         if not math.isfinite(value):
@@ -334,44 +350,40 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     # of cells took ~100 MB before the first number was parsed. Blank lines are skipped
     # and not counted: "row N" is the N-th non-blank row, the header being row 1.
     header, index, number = None, {}, 0
-    try:
-        with open(path, newline="", encoding="utf-8") as stream:
-            reader = csv.reader(stream)
-            for row in reader:
-                if "".join(row).strip():
-                    header = [h.strip() for h in row]
-                    number = 1
-                    break
-            if header is not None:
-                for role, (column, _) in column_map.roles.items():
-                    if column not in header:
-                        raise InputDataError(f"{path}: no column {column!r} (for {role}); "
-                                             f"columns: {', '.join(header)}")
-                    index[role] = header.index(column)
-            while header is not None:
-                chunk = [r for r in itertools.islice(reader, CSV_CHUNK_ROWS)
-                         if "".join(r).strip()]
-                if not chunk:
-                    break
-                first = number + 1
-                number += len(chunk)
-                if _parse_clean_chunk(chunk, header, index, values):
-                    kept_rows.extend(range(first - 1, number - 1))
+    dialect = sniff_dialect(path)
+    comma = dialect.decimal_comma
+    with contextlib.closing(csv_rows(path, dialect)) as reader:
+        for row in reader:
+            if "".join(row).strip():
+                header = [h.strip() for h in row]
+                number = 1
+                break
+        if header is not None:
+            for role, (column, _) in column_map.roles.items():
+                if column not in header:
+                    raise InputDataError(f"{path}: no column {column!r} (for {role}); "
+                                         f"columns: {', '.join(header)}")
+                index[role] = header.index(column)
+        while header is not None:
+            chunk = [r for r in itertools.islice(reader, CSV_CHUNK_ROWS)
+                     if "".join(r).strip()]
+            if not chunk:
+                break
+            first = number + 1
+            number += len(chunk)
+            if _parse_clean_chunk(chunk, header, index, values, comma):
+                kept_rows.extend(range(first - 1, number - 1))
+                continue
+            # A chunk with a bad row: row by row, each row's reason kept.
+            for offset, row in enumerate(chunk):
+                problem = _parse_row(path, row, first + offset, header, index, values,
+                                     bad_in_column, first_bad, comma)
+                if problem:
+                    dropped += 1
+                    if len(reasons) < 5:
+                        reasons.append(problem)
                     continue
-                # A chunk with a bad row: row by row, each row's reason kept.
-                for offset, row in enumerate(chunk):
-                    problem = _parse_row(path, row, first + offset, header, index, values,
-                                         bad_in_column, first_bad)
-                    if problem:
-                        dropped += 1
-                        if len(reasons) < 5:
-                            reasons.append(problem)
-                        continue
-                    kept_rows.append(first + offset - 1)
-    except OSError as exc:
-        raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise InputDataError(f"{path}: not a text CSV file ({exc})") from exc
+                kept_rows.append(first + offset - 1)
     if header is None:
         raise InputDataError(f"{path}: empty file")
     total = number - 1
@@ -409,4 +421,4 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     errors = {r.split(".", 1)[1]: v for r, v in si.items() if r.startswith("err.")}
     return MappedSurvey(time_s, pick("pos"), errors, pick("temp"), pick("vel"), pick("acc"),
                         pick("dir"), si.get("spindle"), total, dropped, reasons, run_of_row,
-                        run_names)
+                        run_names, dialect.note())

@@ -5,10 +5,13 @@ number of fields is an error naming the row (the file is damaged or not
 what it is said to be); a row with a non-numeric, NaN or infinite cell is
 dropped and *counted*, with the first few reasons, so a user sees what
 was left out.
+
+The separator, decimal mark and encoding are the logger's (:mod:`.csv_dialect`): a
+``;``-separated export with decimal commas reads as a comma-separated one. A time
+column may hold date-times (read as seconds).
 """
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError
+from .csv_dialect import CsvDialect, csv_rows, header_row, sniff_dialect, to_number, to_seconds
 
 #: Reasons kept for the report (the count covers all of them).
 KEPT_REASONS = 5
@@ -36,6 +40,10 @@ class CsvTable:
     gaps: dict[str, int] = field(default_factory=dict)
     #: (kept row index, column, reason) of each missing value of a gap column.
     gap_reasons: list[tuple[int, str, str]] = field(default_factory=list)
+    #: How the file was written (separator, decimal mark, encoding).
+    dialect: CsvDialect = field(default_factory=CsvDialect)
+    #: Time columns whose cells were date-times (their values are POSIX seconds).
+    date_time_columns: tuple[str, ...] = ()
 
     def drop_gaps_of(self, columns: set[str]) -> None:
         """Count the rows with a missing value in ``columns`` as dropped, with reasons (the
@@ -56,6 +64,8 @@ class CsvTable:
         """One line: rows kept, and why any were dropped."""
         kept = self.rows_read - self.rows_dropped
         text = f"{self.path.name}: {kept} of {self.rows_read} rows used"
+        if self.dialect.note():
+            text += f" ({self.dialect.note()})"
         if self.rows_dropped:
             text += f"; {self.rows_dropped} dropped ({'; '.join(self.drop_reasons)}"
             text += ", ...)" if self.rows_dropped > len(self.drop_reasons) else ")"
@@ -65,6 +75,7 @@ class CsvTable:
 def read_csv_table(path: str | Path, *, min_rows: int = 2,
                    text_columns: tuple[str, ...] = (),
                    gap_columns: tuple[str, ...] = (),
+                   time_columns: tuple[str, ...] = (),
                    keep_reasons: int = KEPT_REASONS) -> CsvTable:
     """Read ``path``; raises :class:`InputDataError` naming the row or column at fault.
 
@@ -73,16 +84,10 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
     cell is missing, non-numeric or not finite (a dead thermocouple): the value is NaN,
     and the caller decides (``CsvTable.gaps`` counts them per column). Every column
     carries the data row (``CsvTable.data_rows``, 1-based after the header) its values
-    came from."""
+    came from. ``time_columns`` take numbers or date-times (POSIX seconds), not a mix."""
     path = Path(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as stream:
-            rows = list(csv.reader(stream))
-    except OSError as exc:
-        raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise InputDataError(f"{path}: not a text CSV file ({exc})") from exc
-    rows = [r for r in rows if any(cell.strip() for cell in r)]
+    dialect = sniff_dialect(path)
+    rows = [r for r in csv_rows(path, dialect) if any(cell.strip() for cell in r)]
     if not rows:
         raise InputDataError(f"{path}: empty file")
     header = [name.strip() for name in rows[0]]
@@ -92,6 +97,10 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
     if missing:
         raise InputDataError(f"{path}: no column {missing[0]!r}; have {', '.join(header)}")
     values, dropped, reasons, kept_rows, gaps, gap_reasons = [], 0, [], [], {}, []
+    # A time column is read as numbers or, when its first cell is none, as date-times.
+    first = rows[1] if len(rows) > 1 and len(rows[1]) == len(header) else None
+    dated = tuple(name for name in time_columns if name in header and first is not None
+                  and _is_date_time(first[header.index(name)], dialect))
     for number, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):
             raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
@@ -104,9 +113,17 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
                     break
                 parsed.append(cell.strip())
                 continue
+            if name in dated:
+                try:
+                    parsed.append(to_seconds(cell))
+                except ValueError:
+                    problem = f"row {number} column {name}: {cell.strip()[:30]!r} is not a " \
+                        "date-time like the first row's"
+                    break
+                continue
             if name in gap_columns:
                 try:
-                    value = float(cell)
+                    value = to_number(cell, dialect)
                 except ValueError:
                     value = math.nan
                 if not math.isfinite(value):
@@ -120,7 +137,7 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
                 parsed.append(value)
                 continue
             try:
-                value = float(cell)
+                value = to_number(cell, dialect)
             except ValueError:
                 problem = f"row {number} column {name}: {cell.strip()[:20]!r} is not a number"
                 break
@@ -144,19 +161,24 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
         columns[name] = np.asarray(cells, dtype=object if name in text_columns else np.float64)
     return CsvTable(path, columns, rows_read=len(rows) - 1, rows_dropped=dropped,
                     drop_reasons=reasons, data_rows=np.asarray(kept_rows, dtype=np.intp),
-                    gaps=gaps, gap_reasons=gap_reasons)
+                    gaps=gaps, gap_reasons=gap_reasons, dialect=dialect,
+                    date_time_columns=dated)
+
+
+def _is_date_time(cell: str, dialect: CsvDialect) -> bool:
+    """Whether a time cell is a date-time rather than a number."""
+    try:
+        to_number(cell, dialect)
+        return False
+    except ValueError:
+        pass
+    try:
+        to_seconds(cell)
+        return True
+    except ValueError:
+        return False
 
 
 def csv_header(path: str | Path) -> list[str]:
     """The column names of a CSV's first non-empty row (errors as :func:`read_csv_table`)."""
-    path = Path(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as stream:
-            for row in csv.reader(stream):
-                if any(cell.strip() for cell in row):
-                    return [name.strip() for name in row]
-    except OSError as exc:
-        raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise InputDataError(f"{path}: not a text CSV file ({exc})") from exc
-    raise InputDataError(f"{path}: empty file")
+    return header_row(path)

@@ -1,0 +1,150 @@
+"""How a data logger wrote its CSV: the separator, the decimal mark, the encoding.
+
+Shops export logs from spreadsheets and loggers set up in their own language: a
+German or French export separates fields with ``;`` and writes ``20,35`` for
+20.35; a logger may separate with tabs, start with a byte-order mark, or write
+``°C`` in Windows-1252. :func:`sniff_dialect` reads the first lines and says which;
+:func:`csv_rows` then yields the rows, and :func:`to_number` reads a cell.
+
+Date-times in a time column (``2026-11-20 07:00:00``, ``2026-11-20T07:00:00Z``,
+``20.11.2026 07:00:00``) are read by :func:`to_seconds` as seconds since the epoch
+(a stamp without a zone is taken as UTC: only differences matter here).
+"""
+from __future__ import annotations
+
+import csv
+import re
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Iterator
+
+from ..core.errors import InputDataError
+
+#: Bytes read to decide the dialect.
+SNIFF_BYTES = 64 * 1024
+#: Lines (after blank ones are skipped) whose field counts must agree.
+SNIFF_LINES = 20
+#: Separators tried, the usual first (it wins a tie).
+SEPARATORS = (",", ";", "\t")
+#: A number written with a decimal comma, nothing else in the cell.
+DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d*,\d+([eE][+-]?\d+)?\s*$")
+#: Date-time layouts beyond ISO 8601 (which :meth:`datetime.fromisoformat` reads).
+DATE_TIME_LAYOUTS = ("%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M",
+                     "%Y/%m/%d %H:%M:%S", "%Y/%m/%d %H:%M")
+
+
+@dataclass(frozen=True)
+class CsvDialect:
+    """``delimiter`` between fields; ``decimal_comma``: numbers are written ``20,35``;
+    ``encoding`` of the text (``utf-8-sig`` also reads a UTF-8 byte-order mark)."""
+
+    delimiter: str = ","
+    decimal_comma: bool = False
+    encoding: str = "utf-8-sig"
+
+    def note(self) -> str:
+        """One line for the output when the file is not a plain UTF-8, comma-separated CSV
+        ("" when it is)."""
+        parts = []
+        if self.delimiter != ",":
+            parts.append({";": "semicolon", "\t": "tab"}[self.delimiter] + "-separated")
+        if self.decimal_comma:
+            parts.append("with decimal commas")
+        if self.encoding != "utf-8-sig":
+            parts.append("in Windows-1252 (not UTF-8)")
+        return "read as " + ", ".join(parts) if parts else ""
+
+
+def _text(path: Path, size: int | None) -> tuple[str, str]:
+    """The file's text (its first ``size`` bytes, or all) and the encoding that read it."""
+    try:
+        with open(path, "rb") as stream:
+            data = stream.read() if size is None else stream.read(size)
+    except OSError as exc:
+        raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
+    if b"\x00" in data:
+        raise InputDataError(f"{path}: not a text CSV file (it holds NUL bytes)")
+    try:
+        return data.decode("utf-8-sig"), "utf-8-sig"
+    except UnicodeDecodeError as exc:
+        if size is not None and exc.start >= len(data) - 4:
+            # The sniffed bytes may end inside a character: decide on what came before.
+            return data[:exc.start].decode("utf-8-sig"), "utf-8-sig"
+    # Not UTF-8: a spreadsheet's Windows export. Every byte is a character in it, so a
+    # file that is no text at all shows as such later, in its rows.
+    return data.decode("cp1252", errors="replace"), "cp1252"
+
+
+def sniff_dialect(path: str | Path) -> CsvDialect:
+    """The dialect of ``path`` from its first lines: the separator that splits the header
+    and the next lines into the same number (> 1) of fields, the most of them; decimal
+    commas when the separator is not a comma and a data cell is a number written so."""
+    path = Path(path)
+    text, encoding = _text(path, SNIFF_BYTES)
+    lines = [line for line in text.splitlines() if line.strip()]
+    if len(text) >= SNIFF_BYTES and len(lines) > 1:
+        lines = lines[:-1]          # the last line read may be cut short
+    lines = lines[:SNIFF_LINES]
+    best, best_fields = ",", 1
+    for separator in SEPARATORS:
+        counts = {len(row) for row in csv.reader(lines, delimiter=separator)}
+        if len(counts) == 1 and (fields := counts.pop()) > best_fields:
+            best, best_fields = separator, fields
+    decimal_comma = best != "," and any(
+        DECIMAL_COMMA.match(cell) for row in csv.reader(lines[1:], delimiter=best)
+        for cell in row)
+    return CsvDialect(best, decimal_comma, encoding)
+
+
+def csv_rows(path: str | Path, dialect: CsvDialect) -> Iterator[list[str]]:
+    """Every row of ``path`` as cells (blank rows included), read in ``dialect``."""
+    path = Path(path)
+    try:
+        stream = open(path, newline="", encoding=dialect.encoding,
+                      errors="strict" if dialect.encoding == "utf-8-sig" else "replace")
+    except OSError as exc:
+        raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
+    with stream:
+        try:
+            yield from csv.reader(stream, delimiter=dialect.delimiter)
+        except (UnicodeDecodeError, csv.Error) as exc:
+            raise InputDataError(f"{path}: not a text CSV file ({exc})") from exc
+
+
+def header_row(path: str | Path, dialect: CsvDialect | None = None) -> list[str]:
+    """The column names of the first non-empty row."""
+    dialect = dialect or sniff_dialect(path)
+    for row in csv_rows(path, dialect):
+        if any(cell.strip() for cell in row):
+            return [name.strip() for name in row]
+    raise InputDataError(f"{path}: empty file")
+
+
+def to_number(cell: str, dialect: CsvDialect) -> float:
+    """The cell as a float (``ValueError`` when it is none); a decimal comma is read as a
+    point in a dialect that uses it."""
+    if dialect.decimal_comma:
+        cell = cell.replace(",", ".")
+    return float(cell)
+
+
+def to_seconds(cell: str) -> float:
+    """A date-time cell as POSIX seconds (``ValueError`` when it is none)."""
+    text = cell.strip()
+    stamp = None
+    try:
+        stamp = datetime.fromisoformat(text[:-1] + "+00:00" if text.endswith("Z") else text)
+    except ValueError:
+        for layout in DATE_TIME_LAYOUTS:
+            try:
+                stamp = datetime.strptime(text, layout)
+                break
+            except ValueError:
+                continue
+    if stamp is None:
+        raise ValueError(f"{text[:30]!r} is neither a number nor a date-time")
+    if stamp.tzinfo is None:
+        stamp = stamp.replace(tzinfo=timezone.utc)
+    return stamp.timestamp()
+

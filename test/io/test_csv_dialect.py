@@ -1,0 +1,92 @@
+"""CSV files as shops write them: `;` and decimal commas, tabs, a byte-order mark,
+Windows-1252, date-times in the time column. Each reads as its plain twin does."""
+from __future__ import annotations
+
+from datetime import datetime, timezone
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.core.errors import InputDataError
+from mt_accuracy_ros.io.csv_dialect import CsvDialect, sniff_dialect, to_number, to_seconds
+from mt_accuracy_ros.io.csv_table import read_csv_table
+
+ROWS = [["time_s", "T1 [°C]", "T2 [°C]", "dial [µm]"],
+        ["0", "20.125", "19.5", "-1.25"],
+        ["60", "20.5", "19.625", "0.5"],
+        ["120", "21.0", "19.75", "2.0e-1"]]
+
+
+def _write(path, rows, delimiter=",", decimal_comma=False, encoding="utf-8", bom=False):
+    cells = [[c.replace(".", ",") if decimal_comma and i else c for c in row]
+             for i, row in enumerate(rows)]
+    text = "\r\n".join(delimiter.join(row) for row in cells) + "\r\n"
+    path.write_bytes((b"\xef\xbb\xbf" if bom else b"") + text.encode(encoding))
+    return path
+
+
+@pytest.mark.parametrize("delimiter, decimal_comma, encoding, bom, note", [
+    (",", False, "utf-8", False, ""),
+    (";", True, "cp1252", False,
+     "read as semicolon-separated, with decimal commas, in Windows-1252 (not UTF-8)"),
+    (";", False, "utf-8", True, "read as semicolon-separated"),
+    ("\t", True, "utf-8", True, "read as tab-separated, with decimal commas"),
+])
+def test_each_dialect_is_found_and_reads_as_the_plain_file(tmp_path, delimiter, decimal_comma,
+                                                           encoding, bom, note):
+    plain = read_csv_table(_write(tmp_path / "plain.csv", ROWS))
+    path = _write(tmp_path / "shop.csv", ROWS, delimiter, decimal_comma, encoding, bom)
+    dialect = sniff_dialect(path)
+    assert (dialect.delimiter, dialect.decimal_comma) == (delimiter, decimal_comma)
+    assert dialect.encoding == ("cp1252" if encoding == "cp1252" else "utf-8-sig")
+    assert dialect.note() == note
+    table = read_csv_table(path)
+    assert table.names == ROWS[0]      # the BOM and the encoding do not touch the names
+    for name in ROWS[0]:
+        np.testing.assert_array_equal(table.columns[name], plain.columns[name])
+    assert table.summary().endswith(f"({note})" if note else "rows used")
+
+
+def test_a_comma_inside_quotes_does_not_make_a_file_semicolon_separated(tmp_path):
+    path = tmp_path / "quoted.csv"
+    path.write_text('name,value\n"a; b",1.5\n"c; d",2.5\n', encoding="utf-8")
+    assert sniff_dialect(path) == CsvDialect(",", False, "utf-8-sig")
+
+
+def test_numbers_and_date_times():
+    assert to_number("20,35", CsvDialect(";", True)) == 20.35
+    with pytest.raises(ValueError):
+        to_number("20,35", CsvDialect(",", False))
+    epoch = datetime(2026, 11, 20, 7, 0, tzinfo=timezone.utc).timestamp()
+    for text in ("2026-11-20 07:00:00", "2026-11-20T07:00:00", "2026-11-20T07:00:00Z",
+                 "20.11.2026 07:00:00", "20.11.2026 07:00", "2026/11/20 07:00:00",
+                 "2026-11-20T08:00:00+01:00"):
+        assert to_seconds(text) == epoch, text
+    assert to_seconds("2026-11-20 07:00:00.250") == epoch + 0.25
+    for text in ("soon", "31.02.2026 07:00:00", "12"):
+        with pytest.raises(ValueError):
+            to_seconds(text)
+
+
+def test_a_time_column_of_date_times_is_read_as_seconds_and_a_bad_stamp_names_its_row(
+        tmp_path):
+    rows = [["stamp", "T1", "g_um"], ["2026-11-20 23:59:30", "20.0", "1.0"],
+            ["2026-11-21 00:00:30", "20.5", "2.0"], ["yesterday", "20.6", "2.1"],
+            ["2026-11-21 00:01:30", "21.0", "3.0"]]
+    path = _write(tmp_path / "dated.csv", rows)
+    table = read_csv_table(path, time_columns=("stamp",))
+    assert table.date_time_columns == ("stamp",)
+    stamps = table.columns["stamp"]
+    np.testing.assert_array_equal(stamps - stamps[0], [0.0, 60.0, 120.0])
+    assert table.rows_dropped == 1 and table.drop_reasons == [
+        "row 4 column stamp: 'yesterday' is not a date-time like the first row's"]
+    # Numbers in a time column stay numbers.
+    plain = read_csv_table(_write(tmp_path / "plain.csv", ROWS), time_columns=("time_s",))
+    assert plain.date_time_columns == () and list(plain.columns["time_s"]) == [0, 60, 120]
+
+
+def test_a_file_that_is_no_text_is_refused_in_one_line(tmp_path):
+    path = tmp_path / "binary.csv"
+    path.write_bytes(b"a,b\n1,2\n\x00\x01\x02")
+    with pytest.raises(InputDataError, match="not a text CSV file"):
+        read_csv_table(path)
