@@ -390,3 +390,20 @@ def test_a_log_as_a_spreadsheet_exports_it_reads_as_its_plain_twin(tmp_path, cap
     gains = shop_summary["steps"][0]["parameters"][name]
     assert (gains["bz_T1 [°C]"], gains["bz_T2 [K]"]) == pytest.approx((6e-6, -2e-6),
                                                                       abs=0.2e-6)
+
+
+def test_a_log_whose_clock_was_set_back_names_the_row_in_seconds_since_its_start(
+        tmp_path, capsys):
+    """Local date-times across the end of summer time go back an hour: refused, naming the
+    row, in seconds since the first stamp (not seconds since 1970)."""
+    from mt_accuracy_ros.cli import main
+
+    rows = ["stamp;T1 [°C];g [µm]"]
+    for k in range(60):
+        minutes = 2 * k - (60 if k >= 40 else 0)
+        rows.append(f"2026-10-25 {1 + minutes // 60:02d}:{minutes % 60:02d}:00;"
+                    f"{20 + 0.01 * k:.2f};{0.05 * k:.2f}".replace(".", ","))
+    (tmp_path / "dst.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    assert main(["check", str(tmp_path / "dst.csv"), "--target", "g [µm]", "--time-column",
+                 "stamp", "--inputs", "T*", "--auto", "1"]) == 2
+    assert "the time goes back at data row 41: 1200 s after 4680 s" in capsys.readouterr().err

@@ -245,6 +245,8 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     target_column, target_scale, unit = _column_and_unit(target, names, "length", "target")
     if time_column in names:
         time_s = columns[time_column]
+        if time_column in table.date_time_columns and time_s.size:
+            time_s = time_s - time_s[0]     # seconds since the first stamp
     elif row_period_s is not None:
         time_s = np.arange(len(columns[names[0]]), dtype=np.float64) * float(row_period_s)
     else:
