@@ -339,6 +339,8 @@ def _shop_logs(tmp_path):
     rng = np.random.default_rng(11)
     shop = ["Zeitstempel;T1 [°C];T2 [K];Messuhr [µm]"]
     plain = ["time_s,T1_C,T2_C,dial_um"]
+    # A logger's export: the units in a row of their own; minutes and Fahrenheit.
+    logger = ["Zeit\tT1\tT2\tMessuhr", "min\t°C\t°F\tµm"]
     start = dt.datetime(2026, 3, 20, 6, 0, 0)
     for day in range(6):
         for k in range(120):
@@ -351,9 +353,11 @@ def _shop_logs(tmp_path):
                         .replace(".", ",").replace(",", ".", 2))
             seconds = (stamp - start).total_seconds()
             plain.append(f"{seconds:.0f},{t1:.3f},{t2:.3f},{g:.2f}")
+            logger.append(f"{seconds / 60:.1f}\t{t1:.3f}\t{t2 * 1.8 + 32:.6f}\t{g:.2f}")
     (tmp_path / "shop.csv").write_bytes(("\r\n".join(shop) + "\r\n").encode("cp1252"))
     (tmp_path / "plain.csv").write_text("\n".join(plain) + "\n")
-    return tmp_path / "shop.csv", tmp_path / "plain.csv"
+    (tmp_path / "logger.csv").write_text("\n".join(logger) + "\n", encoding="utf-8")
+    return tmp_path / "shop.csv", tmp_path / "plain.csv", tmp_path / "logger.csv"
 
 
 def test_a_log_as_a_spreadsheet_exports_it_reads_as_its_plain_twin(tmp_path, capsys):
@@ -362,14 +366,16 @@ def test_a_log_as_a_spreadsheet_exports_it_reads_as_its_plain_twin(tmp_path, cap
     date-times to seconds), and the output says how the file was read."""
     from mt_accuracy_ros.cli import main
 
-    shop, plain = _shop_logs(tmp_path)
+    shop, plain, logger = _shop_logs(tmp_path)
     assert main(["check", str(shop), "--target", "Messuhr [µm]", "--auto", "2",
                  "--inputs", "T*"]) == 2
     assert "no time column 'time_s' (give --time-column Zeitstempel" in capsys.readouterr().err
     summaries = []
     for path, args in ((shop, ["--target", "Messuhr [µm]", "--time-column", "Zeitstempel",
                                "--inputs", "T*"]),
-                       (plain, ["--target", "dial_um", "--inputs", "T*_C"])):
+                       (plain, ["--target", "dial_um", "--inputs", "T*_C"]),
+                       (logger, ["--target", "Messuhr", "--time-column", "Zeit",
+                                 "--inputs", "T*"])):
         assert main(["check", str(path), *args, "--auto", "2",
                      "--json", str(tmp_path / f"{path.stem}.json")]) == 0
         summaries.append(json.loads((tmp_path / f"{path.stem}.json").read_text()))
@@ -378,12 +384,18 @@ def test_a_log_as_a_spreadsheet_exports_it_reads_as_its_plain_twin(tmp_path, cap
         "commas, in Windows-1252 (not UTF-8))" in out
     assert "note: time from the date-times of Zeitstempel" in out
     assert "note: temperatures converted to °C: T2 [K] (K)" in out
-    shop_summary, plain_summary = summaries
+    assert "note: units from the row under the header: Zeit min, T1 °C, T2 °F, Messuhr µm" \
+        in out and "note: time Zeit converted from min to s" in out
+    assert "note: temperatures converted to °C: T2 (degF)" in out
+    shop_summary, plain_summary, logger_summary = summaries
     assert [n.replace("T1 [°C]", "T1_C").replace("T2 [K]", "T2_C")
-            for n in shop_summary["added"]] == plain_summary["added"]
+            for n in shop_summary["added"]] == plain_summary["added"] == \
+        [n.replace("T1", "T1_C").replace("T2", "T2_C") for n in logger_summary["added"]]
+    assert logger_summary["rows"] == plain_summary["rows"] == 720
     for key in ("final_rmse", "constant_held_out_rmse",
                 "all_inputs_least_squares_held_out_rmse"):
         assert shop_summary[key] == pytest.approx(plain_summary[key], rel=1e-9)
+        assert logger_summary[key] == pytest.approx(plain_summary[key], rel=1e-6)
     # The gains are the generator's: 6 and -2 um/K.
     name = shop_summary["added"][0]
     assert name == "sensor_least_squares:T1 [°C]+T2 [K]"

@@ -444,18 +444,20 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
 
 
 # ------------------------------------------------------------------ thermal log path
-def _column_and_unit(flag: str, names: list[str], quantity: str, what: str
-                     ) -> tuple[str, float, str]:
-    """``COLUMN[:UNIT]`` -> (column, SI scale, unit); the unit from the flag, else the
-    column's suffix (``ch5_um``, ``spindle_rpm``)."""
-    from ..io.column_map import UNITS, unit_from_name
+def _column_and_unit(flag: str, names: list[str], quantity: str, what: str,
+                     units: dict[str, str] | None = None) -> tuple[str, float, str]:
+    """``COLUMN[:UNIT]`` -> (column, SI scale, unit); the unit from the flag, else from a
+    units row under the header (``units``), else the column's name (``ch5_um``,
+    ``dial [µm]``, ``spindle_rpm``)."""
+    from ..io.column_map import UNIT_SPELLINGS, UNITS, unit_from_name
 
     column, unit = (flag.rsplit(":", 1) + [""])[:2] if ":" in flag else (flag, "")
     column, unit = column.strip(), unit.strip()
     if column not in names:
         raise InputDataError(f"no {what} column {column!r}; have {', '.join(names)}")
     table = UNITS[quantity]
-    unit = unit or unit_from_name(column, quantity)
+    given = (units or {}).get(column, "")
+    unit = unit or UNIT_SPELLINGS.get(given, given) or unit_from_name(column, quantity)
     if unit not in table or not unit:
         raise InputDataError(f"{what} {column!r}: give its unit as {column}:UNIT (one of "
                              f"{', '.join(u for u in table if u)}); none could be read off "

@@ -205,15 +205,32 @@ class LogData:
     notes: list[str]
 
 
-def _in_celsius(temperatures: dict[str, np.ndarray]) -> tuple[dict[str, np.ndarray], list]:
-    """Temperatures in °C (as sensor_msgs/Temperature), each from the unit its column's
-    name gives (``T1_K``, ``T2 [°F]``; °C when it gives none), and a note of those
-    converted."""
-    from ..io.column_map import TEMPERATURE, unit_from_name
+def _in_seconds(name: str, values: np.ndarray, units: dict[str, str]
+                ) -> tuple[np.ndarray, str]:
+    """A time column in seconds, from the unit a units row or its name gives (``t_min``,
+    ``time [h]``; seconds when neither does), and a note when it was converted."""
+    from ..io.column_map import UNITS, unit_from_name
+
+    unit = units.get(name, "") if units.get(name, "") in UNITS["time"] else \
+        unit_from_name(name, "time")
+    if unit in ("", "s"):
+        return values, ""
+    return values * UNITS["time"][unit], f"time {name} converted from {unit} to s"
+
+
+def _in_celsius(temperatures: dict[str, np.ndarray], units: dict[str, str] | None = None
+                ) -> tuple[dict[str, np.ndarray], list]:
+    """Temperatures in °C (as sensor_msgs/Temperature), each from the unit a units row
+    (``units``) or its column's name gives (``T1_K``, ``T2 [°F]``; °C when neither
+    does), and a note of those converted."""
+    from ..io.column_map import TEMPERATURE, UNIT_SPELLINGS, unit_from_name
 
     out, converted = {}, []
     for name, values in temperatures.items():
-        unit = unit_from_name(name, "temperature") or "degC"
+        given = (units or {}).get(name, "")
+        given = UNIT_SPELLINGS.get(given, given)
+        unit = (given if given in TEMPERATURE else "") or \
+            unit_from_name(name, "temperature") or "degC"
         scale, offset = TEMPERATURE[unit]
         out[name] = values * scale + offset if (scale, offset) != (1.0, 0.0) else values
         if unit not in ("degC", "C"):
@@ -242,11 +259,15 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
                            time_columns=(time_column,))
     names = table.names
     columns = table.columns
-    target_column, target_scale, unit = _column_and_unit(target, names, "length", "target")
+    target_column, target_scale, unit = _column_and_unit(target, names, "length", "target",
+                                                         table.units)
+    time_note = ""
     if time_column in names:
         time_s = columns[time_column]
         if time_column in table.date_time_columns and time_s.size:
             time_s = time_s - time_s[0]     # seconds since the first stamp
+        else:
+            time_s, time_note = _in_seconds(time_column, time_s, table.units)
     elif row_period_s is not None:
         time_s = np.arange(len(columns[names[0]]), dtype=np.float64) * float(row_period_s)
     else:
@@ -260,14 +281,18 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
         raise InputDataError(f"{path}: no input column matches {inputs}")
     speed = None
     for driver in drivers:
-        column, scale, _ = _column_and_unit(driver, names, "speed", "driver")
+        column, scale, _ = _column_and_unit(driver, names, "speed", "driver", table.units)
         if speed is not None:
             raise InputDataError("one --driver: the spindle speed (the heat source the "
                                  "catalogue models, heat_source:spindle_speed)")
         speed = columns[column] * scale
     run_of_row, run_names = None, None
     target_m = columns[target_column] * target_scale
-    temperatures, notes = _in_celsius({n: columns[n] for n in selected})
+    temperatures, notes = _in_celsius({n: columns[n] for n in selected}, table.units)
+    notes += [time_note] if time_note else []
+    if table.units:
+        notes.append("units from the row under the header: " + ", ".join(
+            f"{name} {unit}" for name, unit in table.units.items()))
     if time_column in table.date_time_columns:
         notes.append(f"time from the date-times of {time_column} (seconds since its first, "
                      "a stamp without a zone taken as UTC)")

@@ -44,6 +44,8 @@ class CsvTable:
     dialect: CsvDialect = field(default_factory=CsvDialect)
     #: Time columns whose cells were date-times (their values are POSIX seconds).
     date_time_columns: tuple[str, ...] = ()
+    #: Column -> unit, from a row of units under the header (a logger's export), if any.
+    units: dict[str, str] = field(default_factory=dict)
 
     def drop_gaps_of(self, columns: set[str]) -> None:
         """Count the rows with a missing value in ``columns`` as dropped, with reasons (the
@@ -97,11 +99,14 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
     if missing:
         raise InputDataError(f"{path}: no column {missing[0]!r}; have {', '.join(header)}")
     values, dropped, reasons, kept_rows, gaps, gap_reasons = [], 0, [], [], {}, []
+    units = _units_row(rows[1], header, text_columns, dialect) if len(rows) > 1 else {}
+    start = 3 if units else 2          # the file's row number of the first data row
     # A time column is read as numbers or, when its first cell is none, as date-times.
-    first = rows[1] if len(rows) > 1 and len(rows[1]) == len(header) else None
+    first = rows[start - 1] if len(rows) > start - 1 and \
+        len(rows[start - 1]) == len(header) else None
     dated = tuple(name for name in time_columns if name in header and first is not None
                   and _is_date_time(first[header.index(name)], dialect))
-    for number, row in enumerate(rows[1:], start=2):
+    for number, row in enumerate(rows[start - 1:], start=start):
         if len(row) != len(header):
             raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
                                  f"{len(header)}")
@@ -151,7 +156,7 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
                 reasons.append(problem)
             continue
         values.append(parsed)
-        kept_rows.append(number - 1)
+        kept_rows.append(number - start + 1)
     if len(values) < min_rows:
         raise InputDataError(f"{path}: {len(values)} usable rows; at least {min_rows} needed"
                              + (f" ({reasons[0]})" if reasons else ""))
@@ -159,10 +164,37 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
     for j, name in enumerate(header):
         cells = [row[j] for row in values]
         columns[name] = np.asarray(cells, dtype=object if name in text_columns else np.float64)
-    return CsvTable(path, columns, rows_read=len(rows) - 1, rows_dropped=dropped,
+    return CsvTable(path, columns, rows_read=len(rows) - start + 1, rows_dropped=dropped,
                     drop_reasons=reasons, data_rows=np.asarray(kept_rows, dtype=np.intp),
                     gaps=gaps, gap_reasons=gap_reasons, dialect=dialect,
-                    date_time_columns=dated)
+                    date_time_columns=dated, units=units)
+
+
+def _units_row(row: list[str], header: list[str], text_columns: tuple[str, ...],
+               dialect: CsvDialect) -> dict[str, str]:
+    """Column -> unit when ``row`` (the one under the header) is a row of units: no cell a
+    number or a date-time, and one at least a unit this package knows. Else {}."""
+    from .column_map import TEMPERATURE, UNIT_SPELLINGS, UNITS
+
+    if len(row) != len(header):
+        return {}
+    known = set(TEMPERATURE) | set(UNIT_SPELLINGS) | {u for table in UNITS.values()
+                                                      for u in table if u}
+    cells = {name: cell.strip().strip("[]()").strip() for name, cell in zip(header, row)
+             if name not in text_columns}
+    if any(_is_number_or_date_time(cell, dialect) for cell in cells.values() if cell):
+        return {}
+    if not any(cell in known for cell in cells.values()):
+        return {}
+    return {name: cell for name, cell in cells.items() if cell}
+
+
+def _is_number_or_date_time(cell: str, dialect: CsvDialect) -> bool:
+    try:
+        to_number(cell, dialect)
+        return True
+    except ValueError:
+        return _is_date_time(cell, dialect)
 
 
 def _is_date_time(cell: str, dialect: CsvDialect) -> bool:

@@ -90,3 +90,18 @@ def test_a_file_that_is_no_text_is_refused_in_one_line(tmp_path):
     path.write_bytes(b"a,b\n1,2\n\x00\x01\x02")
     with pytest.raises(InputDataError, match="not a text CSV file"):
         read_csv_table(path)
+
+
+def test_a_row_of_units_under_the_header_is_read_as_units_not_dropped(tmp_path):
+    rows = [["t", "T1", "g"], ["min", "°C", "µm"], ["0", "20.0", "1.0"], ["1", "x", "2.0"],
+            ["2", "21.0", "3.0"]]
+    table = read_csv_table(_write(tmp_path / "units.csv", rows))
+    assert table.units == {"t": "min", "T1": "°C", "g": "µm"}
+    assert table.rows_read == 3 and table.rows_dropped == 1
+    assert table.drop_reasons == ["row 4 column T1: 'x' is not a number"]   # the file's row
+    assert list(table.data_rows) == [1, 3]                                  # after the units
+    np.testing.assert_array_equal(table.columns["g"], [1.0, 3.0])
+    # A first row of words that are no units is a bad data row, as before.
+    rows[1] = ["soon", "hot", "far"]
+    table = read_csv_table(_write(tmp_path / "words.csv", rows))
+    assert table.units == {} and table.rows_read == 4 and table.rows_dropped == 2
