@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError, ParameterError
-from .csv_dialect import csv_rows, sniff_dialect
+from .csv_dialect import sniff_dialect, table_rows
 
 _LENGTH = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "micron": 1e-6, "nm": 1e-9,
            "in": 0.0254, "inch": 0.0254}
@@ -352,7 +352,7 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     header, index, number = None, {}, 0
     dialect = sniff_dialect(path)
     comma = dialect.decimal_comma
-    with contextlib.closing(csv_rows(path, dialect)) as reader:
+    with contextlib.closing(table_rows(path, dialect)) as reader:
         for row in reader:
             if "".join(row).strip():
                 header = [h.strip() for h in row]

@@ -25,6 +25,8 @@ from ..core.errors import InputDataError
 SNIFF_BYTES = 64 * 1024
 #: Lines (after blank ones are skipped) whose field counts must agree.
 SNIFF_LINES = 20
+#: Lines a logger may write before the header (title, serial number, start time, ...).
+MAX_PREAMBLE_LINES = 30
 #: Separators tried, the usual first (it wins a tie).
 SEPARATORS = (",", ";", "\t")
 #: A number written with a decimal comma, nothing else in the cell.
@@ -42,6 +44,8 @@ class CsvDialect:
     delimiter: str = ","
     decimal_comma: bool = False
     encoding: str = "utf-8-sig"
+    #: Non-empty lines before the header (a logger's preamble: title, serial number, ...).
+    preamble_lines: int = 0
 
     def note(self) -> str:
         """One line for the output when the file is not a plain UTF-8, comma-separated CSV
@@ -53,7 +57,11 @@ class CsvDialect:
             parts.append("with decimal commas")
         if self.encoding != "utf-8-sig":
             parts.append("in Windows-1252 (not UTF-8)")
-        return "read as " + ", ".join(parts) if parts else ""
+        said = ["read as " + ", ".join(parts)] if parts else []
+        if self.preamble_lines:
+            said.append(f"{self.preamble_lines} line{'s' if self.preamble_lines > 1 else ''} "
+                        "before the header skipped")
+        return "; ".join(said)
 
 
 def _text(path: Path, size: int | None) -> tuple[str, str]:
@@ -77,24 +85,48 @@ def _text(path: Path, size: int | None) -> tuple[str, str]:
 
 
 def sniff_dialect(path: str | Path) -> CsvDialect:
-    """The dialect of ``path`` from its first lines: the separator that splits the header
-    and the next lines into the same number (> 1) of fields, the most of them; decimal
+    """The dialect of ``path`` from its first lines: the header is the first line from
+    which it and the next lines split into the same number (> 1) of fields (lines before
+    it are a logger's preamble), by the separator that gives the most of them; decimal
     commas when the separator is not a comma and a data cell is a number written so."""
     path = Path(path)
     text, encoding = _text(path, SNIFF_BYTES)
     lines = [line for line in text.splitlines() if line.strip()]
     if len(text) >= SNIFF_BYTES and len(lines) > 1:
         lines = lines[:-1]          # the last line read may be cut short
-    lines = lines[:SNIFF_LINES]
-    best, best_fields = ",", 1
-    for separator in SEPARATORS:
-        counts = {len(row) for row in csv.reader(lines, delimiter=separator)}
-        if len(counts) == 1 and (fields := counts.pop()) > best_fields:
-            best, best_fields = separator, fields
+    best, best_fields, start = ",", 1, 0
+    for first in range(min(MAX_PREAMBLE_LINES + 1, max(1, len(lines) - 1))):
+        window = lines[first:first + SNIFF_LINES]
+        for separator in SEPARATORS:
+            counts = {len(row) for row in csv.reader(window, delimiter=separator)}
+            if len(counts) != 1 or (fields := counts.pop()) <= best_fields:
+                continue
+            if first and not _preamble(lines[:first + 1], separator, fields):
+                continue
+            best, best_fields, start = separator, fields, first
+        if best_fields > 1:
+            break
+    window = lines[start + 1:start + SNIFF_LINES]
     decimal_comma = best != "," and any(
-        DECIMAL_COMMA.match(cell) for row in csv.reader(lines[1:], delimiter=best)
+        DECIMAL_COMMA.match(cell) for row in csv.reader(window, delimiter=best)
         for cell in row)
-    return CsvDialect(best, decimal_comma, encoding)
+    return CsvDialect(best, decimal_comma, encoding, start)
+
+
+def _preamble(lines: list[str], separator: str, fields: int) -> bool:
+    """Whether ``lines[:-1]`` are a preamble to the header ``lines[-1]``: each splits into
+    fewer fields than the header, and no header cell is a number (else a damaged row in
+    the data, not a preamble, broke the field counts)."""
+    rows = list(csv.reader(lines, delimiter=separator))
+    if any(len(row) >= fields for row in rows[:-1]):
+        return False
+    for cell in rows[-1]:
+        try:
+            float(cell.replace(",", "."))
+            return False
+        except ValueError:
+            continue
+    return True
 
 
 def csv_rows(path: str | Path, dialect: CsvDialect) -> Iterator[list[str]]:
@@ -112,12 +144,27 @@ def csv_rows(path: str | Path, dialect: CsvDialect) -> Iterator[list[str]]:
             raise InputDataError(f"{path}: not a text CSV file ({exc})") from exc
 
 
-def header_row(path: str | Path, dialect: CsvDialect | None = None) -> list[str]:
-    """The column names of the first non-empty row."""
-    dialect = dialect or sniff_dialect(path)
+def table_rows(path: str | Path, dialect: CsvDialect) -> Iterator[list[str]]:
+    """The non-empty rows of ``path`` from its header on (a preamble skipped)."""
+    skipped = 0
     for row in csv_rows(path, dialect):
-        if any(cell.strip() for cell in row):
+        if not any(cell.strip() for cell in row):
+            continue
+        if skipped < dialect.preamble_lines:
+            skipped += 1
+            continue
+        yield row
+
+
+def header_row(path: str | Path, dialect: CsvDialect | None = None) -> list[str]:
+    """The column names of the header row."""
+    dialect = dialect or sniff_dialect(path)
+    rows = table_rows(path, dialect)
+    try:
+        for row in rows:
             return [name.strip() for name in row]
+    finally:
+        rows.close()
     raise InputDataError(f"{path}: empty file")
 
 

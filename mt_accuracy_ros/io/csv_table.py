@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError
-from .csv_dialect import CsvDialect, csv_rows, header_row, sniff_dialect, to_number, to_seconds
+from .csv_dialect import (CsvDialect, header_row, sniff_dialect, table_rows, to_number,
+                          to_seconds)
 
 #: Reasons kept for the report (the count covers all of them).
 KEPT_REASONS = 5
@@ -89,7 +90,7 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
     came from. ``time_columns`` take numbers or date-times (POSIX seconds), not a mix."""
     path = Path(path)
     dialect = sniff_dialect(path)
-    rows = [r for r in csv_rows(path, dialect) if any(cell.strip() for cell in r)]
+    rows = list(table_rows(path, dialect))
     if not rows:
         raise InputDataError(f"{path}: empty file")
     header = [name.strip() for name in rows[0]]

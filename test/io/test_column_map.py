@@ -258,8 +258,9 @@ def test_chunks_read_as_row_by_row_across_boundaries_blank_lines_and_bad_rows(
 
 def test_a_survey_with_semicolons_and_decimal_commas_reads_as_its_plain_twin(
         tmp_path, monkeypatch):
-    """A spreadsheet's German export of the same survey: every mapped value equal, bit for
-    bit, on the chunked path and row by row (a bad row in it is named alike)."""
+    """A spreadsheet's German export of the same survey, a line of preamble before its
+    header: every mapped value equal, bit for bit, on the chunked path and row by row (a
+    bad row in it is named alike, rows counted from the header)."""
     from mt_accuracy_ros.io import column_map as module
 
     rng = np.random.default_rng(3)
@@ -270,14 +271,15 @@ def test_a_survey_with_semicolons_and_decimal_commas_reads_as_its_plain_twin(
     plain = read_mapped_csv(_write(tmp_path / "plain.csv", rows), column_map_from_dict(MAP))
     german = [";".join(cell.replace(".", ",") for cell in row.split(",")) for row in rows]
     path = tmp_path / "german.csv"
-    path.write_bytes(("t;x;b;dx;Tb;Tc;f;S;note\r\n" + "\r\n".join(german) + "\r\n")
-                     .encode("cp1252"))
+    path.write_bytes(("Messprotokoll;Maschine 7\r\n\r\nt;x;b;dx;Tb;Tc;f;S;note\r\n" +
+                      "\r\n".join(german) + "\r\n").encode("cp1252"))
     surveys = [read_mapped_csv(path, column_map_from_dict(MAP))]
     monkeypatch.setattr(module, "_parse_clean_chunk", lambda *args: False)
     surveys.append(read_mapped_csv(path, column_map_from_dict(MAP)))
     for survey in surveys:
         assert survey.summary("german.csv") == "german.csv: 299 of 300 rows used (read as " \
-            "semicolon-separated, with decimal commas); 1 dropped (row 42 column f: 'n/a')"
+            "semicolon-separated, with decimal commas; 1 line before the header skipped); " \
+            "1 dropped (row 42 column f: 'n/a')"
         assert survey.drop_reasons == plain.drop_reasons
         for name in ("time_s", "positions", "errors", "temperatures", "velocities",
                      "spindle_speed_rad_s"):

@@ -105,3 +105,28 @@ def test_a_row_of_units_under_the_header_is_read_as_units_not_dropped(tmp_path):
     rows[1] = ["soon", "hot", "far"]
     table = read_csv_table(_write(tmp_path / "words.csv", rows))
     assert table.units == {} and table.rows_read == 4 and table.rows_dropped == 2
+
+
+def test_a_loggers_preamble_before_the_header_is_skipped_and_said(tmp_path):
+    preamble = ["Plot Title: spindle warm-up", "Serial Number: 20551234",
+                "Start; 20.11.2026 07:00"]
+    path = tmp_path / "hobo.csv"
+    lines = preamble + [";".join(row) for row in ROWS]
+    path.write_text("\n".join(lines[:3] + [""] + lines[3:]) + "\n", encoding="utf-8")
+    dialect = sniff_dialect(path)
+    assert (dialect.delimiter, dialect.preamble_lines) == (";", 3)
+    table = read_csv_table(path)
+    assert table.names == ROWS[0] and table.rows_read == 3
+    assert dialect.note() == "read as semicolon-separated; 3 lines before the header skipped"
+    np.testing.assert_array_equal(table.columns["dial [µm]"], [-1.25, 0.5, 0.2])
+
+
+def test_a_damaged_row_near_the_top_is_not_taken_for_a_preamble(tmp_path):
+    """Data rows before a row with a field too many split like the header: they are no
+    preamble, and the damaged row is named as before."""
+    rows = [",".join(r) for r in ROWS] + ["180,21.5,19.9,0.3,extra", "240,21.6,20.0,0.4"]
+    path = tmp_path / "damaged.csv"
+    path.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    assert sniff_dialect(path).preamble_lines == 0
+    with pytest.raises(InputDataError, match="row 5 has 5 fields, the header 4"):
+        read_csv_table(path)
