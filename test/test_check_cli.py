@@ -367,6 +367,11 @@ def test_a_log_as_a_spreadsheet_exports_it_reads_as_its_plain_twin(tmp_path, cap
     from mt_accuracy_ros.cli import main
 
     shop, plain, logger = _shop_logs(tmp_path)
+    # The date and the time of day in columns of their own: --time-column Datum+Uhrzeit.
+    split = [line.replace("Zeitstempel", "Datum;Uhrzeit", 1) if k == 0 else
+             line.replace(" ", ";", 1)
+             for k, line in enumerate(shop.read_bytes().decode("cp1252").splitlines())]
+    (tmp_path / "split.csv").write_bytes(("\r\n".join(split) + "\r\n").encode("cp1252"))
     assert main(["check", str(shop), "--target", "Messuhr [µm]", "--auto", "2",
                  "--inputs", "T*"]) == 2
     assert "no time column 'time_s' (give --time-column Zeitstempel" in capsys.readouterr().err
@@ -375,7 +380,9 @@ def test_a_log_as_a_spreadsheet_exports_it_reads_as_its_plain_twin(tmp_path, cap
                                "--inputs", "T*"]),
                        (plain, ["--target", "dial_um", "--inputs", "T*_C"]),
                        (logger, ["--target", "Messuhr", "--time-column", "Zeit",
-                                 "--inputs", "T*"])):
+                                 "--inputs", "T*"]),
+                       (tmp_path / "split.csv", ["--target", "Messuhr [µm]", "--time-column",
+                                                 "Datum+Uhrzeit", "--inputs", "T*"])):
         assert main(["check", str(path), *args, "--auto", "2",
                      "--json", str(tmp_path / f"{path.stem}.json")]) == 0
         summaries.append(json.loads((tmp_path / f"{path.stem}.json").read_text()))
@@ -387,7 +394,10 @@ def test_a_log_as_a_spreadsheet_exports_it_reads_as_its_plain_twin(tmp_path, cap
     assert "note: units from the row under the header: Zeit min, T1 °C, T2 °F, Messuhr µm" \
         in out and "note: time Zeit converted from min to s" in out
     assert "note: temperatures converted to °C: T2 (degF)" in out
-    shop_summary, plain_summary, logger_summary = summaries
+    assert "note: time from the date-times of Datum + Uhrzeit" in out
+    shop_summary, plain_summary, logger_summary, split_summary = summaries
+    assert split_summary["added"] == shop_summary["added"]
+    assert split_summary["final_rmse"] == shop_summary["final_rmse"]
     assert [n.replace("T1 [°C]", "T1_C").replace("T2 [K]", "T2_C")
             for n in shop_summary["added"]] == plain_summary["added"] == \
         [n.replace("T1", "T1_C").replace("T2", "T2_C") for n in logger_summary["added"]]

@@ -205,6 +205,21 @@ class LogData:
     notes: list[str]
 
 
+def _joined_date_times(path: Path, parts: list[np.ndarray], data_rows: np.ndarray
+                       ) -> np.ndarray:
+    """Seconds since the first row of a date and a time of day kept in separate columns;
+    one line naming the data row whose cells are no date-time."""
+    from ..io.csv_dialect import to_seconds
+
+    out = np.empty(parts[0].size)
+    for k, cells in enumerate(zip(*parts)):
+        try:
+            out[k] = to_seconds(" ".join(str(c) for c in cells))
+        except ValueError as exc:
+            raise InputDataError(f"{path}: data row {int(data_rows[k])}: {exc}") from exc
+    return out - out[0] if out.size else out
+
+
 def _in_seconds(name: str, values: np.ndarray, units: dict[str, str]
                 ) -> tuple[np.ndarray, str]:
     """A time column in seconds, from the unit a units row or its name gives (``t_min``,
@@ -251,10 +266,16 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     from .check import _column_and_unit
 
     header = csv_header(path)
+    # A date and a time of day in two columns: --time-column DATE+TIME.
+    split_time = time_column.split("+") if time_column not in header and \
+        "+" in time_column and all(p.strip() in header for p in time_column.split("+")) \
+        else []
+    split_time = [p.strip() for p in split_time]
     fixed = {flag.split(":", 1)[0].strip() for flag in [target, *drivers]} | \
-        {time_column, run_column}
+        {time_column, run_column, *split_time}
     # A temperature column may have holes (a dead thermocouple): kept as NaN, decided below.
-    table = read_csv_table(path, text_columns=(run_column,) if run_column else (),
+    table = read_csv_table(path, text_columns=((run_column,) if run_column else ()) +
+                           tuple(split_time),
                            gap_columns=tuple(n for n in header if n not in fixed),
                            time_columns=(time_column,))
     names = table.names
@@ -262,7 +283,11 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     target_column, target_scale, unit = _column_and_unit(target, names, "length", "target",
                                                          table.units)
     time_note = ""
-    if time_column in names:
+    if split_time:
+        time_s = _joined_date_times(path, [columns[p] for p in split_time], table.data_rows)
+        time_note = f"time from the date-times of {' + '.join(split_time)} (seconds since " \
+            "its first, a stamp without a zone taken as UTC)"
+    elif time_column in names:
         time_s = columns[time_column]
         if time_column in table.date_time_columns and time_s.size:
             time_s = time_s - time_s[0]     # seconds since the first stamp
@@ -276,7 +301,7 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
                              f"{' ' + timely[0] if timely else ''}, or --row-period SECONDS "
                              f"for one row every SECONDS); columns: {', '.join(names)}")
     selected = [n for n in names if any(fnmatch.fnmatch(n, p) for p in inputs)
-                and n not in (target_column, time_column, run_column)]
+                and n not in (target_column, time_column, run_column, *split_time)]
     if not selected:
         raise InputDataError(f"{path}: no input column matches {inputs}")
     speed = None

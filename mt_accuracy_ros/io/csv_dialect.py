@@ -106,6 +106,20 @@ def sniff_dialect(path: str | Path) -> CsvDialect:
             best, best_fields, start = separator, fields, first
         if best_fields > 1:
             break
+    if best_fields == 1:
+        # No header matches its data: the separator the data rows agree on, so that the
+        # error names the header's fields against theirs.
+        # (A tie - decimal commas split a row as a comma would - goes to the separator
+        # that splits the header more.)
+        ranked = []
+        for separator in SEPARATORS:
+            counts = {len(row) for row in csv.reader(lines[1:SNIFF_LINES],
+                                                     delimiter=separator)}
+            if len(counts) == 1 and (fields := counts.pop()) > 1:
+                header = next(csv.reader(lines[:1], delimiter=separator), [])
+                ranked.append((fields, len(header), separator))
+        if ranked:
+            best = max(ranked, key=lambda r: (r[0], r[1]))[2]
     window = lines[start + 1:start + SNIFF_LINES]
     decimal_comma = best != "," and any(
         DECIMAL_COMMA.match(cell) for row in csv.reader(window, delimiter=best)

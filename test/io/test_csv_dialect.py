@@ -130,3 +130,12 @@ def test_a_damaged_row_near_the_top_is_not_taken_for_a_preamble(tmp_path):
     assert sniff_dialect(path).preamble_lines == 0
     with pytest.raises(InputDataError, match="row 5 has 5 fields, the header 4"):
         read_csv_table(path)
+
+
+def test_a_header_that_does_not_match_its_data_is_named_in_the_datas_separator(tmp_path):
+    path = tmp_path / "mismatch.csv"
+    path.write_text("Datum;Uhrzeit;T1 [°C]\n20.03.2026 06:00:00;20,5\n"
+                    "20.03.2026 06:02:00;20,6\n", encoding="utf-8")
+    assert sniff_dialect(path).delimiter == ";"
+    with pytest.raises(InputDataError, match="row 2 has 2 fields, the header 3"):
+        read_csv_table(path)
