@@ -3,8 +3,9 @@
 Shops export logs from spreadsheets and loggers set up in their own language: a
 German or French export separates fields with ``;`` and writes ``20,35`` for
 20.35; a logger may separate with tabs, start with a byte-order mark, or write
-``°C`` in Windows-1252. :func:`sniff_dialect` reads the first lines and says which;
-:func:`csv_rows` then yields the rows, and :func:`to_number` reads a cell.
+``°C`` in Windows-1252, or write a preamble (title, serial number) before the header.
+:func:`sniff_dialect` reads the first lines and says which; :func:`table_rows` then
+yields the rows from the header on, and :func:`to_number` reads a cell.
 
 Date-times in a time column (``2026-11-20 07:00:00``, ``2026-11-20T07:00:00Z``,
 ``20.11.2026 07:00:00``) are read by :func:`to_seconds` as seconds since the epoch
@@ -32,8 +33,8 @@ SEPARATORS = (",", ";", "\t")
 #: A number written with a decimal comma, nothing else in the cell.
 DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d*,\d+([eE][+-]?\d+)?\s*$")
 #: Date-time layouts beyond ISO 8601 (which :meth:`datetime.fromisoformat` reads).
-DATE_TIME_LAYOUTS = ("%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M",
-                     "%Y/%m/%d %H:%M:%S", "%Y/%m/%d %H:%M")
+DATE_TIME_LAYOUTS = ("%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M:%S,%f",
+                     "%d.%m.%Y %H:%M", "%Y/%m/%d %H:%M:%S", "%Y/%m/%d %H:%M")
 
 
 @dataclass(frozen=True)

@@ -63,6 +63,7 @@ def test_numbers_and_date_times():
                  "2026-11-20T08:00:00+01:00"):
         assert to_seconds(text) == epoch, text
     assert to_seconds("2026-11-20 07:00:00.250") == epoch + 0.25
+    assert to_seconds("20.11.2026 07:00:00,250") == epoch + 0.25
     for text in ("soon", "31.02.2026 07:00:00", "12"):
         with pytest.raises(ValueError):
             to_seconds(text)
