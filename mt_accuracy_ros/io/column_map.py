@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError, ParameterError
-from .csv_dialect import sniff_dialect, table_rows
+from .csv_dialect import sniff_dialect, table_rows, to_seconds
 
 _LENGTH = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "micron": 1e-6, "nm": 1e-9,
            "in": 0.0254, "inch": 0.0254}
@@ -264,7 +264,8 @@ CSV_CHUNK_ROWS = 4096
 
 
 def _parse_clean_chunk(chunk: list[list[str]], header: list[str], index: dict[str, int],
-                       values: dict[str, list], decimal_comma: bool = False) -> bool:
+                       values: dict[str, list], decimal_comma: bool = False,
+                       dated: bool = False) -> bool:
     """Append ``chunk``'s mapped cells to ``values`` column by column and return True -
     or append nothing and return False when a row has the wrong number of fields, a
     numeric cell is not a finite number or a run cell is empty (then
@@ -281,6 +282,12 @@ def _parse_clean_chunk(chunk: list[list[str]], header: list[str], index: dict[st
                 return False
             parsed[role] = cells
             continue
+        if role == "time" and dated:
+            try:
+                parsed[role] = [to_seconds(c) for c in cells]
+            except ValueError:
+                return False
+            continue
         if decimal_comma:
             cells = [c.replace(",", ".") for c in cells]
         try:
@@ -295,9 +302,26 @@ def _parse_clean_chunk(chunk: list[list[str]], header: list[str], index: dict[st
     return True
 
 
+def _dated(row: list[str], column: int, decimal_comma: bool) -> bool:
+    """Whether a survey's time cell is a date-time rather than a number."""
+    if column >= len(row):
+        return False
+    cell = row[column].replace(",", ".") if decimal_comma else row[column]
+    try:
+        float(cell)
+        return False
+    except ValueError:
+        pass
+    try:
+        to_seconds(row[column])
+        return True
+    except ValueError:
+        return False
+
+
 def _parse_row(path: Path, row: list[str], number: int, header: list[str],
                index: dict[str, int], values: dict[str, list], bad_in_column: dict[str, int],
-               first_bad: dict, decimal_comma: bool = False) -> str:
+               first_bad: dict, decimal_comma: bool = False, dated: bool = False) -> str:
     """Append row ``number``'s mapped cells to ``values`` (SI scaling comes later); the
     reason it is dropped instead ("" when kept: then every role got its value)."""
     if len(row) != len(header):
@@ -312,7 +336,8 @@ def _parse_row(path: Path, row: list[str], number: int, header: list[str],
             parsed[role] = cell
             continue
         try:
-            value = float(cell.replace(",", ".") if decimal_comma else cell)
+            value = to_seconds(cell) if role == "time" and dated else \
+                float(cell.replace(",", ".") if decimal_comma else cell)
         except ValueError:
             value = math.nan
         if not math.isfinite(value):
@@ -351,7 +376,7 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     # and not counted: "row N" is the N-th non-blank row, the header being row 1.
     header, index, number = None, {}, 0
     dialect = sniff_dialect(path)
-    comma = dialect.decimal_comma
+    comma, dated = dialect.decimal_comma, False
     with contextlib.closing(table_rows(path, dialect)) as reader:
         for row in reader:
             if "".join(row).strip():
@@ -369,15 +394,17 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
                      if "".join(r).strip()]
             if not chunk:
                 break
+            if number == 1 and "time" in index:
+                dated = _dated(chunk[0], index["time"], comma)
             first = number + 1
             number += len(chunk)
-            if _parse_clean_chunk(chunk, header, index, values, comma):
+            if _parse_clean_chunk(chunk, header, index, values, comma, dated):
                 kept_rows.extend(range(first - 1, number - 1))
                 continue
             # A chunk with a bad row: row by row, each row's reason kept.
             for offset, row in enumerate(chunk):
                 problem = _parse_row(path, row, first + offset, header, index, values,
-                                     bad_in_column, first_bad, comma)
+                                     bad_in_column, first_bad, comma, dated)
                 if problem:
                     dropped += 1
                     if len(reasons) < 5:
@@ -396,6 +423,9 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     if kept < min_rows:
         raise InputDataError(f"{path}: {kept} usable rows; at least {min_rows} needed"
                              + (f" ({reasons[0]})" if reasons else ""))
+    if dated:
+        # Date-times are seconds already (the map's unit is for numbers); since the first.
+        scales["time"] = (1.0, -values["time"][0] if values["time"] else 0.0)
     si = {role: np.asarray(v) * scales[role][0] + scales[role][1] for role, v in values.items()
           if role != "run"}
     run_of_row = run_names = None

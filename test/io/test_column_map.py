@@ -288,3 +288,20 @@ def test_a_survey_with_semicolons_and_decimal_commas_reads_as_its_plain_twin(
                 assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
             else:
                 assert np.array_equal(a, b)
+
+
+def test_a_survey_time_column_of_date_times_reads_as_seconds_since_the_first(tmp_path):
+    import datetime as dt
+
+    start = dt.datetime(2026, 11, 20, 23, 59, 0)
+    rows = _rows()
+    dated = [f"{start + dt.timedelta(seconds=15 * k):%Y-%m-%d %H:%M:%S}" + row[row.index(","):]
+             for k, row in enumerate(rows)]
+    dated[7] = "yesterday" + dated[7][dated[7].index(","):]
+    survey = read_mapped_csv(_write(tmp_path / "dated.csv", dated), column_map_from_dict(MAP))
+    assert survey.rows_dropped == 1 and survey.drop_reasons == ["row 9 column t: 'yesterday'"]
+    kept = np.delete(np.arange(25), 7)
+    # The map's unit (min) is for numbers: date-times are seconds, counted from the first.
+    np.testing.assert_array_equal(survey.time_s, 15.0 * kept)
+    plain = read_mapped_csv(_write(tmp_path / "plain.csv", rows), column_map_from_dict(MAP))
+    np.testing.assert_array_equal(survey.positions["X"], np.delete(plain.positions["X"], 7))
