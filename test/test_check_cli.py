@@ -429,3 +429,31 @@ def test_a_log_whose_clock_was_set_back_names_the_row_in_seconds_since_its_start
     assert main(["check", str(tmp_path / "dst.csv"), "--target", "g [µm]", "--time-column",
                  "stamp", "--inputs", "T*", "--auto", "1"]) == 2
     assert "the time goes back at data row 41: 1200 s after 4680 s" in capsys.readouterr().err
+
+
+def test_a_log_with_a_clock_and_no_date_runs_across_midnight(tmp_path, capsys):
+    """A logger that writes only the time of day: the night shift's log passes midnight,
+    counted as the next day, and reads as the plain log in seconds."""
+    from mt_accuracy_ros.cli import main
+
+    rng = np.random.default_rng(4)
+    clock, plain = ["Uhrzeit;T1;g [µm]"], ["time_s,T1,g_um"]
+    for k in range(240):
+        seconds = 22 * 3600 + 60 * k
+        t1 = 20 + 2 * (1 - np.exp(-k / 60)) + rng.normal(0, 0.02)
+        g = 5 * (t1 - 20) + rng.normal(0, 0.1)
+        clock.append(f"{seconds // 3600 % 24:02d}:{seconds // 60 % 60:02d}:00;"
+                     f"{t1:.3f};{g:.2f}".replace(".", ","))
+        plain.append(f"{60 * k},{t1:.3f},{g:.2f}")
+    (tmp_path / "clock.csv").write_text("\n".join(clock) + "\n", encoding="utf-8")
+    (tmp_path / "plain.csv").write_text("\n".join(plain) + "\n", encoding="utf-8")
+    figures = []
+    for name, args in (("clock", ["--target", "g [µm]", "--time-column", "Uhrzeit"]),
+                       ("plain", ["--target", "g_um"])):
+        assert main(["check", str(tmp_path / f"{name}.csv"), *args, "--inputs", "T1",
+                     "--auto", "1", "--json", str(tmp_path / f"{name}.json")]) == 0
+        summary = json.loads((tmp_path / f"{name}.json").read_text())
+        figures.append((summary["added"], summary["final_rmse"]))
+    assert "note: time from the clock of Uhrzeit" in capsys.readouterr().out
+    assert figures[0][0] == figures[1][0] and figures[0][0]
+    assert figures[0][1] == pytest.approx(figures[1][1], rel=1e-9)

@@ -318,7 +318,10 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     if table.units:
         notes.append("units from the row under the header: " + ", ".join(
             f"{name} {unit}" for name, unit in table.units.items()))
-    if time_column in table.date_time_columns:
+    if time_column in table.clock_columns:
+        notes.append(f"time from the clock of {time_column} (times of day without a date: "
+                     "a step back of more than 12 h is taken as midnight passing)")
+    elif time_column in table.date_time_columns:
         notes.append(f"time from the date-times of {time_column} (seconds since its first, "
                      "a stamp without a zone taken as UTC)")
     if run_column:

@@ -191,6 +191,35 @@ def to_number(cell: str, dialect: CsvDialect) -> float:
     return float(cell)
 
 
+#: A time of day without a date (a logger that writes only the clock).
+TIME_OF_DAY = re.compile(r"^\s*(\d{1,2}):(\d{2})(?::(\d{2})(?:[.,](\d+))?)?\s*$")
+#: A day in seconds, and the backward step of a clock of the day read as midnight passing.
+DAY_S = 86400.0
+MIDNIGHT_STEP_S = -DAY_S / 2
+
+
+def time_of_day(cell: str) -> float:
+    """``HH:MM[:SS[.fff]]`` as seconds since midnight (``ValueError`` when it is none)."""
+    found = TIME_OF_DAY.match(cell)
+    if not found:
+        raise ValueError(f"{cell.strip()[:30]!r} is no time of day")
+    hours, minutes, seconds, fraction = found.groups()
+    if int(hours) > 23 or int(minutes) > 59 or int(seconds or 0) > 59:
+        raise ValueError(f"{cell.strip()[:30]!r} is no time of day")
+    return int(hours) * 3600.0 + int(minutes) * 60.0 + int(seconds or 0) + \
+        (float("0." + fraction) if fraction else 0.0)
+
+
+def across_midnights(seconds_of_day):
+    """Times of day (seconds since midnight, in file order) as seconds since the first
+    midnight: a step back of more than half a day is the next day's clock."""
+    import numpy as np
+
+    values = np.asarray(seconds_of_day, dtype=np.float64)
+    days = np.concatenate(([0.0], np.cumsum(np.diff(values) < MIDNIGHT_STEP_S)))
+    return values + DAY_S * days
+
+
 def to_seconds(cell: str) -> float:
     """A date-time cell as POSIX seconds (``ValueError`` when it is none)."""
     text = cell.strip()

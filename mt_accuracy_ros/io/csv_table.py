@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError
-from .csv_dialect import (CsvDialect, header_row, sniff_dialect, table_rows, to_number,
-                          to_seconds)
+from .csv_dialect import (CsvDialect, across_midnights, header_row, sniff_dialect, table_rows,
+                          time_of_day, to_number, to_seconds)
 
 #: Reasons kept for the report (the count covers all of them).
 KEPT_REASONS = 5
@@ -43,8 +43,10 @@ class CsvTable:
     gap_reasons: list[tuple[int, str, str]] = field(default_factory=list)
     #: How the file was written (separator, decimal mark, encoding).
     dialect: CsvDialect = field(default_factory=CsvDialect)
-    #: Time columns whose cells were date-times (their values are POSIX seconds).
+    #: Time columns whose cells were date-times (their values are POSIX seconds), or
+    #: times of day without a date (seconds since the first midnight: ``clock_columns``).
     date_time_columns: tuple[str, ...] = ()
+    clock_columns: tuple[str, ...] = ()
     #: Column -> unit, from a row of units under the header (a logger's export), if any.
     units: dict[str, str] = field(default_factory=dict)
 
@@ -107,6 +109,8 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
         len(rows[start - 1]) == len(header) else None
     dated = tuple(name for name in time_columns if name in header and first is not None
                   and _is_date_time(first[header.index(name)], dialect))
+    # A clock without a date (HH:MM:SS): seconds since midnight, days counted below.
+    clocked = tuple(name for name in dated if _is_time_of_day(first[header.index(name)]))
     for number, row in enumerate(rows[start - 1:], start=start):
         if len(row) != len(header):
             raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
@@ -121,7 +125,7 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
                 continue
             if name in dated:
                 try:
-                    parsed.append(to_seconds(cell))
+                    parsed.append(time_of_day(cell) if name in clocked else to_seconds(cell))
                 except ValueError:
                     problem = f"row {number} column {name}: {cell.strip()[:30]!r} is not a " \
                         "date-time like the first row's"
@@ -165,10 +169,12 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
     for j, name in enumerate(header):
         cells = [row[j] for row in values]
         columns[name] = np.asarray(cells, dtype=object if name in text_columns else np.float64)
+        if name in clocked:
+            columns[name] = across_midnights(columns[name])
     return CsvTable(path, columns, rows_read=len(rows) - start + 1, rows_dropped=dropped,
                     drop_reasons=reasons, data_rows=np.asarray(kept_rows, dtype=np.intp),
                     gaps=gaps, gap_reasons=gap_reasons, dialect=dialect,
-                    date_time_columns=dated, units=units)
+                    date_time_columns=dated, clock_columns=clocked, units=units)
 
 
 def _units_row(row: list[str], header: list[str], text_columns: tuple[str, ...],
@@ -207,6 +213,14 @@ def _is_date_time(cell: str, dialect: CsvDialect) -> bool:
         pass
     try:
         to_seconds(cell)
+        return True
+    except ValueError:
+        return _is_time_of_day(cell)
+
+
+def _is_time_of_day(cell: str) -> bool:
+    try:
+        time_of_day(cell)
         return True
     except ValueError:
         return False

@@ -140,3 +140,16 @@ def test_a_header_that_does_not_match_its_data_is_named_in_the_datas_separator(t
     assert sniff_dialect(path).delimiter == ";"
     with pytest.raises(InputDataError, match="row 2 has 2 fields, the header 3"):
         read_csv_table(path)
+
+
+def test_a_clock_without_a_date_counts_the_midnights_it_passes(tmp_path):
+    rows = [["Uhrzeit", "T1", "g_um"], ["23:58:00", "20.0", "1.0"], ["23:59:30,5", "20.1", "1.1"],
+            ["00:01:00", "20.2", "1.2"], ["25:00:00", "20.3", "1.3"], ["13:00:00", "20.4", "1.4"],
+            ["00:00:30", "20.5", "1.5"]]
+    table = read_csv_table(_write(tmp_path / "clock.csv", rows, ";"), time_columns=("Uhrzeit",))
+    assert table.clock_columns == ("Uhrzeit",) == table.date_time_columns
+    start = 23 * 3600 + 58 * 60
+    np.testing.assert_allclose(table.columns["Uhrzeit"] - start,
+                               [0.0, 90.5, 180.0, 13 * 3600 + 120.0, 24 * 3600 + 150.0])
+    assert table.drop_reasons == [
+        "row 5 column Uhrzeit: '25:00:00' is not a date-time like the first row's"]
