@@ -449,15 +449,14 @@ def _column_and_unit(flag: str, names: list[str], quantity: str, what: str,
     """``COLUMN[:UNIT]`` -> (column, SI scale, unit); the unit from the flag, else from a
     units row under the header (``units``), else the column's name (``ch5_um``,
     ``dial [µm]``, ``spindle_rpm``)."""
-    from ..io.column_map import UNIT_SPELLINGS, UNITS, unit_from_name
+    from ..io.column_map import UNITS, column_unit
 
     column, unit = (flag.rsplit(":", 1) + [""])[:2] if ":" in flag else (flag, "")
     column, unit = column.strip(), unit.strip()
     if column not in names:
         raise InputDataError(f"no {what} column {column!r}; have {', '.join(names)}")
     table = UNITS[quantity]
-    given = (units or {}).get(column, "")
-    unit = unit or UNIT_SPELLINGS.get(given, given) or unit_from_name(column, quantity)
+    unit = unit or column_unit(column, quantity, units)
     if unit not in table or not unit:
         raise InputDataError(f"{what} {column!r}: give its unit as {column}:UNIT (one of "
                              f"{', '.join(u for u in table if u)}); none could be read off "

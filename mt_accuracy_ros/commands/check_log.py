@@ -205,29 +205,13 @@ class LogData:
     notes: list[str]
 
 
-def _joined_date_times(path: Path, parts: list[np.ndarray], data_rows: np.ndarray
-                       ) -> np.ndarray:
-    """Seconds since the first row of a date and a time of day kept in separate columns;
-    one line naming the data row whose cells are no date-time."""
-    from ..io.csv_dialect import to_seconds
-
-    out = np.empty(parts[0].size)
-    for k, cells in enumerate(zip(*parts)):
-        try:
-            out[k] = to_seconds(" ".join(str(c) for c in cells))
-        except ValueError as exc:
-            raise InputDataError(f"{path}: data row {int(data_rows[k])}: {exc}") from exc
-    return out - out[0] if out.size else out
-
-
 def _in_seconds(name: str, values: np.ndarray, units: dict[str, str]
                 ) -> tuple[np.ndarray, str]:
     """A time column in seconds, from the unit a units row or its name gives (``t_min``,
     ``time [h]``; seconds when neither does), and a note when it was converted."""
-    from ..io.column_map import UNITS, unit_from_name
+    from ..io.column_map import UNITS, column_unit
 
-    unit = units.get(name, "") if units.get(name, "") in UNITS["time"] else \
-        unit_from_name(name, "time")
+    unit = column_unit(name, "time", units)
     if unit in ("", "s"):
         return values, ""
     return values * UNITS["time"][unit], f"time {name} converted from {unit} to s"
@@ -238,14 +222,11 @@ def _in_celsius(temperatures: dict[str, np.ndarray], units: dict[str, str] | Non
     """Temperatures in °C (as sensor_msgs/Temperature), each from the unit a units row
     (``units``) or its column's name gives (``T1_K``, ``T2 [°F]``; °C when neither
     does), and a note of those converted."""
-    from ..io.column_map import TEMPERATURE, UNIT_SPELLINGS, unit_from_name
+    from ..io.column_map import TEMPERATURE, column_unit
 
     out, converted = {}, []
     for name, values in temperatures.items():
-        given = (units or {}).get(name, "")
-        given = UNIT_SPELLINGS.get(given, given)
-        unit = (given if given in TEMPERATURE else "") or \
-            unit_from_name(name, "temperature") or "degC"
+        unit = column_unit(name, "temperature", units) or "degC"
         scale, offset = TEMPERATURE[unit]
         out[name] = values * scale + offset if (scale, offset) != (1.0, 0.0) else values
         if unit not in ("degC", "C"):
@@ -274,8 +255,7 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     fixed = {flag.split(":", 1)[0].strip() for flag in [target, *drivers]} | \
         {time_column, run_column, *split_time}
     # A temperature column may have holes (a dead thermocouple): kept as NaN, decided below.
-    table = read_csv_table(path, text_columns=((run_column,) if run_column else ()) +
-                           tuple(split_time),
+    table = read_csv_table(path, text_columns=(run_column,) if run_column else (),
                            gap_columns=tuple(n for n in header if n not in fixed),
                            time_columns=(time_column,))
     names = table.names
@@ -283,11 +263,7 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     target_column, target_scale, unit = _column_and_unit(target, names, "length", "target",
                                                          table.units)
     time_note = ""
-    if split_time:
-        time_s = _joined_date_times(path, [columns[p] for p in split_time], table.data_rows)
-        time_note = f"time from the date-times of {' + '.join(split_time)} (seconds since " \
-            "its first, a stamp without a zone taken as UTC)"
-    elif time_column in names:
+    if time_column in names:
         time_s = columns[time_column]
         if time_column in table.date_time_columns and time_s.size:
             time_s = time_s - time_s[0]     # seconds since the first stamp
@@ -322,8 +298,8 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
         notes.append(f"time from the clock of {time_column} (times of day without a date: "
                      "a step back of more than 12 h is taken as midnight passing)")
     elif time_column in table.date_time_columns:
-        notes.append(f"time from the date-times of {time_column} (seconds since its first, "
-                     "a stamp without a zone taken as UTC)")
+        notes.append(f"time from the date-times of {' + '.join(split_time) or time_column} "
+                     "(seconds since its first, a stamp without a zone taken as UTC)")
     if run_column:
         run_of_row, run_names = run_labels(columns[run_column], table.data_rows, run_column)
     temperatures, dead_notes = leave_out_dead_sensors(temperatures, run_of_row, run_names)

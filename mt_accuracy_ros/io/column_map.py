@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError, ParameterError
-from .csv_dialect import sniff_dialect, table_rows, to_seconds
+from .csv_dialect import CsvDialect, cell_kind, sniff_dialect, table_rows, to_seconds
 
 _LENGTH = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "micron": 1e-6, "nm": 1e-9,
            "in": 0.0254, "inch": 0.0254}
@@ -217,6 +217,16 @@ def unit_from_name(column: str, quantity: str) -> str:
     return suffix if suffix and suffix in known else ""
 
 
+def column_unit(column: str, quantity: str, units: dict[str, str] | None = None) -> str:
+    """The unit of ``column`` a file gives, if it is one of ``quantity``'s: from a units row
+    under the header (``units``: column -> unit as written), else from the column's name
+    (:func:`unit_from_name`); "" when neither does."""
+    given = (units or {}).get(column, "")
+    given = UNIT_SPELLINGS.get(given, given)
+    known = TEMPERATURE if quantity == "temperature" else UNITS.get(quantity, {})
+    return given if given and given in known else unit_from_name(column, quantity)
+
+
 def _scale(column_map: ColumnMap, role: str, unit: str, column: str = ""):
     """(scale, offset) that take the column to SI; raises naming the role's unit. Without a
     unit in the map the column's name may say it (``x_mm``): a millimetre column is never
@@ -302,21 +312,9 @@ def _parse_clean_chunk(chunk: list[list[str]], header: list[str], index: dict[st
     return True
 
 
-def _dated(row: list[str], column: int, decimal_comma: bool) -> bool:
+def _dated(row: list[str], column: int, dialect: CsvDialect) -> bool:
     """Whether a survey's time cell is a date-time rather than a number."""
-    if column >= len(row):
-        return False
-    cell = row[column].replace(",", ".") if decimal_comma else row[column]
-    try:
-        float(cell)
-        return False
-    except ValueError:
-        pass
-    try:
-        to_seconds(row[column])
-        return True
-    except ValueError:
-        return False
+    return column < len(row) and cell_kind(row[column], dialect) == "date-time"
 
 
 def _parse_row(path: Path, row: list[str], number: int, header: list[str],
@@ -395,7 +393,7 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
             if not chunk:
                 break
             if number == 1 and "time" in index:
-                dated = _dated(chunk[0], index["time"], comma)
+                dated = _dated(chunk[0], index["time"], dialect)
             first = number + 1
             number += len(chunk)
             if _parse_clean_chunk(chunk, header, index, values, comma, dated):

@@ -20,6 +20,8 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Iterator
 
+import numpy as np
+
 from ..core.errors import InputDataError
 
 #: Bytes read to decide the dialect.
@@ -213,8 +215,6 @@ def time_of_day(cell: str) -> float:
 def across_midnights(seconds_of_day):
     """Times of day (seconds since midnight, in file order) as seconds since the first
     midnight: a step back of more than half a day is the next day's clock."""
-    import numpy as np
-
     values = np.asarray(seconds_of_day, dtype=np.float64)
     days = np.concatenate(([0.0], np.cumsum(np.diff(values) < MIDNIGHT_STEP_S)))
     return values + DAY_S * days
@@ -239,3 +239,16 @@ def to_seconds(cell: str) -> float:
         stamp = stamp.replace(tzinfo=timezone.utc)
     return stamp.timestamp()
 
+
+
+def cell_kind(cell: str, dialect: CsvDialect) -> str:
+    """What a cell holds: "number", "date-time", "clock" (a time of day without a date)
+    or "" (none of them)."""
+    for kind, read in (("number", lambda c: to_number(c, dialect)), ("date-time", to_seconds),
+                       ("clock", time_of_day)):
+        try:
+            read(cell)
+            return kind
+        except ValueError:
+            continue
+    return ""

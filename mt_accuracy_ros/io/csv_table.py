@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError
-from .csv_dialect import (CsvDialect, across_midnights, header_row, sniff_dialect, table_rows,
-                          time_of_day, to_number, to_seconds)
+from .csv_dialect import (CsvDialect, across_midnights, cell_kind, header_row, sniff_dialect,
+                          table_rows, time_of_day, to_number, to_seconds)
 
 #: Reasons kept for the report (the count covers all of them).
 KEPT_REASONS = 5
@@ -89,7 +89,9 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
     cell is missing, non-numeric or not finite (a dead thermocouple): the value is NaN,
     and the caller decides (``CsvTable.gaps`` counts them per column). Every column
     carries the data row (``CsvTable.data_rows``, 1-based after the header) its values
-    came from. ``time_columns`` take numbers or date-times (POSIX seconds), not a mix."""
+    came from. ``time_columns`` take numbers or date-times (POSIX seconds), not a mix; a
+    name ``DATE+TIME`` of two columns joins their cells into one date-time column (the
+    two kept as text)."""
     path = Path(path)
     dialect = sniff_dialect(path)
     rows = list(table_rows(path, dialect))
@@ -107,17 +109,32 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
     # A time column is read as numbers or, when its first cell is none, as date-times.
     first = rows[start - 1] if len(rows) > start - 1 and \
         len(rows[start - 1]) == len(header) else None
-    dated = tuple(name for name in time_columns if name in header and first is not None
-                  and _is_date_time(first[header.index(name)], dialect))
+    kinds = {name: cell_kind(first[header.index(name)], dialect) for name in time_columns
+             if name in header and first is not None}
+    dated = tuple(name for name, kind in kinds.items() if kind in ("date-time", "clock"))
     # A clock without a date (HH:MM:SS): seconds since midnight, days counted below.
-    clocked = tuple(name for name in dated if _is_time_of_day(first[header.index(name)]))
+    clocked = tuple(name for name, kind in kinds.items() if kind == "clock")
+    # A date and a time of day in two columns ("Datum+Uhrzeit"): one date-time column.
+    joined = {name: [header.index(p.strip()) for p in name.split("+")] for name in time_columns
+              if name not in header and "+" in name and
+              all(p.strip() in header for p in name.split("+"))}
+    parts = {header[j] for indices in joined.values() for j in indices}
     for number, row in enumerate(rows[start - 1:], start=start):
         if len(row) != len(header):
             raise InputDataError(f"{path}: row {number} has {len(row)} fields, the header "
                                  f"{len(header)}")
         parsed, problem = [], ""
+        for name, indices in joined.items():
+            cell = " ".join(row[j].strip() for j in indices)
+            try:
+                parsed.append(to_seconds(cell))
+            except ValueError:
+                problem = f"row {number} column {name}: {cell[:30]!r} is not a date-time"
+                break
         for name, cell in zip(header, row):
-            if name in text_columns:
+            if problem:
+                break
+            if name in text_columns or name in parts:
                 if not cell.strip():
                     problem = f"row {number} column {name}: empty"
                     break
@@ -166,15 +183,19 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
         raise InputDataError(f"{path}: {len(values)} usable rows; at least {min_rows} needed"
                              + (f" ({reasons[0]})" if reasons else ""))
     columns = {}
-    for j, name in enumerate(header):
+    for k, name in enumerate(joined):
+        columns[name] = np.asarray([row[k] for row in values], dtype=np.float64)
+    for j, name in enumerate(header, start=len(joined)):
         cells = [row[j] for row in values]
-        columns[name] = np.asarray(cells, dtype=object if name in text_columns else np.float64)
+        columns[name] = np.asarray(cells, dtype=object if name in text_columns or
+                                   name in parts else np.float64)
         if name in clocked:
             columns[name] = across_midnights(columns[name])
     return CsvTable(path, columns, rows_read=len(rows) - start + 1, rows_dropped=dropped,
                     drop_reasons=reasons, data_rows=np.asarray(kept_rows, dtype=np.intp),
                     gaps=gaps, gap_reasons=gap_reasons, dialect=dialect,
-                    date_time_columns=dated, clock_columns=clocked, units=units)
+                    date_time_columns=dated + tuple(joined), clock_columns=clocked,
+                    units=units)
 
 
 def _units_row(row: list[str], header: list[str], text_columns: tuple[str, ...],
@@ -189,41 +210,11 @@ def _units_row(row: list[str], header: list[str], text_columns: tuple[str, ...],
                                                       for u in table if u}
     cells = {name: cell.strip().strip("[]()").strip() for name, cell in zip(header, row)
              if name not in text_columns}
-    if any(_is_number_or_date_time(cell, dialect) for cell in cells.values() if cell):
+    if any(cell_kind(cell, dialect) for cell in cells.values() if cell):
         return {}
     if not any(cell in known for cell in cells.values()):
         return {}
     return {name: cell for name, cell in cells.items() if cell}
-
-
-def _is_number_or_date_time(cell: str, dialect: CsvDialect) -> bool:
-    try:
-        to_number(cell, dialect)
-        return True
-    except ValueError:
-        return _is_date_time(cell, dialect)
-
-
-def _is_date_time(cell: str, dialect: CsvDialect) -> bool:
-    """Whether a time cell is a date-time rather than a number."""
-    try:
-        to_number(cell, dialect)
-        return False
-    except ValueError:
-        pass
-    try:
-        to_seconds(cell)
-        return True
-    except ValueError:
-        return _is_time_of_day(cell)
-
-
-def _is_time_of_day(cell: str) -> bool:
-    try:
-        time_of_day(cell)
-        return True
-    except ValueError:
-        return False
 
 
 def csv_header(path: str | Path) -> list[str]:

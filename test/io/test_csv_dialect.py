@@ -153,3 +153,18 @@ def test_a_clock_without_a_date_counts_the_midnights_it_passes(tmp_path):
                                [0.0, 90.5, 180.0, 13 * 3600 + 120.0, 24 * 3600 + 150.0])
     assert table.drop_reasons == [
         "row 5 column Uhrzeit: '25:00:00' is not a date-time like the first row's"]
+
+
+def test_a_date_and_a_time_of_day_in_two_columns_join_and_a_bad_pair_drops_its_row(tmp_path):
+    rows = [["Datum", "Uhrzeit", "T1", "g_um"], ["20.11.2026", "23:59:00", "20,0", "1,0"],
+            ["21.11.2026", "00:00:30", "20,1", "1,1"], ["21.11.2026", "später", "20,2", "1,2"],
+            ["21.11.2026", "00:01:00", "20,3", "1,3"]]
+    table = read_csv_table(_write(tmp_path / "split.csv", rows, ";"),
+                           time_columns=("Datum+Uhrzeit",))
+    assert table.date_time_columns == ("Datum+Uhrzeit",)
+    stamps = table.columns["Datum+Uhrzeit"]
+    np.testing.assert_array_equal(stamps - stamps[0], [0.0, 90.0, 120.0])
+    assert list(table.columns["Uhrzeit"]) == ["23:59:00", "00:00:30", "00:01:00"]
+    np.testing.assert_array_equal(table.columns["T1"], [20.0, 20.1, 20.3])
+    assert table.rows_dropped == 1 and table.drop_reasons == [
+        "row 4 column Datum+Uhrzeit: '21.11.2026 später' is not a date-time"]
