@@ -183,11 +183,13 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     ``add`` the named ones first.
     """
     from ..core.workbench.diagnosis import add_effect, add_effects, diagnose, residuals
+    from ..core.workbench.context_memo import ContextMemo
     from ..core.workbench.localisation import LocalisationMemo
 
     # What the named effects leave is localised in the first look and again in the look
-    # at the model with them added: one localisation serves both.
-    localisations = LocalisationMemo()
+    # at the model with them added: one localisation serves both. Both looks see the
+    # readings through the same chain: one context (and its designs) serves both.
+    localisations, contexts = LocalisationMemo(), ContextMemo()
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c.setdefault(sensor, float(values[0]))
 
@@ -198,7 +200,8 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
         # the named effects are added, what they leave is judged one effect at a time.
         return diagnose(current, obs, min_reduction=min_reduction, blocks=blocks,
                         folds=5 if blocks is None else int(blocks[-1]) + 1,
-                        pair_lookahead=first_look, localisations=localisations)
+                        pair_lookahead=first_look, localisations=localisations,
+                        contexts=contexts)
 
     diagnosis = evaluate(model, first_look=True)
     first = diagnosis

@@ -261,6 +261,15 @@ class EffectFamily:
     #: polynomial order): the workbench then computes one design for all of them.
     nested_settings: bool = False
 
+    def nested_columns(self, variant: str, setting: dict, largest: dict) -> list[int] | None:
+        """Which columns of the ``largest`` setting's design, in order, are ``setting``'s
+        design, or None when it is no part of it: the workbench then makes one design
+        (and one set of products) for all the settings. By default the first columns,
+        for a family with :attr:`nested_settings`."""
+        if not self.nested_settings:
+            return None
+        return list(range(len(self.parameter_names(variant, setting))))
+
     @property
     def preselects(self) -> bool:
         """Whether :meth:`preselect` may choose a setting (the workbench skips it if not):

@@ -487,6 +487,11 @@ class AngularWithArm(EffectFamily):
             return _legendre_columns(ctx.normalised_position(variant[2]), 1, setting["order"])
         return ctx.cache[key][:, 1:setting["order"] + 1]
 
+    def nested_columns(self, variant: str, setting: dict, largest: dict) -> list[int]:
+        # The tilt's orders, then the arm's: a lower order's are the first of each half.
+        order, most = setting["order"], largest["order"]
+        return list(range(order)) + list(range(most, most + order))
+
     def design(self, ctx: Context, variant: str, setting: dict):
         basis = self._basis(ctx, variant, setting)
         return np.concatenate([along(ctx.jacobian(variant), basis),

@@ -34,6 +34,7 @@ from .statistics import DEFAULT_DIRECTION_UNCERTAINTY_RAD, stated_uncertainty
 from ..errors import InsufficientDataError, ParameterError
 from ..effects import Context, EffectFamily, families as catalogue_families, is_catalogue_entry
 from ..effects.user import UserExpression
+from .context_memo import ContextMemo
 from .localisation import Localisation, LocalisationMemo, localise
 from .distributions import chi2_sf
 from .selection import Selector, Term
@@ -456,7 +457,8 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
              min_share: float = 0.25, family_list: list[EffectFamily] | None = None,
              localise_residual: bool = True, forward: bool = False,
              blocks: NDArray[np.intp] | None = None, pair_lookahead: bool = True,
-             localisations: LocalisationMemo | None = None) -> Diagnosis:
+             localisations: LocalisationMemo | None = None,
+             contexts: ContextMemo | None = None) -> Diagnosis:
     """Localise the residual and select the missing effects (see the module docstring).
 
     ``forward``: validate as the model will be used on a log - each block predicted by
@@ -466,10 +468,12 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     hiding each other show at the start; a re-diagnosis of the same readings after the
     named effects were added judges what they leave one effect at a time).
     ``localisations``: a memo of ``obs``' localisations, for a caller that diagnoses the
-    same readings again (a residual seen before is not localised again)."""
+    same readings again (a residual seen before is not localised again); ``contexts``:
+    a memo of their context, for the same caller (the candidates' designs are not made
+    again)."""
     if blocks is None and obs.n < 4 * folds:
         raise InsufficientDataError(f"{obs.n} reference readings; need >= {4 * folds}")
-    frame = residual_frame(model, obs)
+    frame = residual_frame(model, obs, contexts=contexts)
     ctx, residual, mask = frame.ctx, frame.residual, frame.mask
     position_residual, lever, directions = frame.position_residual, frame.lever, \
         obs.measures_direction
@@ -555,10 +559,11 @@ class ResidualFrame:
     lever: float | None
 
 
-def residual_frame(model: ErrorModel, obs: Observations, *, absolute: bool = False
-                   ) -> ResidualFrame:
+def residual_frame(model: ErrorModel, obs: Observations, *, absolute: bool = False,
+                   contexts: ContextMemo | None = None) -> ResidualFrame:
     """The residual of ``model`` at ``obs`` as the selection sees it (see ResidualFrame;
-    ``absolute``: the position's mean kept, see :func:`residuals`)."""
+    ``absolute``: the position's mean kept, see :func:`residuals`; ``contexts``: a memo
+    that hands out an earlier look's context of the same readings)."""
     residual = residuals(model, obs, absolute=absolute)
     mask = obs.measured_mask
     variables = obs.variables(model.reference_temperatures_c)
@@ -567,9 +572,9 @@ def residual_frame(model: ErrorModel, obs: Observations, *, absolute: bool = Fal
     if orientation is None and ("geometric" in model.effects or model.profiles or directions):
         orientation = model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[1]
     lever = obs.orientation_lever_m if directions else None
-    ctx = Context(model.machine, variables, model._kinematics, orientation,
-                  orientation_lever_m=lever, work_point=obs.work_point,
-                  zero_rows=obs.zero_rows)
+    make = Context if contexts is None else contexts.context
+    ctx = make(model.machine, variables, model._kinematics, orientation,
+               orientation_lever_m=lever, work_point=obs.work_point, zero_rows=obs.zero_rows)
     position_residual = residual
     if directions:
         # The tool's direction as a second measured quantity, scaled to the position's

@@ -41,6 +41,8 @@ in ``bench/workbench_catalogue.py`` (docs/results.md).
 """
 from __future__ import annotations
 
+import hashlib
+import itertools
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
@@ -312,6 +314,35 @@ class _DesignCache:
             self._bytes -= dropped.nbytes
 
 
+class _ReadingCaches:
+    """What a selector derives from its context and rows alone - designs, scalar bases,
+    sensitivities, where each term acts, and (per cut into folds) each design's products
+    with itself - kept on the context, so that every selector over the same readings
+    shares them: the look after the named effects are added (``check --auto``) scores
+    the same candidates' designs against another residual (issue 41)."""
+
+    def __init__(self) -> None:
+        self.designs = _DesignCache(DESIGN_CACHE_BYTES)
+        self.sensitivities = _DesignCache(SENSITIVITY_CACHE_BYTES)
+        self.components: dict[str, NDArray[np.bool_]] = {}
+        #: fold bounds -> {(term name, setting): per-fold X'X (folds, p, p)}.
+        self.own_products: dict[tuple, dict] = {}
+
+
+def _reading_caches(ctx: Context, mask: NDArray[np.bool_]) -> _ReadingCaches:
+    """The caches of the selectors over ``ctx`` fitting the rows ``mask`` (N, K) selects."""
+    key = ("selector caches", mask.shape, hashlib.sha1(np.packbits(mask)).digest())
+    caches = ctx.cache.get(key)
+    if caches is None:
+        caches = ctx.cache[key] = _ReadingCaches()
+    return caches
+
+
+#: Serial numbers of base statistics, unique in the process: selectors sharing a cache
+#: (:class:`_ReadingCaches`) must never key two bases alike.
+_SERIALS = itertools.count(1)
+
+
 def _train(per_fold: NDArray[np.float64]) -> NDArray[np.float64]:
     """Per-fold sums -> sums over every other fold (the training blocks)."""
     return per_fold.sum(axis=0, keepdims=True) - per_fold
@@ -395,7 +426,8 @@ class Selector:
         #: Per separable term: its sensitivity at each measured row and, after them, its
         #: square summed per reading - bounded like the designs (at 1e5 readings each is
         #: megabytes, and a catalogue has a hundred separable terms; issue 41).
-        self._sensitivities = _DesignCache(SENSITIVITY_CACHE_BYTES)
+        caches = _reading_caches(ctx, mask)
+        self._sensitivities = caches.sensitivities
         # Rows judged: all, or (forward) those after the first block.
         first_judged = self.fold_bounds[1][0] if self.forward else 0
         self.judged_row = np.arange(self.rows.size) >= first_judged
@@ -410,9 +442,9 @@ class Selector:
         self.noise_sigma = float(noise_sigma)
         self.alpha, self.min_reduction, self.min_share = alpha, min_reduction, min_share
         self.tie = tie
-        self._designs = _DesignCache(DESIGN_CACHE_BYTES)
-        self._components: dict[str, NDArray[np.bool_]] = {}
-        self._serial = 0
+        self._designs = caches.designs
+        self._components = caches.components
+        self._own_products = caches.own_products.setdefault(tuple(self.fold_bounds), {})
         #: How many of a step's best candidates keep their per-reading errors.
         self.keep_errors = 3
         self.selected: list[tuple[Term, dict]] = []
@@ -424,10 +456,12 @@ class Selector:
         key = (term.name, design_setting(term, setting))
         design = self._designs.get(key)
         if design is None:
-            if term.family.nested_settings and setting != term.settings[-1]:
-                # The first columns of the largest setting's design: a view, no copy.
-                size = len(term.family.parameter_names(term.variant, setting))
-                return self.design_rows(term, term.settings[-1])[:, :size]
+            columns = self._nested_columns(term, setting)
+            if columns is not None:
+                # Columns of the largest setting's design (the first ones: a view).
+                largest = self.design_rows(term, term.settings[-1])
+                return largest[:, :len(columns)] if columns[-1] == len(columns) - 1 else \
+                    largest[:, columns]
             design = self.ctx.measured_design(term.family, term.variant, setting)
             design = design.reshape(-1, design.shape[2])
             if self.rows.size != design.shape[0]:
@@ -435,16 +469,27 @@ class Selector:
             self._designs.put(key, design)
         return design
 
+    @staticmethod
+    def _nested_columns(term: Term, setting: dict) -> list[int] | None:
+        """The columns of ``term``'s largest setting that are ``setting``'s (None when
+        ``setting`` is the largest, or no part of it)."""
+        if setting == term.settings[-1]:
+            return None
+        return term.family.nested_columns(term.variant, setting, term.settings[-1])
+
     def basis_rows(self, term: Term, setting: dict) -> NDArray[np.float64] | None:
         """The scalar columns (S, P) of a separable design at the readings that measured
         anything (None when the family's design is not separable)."""
         key = ("basis", term.name, design_setting(term, setting))
         basis = self._designs.get(key)
         if basis is None:
-            if term.family.nested_settings and setting != term.settings[-1]:
-                size = len(term.family.parameter_names(term.variant, setting))
+            columns = self._nested_columns(term, setting)
+            if columns is not None:
                 largest = self.basis_rows(term, term.settings[-1])
-                return None if largest is None else largest[:, :size]
+                if largest is None:
+                    return None
+                return largest[:, :len(columns)] if columns[-1] == len(columns) - 1 else \
+                    largest[:, columns]
             separable = self.ctx.measured_separable(term.family, term.variant, setting)
             if separable is None:
                 return None
@@ -579,16 +624,21 @@ class Selector:
         """The selected model's per-fold products (its columns with themselves and y)."""
         with_y = np.column_stack([base, self.y])
         products = self._block_products(with_y, with_y)
-        self._serial += 1
-        return _BaseStatistics(base, products, with_y, serial=self._serial)
+        return _BaseStatistics(base, products, with_y, serial=next(_SERIALS))
 
-    def _candidate_products(self, stats: _BaseStatistics, design: NDArray[np.float64]):
+    def _candidate_products(self, stats: _BaseStatistics, design: NDArray[np.float64],
+                            key: tuple | None = None):
         """Per-fold normal equations of base + ``design``: X_f'X_f (folds, q+p, q+p), X_f'y_f
         (folds, q+p) and y_f'y_f (folds,); :func:`_train` turns them into the training
-        blocks', a sum over folds into the whole record's."""
+        blocks', a sum over folds into the whole record's. ``key`` (term name, setting):
+        the design's products with itself are kept under it (they hold for any base)."""
         q = stats.base.shape[1]
         with_base = self._block_products(design, stats.with_y)     # (folds, p, q + 1)
-        own = self._block_products(design, design)                 # (folds, p, p)
+        own = None if key is None else self._own_products.get(key)
+        if own is None:
+            own = self._block_products(design, design)             # (folds, p, p)
+            if key is not None:
+                self._own_products[key] = own
         return self._assemble_products(stats, q, with_base, own)
 
     def _assemble_products(self, stats: _BaseStatistics, q: int, with_base, own):
@@ -604,7 +654,7 @@ class Selector:
         return gram, rhs, products[:, q, q]
 
     def _separable_products(self, stats: _BaseStatistics, term: Term,
-                            basis: NDArray[np.float64]):
+                            basis: NDArray[np.float64], own_key: tuple | None = None):
         """:meth:`_candidate_products` of a separable design, on one value per reading: X'W
         = B'(sum over components of sensitivity x W) and X'X = B' diag(|sensitivity|^2) B."""
         # Kept in the design cache (bounded: at 1e5 readings one is megabytes per variant).
@@ -623,8 +673,12 @@ class Selector:
             self._designs.put(key, contracted)
         q = stats.base.shape[1]
         with_base = np.stack([basis[a:b].T @ contracted[a:b] for a, b in self.present_bounds])
-        own = np.stack([basis[a:b].T @ (squared[a:b, None] * basis[a:b])
-                        for a, b in self.present_bounds])
+        own = None if own_key is None else self._own_products.get(own_key)
+        if own is None:
+            own = np.stack(
+                [basis[a:b].T @ (squared[a:b, None] * basis[a:b]) for a, b in self.present_bounds])
+            if own_key is not None:
+                self._own_products[own_key] = own
         return self._assemble_products(stats, q, with_base, own)
 
     def _products_of(self, stats: _BaseStatistics, term: Term, setting: dict):
@@ -633,15 +687,21 @@ class Selector:
         key = (term.name, design_setting(term, setting))
         cache = stats.candidates
         if key not in cache:
-            if term.family.nested_settings and setting != term.settings[-1]:
+            columns = self._nested_columns(term, setting)
+            if columns is not None:
                 gram, rhs, yy = self._products_of(stats, term, term.settings[-1])
-                size = stats.base.shape[1] + len(term.family.parameter_names(term.variant,
-                                                                             setting))
-                cache[key] = (gram[:, :size, :size], rhs[:, :size], yy)
+                q = stats.base.shape[1]
+                if columns[-1] == len(columns) - 1:
+                    size = q + len(columns)
+                    cache[key] = (gram[:, :size, :size], rhs[:, :size], yy)
+                else:
+                    index = np.concatenate([np.arange(q), q + np.asarray(columns)])
+                    cache[key] = (gram[:, index[:, None], index], rhs[:, index], yy)
             else:
                 basis = self.basis_rows(term, setting)
-                cache[key] = self._candidate_products(stats, self.design_rows(term, setting)) \
-                    if basis is None else self._separable_products(stats, term, basis)
+                cache[key] = self._candidate_products(stats, self.design_rows(term, setting),
+                                                      key) \
+                    if basis is None else self._separable_products(stats, term, basis, key)
         return cache[key]
 
     def _held_out_errors(self, x: NDArray[np.float64], coefficients: NDArray[np.float64]
