@@ -205,11 +205,11 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
 
     diagnosis = evaluate(model, first_look=True)
     first = diagnosis
-    residual_before = residuals(model, obs)
     steps, step_residuals = [], []
     queue = list(add)
     while True:
-        step_residuals.append(residuals(model, obs).copy())
+        # (A fresh array per model: each step's residual is the model's at that step.)
+        step_residuals.append(residuals(model, obs))
         steps.append({"model_version": model.version, "effects": sorted(model.effects),
                       "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text()})
         if queue:
@@ -226,7 +226,8 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
         steps[-1]["parameter_uncertainties"] = {c.name: c.parameter_uncertainties
                                                 for c in chosen}
         diagnosis = evaluate(model)
-    residual = residuals(model, obs)  # obs holds the final model's predictions
+    # The model did not change after the last residual was taken.
+    residual_before, residual = step_residuals[0], step_residuals[-1]
     return {"readings": obs.n,
             "figures_before_m": error_figures(residual_before),
             "figures_after_m": error_figures(residual),
