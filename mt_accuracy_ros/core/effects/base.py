@@ -112,10 +112,26 @@ class Context:
         the part of its Abbe arm the chain does not know (a tool offset not given)."""
         key = "arm:" + error_name
         if key not in self._jacobians:
-            # The turn's axis in the bed frame (the orientation sensitivity) across the tool.
-            self._jacobians[key] = np.cross(self.orientation_jacobian(error_name),
-                                            self.tool_axis())
+            self._jacobians[key] = self._arm_sensitivity(error_name)
         return self._jacobians[key]
+
+    def _arm_sensitivity(self, error_name: str) -> NDArray[np.float64]:
+        # The turn's axis in the bed frame (the orientation sensitivity) across the tool.
+        # Not kept: a survey without the tool's direction needs the orientation
+        # sensitivity only here (N x 3 floats per error name: 2.4 MB each at 1e5 readings).
+        turn = self._jacobians.get("orientation:" + error_name)
+        if turn is None:
+            turn = self._orientation_sensitivity(error_name)
+        return np.cross(turn, self.tool_axis())
+
+    def arm_moves(self, error_name: str) -> bool:
+        """Does an extra arm along the tool carry the rotation ``error_name`` to the TCP
+        anywhere (:meth:`arm_jacobian` not zero)? Asked of every rotation; answered
+        without keeping the sensitivity."""
+        key = "arm:" + error_name
+        arm = self._jacobians[key] if key in self._jacobians else \
+            self._arm_sensitivity(error_name)
+        return bool(np.any(np.abs(arm) > 1e-12))
 
     def orientation_jacobian(self, error_name: str) -> NDArray[np.float64]:
         """d (tool orientation relative to the workpiece) / d (error ``error_name``), (N, 3)
@@ -124,15 +140,17 @@ class Context:
         part; :meth:`KinematicModel.tcp_error_linear`)."""
         key = "orientation:" + error_name
         if key not in self._jacobians:
-            self.jacobian(error_name)   # builds the frames
-            frame = self._frames.get(error_name)
-            if frame is None or COMPONENTS.index(error_name[1]) < 3:
-                self._jacobians[key] = np.zeros((self.n, 3))
-            else:
-                sign, rotation, _ = frame
-                component = COMPONENTS.index(error_name[1]) - 3
-                self._jacobians[key] = sign * np.ascontiguousarray(rotation[:, :, component])
+            self._jacobians[key] = self._orientation_sensitivity(error_name)
         return self._jacobians[key]
+
+    def _orientation_sensitivity(self, error_name: str) -> NDArray[np.float64]:
+        self.jacobian(error_name)   # builds the frames
+        frame = self._frames.get(error_name)
+        if frame is None or COMPONENTS.index(error_name[1]) < 3:
+            return np.zeros((self.n, 3))
+        sign, rotation, _ = frame
+        component = COMPONENTS.index(error_name[1]) - 3
+        return sign * np.ascontiguousarray(rotation[:, :, component])
 
     @property
     def width(self) -> int:

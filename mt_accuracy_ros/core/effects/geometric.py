@@ -468,8 +468,7 @@ class AngularWithArm(EffectFamily):
             return []
         # A turn about the tool's own axis has no arm along it (a yaw under a vertical
         # spindle): that tilt is the plain angular error.
-        return [name for name in component_names(ctx, "angular")
-                if np.any(np.abs(ctx.arm_jacobian(name)) > 1e-12)]
+        return [name for name in component_names(ctx, "angular") if ctx.arm_moves(name)]
 
     def settings(self, ctx: Context, variant: str) -> list[dict]:
         return [{"order": k} for k in range(1, 1 + _ORDERS)]

@@ -634,7 +634,9 @@ class Selector:
         """The selected model's per-fold products (its columns with themselves and y)."""
         with_y = np.column_stack([base, self.y])
         products = self._block_products(with_y, with_y)
-        return _BaseStatistics(base, products, with_y, serial=next(_SERIALS))
+        # The columns once (at 1e5 readings a model of a few terms is tens of MB): the
+        # base is a view of [base, y].
+        return _BaseStatistics(with_y[:, :-1], products, with_y, serial=next(_SERIALS))
 
     def _candidate_products(self, stats: _BaseStatistics, design: NDArray[np.float64],
                             key: tuple | None = None):
@@ -984,7 +986,7 @@ class Selector:
             candidate.parameter_names = term.family.parameter_names(term.variant, setting)
             candidate.refusal = self.physics_refusal(term, setting, candidate.coefficients)
             scored.append(candidate)
-            if len(scored) % 32 == 0:
+            if len(scored) % 8 == 0:
                 self._release_errors(scored)
         # The best of many candidates is no chance winner: each p-value is adjusted for
         # every candidate tried, by the distribution of the *largest* t over them all

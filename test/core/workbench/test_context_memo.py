@@ -145,3 +145,27 @@ def test_a_tilt_with_its_arm_at_a_lower_order_is_columns_of_the_highest_orders_d
             np.testing.assert_allclose(rhs, e_rhs, rtol=0, atol=1e-12 * np.abs(e_rhs).max())
             np.testing.assert_allclose(yy, e_yy, rtol=1e-14)
             assert gram.shape[1] == q + len(term.family.parameter_names(term.variant, setting))
+
+
+def test_what_a_context_and_a_selector_keep_at_a_hundred_thousand_readings_is_kept_once():
+    """Memory (issue 41: 500 MB at 1e5 readings): asking which tilts an arm along the
+    tool carries keeps no sensitivity, and a base's columns live once, inside [base, y].
+    The answers are those of the sensitivities made and kept."""
+    model, obs = _pitch_survey()
+    frame = residual_frame(model, obs)
+    ctx = frame.ctx
+    names = [f"E{c}{a}" for a in "XYZ" for c in "ABC"]
+    moves = {name: ctx.arm_moves(name) for name in names}
+    assert not any(key.startswith(("arm:", "orientation:")) for key in ctx._jacobians)
+    fresh = residual_frame(model, obs).ctx
+    assert moves == {name: bool(np.any(np.abs(fresh.arm_jacobian(name)) > 1e-12))
+                     for name in names}
+    assert any(moves.values()) and not all(moves.values())
+    # Once made, the kept sensitivity answers.
+    assert all(fresh.arm_moves(name) == moves[name] for name in names)
+    selector = selection.Selector(ctx, frame.residual, frame.mask, 0.3e-6)
+    columns = selector.base_columns()
+    stats = selector.base_statistics(columns)
+    np.testing.assert_array_equal(stats.base, columns)
+    np.testing.assert_array_equal(stats.with_y[:, -1], selector.y)
+    assert np.shares_memory(stats.base, stats.with_y)
