@@ -14,7 +14,6 @@ library must not change its host process's allocator.
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 
 #: mallopt parameters (glibc's malloc.h).
 _M_TRIM_THRESHOLD, _M_TOP_PAD, _M_MMAP_THRESHOLD = -1, -2, -3
@@ -31,12 +30,10 @@ def keep_freed_arrays() -> bool:
 
     Returns True when the settings took (False on another C library: nothing changes).
     """
-    name = ctypes.util.find_library("c")
-    if not name:
-        return False
     try:
-        libc = ctypes.CDLL(name)
-        mallopt = libc.mallopt
+        # The process's own symbols hold the C library's (no library search at start-up:
+        # ctypes.util costs more than the rest of this module).
+        mallopt = ctypes.CDLL(None).mallopt
     except (OSError, AttributeError):
         return False
     mallopt.argtypes = (ctypes.c_int, ctypes.c_int)

@@ -404,6 +404,7 @@ class Selector:
         self.components = COMPONENT_NAMES[:width]
         self.mask = mask
         self._measured_components = mask.any(axis=0)
+        self._rows_per_component = mask.sum(axis=0)
         self.rows = np.flatnonzero(mask.ravel())
         self.sample_of_row = self.rows // width
         self.y = residual.ravel()[self.rows]
@@ -551,14 +552,21 @@ class Selector:
         columns = [self.offsets] + [self.design_rows(t, s) for t, s in self.selected]
         return np.column_stack(columns)
 
-    def physics_refusal(self, term: Term, setting: dict, coefficients: NDArray[np.float64]
-                        ) -> str:
-        """Why physics refuses ``term`` fitted with ``coefficients`` ("" if it may stand)."""
+    def physics_refusal(self, term: Term, setting: dict, coefficients: NDArray[np.float64],
+                        own_square_sum: float | None = None) -> str:
+        """Why physics refuses ``term`` fitted with ``coefficients`` ("" if it may stand).
+
+        ``own_square_sum``: c'X'Xc, the sum of the term's own contribution squared over
+        the rows fitted (from the products at hand). Every component's spread is at most
+        sqrt(that / its rows); when that bound lies within every allowance, no spread can
+        exceed one and the contribution itself is not made."""
         names = term.family.parameter_names(term.variant, setting)
         problems = limit_problems(names, coefficients,
                                   term.family.parameter_limits(self.ctx, term.variant, setting))
         coefficients = np.asarray(coefficients, float)
         problems += term.family.fit_problems(self.ctx, term.variant, setting, coefficients)
+        if own_square_sum is not None and self._spreads_within_allowances(own_square_sum):
+            return "; ".join(problems)
         basis = self.basis_rows(term, setting)
         own = self.design_rows(term, setting) @ coefficients if basis is None else \
             self._separable_prediction(term, basis, coefficients)
@@ -579,6 +587,22 @@ class Selector:
                    if component in self.allowances}
         problems += spread_problems(spreads, self.allowances, self.ctx.orientation_lever_m)
         return "; ".join(problems)
+
+    def _spreads_within_allowances(self, own_square_sum: float) -> bool:
+        """Can no component's spread of a contribution whose squares sum to
+        ``own_square_sum`` over the rows fitted exceed its allowance? (A spread about the
+        mean of n_c rows is at most sqrt(sum / n_c); a margin of 1e-9 covers the rounding
+        of a sum taken from products.)"""
+        if not np.isfinite(own_square_sum) or own_square_sum < 0:
+            return False
+        for c, component in enumerate(self.components):
+            allowed = self.allowances.get(component)
+            rows = self._rows_per_component[c]
+            if allowed is None or rows == 0:
+                continue
+            if not np.sqrt(own_square_sum / rows) * (1.0 + 1e-9) <= allowed:
+                return False
+        return True
 
     # ------------------------------------------------------------ scoring
     # Every fold's fit is solved from normal equations: the training blocks' products
@@ -980,11 +1004,15 @@ class Selector:
                                                   if m))
             # Every candidate carries its full-data fit, so that a user may add any of them
             # (judged by physics now, while its design is at hand).
+            products = self._products_of(stats, term, setting)
             candidate.coefficients, candidate.standard_errors = (
-                a[q:] for a in self._fit_products(*self._products_of(stats, term, setting),
+                a[q:] for a in self._fit_products(*products,
                                                   penalty=(q, penalty_of(term, setting))))
             candidate.parameter_names = term.family.parameter_names(term.variant, setting)
-            candidate.refusal = self.physics_refusal(term, setting, candidate.coefficients)
+            own = candidate.coefficients
+            candidate.refusal = self.physics_refusal(
+                term, setting, own,
+                own_square_sum=float(own @ products[0][:, q:, q:].sum(axis=0) @ own))
             scored.append(candidate)
             if len(scored) % 8 == 0:
                 self._release_errors(scored)

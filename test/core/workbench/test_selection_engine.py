@@ -107,3 +107,28 @@ def test_separable_designs_score_as_their_rows_do(mask):
             expected += consistency_problems(flat.reshape(-1, 3), selector.residual,
                                              selector.mask, selector.noise_sigma)
             assert selector.physics_refusal(term, setting, coefficients) == "; ".join(expected)
+
+
+@pytest.mark.parametrize("mask", [None, "partial"])
+def test_physics_refuses_alike_with_or_without_the_spread_bound(mask):
+    """A candidate's spread is bounded from its products (sqrt(c'X'Xc / rows)); where the
+    bound lies within every allowance the contribution is not made. Every candidate's
+    refusal - as fitted, and with coefficients 30x too large, which physics refuses - is
+    the same as from the contribution itself, and the bound's sum is the contribution's."""
+    selector, terms = _selector(None if mask is None else _partial_mask())
+    stats = selector.base_statistics(selector.base_columns())
+    q = stats.base.shape[1]
+    skipped = refused = 0
+    for term in terms:
+        setting = term.settings[-1]
+        gram, rhs, yy = selector._products_of(stats, term, setting)
+        coefficients, _ = selector._fit_products(gram, rhs, yy)
+        for c in (coefficients[q:], 30.0 * coefficients[q:]):
+            own_sum = float(c @ gram[:, q:, q:].sum(axis=0) @ c)
+            own = selector.design_rows(term, setting) @ c
+            assert own_sum == pytest.approx(float(own @ own), rel=1e-9, abs=1e-30)
+            plain = selector.physics_refusal(term, setting, c)
+            assert selector.physics_refusal(term, setting, c, own_square_sum=own_sum) == plain
+            skipped += selector._spreads_within_allowances(own_sum)
+            refused += "RMS at the readings" in plain
+    assert skipped > 0 and refused > 0
