@@ -74,6 +74,25 @@ def test_cross_validation_equals_an_explicit_per_fold_brute_force():
 
 
 
+@pytest.mark.parametrize("cached_samples", [1, 1400, 15_000])
+def test_many_variables_searched_in_any_blocks_equal_one_at_a_time(monkeypatch, cached_samples):
+    """The variables are searched a few at a time (``CACHED_SAMPLES``): one, two or all
+    four per block, every variable's fold errors are bit for bit its own call's."""
+    from mt_accuracy_ros.core.scales import knn
+
+    monkeypatch.setattr(knn, "CACHED_SAMPLES", cached_samples)
+    rng = np.random.default_rng(5)
+    n = 700
+    y = rng.normal(0, 1e-6, (n, 2))
+    variables = np.stack([rng.uniform(0, 0.4, n), np.repeat(np.arange(7.0), n // 7),
+                          -np.linspace(0, 1, n), y[:, 0] * 1e5])
+    many = cross_validate_k_many(variables, y, k_lim=25, n_folds=5, seed=2)
+    for v, per_series in zip(variables, many):
+        for c, result in enumerate(per_series):
+            alone = cross_validate_k(v, y[:, c], k_lim=25, n_folds=5, seed=2)
+            np.testing.assert_array_equal(result.fold_rmse, alone.fold_rmse)
+
+
 def test_many_variables_in_one_pass_equal_one_at_a_time():
     """The batched cross-validation (every variable's folds as segments of one array)
     gives each variable exactly what its own call gives, ties and steps included."""
