@@ -33,6 +33,8 @@ time between runs (a night, a restarted clock) means nothing to the machine.
 """
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -41,6 +43,8 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InputDataError
 
 AXIS_LETTERS = "XYZABC"
+#: Lagged signals kept per set of readings [bytes] (:meth:`Variables.lag`).
+LAG_MEMO_BYTES = 16 * 2 ** 20
 
 
 def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
@@ -244,7 +248,29 @@ class Variables:
     def lag(self, key: str, signal: NDArray[np.float64], tau_s: float, *,
             from_rest: bool = False) -> NDArray[np.float64]:
         """First-order lag of ``signal`` (see :func:`first_order_lag`), continued from
-        ``lag_states[key, tau]`` when that state lies before these readings."""
+        ``lag_states[key, tau]`` when that state lies before these readings.
+
+        Without live states the result is a function of the readings alone: it is kept
+        (read-only, up to :data:`LAG_MEMO_BYTES`) for the next design that asks for the
+        same signal and time constant - a selection asks again at every step."""
+        if self.lag_states is not None:
+            return self._lag(key, signal, tau_s, from_rest)
+        signal = np.ascontiguousarray(signal, dtype=np.float64)
+        memo = self.__dict__.setdefault("_lag_memo", OrderedDict())
+        memo_key = (key, float(tau_s), bool(from_rest), hashlib.sha1(signal).digest())
+        kept = memo.get(memo_key)
+        if kept is not None:
+            memo.move_to_end(memo_key)
+            return kept
+        lagged = self._lag(key, signal, tau_s, from_rest)
+        lagged.flags.writeable = False
+        memo[memo_key] = lagged
+        while len(memo) > 1 and sum(a.nbytes for a in memo.values()) > LAG_MEMO_BYTES:
+            memo.popitem(last=False)
+        return lagged
+
+    def _lag(self, key: str, signal: NDArray[np.float64], tau_s: float, from_rest: bool
+             ) -> NDArray[np.float64]:
         if self.run_starts is not None and self.lag_states is None:
             # Each run from its own first reading (a cold start, a new day).
             t, out = self.relative_time(), np.empty(self.n)

@@ -620,6 +620,9 @@ class Selector:
         """Squared errors of the judged rows -> (N, 3) per reading and component."""
         if self.forward:
             squared_rows = np.where(self.judged_row, squared_rows, 0.0)
+        if self.all_rows:
+            # Every component of every reading fitted: the rows are the readings' already.
+            return squared_rows.reshape(self.n, self.width)
         return np.bincount(self.rows, weights=squared_rows,
                            minlength=self.mask.size).reshape(self.n, self.width)
 

@@ -75,6 +75,34 @@ def test_a_stream_continues_the_lag_exactly():
     np.testing.assert_allclose(np.concatenate(parts), whole, atol=1e-12)
 
 
+def test_a_lag_asked_again_is_the_kept_one_and_only_for_the_same_signal(monkeypatch):
+    """Readings without live states keep each lag (a selection asks at every step): the
+    same key, signal and time constant give the kept, read-only array; another signal
+    under the same key, another constant, from rest, or runs, their own; the memo is
+    bounded."""
+    from mt_accuracy_ros.core.effects import variables as module
+
+    t = np.arange(0.0, 3000.0, 5.0)
+    u = np.sin(t / 400.0)
+    v = Variables({"X": t * 0}, t)
+    first = v.lag("u", u, 600.0)
+    np.testing.assert_array_equal(first, first_order_lag(t - t[0], u, 600.0))
+    assert v.lag("u", u.copy(), 600.0) is first and not first.flags.writeable
+    other = v.lag("u", u + 1e-12, 600.0)
+    assert other is not first
+    np.testing.assert_array_equal(other, first_order_lag(t - t[0], u + 1e-12, 600.0))
+    assert v.lag("u", u, 1200.0) is not first
+    np.testing.assert_array_equal(v.lag("u", u, 600.0, from_rest=True),
+                                  first_order_lag(t - t[0], u, 600.0, initial=0.0))
+    runs = Variables({"X": t * 0}, t, run_starts=np.array([0, 250]))
+    np.testing.assert_array_equal(runs.lag("u", u, 600.0)[250:],
+                                  first_order_lag(t[250:] - t[250], u[250:], 600.0))
+    monkeypatch.setattr(module, "LAG_MEMO_BYTES", 2 * first.nbytes)
+    for tau in (100.0, 200.0, 300.0, 400.0):
+        v.lag("u", u, tau)
+    assert sum(a.nbytes for a in v._lag_memo.values()) <= 2 * first.nbytes
+
+
 def test_variables_by_name_and_clear_errors():
     t = np.array([0.0, 1.0, 2.0, 3.0])
     v = Variables({"X": np.array([0.0, 0.1, 0.3, 0.6]), "B": np.zeros(4)}, t + 100.0,

@@ -132,3 +132,14 @@ def test_physics_refuses_alike_with_or_without_the_spread_bound(mask):
             skipped += selector._spreads_within_allowances(own_sum)
             refused += "RMS at the readings" in plain
     assert skipped > 0 and refused > 0
+
+
+def test_per_reading_errors_of_every_row_are_the_rows_themselves():
+    """With every component of every reading fitted the rows are already per reading:
+    the shortcut equals the scatter by row index, bit for bit."""
+    selector, _ = _selector()
+    assert selector.all_rows
+    squared = np.random.default_rng(2).random(selector.y.size)
+    expected = np.bincount(selector.rows, weights=squared, minlength=selector.mask.size
+                           ).reshape(selector.n, selector.width)
+    np.testing.assert_array_equal(selector._per_sample(squared.copy()), expected)
