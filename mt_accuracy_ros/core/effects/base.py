@@ -29,6 +29,8 @@ the tool axis (the instrument cannot see a turn about it).
 """
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import re
 from typing import Any
 
@@ -40,6 +42,11 @@ from ..kinematics.chain import KinematicModel
 from ..kinematics.machine import COMPONENTS, MachineDescription
 from .variables import Variables
 
+#: Columns shared between candidates, kept per context [bytes] (:meth:`Context.shared_columns`).
+SHARED_COLUMNS_BYTES = 32 * 2 ** 20
+#: ... and only while it can hold this many of them (measured: 76 distinct periods over
+#: a survey's three selection steps, each asked for 2-3 times; docs/benchmarks.md).
+SHARED_COLUMNS_KEPT = 48
 #: The scales' own thermocouples (x1_s0 ...) serve the scale compensation, not the structure.
 _SCALE_SENSOR = re.compile(r"^[xyzabc][12]_s\d+$", re.IGNORECASE)
 
@@ -74,9 +81,31 @@ class Context:
         self._jacobians: dict[str, NDArray[np.float64]] = {}
         self._frames: dict | None = None
         self.cache: dict = {}   # families' precomputed bases (e.g. periodic) for these readings
+        self._shared: OrderedDict[tuple, NDArray[np.float64]] = OrderedDict()
         missing = [a for a in machine.axis_order if a not in variables.positions]
         if missing:
             raise InputDataError(f"positions missing for axis {', '.join(missing)}")
+
+    def shared_columns(self, key: tuple, make) -> NDArray[np.float64]:
+        """Columns several candidates ask for at these readings (the harmonics of one
+        axis' position at one period serve its positioning, straightness and angular
+        errors): ``make()`` once, kept read-only in a least-recently-used store of
+        :data:`SHARED_COLUMNS_BYTES`."""
+        columns = self._shared.get(key)
+        if columns is not None:
+            self._shared.move_to_end(key)
+            return columns
+        columns = make()
+        columns.flags.writeable = False
+        if columns.nbytes * SHARED_COLUMNS_KEPT > SHARED_COLUMNS_BYTES:
+            # A selection step asks for dozens of them before asking again: a store that
+            # cannot hold that many only costs memory (1e5 readings: 3.2 MB each).
+            return columns
+        self._shared[key] = columns
+        while len(self._shared) > 1 and \
+                sum(a.nbytes for a in self._shared.values()) > SHARED_COLUMNS_BYTES:
+            self._shared.popitem(last=False)
+        return columns
 
     def jacobian(self, error_name: str) -> NDArray[np.float64]:
         """d e_TCP / d (error ``error_name``) at the readings, shape (N, 3) [m per m or rad].

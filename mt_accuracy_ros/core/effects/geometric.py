@@ -123,7 +123,12 @@ class ComponentError(EffectFamily):
 
     def separable_design(self, ctx: Context, variant: str, setting: dict):
         axis = variant[2]
-        if self.periodic or setting["order"] > _LARGEST_ORDER:
+        if self.periodic:
+            # Every periodic error of an axis has the same harmonics at one period.
+            basis = ctx.shared_columns(
+                ("harmonics", axis, float(setting["period_m"])),
+                lambda: self._basis(ctx.variables.positions[axis], None, setting))
+        elif setting["order"] > _LARGEST_ORDER:
             basis = self._basis(ctx.variables.positions[axis], ctx.normalised_position(axis),
                                 setting)
         else:

@@ -45,6 +45,9 @@ from ..errors import InputDataError
 AXIS_LETTERS = "XYZABC"
 #: Lagged signals kept per set of readings [bytes] (:meth:`Variables.lag`).
 LAG_MEMO_BYTES = 16 * 2 ** 20
+#: ... and only while it can hold this many (a catalogue's thermal candidates ask for
+#: 44-66 lags per selection step).
+LAG_MEMO_KEPT = 64
 
 
 def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
@@ -264,6 +267,10 @@ class Variables:
             return kept
         lagged = self._lag(key, signal, tau_s, from_rest)
         lagged.flags.writeable = False
+        if lagged.nbytes * LAG_MEMO_KEPT > LAG_MEMO_BYTES:
+            # A selection step asks for dozens before asking again: a memo that cannot
+            # hold that many only costs memory (1e5 readings: 0.8 MB each).
+            return lagged
         memo[memo_key] = lagged
         while len(memo) > 1 and sum(a.nbytes for a in memo.values()) > LAG_MEMO_BYTES:
             memo.popitem(last=False)

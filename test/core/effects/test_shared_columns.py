@@ -1,0 +1,58 @@
+"""Columns several candidates share at one context (the harmonics of an axis' position
+at one period): made once, read-only, bounded, and exactly the family's own."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.core.effects import base
+from mt_accuracy_ros.core.effects.base import Context
+from mt_accuracy_ros.core.effects.geometric import ComponentError
+from mt_accuracy_ros.core.effects.variables import Variables
+from mt_accuracy_ros.core.kinematics.machine import generic_cartesian
+
+
+def _context(n: int = 2000) -> Context:
+    rng = np.random.default_rng(4)
+    machine = generic_cartesian({"X": (0.0, 0.5), "Y": (0.0, 0.4), "Z": (0.0, 0.3)})
+    return Context(machine, Variables({a: rng.uniform(0.0, 0.3, n) for a in "XYZ"}))
+
+
+def test_the_axis_harmonics_are_made_once_for_every_periodic_error_of_the_axis():
+    ctx = _context()
+    setting = {"period_m": 0.0123}
+    families = [ComponentError(kind, True) for kind in ("positioning", "straightness",
+                                                        "angular")]
+    variants = ["EXX", "EYX", "EBX"]
+    bases = [f.separable_design(ctx, v, setting)[1] for f, v in zip(families, variants)]
+    assert bases[1] is bases[0] and bases[2] is bases[0] and not bases[0].flags.writeable
+    own = families[0]._basis(ctx.variables.positions["X"], None, setting)
+    np.testing.assert_array_equal(bases[0], own)
+    # Another axis or period: their own columns.
+    assert families[0].separable_design(ctx, "EYY", setting)[1] is not bases[0]
+    assert families[0].separable_design(ctx, "EXX", {"period_m": 0.02})[1] is not bases[0]
+    with pytest.raises(ValueError):
+        bases[0][0, 0] = 1.0
+
+
+def test_the_store_is_bounded_and_keeps_nothing_it_cannot_hold_enough_of(monkeypatch):
+    ctx = _context()
+    made = []
+
+    def make(size):
+        def f():
+            made.append(size)
+            return np.ones((size, 4))
+        return f
+
+    monkeypatch.setattr(base, "SHARED_COLUMNS_BYTES", 3 * 2000 * 4 * 8)
+    monkeypatch.setattr(base, "SHARED_COLUMNS_KEPT", 2)
+    first = ctx.shared_columns(("a",), make(2000))
+    assert ctx.shared_columns(("a",), make(2000)) is first and made == [2000]
+    for key in ("b", "c", "d"):
+        ctx.shared_columns((key,), make(2000))
+    assert sum(a.nbytes for a in ctx._shared.values()) <= 3 * 2000 * 4 * 8
+    assert ("a",) not in ctx._shared, "the least recently used went first"
+    # Too large for the store to hold SHARED_COLUMNS_KEPT of them: made, not kept.
+    ctx.shared_columns(("big",), make(4000))
+    assert ("big",) not in ctx._shared
