@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..scales.knn import cross_validate_k_many
-from ..effects.spectral import direct_basis, frequency_grid, grid_periodogram
+from ..effects.spectral import direct_basis, frequency_grid, grid_periodogram, weight_sums
 from ..effects.variables import Variables
 
 COMPONENTS = "xyz"
@@ -344,7 +344,7 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
             measured[component] = (rows, r, variance)
     shares = _variable_shares(candidates, measured, folds)
     # The exponentials of an axis' positions serve each component read at the same rows.
-    bases: dict[tuple, NDArray | None] = {}
+    bases: dict[tuple, tuple] = {}
     for c, component in enumerate(COMPONENTS):
         if component not in measured:
             continue
@@ -360,9 +360,12 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
             periods = 1.0 / frequencies
             key = (axis, np.asarray(rows).tobytes())
             if key not in bases:
-                bases[key] = direct_basis(q, frequencies)
-            explained, amplitude = grid_periodogram(q, r, np.ones(r.size), frequencies,
-                                                    basis=bases[key])
+                basis = direct_basis(q, frequencies)
+                # Unit weights: their sums serve every component read at these rows.
+                bases[key] = basis, weight_sums(q, np.ones(q.size), frequencies, basis=basis)
+            basis, unit_weights = bases[key]
+            explained, amplitude = grid_periodogram(q, r, None, frequencies,
+                                                    weights=unit_weights, basis=basis)
             best = int(np.argmax(explained))
             # The best of hundreds of periods explains much in-sample even of a smooth drift
             # (regular readings of a periodic program alias time into position); held-out
