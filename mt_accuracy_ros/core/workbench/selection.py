@@ -142,6 +142,26 @@ def solve_normal(gram: NDArray[np.float64], rhs: NDArray[np.float64]) -> NDArray
     return scale * np.einsum("...ij,...j->...i", vectors, inverse * projected)
 
 
+def solve_normal_grouped(grams: list[NDArray[np.float64]], rhs: list[NDArray[np.float64]]
+                         ) -> list[NDArray[np.float64]]:
+    """:func:`solve_normal` of each (gram (..., p, p), rhs (..., p)) pair, the pairs of one
+    shape solved in one batched call (a candidate's settings: one eigendecomposition
+    call instead of one per setting). Each result is its own call's, bit for bit."""
+    out: list[NDArray[np.float64] | None] = [None] * len(grams)
+    groups: dict[tuple, list[int]] = {}
+    for i, gram in enumerate(grams):
+        groups.setdefault(gram.shape, []).append(i)
+    for shape, members in groups.items():
+        if len(members) == 1:
+            out[members[0]] = solve_normal(grams[members[0]], rhs[members[0]])
+            continue
+        solved = solve_normal(np.stack([grams[i] for i in members]),
+                              np.stack([rhs[i] for i in members]))
+        for k, i in enumerate(members):
+            out[i] = solved[k]
+    return out
+
+
 def normal_inverse(gram: NDArray[np.float64]) -> NDArray[np.float64]:
     """(X'X)^-1 with the cut-off of :func:`solve_normal` (the coefficients' covariance per
     unit variance); directions it drops get zero variance."""
@@ -811,9 +831,11 @@ class Selector:
                            for a, b in self.fold_bounds], float)
         best_bic = np.full(self.folds, np.inf)
         best = [term.settings[0]] * self.folds
-        for setting in term.settings:
-            gram, rhs, yy = (self._train(a) for a in self._products_of(stats, term, setting))
-            coefficients = solve_normal(gram, rhs)
+        trained = [tuple(self._train(a) for a in self._products_of(stats, term, setting))
+                   for setting in term.settings]
+        solved = solve_normal_grouped([gram for gram, _, _ in trained],
+                                      [rhs for _, rhs, _ in trained])
+        for setting, (gram, rhs, yy), coefficients in zip(term.settings, trained, solved):
             rss = np.maximum(yy - np.einsum("fi,fi->f", coefficients, rhs), 1e-300)
             bic = counts * np.log(rss / counts) + gram.shape[1] * np.log(counts)
             for fold in np.flatnonzero(bic < best_bic):

@@ -143,3 +143,20 @@ def test_per_reading_errors_of_every_row_are_the_rows_themselves():
     expected = np.bincount(selector.rows, weights=squared, minlength=selector.mask.size
                            ).reshape(selector.n, selector.width)
     np.testing.assert_array_equal(selector._per_sample(squared.copy()), expected)
+
+
+def test_normal_equations_solved_in_groups_are_each_their_own_solution():
+    """A candidate's settings are solved in one batched call per matrix size; each result
+    is bit for bit the one its own call gives (rank-deficient ones included)."""
+    from mt_accuracy_ros.core.workbench.selection import solve_normal, solve_normal_grouped
+
+    rng = np.random.default_rng(0)
+    grams, rhs = [], []
+    for p in (3, 4, 4, 5, 4, 3, 7):
+        x = rng.normal(size=(5, 50, p))
+        if p == 5:
+            x[..., 4] = x[..., 0]          # a repeated column
+        grams.append(np.einsum("fni,fnj->fij", x, x))
+        rhs.append(rng.normal(size=(5, p)))
+    for grouped, gram, r in zip(solve_normal_grouped(grams, rhs), grams, rhs):
+        np.testing.assert_array_equal(grouped, solve_normal(gram, r))
