@@ -193,23 +193,24 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c.setdefault(sensor, float(values[0]))
 
+    steps, step_residuals = [], []
+
     def evaluate(current, first_look: bool = False):
         if predict is not None:
             obs.predicted_m, obs.predicted_orientation = predict(current)
+        # Each model's residual once: kept for the report, and what the look fits.
+        step_residuals.append(residuals(current, obs))
         # Pairs of effects hiding each other are sought in the first look only: after
         # the named effects are added, what they leave is judged one effect at a time.
         return diagnose(current, obs, min_reduction=min_reduction, blocks=blocks,
                         folds=5 if blocks is None else int(blocks[-1]) + 1,
                         pair_lookahead=first_look, localisations=localisations,
-                        contexts=contexts)
+                        contexts=contexts, residual=step_residuals[-1])
 
     diagnosis = evaluate(model, first_look=True)
     first = diagnosis
-    steps, step_residuals = [], []
     queue = list(add)
     while True:
-        # (A fresh array per model: each step's residual is the model's at that step.)
-        step_residuals.append(residuals(model, obs))
         steps.append({"model_version": model.version, "effects": sorted(model.effects),
                       "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text()})
         if queue:

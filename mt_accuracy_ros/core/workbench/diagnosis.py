@@ -458,7 +458,8 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
              localise_residual: bool = True, forward: bool = False,
              blocks: NDArray[np.intp] | None = None, pair_lookahead: bool = True,
              localisations: LocalisationMemo | None = None,
-             contexts: ContextMemo | None = None) -> Diagnosis:
+             contexts: ContextMemo | None = None,
+             residual: NDArray[np.float64] | None = None) -> Diagnosis:
     """Localise the residual and select the missing effects (see the module docstring).
 
     ``forward``: validate as the model will be used on a log - each block predicted by
@@ -470,10 +471,11 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     ``localisations``: a memo of ``obs``' localisations, for a caller that diagnoses the
     same readings again (a residual seen before is not localised again); ``contexts``:
     a memo of their context, for the same caller (the candidates' designs are not made
-    again)."""
+    again); ``residual``: :func:`residuals` of ``model`` at ``obs``, if the caller has it
+    (it is not changed)."""
     if blocks is None and obs.n < 4 * folds:
         raise InsufficientDataError(f"{obs.n} reference readings; need >= {4 * folds}")
-    frame = residual_frame(model, obs, contexts=contexts)
+    frame = residual_frame(model, obs, contexts=contexts, residual=residual)
     ctx, residual, mask = frame.ctx, frame.residual, frame.mask
     position_residual, lever, directions = frame.position_residual, frame.lever, \
         obs.measures_direction
@@ -560,11 +562,14 @@ class ResidualFrame:
 
 
 def residual_frame(model: ErrorModel, obs: Observations, *, absolute: bool = False,
-                   contexts: ContextMemo | None = None) -> ResidualFrame:
+                   contexts: ContextMemo | None = None,
+                   residual: NDArray[np.float64] | None = None) -> ResidualFrame:
     """The residual of ``model`` at ``obs`` as the selection sees it (see ResidualFrame;
     ``absolute``: the position's mean kept, see :func:`residuals`; ``contexts``: a memo
-    that hands out an earlier look's context of the same readings)."""
-    residual = residuals(model, obs, absolute=absolute)
+    that hands out an earlier look's context of the same readings; ``residual``:
+    :func:`residuals` of ``model`` at ``obs``, when the caller has it already)."""
+    if residual is None:
+        residual = residuals(model, obs, absolute=absolute)
     mask = obs.measured_mask
     variables = obs.variables(model.reference_temperatures_c)
     orientation = obs.predicted_orientation
