@@ -18,7 +18,8 @@ from mt_accuracy_ros.core.kinematics.machine import generic_cartesian
 from mt_accuracy_ros.core.workbench import selection
 from mt_accuracy_ros.core.workbench.context_memo import ContextMemo
 from mt_accuracy_ros.core.workbench.diagnosis import (Observations, add_effects,
-                                                      candidate_terms, diagnose, residual_frame)
+                                                      candidate_terms, diagnose, residual_frame,
+                                                      residuals)
 
 STROKES = {"X": (0.0, 0.5), "Y": (0.0, 0.4), "Z": (0.0, 0.3)}
 
@@ -169,3 +170,11 @@ def test_what_a_context_and_a_selector_keep_at_a_hundred_thousand_readings_is_ke
     np.testing.assert_array_equal(stats.base, columns)
     np.testing.assert_array_equal(stats.with_y[:, -1], selector.y)
     assert np.shares_memory(stats.base, stats.with_y)
+
+
+def test_a_look_handed_its_models_residual_reports_as_one_that_computes_it():
+    model, obs = _pitch_survey()
+    residual = residuals(model, obs)
+    kept = residual.copy()
+    _assert_same(diagnose(model, obs, residual=residual), diagnose(model, obs))
+    np.testing.assert_array_equal(residual, kept)
