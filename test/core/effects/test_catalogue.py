@@ -201,3 +201,19 @@ def test_an_installed_plugin_is_a_candidate_everywhere(tmp_path):
                             text=True, timeout=120)
     assert broken.returncode != 0
     assert "effect plugin 'sag' (my_effects:Nope): cannot be loaded" in broken.stderr
+
+
+def test_the_quick_look_for_plugins_misses_none(tmp_path, monkeypatch):
+    """Without any entry_points.txt naming the group the catalogue skips the slow scan;
+    one that names it, or a zip on the path, leaves the answer to importlib.metadata."""
+    from mt_accuracy_ros.core.effects.user import _entry_point_files_may_name
+
+    assert not _entry_point_files_may_name("no.such.group.anywhere")
+    info = tmp_path / "other-1.0.dist-info"
+    info.mkdir()
+    (info / "entry_points.txt").write_text("[no.such.group.anywhere]\nx = y:z\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert _entry_point_files_may_name("no.such.group.anywhere")
+    monkeypatch.syspath_prepend(str(tmp_path / "archive.zip"))
+    (tmp_path / "archive.zip").write_bytes(b"PK")
+    assert _entry_point_files_may_name("another.group")
