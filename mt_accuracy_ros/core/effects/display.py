@@ -13,7 +13,7 @@ import math
 #: (unit, factor from SI) by kind of quantity.
 UNITS = {"length": ("µm", 1e6), "angle": ("µrad", 1e6), "gain_k": ("µm/K", 1e6),
          "angle_k": ("µrad/K", 1e6), "expansion": ("µm/m/K", 1e6), "time": ("ms", 1e3),
-         "per_acceleration": ("µm/(m/s²)", 1e6), "per_area": ("µm/m²", 1e6),
+         "per_acceleration": ("µm/(m/s²)", 1e6),
          "lever": ("mm", 1e3), "spindle_gain": ("µm/krpm", 1e6),
          "feed_gain": ("µm/(m/min)", 1e6), "per_score": ("µm per unit score", 1e6)}
 
@@ -30,7 +30,8 @@ _KIND_OF_FAMILY = {**{f: "length" for f in _LENGTH_FAMILIES},
                    "angular": "angle", "angular_periodic": "angle", "squareness": "angle",
                    "position_dependent_thermal": "expansion", "thermal_squareness": "angle_k",
                    "reversal": "length", "servo_lag": "time", "acceleration": "per_acceleration",
-                   "cross_axis": "per_area", "abbe_offset": "lever",
+                   # a twist's coefficient multiplies normalised positions: a length
+                   "cross_axis": "length", "abbe_offset": "lever",
                    # a principal component's score is standardised: its gain is a length
                    "temperature_components": "per_score"}
 

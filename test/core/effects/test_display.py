@@ -53,3 +53,11 @@ def test_temperatures_that_explain_alike_are_one_bar():
     assert len(chart[0]["variables"]) == 12 and chart[0]["component"] == "z"
     assert "Y" in labels and "X" in labels and "T_t3-t5" in labels
     assert not any(label.startswith("T_t1") for label in labels)
+
+
+def test_a_twists_coefficient_is_a_length():
+    """cross_axis multiplies normalised positions (u_a u_b, dimensionless): its coefficient
+    is the twist's size at the travel's corners, a length - not per area."""
+    from mt_accuracy_ros.core.effects.display import parameter_unit
+
+    assert parameter_unit("cross_axis", "XY", "on_z") == ("µm", 1e6)
