@@ -1,6 +1,10 @@
 """Helpers every node shares: QoS profiles, stamps, parameter descriptors."""
 from __future__ import annotations
 
+import signal
+import threading
+from contextlib import contextmanager
+
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -100,6 +104,24 @@ def linger(node, seconds: float = 0.5) -> None:
     end = time.monotonic() + seconds
     while rclpy.ok() and time.monotonic() < end:
         rclpy.spin_once(node, timeout_sec=0.05)
+
+
+@contextmanager
+def signals_held():
+    """SIGINT and SIGTERM held off for the block (main thread, POSIX): Python turns a
+    SIGINT into a KeyboardInterrupt at any bytecode, and inside the MCAP writer one
+    leaves a chunk half written that the finished file then indexes (seen in a loaded
+    run: the bag's last chunk unreadable). A signal that arrives meanwhile is delivered
+    when the block ends."""
+    if not hasattr(signal, "pthread_sigmask") or \
+            threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def run_node(node_class, args: list[str] | None, *, until_finished: bool = False,

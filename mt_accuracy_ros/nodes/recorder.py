@@ -24,7 +24,8 @@ from rclpy.node import Node
 
 from ..core.errors import BagError
 from ..io.bag_writer import BagWriter
-from ._common import float_descriptor, int_descriptor, plain_descriptor, run_node
+from ._common import (float_descriptor, int_descriptor, plain_descriptor, run_node,
+                      signals_held)
 from ._raw_topics import RawTopicFollower
 
 
@@ -79,7 +80,7 @@ class Recorder(Node):
         self.create_timer(1.0, self._report, clock=steady)
         interval = float(self.get_parameter("chunk_interval_s").value)
         if interval > 0:
-            self.create_timer(min(interval, 1.0) / 4, self.bag.flush_due, clock=steady)
+            self.create_timer(min(interval, 1.0) / 4, self._flush_due, clock=steady)
         self.get_logger().info(f"recording to {self.bag.path}")
 
     def _validate(self, parameters):
@@ -103,11 +104,17 @@ class Recorder(Node):
                 # than log it at time zero; it gets the first valid time.
                 self._pending.append((topic, data, source))
                 return
-            while self._pending:
-                held_topic, held_data, held_source = self._pending.pop(0)
-                self.bag.write(held_topic, held_data, received, held_source)
-            self.bag.write(topic, data, received, source)
+            # A stop signal waits until the message is in the bag (signals_held).
+            with signals_held():
+                while self._pending:
+                    held_topic, held_data, held_source = self._pending.pop(0)
+                    self.bag.write(held_topic, held_data, received, held_source)
+                self.bag.write(topic, data, received, source)
         return write
+
+    def _flush_due(self) -> None:
+        with signals_held():
+            self.bag.flush_due()
 
     def _report(self) -> None:
         status = DiagnosticStatus(level=DiagnosticStatus.OK, name=f"{self.get_name()}: bag",
@@ -120,11 +127,12 @@ class Recorder(Node):
         self._diagnostics.publish(array)
 
     def close(self) -> None:
-        # Messages still waiting for a first /clock are kept, at their source time.
-        for topic, data, source in self._pending:
-            self.bag.write(topic, data, source, source)
-        self._pending.clear()
-        self.bag.close()
+        with signals_held():   # a second Ctrl-C must not cut the summary short
+            # Messages still waiting for a first /clock are kept, at their source time.
+            for topic, data, source in self._pending:
+                self.bag.write(topic, data, source, source)
+            self._pending.clear()
+            self.bag.close()
 
 
 def main(args: list[str] | None = None) -> int:

@@ -298,6 +298,76 @@ def test_recorder_stopped_by_signal_leaves_a_complete_bag(rclpy_context, tmp_pat
     assert read == [f"m{i}" for i in range(50)], _bag_layout(tmp_path / "bag")
 
 
+@pytest.mark.parametrize("held", [True, False])
+def test_a_stop_signal_waits_until_the_write_in_progress_is_done(held):
+    """The recorder writes inside ``signals_held()``: a SIGINT that arrives mid-write
+    becomes a KeyboardInterrupt only once the write is complete (without it, Python
+    raises at the next bytecode, inside the MCAP writer)."""
+    code = (
+        "import os, signal\n"
+        "from contextlib import nullcontext\n"
+        "from mt_accuracy_ros.nodes._common import signals_held\n"
+        "done = []\n"
+        "try:\n"
+        f"    with {'signals_held()' if held else 'nullcontext()'}:\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "        for _ in range(200000):\n"
+        "            pass\n"
+        "        done.append('written')\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted after', done)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60, check=True).stdout
+    assert out.strip() == ("interrupted after ['written']" if held else "interrupted after []")
+
+
+@pytest.mark.parametrize("round_", range(3))
+def test_a_stop_signal_in_the_middle_of_writing_leaves_every_counted_message_readable(
+        rclpy_context, tmp_path, round_):
+    """SIGINT while the recorder writes as fast as it can (small chunks, closed every
+    10 ms). A loaded run once left, after a SIGINT, a bag whose summary counted 50
+    messages and indexed a last chunk that neither this package's reader nor the mcap
+    library's linear scan could read (36 read); a KeyboardInterrupt inside the MCAP
+    writer is the way we see to do that, and the writes are now held against it. The
+    race is too narrow to force here (this test passed 9 of 9 on the old code too): it
+    checks that whatever the moment, every message the statistics count is read back,
+    by both readers, in order."""
+    import time
+
+    from mcap.reader import NonSeekingReader
+    from std_msgs.msg import String
+
+    import rclpy
+
+    node = rclpy.create_node("talker")
+    publisher = node.create_publisher(String, "/chatter", 1000)
+    recorder = start_node("recorder", {"output": str(tmp_path / "bag"), "topics": ["/chatter"],
+                                       "chunk_size": 1024, "chunk_interval_s": 0.01,
+                                       "discovery_period_s": 0.1})
+    assert spin_until(node, lambda: publisher.get_subscription_count() >= 1)
+    sent, started, signalled = 0, time.monotonic(), False
+    stop_at = 0.3 + 0.1 * round_
+    while time.monotonic() - started < stop_at + 0.5:
+        publisher.publish(String(data=f"m{sent}"))
+        sent += 1
+        if sent % 20 == 0:
+            spin_for(node, 0.001)
+        if not signalled and time.monotonic() - started >= stop_at:
+            recorder.popen.send_signal(signal.SIGINT)
+            signalled = True
+    assert recorder.popen.wait(timeout=30) == 0
+    node.destroy_node()
+    counted = bag_info(tmp_path / "bag")["topics"]["/chatter"]["count"]
+    assert counted > 0
+    read = [decode(m).data for m in read_messages(tmp_path / "bag", ["/chatter"])]
+    assert read == [f"m{i}" for i in range(counted)], _bag_layout(tmp_path / "bag")
+    (path,) = sorted((tmp_path / "bag").glob("*.mcap"))
+    with open(path, "rb") as stream:
+        scanned = [m.data for _, c, m in NonSeekingReader(stream).iter_messages()
+                   if c.topic == "/chatter"]
+    assert len(scanned) == counted
+
+
 def _bag_layout(bag: Path) -> str:
     """Chunk indexes and a linear scan of a bag's file: what to look at if a read falls short
     (seen once in CI, not reproduced in 12 loaded runs)."""
