@@ -17,6 +17,7 @@ from mt_accuracy_ros.core.effects.variables import Variables
 from mt_accuracy_ros.core.kinematics.machine import generic_cartesian
 from mt_accuracy_ros.core.workbench import selection
 from mt_accuracy_ros.core.workbench.context_memo import ContextMemo
+from same_steps import assert_same_steps
 from mt_accuracy_ros.core.workbench.diagnosis import (Observations, add_effects,
                                                       candidate_terms, diagnose, residual_frame,
                                                       residuals)
@@ -108,15 +109,7 @@ def test_selectors_sharing_a_context_score_as_selectors_on_their_own():
     assert alone._designs is not warm._designs
     steps = shared.run(terms, max_terms=2)
     alone_steps = alone.run(candidate_terms(model, alone_frame.ctx, None), max_terms=2)
-    assert [s.added and s.added.term.name for s in steps] == \
-        [s.added and s.added.term.name for s in alone_steps]
-    for a, b in zip(steps, alone_steps):
-        assert [s.term.name for s in a.ranking] == [s.term.name for s in b.ranking]
-        assert [s.cv_rmse for s in a.ranking] == pytest.approx([s.cv_rmse for s in b.ranking],
-                                                               rel=1e-12)
-        for s, t in zip(a.ranking, b.ranking):
-            np.testing.assert_allclose(s.coefficients, t.coefficients, rtol=1e-9,
-                                       atol=1e-12 * np.abs(t.coefficients).max(initial=1e-30))
+    assert_same_steps(steps, alone_steps, coefficients=True)
     # Other rows fitted: caches of their own.
     fewer = frame.mask.copy()
     fewer[::3, 1] = False
