@@ -151,15 +151,6 @@ SHOWN_REFUSALS = 5
 SHOWN_CONTESTANTS = 5
 
 
-def _carrier(of: dict) -> str:
-    """Which sensor model a log's sensor weights belong to, in a few words."""
-    if not of:
-        return "the sensor model"
-    family = of["name"].split(":", 1)[0]
-    return (f"the {'model' if of['in_model'] else 'candidate'} {family} over "
-            f"{of['sensors']} sensor{'s' if of['sensors'] > 1 else ''}")
-
-
 def _check(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -287,7 +278,9 @@ def _check(args: argparse.Namespace) -> int:
     if result.get("verdict"):
         print(f"verdict: {result['verdict']}")
     if result.get("sensors_carrying_weight"):
-        print(f"{_carrier(result.get('sensors_carrying_weight_of', {}))} leans on: " +
+        whose = (result.get("sensors_carrying_weight_of") or {}).get("words",
+                                                                      "the sensor model")
+        print(f"{whose} leans on: " +
               ", ".join(f"{sensor} {100 * share:.0f} %" for sensor, share in
                         result["sensors_carrying_weight"].items()))
     print(f"added: {', '.join(result['added']) or 'nothing'}; final "

@@ -297,6 +297,7 @@ def test_a_whole_model_the_step_by_step_model_is_made_of_is_contested_once(tmp_p
     parameters = summary["steps"][0]["parameters"][both]
     assert (parameters["bz_tA_C"], parameters["bz_tB_C"]) == pytest.approx((5e-6, -4e-6),
                                                                             abs=0.1e-6)
-    assert summary["sensors_carrying_weight_of"] == {"name": both, "sensors": 2,
-                                                     "in_model": True}
+    assert summary["sensors_carrying_weight_of"] == {
+        "name": both, "sensors": 2, "in_model": True,
+        "words": "the model sensor_least_squares over 2 sensors"}
     assert "the model sensor_least_squares over 2 sensors leans on: tA_C" in out

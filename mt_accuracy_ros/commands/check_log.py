@@ -243,15 +243,12 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     from ..core.workbench.log_runs import (leave_out_dead_sensors, mixed_units_problem,
                                            run_labels, run_starts)
     from ..core.workbench.thermal_log import log_observations
-    from ..io.csv_table import csv_header, read_csv_table
+    from ..io.csv_table import csv_header, joined_columns, read_csv_table
     from .check import _column_and_unit
 
     header = csv_header(path)
     # A date and a time of day in two columns: --time-column DATE+TIME.
-    split_time = time_column.split("+") if time_column not in header and \
-        "+" in time_column and all(p.strip() in header for p in time_column.split("+")) \
-        else []
-    split_time = [p.strip() for p in split_time]
+    split_time = joined_columns(time_column, header)
     fixed = {flag.split(":", 1)[0].strip() for flag in [target, *drivers]} | \
         {time_column, run_column, *split_time}
     # A temperature column may have holes (a dead thermocouple): kept as NaN, decided below.
@@ -536,8 +533,14 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         [(c_.name, c_.parameters) for c_ in first.ranking if c_.effect == "all_sensors_ridge"]
     carried = dict(sensor_weights(ridge[0][1], obs.temperatures)[:6]) if ridge else {}
     # Whose weights these are: a sensor model in the model, or the ridge candidate.
-    carrier = {"name": ridge[0][0], "sensors": ridge[0][0].split(":", 1)[1].count("+") + 1,
-               "in_model": ridge[0][0] in added} if ridge else {}
+    carrier = {}
+    if ridge:
+        sensors = ridge[0][0].split(":", 1)[1].count("+") + 1
+        in_model = ridge[0][0] in added
+        carrier = {"name": ridge[0][0], "sensors": sensors, "in_model": in_model,
+                   "words": f"the {'model' if in_model else 'candidate'} "
+                            f"{ridge[0][0].split(':', 1)[0]} over {sensors} "
+                            f"sensor{'s' if sensors > 1 else ''}"}
     result = {
         "data": str(path), "kind": "thermal_log", "target": target_column,
         "target_unit": unit, "target_unit_per_m": to_unit, "component": component, "rows": obs.n,

@@ -212,19 +212,22 @@ def unit_from_name(column: str, quantity: str) -> str:
     bracketed = re.search(r"[\[(]\s*([^\])]+?)\s*[\])]\s*$", column)
     suffix = bracketed.group(1) if bracketed else \
         (column.rsplit("_", 1)[-1] if "_" in column else "")
-    suffix = UNIT_SPELLINGS.get(suffix, suffix)
+    return _known_unit(suffix, quantity)
+
+
+def _known_unit(unit: str, quantity: str) -> str:
+    """``unit`` as this module names it, if it is one of ``quantity``'s, else ""."""
+    unit = UNIT_SPELLINGS.get(unit, unit)
     known = TEMPERATURE if quantity == "temperature" else UNITS.get(quantity, {})
-    return suffix if suffix and suffix in known else ""
+    return unit if unit and unit in known else ""
 
 
 def column_unit(column: str, quantity: str, units: dict[str, str] | None = None) -> str:
     """The unit of ``column`` a file gives, if it is one of ``quantity``'s: from a units row
     under the header (``units``: column -> unit as written), else from the column's name
     (:func:`unit_from_name`); "" when neither does."""
-    given = (units or {}).get(column, "")
-    given = UNIT_SPELLINGS.get(given, given)
-    known = TEMPERATURE if quantity == "temperature" else UNITS.get(quantity, {})
-    return given if given and given in known else unit_from_name(column, quantity)
+    return _known_unit((units or {}).get(column, ""), quantity) or \
+        unit_from_name(column, quantity)
 
 
 def _scale(column_map: ColumnMap, role: str, unit: str, column: str = ""):

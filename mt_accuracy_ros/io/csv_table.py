@@ -77,6 +77,15 @@ class CsvTable:
         return text
 
 
+def joined_columns(name: str, header: list[str]) -> list[str]:
+    """The columns a time column named ``DATE+TIME`` joins (each in ``header``), or []
+    when ``name`` is a column itself or names no such pair."""
+    parts = [p.strip() for p in name.split("+")]
+    if name in header or len(parts) < 2 or not all(p in header for p in parts):
+        return []
+    return parts
+
+
 def read_csv_table(path: str | Path, *, min_rows: int = 2,
                    text_columns: tuple[str, ...] = (),
                    gap_columns: tuple[str, ...] = (),
@@ -115,9 +124,8 @@ def read_csv_table(path: str | Path, *, min_rows: int = 2,
     # A clock without a date (HH:MM:SS): seconds since midnight, days counted below.
     clocked = tuple(name for name, kind in kinds.items() if kind == "clock")
     # A date and a time of day in two columns ("Datum+Uhrzeit"): one date-time column.
-    joined = {name: [header.index(p.strip()) for p in name.split("+")] for name in time_columns
-              if name not in header and "+" in name and
-              all(p.strip() in header for p in name.split("+"))}
+    joined = {name: [header.index(p) for p in joined_columns(name, header)]
+              for name in time_columns if joined_columns(name, header)}
     parts = {header[j] for indices in joined.values() for j in indices}
     for number, row in enumerate(rows[start - 1:], start=start):
         if len(row) != len(header):

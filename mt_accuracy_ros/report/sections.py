@@ -730,10 +730,9 @@ def csv_report_sections(result: dict, plot: dict, directory: Path, stem: str) ->
     for line in result.get("warnings", []):
         headline.paragraphs.append(line[0].upper() + line[1:] + ".")
     if result.get("sensors_carrying_weight"):
-        of = result.get("sensors_carrying_weight_of") or {}
-        whose = (f"The {'model' if of['in_model'] else 'candidate'} {of['name'].split(':')[0]} "
-                 f"over {of['sensors']} sensors") if of else "The sensor model"
-        headline.paragraphs.append(f"{whose} leans on " + ", ".join(
+        whose = (result.get("sensors_carrying_weight_of") or {}).get("words",
+                                                                      "the sensor model")
+        headline.paragraphs.append(f"{whose[0].upper()}{whose[1:]} leans on " + ", ".join(
             f"{sensor} ({100 * share:.0f} %)" for sensor, share in
             result["sensors_carrying_weight"].items()) + " (share of its spread).")
     versions = Table(["model version", "effects", f"held-out RMSE [{unit}]",

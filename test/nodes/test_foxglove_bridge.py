@@ -59,13 +59,21 @@ def test_bridge_relays_topics_a_foxglove_client_decodes(tmp_path):
                 if isinstance(frame, str):
                     message = json.loads(frame)
                     said.append(message["op"] if message["op"] == "advertise" else message)
-                    if message["op"] == "advertise":
-                        for channel in message["channels"]:
-                            channels[channel["topic"]] = channel
-                            if channel["topic"] == "/temperatures":
-                                subscriptions.add(7 + len(subscriptions))
-                                connection.send(json.dumps({"op": "subscribe", "subscriptions": [
-                                    {"id": max(subscriptions), "channelId": channel["id"]}]}))
+                    advertised = message["channels"] if message["op"] == "advertise" else []
+                    # The server once answered a subscription to the channel it had just
+                    # advertised with "Unknown channel ID" (an idle run, foxglove-sdk
+                    # 0.30.3): a client asks again, as the Foxglove app does.
+                    temperatures = channels.get("/temperatures")
+                    if message["op"] == "status" and temperatures and \
+                            message.get("message") == f"Unknown channel ID: {temperatures['id']}":
+                        time.sleep(0.2)
+                        advertised = [temperatures]
+                    for channel in advertised:
+                        channels[channel["topic"]] = channel
+                        if channel["topic"] == "/temperatures":
+                            subscriptions.add(7 + len(subscriptions))
+                            connection.send(json.dumps({"op": "subscribe", "subscriptions": [
+                                {"id": max(subscriptions), "channelId": channel["id"]}]}))
                     continue
                 opcode, subscription, _log_time = struct.unpack_from("<BIQ", frame)
                 binary.append((opcode, subscription))

@@ -29,8 +29,6 @@ the tool axis (the instrument cannot see a turn about it).
 """
 from __future__ import annotations
 
-from collections import OrderedDict
-
 import re
 from typing import Any
 
@@ -40,6 +38,7 @@ from numpy.typing import NDArray
 from ..errors import InputDataError
 from ..kinematics.chain import KinematicModel
 from ..kinematics.machine import COMPONENTS, MachineDescription
+from .lru import ByteBoundedCache
 from .variables import Variables
 
 #: Columns shared between candidates, kept per context [bytes] (:meth:`Context.shared_columns`).
@@ -81,7 +80,7 @@ class Context:
         self._jacobians: dict[str, NDArray[np.float64]] = {}
         self._frames: dict | None = None
         self.cache: dict = {}   # families' precomputed bases (e.g. periodic) for these readings
-        self._shared: OrderedDict[tuple, NDArray[np.float64]] = OrderedDict()
+        self._shared: ByteBoundedCache | None = None
         missing = [a for a in machine.axis_order if a not in variables.positions]
         if missing:
             raise InputDataError(f"positions missing for axis {', '.join(missing)}")
@@ -91,20 +90,15 @@ class Context:
         axis' position at one period serve its positioning, straightness and angular
         errors): ``make()`` once, kept read-only in a least-recently-used store of
         :data:`SHARED_COLUMNS_BYTES`."""
+        if self._shared is None:
+            # A step asks for dozens of them before asking again: nothing is kept that the
+            # store could not hold that many of (1e5 readings: 3.2 MB each).
+            self._shared = ByteBoundedCache(SHARED_COLUMNS_BYTES, SHARED_COLUMNS_KEPT)
         columns = self._shared.get(key)
-        if columns is not None:
-            self._shared.move_to_end(key)
-            return columns
-        columns = make()
-        columns.flags.writeable = False
-        if columns.nbytes * SHARED_COLUMNS_KEPT > SHARED_COLUMNS_BYTES:
-            # A selection step asks for dozens of them before asking again: a store that
-            # cannot hold that many only costs memory (1e5 readings: 3.2 MB each).
-            return columns
-        self._shared[key] = columns
-        while len(self._shared) > 1 and \
-                sum(a.nbytes for a in self._shared.values()) > SHARED_COLUMNS_BYTES:
-            self._shared.popitem(last=False)
+        if columns is None:
+            columns = make()
+            columns.flags.writeable = False
+            self._shared.put(key, columns)
         return columns
 
     def jacobian(self, error_name: str) -> NDArray[np.float64]:

@@ -34,13 +34,13 @@ time between runs (a night, a restarted clock) means nothing to the machine.
 from __future__ import annotations
 
 import hashlib
-from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputDataError
+from .lru import ByteBoundedCache
 
 AXIS_LETTERS = "XYZABC"
 #: Lagged signals kept per set of readings [bytes] (:meth:`Variables.lag`).
@@ -157,6 +157,7 @@ class Variables:
     run_starts: NDArray[np.intp] | None = None
 
     def __post_init__(self) -> None:
+        self._lag_memo: ByteBoundedCache | None = None   # lags kept: lag()
         if not self.positions:
             raise InputDataError("variables: no axis positions")
         self.n = int(np.size(next(iter(self.positions.values()))))
@@ -259,21 +260,16 @@ class Variables:
         if self.lag_states is not None:
             return self._lag(key, signal, tau_s, from_rest)
         signal = np.ascontiguousarray(signal, dtype=np.float64)
-        memo = self.__dict__.setdefault("_lag_memo", OrderedDict())
+        if self._lag_memo is None:
+            # A selection step asks for dozens before asking again: nothing is kept that
+            # the memo could not hold that many of (1e5 readings: 0.8 MB each).
+            self._lag_memo = ByteBoundedCache(LAG_MEMO_BYTES, LAG_MEMO_KEPT)
         memo_key = (key, float(tau_s), bool(from_rest), hashlib.sha1(signal).digest())
-        kept = memo.get(memo_key)
-        if kept is not None:
-            memo.move_to_end(memo_key)
-            return kept
-        lagged = self._lag(key, signal, tau_s, from_rest)
-        lagged.flags.writeable = False
-        if lagged.nbytes * LAG_MEMO_KEPT > LAG_MEMO_BYTES:
-            # A selection step asks for dozens before asking again: a memo that cannot
-            # hold that many only costs memory (1e5 readings: 0.8 MB each).
-            return lagged
-        memo[memo_key] = lagged
-        while len(memo) > 1 and sum(a.nbytes for a in memo.values()) > LAG_MEMO_BYTES:
-            memo.popitem(last=False)
+        lagged = self._lag_memo.get(memo_key)
+        if lagged is None:
+            lagged = self._lag(key, signal, tau_s, from_rest)
+            lagged.flags.writeable = False
+            self._lag_memo.put(memo_key, lagged)
         return lagged
 
     def _lag(self, key: str, signal: NDArray[np.float64], tau_s: float, from_rest: bool

@@ -43,7 +43,6 @@ from __future__ import annotations
 
 import hashlib
 import itertools
-from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -51,6 +50,7 @@ from numpy.typing import NDArray
 
 from ..errors import InsufficientDataError
 from ..effects.base import Context, EffectFamily
+from ..effects.lru import ByteBoundedCache
 from ..effects.physics import consistency_allowances, limit_problems, spread_problems
 from .distributions import chi2_sf, t_sf
 from .line_search import minimise_bounded
@@ -151,7 +151,7 @@ def solve_normal_grouped(grams: list[NDArray[np.float64]], rhs: list[NDArray[np.
     groups: dict[tuple, list[int]] = {}
     for i, gram in enumerate(grams):
         groups.setdefault(gram.shape, []).append(i)
-    for shape, members in groups.items():
+    for members in groups.values():
         if len(members) == 1:
             out[members[0]] = solve_normal(grams[members[0]], rhs[members[0]])
             continue
@@ -312,28 +312,6 @@ DESIGN_CACHE_BYTES = 32 * 2 ** 20
 SENSITIVITY_CACHE_BYTES = 16 * 2 ** 20
 
 
-class _DesignCache:
-    """Least-recently-used arrays up to a byte budget."""
-
-    def __init__(self, max_bytes: int) -> None:
-        self.max_bytes = max_bytes
-        self._items: OrderedDict[tuple, NDArray[np.float64]] = OrderedDict()
-        self._bytes = 0
-
-    def get(self, key: tuple) -> NDArray[np.float64] | None:
-        item = self._items.get(key)
-        if item is not None:
-            self._items.move_to_end(key)
-        return item
-
-    def put(self, key: tuple, item: NDArray[np.float64]) -> None:
-        self._items[key] = item
-        self._bytes += item.nbytes
-        while self._bytes > self.max_bytes and len(self._items) > 1:
-            _, dropped = self._items.popitem(last=False)
-            self._bytes -= dropped.nbytes
-
-
 class _ReadingCaches:
     """What a selector derives from its context and rows alone - designs, scalar bases,
     sensitivities, where each term acts, and (per cut into folds) each design's products
@@ -342,8 +320,8 @@ class _ReadingCaches:
     the same candidates' designs against another residual (issue 41)."""
 
     def __init__(self) -> None:
-        self.designs = _DesignCache(DESIGN_CACHE_BYTES)
-        self.sensitivities = _DesignCache(SENSITIVITY_CACHE_BYTES)
+        self.designs = ByteBoundedCache(DESIGN_CACHE_BYTES)
+        self.sensitivities = ByteBoundedCache(SENSITIVITY_CACHE_BYTES)
         self.components: dict[str, NDArray[np.bool_]] = {}
         #: fold bounds -> {(term name, setting): per-fold X'X (folds, p, p)}.
         self.own_products: dict[tuple, dict] = {}

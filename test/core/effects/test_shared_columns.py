@@ -51,7 +51,7 @@ def test_the_store_is_bounded_and_keeps_nothing_it_cannot_hold_enough_of(monkeyp
     assert ctx.shared_columns(("a",), make(2000)) is first and made == [2000]
     for key in ("b", "c", "d"):
         ctx.shared_columns((key,), make(2000))
-    assert sum(a.nbytes for a in ctx._shared.values()) <= 3 * 2000 * 4 * 8
+    assert ctx._shared.nbytes <= 3 * 2000 * 4 * 8
     assert ("a",) not in ctx._shared, "the least recently used went first"
     # Too large for the store to hold SHARED_COLUMNS_KEPT of them: made, not kept.
     ctx.shared_columns(("big",), make(4000))

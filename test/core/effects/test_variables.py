@@ -99,9 +99,15 @@ def test_a_lag_asked_again_is_the_kept_one_and_only_for_the_same_signal(monkeypa
                                   first_order_lag(t[250:] - t[250], u[250:], 600.0))
     monkeypatch.setattr(module, "LAG_MEMO_BYTES", 2 * first.nbytes)
     monkeypatch.setattr(module, "LAG_MEMO_KEPT", 1)
+    bounded = Variables({"X": t * 0}, t)
     for tau in (100.0, 200.0, 300.0, 400.0):
-        v.lag("u", u, tau)
-    assert sum(a.nbytes for a in v._lag_memo.values()) <= 2 * first.nbytes
+        bounded.lag("u", u, tau)
+    assert bounded._lag_memo.nbytes <= 2 * first.nbytes and len(bounded._lag_memo) == 2
+    # A memo that could not hold LAG_MEMO_KEPT of them keeps none.
+    monkeypatch.setattr(module, "LAG_MEMO_KEPT", 3)
+    unkept = Variables({"X": t * 0}, t)
+    unkept.lag("u", u, 600.0)
+    assert len(unkept._lag_memo) == 0
 
 
 def test_variables_by_name_and_clear_errors():
