@@ -4,8 +4,9 @@ This generator shares **no code** with the workbench, the error model or the
 kinematic chain of ``mt_accuracy_ros``: it reads a bundled machine
 description as plain YAML, builds the rigid-body chain with its own 4x4
 matrices (exact rotations from scipy's rotation vectors, errors placed as
-ISO 230-1 and Khan & Chen eq. 8 place them: a location error before the
-axis' motion, its error motions after it), integrates thermal lags with
+ISO 230-1 and Khan & Chen eq. 8 place them: a linear axis' location error
+before its motion, a rotary body turned about its actual line (ISO 230-7), error
+motions after the motion), integrates thermal lags with
 scipy's ODE solver on a dense grid, and draws errors as splines through
 random knots or sinusoids - none of them in the workbench's Legendre,
 Fourier or exact-lag bases. A mistake in a workbench regressor therefore
@@ -108,9 +109,15 @@ def tcp_point(geometry: Geometry, q: dict[str, np.ndarray], errors: "ErrorSet | 
         for axis in axes:
             frame = frame @ _homogeneous(np.broadcast_to(np.eye(3), (n, 3, 3)),
                                          np.broadcast_to(parent, (n, 3)))
-            if with_errors:
-                frame = frame @ _error_transform(errors.location(axis, n))
-            frame = frame @ _motion(axis, q[axis])
+            located = _error_transform(errors.location(axis, n)) if with_errors else None
+            if located is not None and axis in "ABC":
+                # ISO 230-7: the body turns about the actual line (set up at 0): the
+                # motion conjugated by the line's displacement, zero effect at q = 0.
+                frame = frame @ located @ _motion(axis, q[axis]) @ np.linalg.inv(located)
+            elif located is not None:
+                frame = frame @ located @ _motion(axis, q[axis])
+            else:
+                frame = frame @ _motion(axis, q[axis])
             if with_errors:
                 frame = frame @ _error_transform(errors.motion(axis, q))
             parent = geometry.offsets[axis]

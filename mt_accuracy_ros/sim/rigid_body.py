@@ -7,7 +7,9 @@ kept as (rotation matrix, origin) pairs built with :mod:`scipy.spatial.transform
 and composed body by body, from the bed outwards, in the order the machine is
 assembled (ISO 230-1): the body sits at its parent's ``offset``, is out of
 place by its location errors, moves by its command, and is disturbed by its
-six error motions and a thermal twist.
+six error motions and a thermal twist. A rotary body turns about its actual
+axis line (ISO 230-7): where the set-up found it at the machine's set-up pose,
+and from there about the line its location errors put elsewhere.
 
 An error twist (dx, dy, dz, ex, ey, ez) is the pose "shift by d, then turn by
 the XYZ-intrinsic angles (ex, ey, ez)" - the reading of an error motion that
@@ -96,6 +98,29 @@ def _disturb(pose: Pose, twist: NDArray | None, n: int) -> Pose:
     return pose.then(rotation, shift)
 
 
+def _turn(angle: NDArray, unit: NDArray, n: int) -> NDArray:
+    return Rotation.from_rotvec(np.asarray(angle)[:, None] * unit).as_matrix().reshape(n, 3, 3)
+
+
+def _turn_about_actual_line(pose: Pose, angle: NDArray, unit: NDArray,
+                            location: NDArray | None, setup: float, n: int) -> Pose:
+    """A rotary body turned by ``angle`` [rad] about its actual axis line.
+
+    The line's place and direction are the nominal frame moved by the location twist
+    (ISO 230-7). The body was set up at ``setup``: there it is where the set-up found
+    it, and from there it turns about the actual line - so a point at the frame's
+    nominal position p goes to c + R (p - c) for a line through c.
+    """
+    if location is None:
+        return pose.then(_turn(angle, unit, n), None)
+    line_rotation, line_shift = _twist(location, n)
+    on_line = pose.then(line_rotation, line_shift)
+    turned = on_line.then(_turn(angle - setup, unit, n), None)
+    # Back from the actual line's frame: the inverse of "shift, then turn".
+    back = turned.then(np.swapaxes(line_rotation, 1, 2), None).then(None, -line_shift)
+    return back.then(_turn(np.full(n, setup), unit, n), None)
+
+
 def body_pose(machine, branch: str, positions: dict[str, NDArray],
               errors: BodyErrors | None = None) -> Pose:
     """Pose of the last body of a branch (``"tool"`` or ``"workpiece"``), at its
@@ -113,14 +138,14 @@ def body_pose(machine, branch: str, positions: dict[str, NDArray],
     for axis in axes:
         spec = machine.axes[axis]
         pose = pose.then(None, np.broadcast_to(mount, (n, 3)))
-        if errors is not None:
-            pose = _disturb(pose, errors.location.get(axis), n)
         value = spec.sign * np.broadcast_to(np.asarray(positions[axis], float), (n,))
         unit = _UNIT[spec.direction]
+        location = None if errors is None else errors.location.get(axis)
         if spec.is_rotary:
-            pose = pose.then(Rotation.from_rotvec(value[:, None] * unit).as_matrix()
-                             .reshape(n, 3, 3), None)
+            pose = _turn_about_actual_line(pose, value, unit, location,
+                                           spec.sign * machine.setup_angle(axis), n)
         else:
+            pose = _disturb(pose, location, n)
             pose = pose.then(None, value[:, None] * unit)
         if errors is not None:
             pose = _disturb(pose, errors.motion.get(axis), n)

@@ -20,14 +20,23 @@ def _run(effects: str, duration: float = 12.0, extra: str = ""):
         f"program: {PROGRAM}\neffects: {effects}\n{extra}"))
 
 
-def test_an_offset_rotary_axis_line_shifts_the_work_by_the_offset_at_every_pose():
-    """EY0A, EZ0A: the A axis line displaced before it turns - the work moves with it,
-    whatever the angle: e = -(0, dy, dz)."""
+def test_an_offset_rotary_axis_line_turns_the_work_about_the_real_line():
+    """EY0A, EZ0A: the A axis line displaced by d (ISO 230-7). The table turns about the
+    real line from where the work was set up (A = 0), so the material moves by
+    (I - R_A) d: e = -(I - R_A) d, zero at A = 0 (ISO 10791-6's circle)."""
     result = _run("{geometric: false, rotary_location: {errors: {EY0A: 2.5e-5, EZ0A: -2.0e-5}}}")
     rows = np.arange(0, result.time_s.size, 97)
-    assert np.ptp(result.command["A"][rows]) > 1.0        # the table really turned
-    error = result.tcp_error(rows)
-    np.testing.assert_allclose(error, np.tile([0.0, -2.5e-5, 2.0e-5], (rows.size, 1)), atol=1e-15)
+    angle = result.command["A"][rows]
+    assert np.ptp(angle) > 1.0        # the table really turned
+    d = np.array([0.0, 2.5e-5, -2.0e-5])
+    turned = np.stack([np.zeros_like(angle), np.cos(angle) * d[1] - np.sin(angle) * d[2],
+                       np.sin(angle) * d[1] + np.cos(angle) * d[2]], axis=1)
+    np.testing.assert_allclose(result.tcp_error(rows), -(d - turned), rtol=0, atol=1e-12)
+    # Where the work was set up the line's offset moves nothing.
+    home = int(np.argmin(np.abs(result.command["A"])))
+    near = abs(result.command["A"][home])
+    assert near < 1e-4
+    assert np.linalg.norm(result.tcp_error(np.array([home]))) <= near * np.linalg.norm(d) * 1.01
 
 
 def test_a_rotary_positioning_error_is_an_extra_turn_of_the_axis():

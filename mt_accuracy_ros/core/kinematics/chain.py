@@ -8,7 +8,16 @@ with T_p the nominal position of the joint frame in its parent (the previous
 axis' ``offset``, Kidani's L_*), T_pe the location errors (squareness, offsets,
 zero errors), T_s the commanded motion, T_se the six position-dependent error
 motions (exact product, or Kidani eq. 2.7 to first order) and an optional
-thermal-link HTM (Zhu eq. 4.2). The tool branch (Khan & Chen's M loop) carries
+thermal-link HTM (Zhu eq. 4.2). A rotary joint turns about its *actual* axis
+line (ISO 230-7): its location errors L (offsets and tilts of the line, the
+zero) act as
+
+    T_pe T_s(q) -> L . T_s(q - q_s) . L^-1 . T_s(q_s)
+
+with q_s the set-up command (``MachineDescription.setup_pose``, default 0): the
+body is where the set-up found it at q_s and turns about the actual line from
+there, so an offset d of a C line moves the work by (I - R_C) d, a tilt by the
+tilt times the radius, and the zero error is taken out by the set-up. The tool branch (Khan & Chen's M loop) carries
 the tool vector t, the workpiece branch (N loop) the workpiece point w, and the
 TCP error is
 
@@ -187,20 +196,37 @@ class KinematicModel:
             pos = pos + np.einsum("nij,nj->ni", rot, htm[:, :3, 3])
             rot = rot @ htm[:, :3, :3]
 
+        def undo_error(twist):
+            # The inverse of apply_error's (R_e, d): (R_e^T, -R_e^T d).
+            nonlocal rot, pos
+            turn = np.swapaxes(rotation_of(twist[:, 3], twist[:, 4], twist[:, 5]), 1, 2)
+            rot = rot @ turn
+            pos = pos - np.einsum("nij,nj->ni", rot, twist[:, :3])
+
         thermal = self._thermal("bed_tool" if which == "tool" else "bed_work", n, overrides)
         if errors and thermal is not None:
             apply_error(thermal)
         parent_offset = np.zeros(3)
         for axis in axes:
             pos = pos + rot @ parent_offset
-            if errors:
-                location = self.location_errors(axis, n, overrides)
-                if np.any(location):
-                    apply_error(location)
             spec = self.machine.axes[axis]
-            if spec.is_rotary:
+            location = self.location_errors(axis, n, overrides) if errors else None
+            located = location is not None and np.any(location)
+            if located and spec.is_rotary:
+                # ISO 230-7: the body turns about the actual axis line L from where it was
+                # set up, L R(q - q_s) L^-1 R(q_s): at the set-up pose it is where the
+                # set-up found it; an offset line d moves it by (I - R) d.
+                setup = spec.sign * self.machine.setup_angle(axis)
+                apply_error(location)
+                apply(rotation("xyz"[spec.direction], spec.sign * q[axis] - setup))
+                undo_error(location)
+                if setup:
+                    apply(rotation("xyz"[spec.direction], np.full(n, setup)))
+            elif spec.is_rotary:
                 apply(rotation("xyz"[spec.direction], spec.sign * q[axis]))
             else:
+                if located:
+                    apply_error(location)
                 pos = pos + rot[:, :, spec.direction] * (spec.sign * q[axis])[:, None]
             if errors:
                 apply_error(self.motion_errors(axis, q[axis], overrides))
@@ -323,7 +349,13 @@ class KinematicModel:
             parent_offset = np.zeros(3)
             for axis in axes:
                 frame = frame @ translation(*parent_offset)
-                frames_and_twists.append((frame.copy(), self.location_errors(axis, n, overrides)))
+                location = self.location_errors(axis, n, overrides)
+                frames_and_twists.append((frame.copy(), location))
+                if self.machine.axes[axis].is_rotary:
+                    # Turning about the actual line from the set-up pose: the twist, and
+                    # its opposite in the frame turned by q - q_s (chain docstring).
+                    frames_and_twists.append((frame @ self._turn_from_setup(axis, q[axis]),
+                                              -location))
                 frame = frame @ self._motion(axis, q[axis])
                 frames_and_twists.append((frame.copy(), self.motion_errors(axis, q[axis],
                                                                            overrides)))
@@ -356,6 +388,12 @@ class KinematicModel:
         terms as :meth:`tcp_error_linear`, so a sensitivity costs one cross
         product instead of a chain of matrix products. Frames of linear axes
         share one rotation array (a linear motion does not turn the frame).
+
+        A rotary axis' location error turns its body about the actual line from
+        the set-up pose (ISO 230-7), so its ``R`` is ``R_p (I - R(q - q_s))``,
+        R_p the frame before the turn: not a rotation, but the consumers above
+        take its columns linearly. Its zero error (EC0C for C) and the offset along
+        its own line then move nothing: the set-up takes them out.
         """
         q, n = self._positions(positions, check_stroke)
         frames: dict[str, tuple[float, NDArray, NDArray]] = {}
@@ -368,8 +406,14 @@ class KinematicModel:
             parent_offset = np.zeros(3)
             for axis in axes:
                 pos = pos + rot @ parent_offset
-                origins.append((axis, "location", rot, pos))
                 spec = self.machine.axes[axis]
+                if spec.is_rotary:
+                    # A unit location error acts as R (I - R(q - q_s)): not a rotation,
+                    # but every consumer takes its columns linearly (see the docstring).
+                    turned = self._turn_from_setup(axis, q[axis])[:, :3, :3]
+                    origins.append((axis, "location", rot - rot @ turned, pos))
+                else:
+                    origins.append((axis, "location", rot, pos))
                 if spec.is_rotary:
                     rot = rot @ rotation("xyz"[spec.direction], spec.sign * q[axis])[:, :3, :3]
                 else:
@@ -390,6 +434,11 @@ class KinematicModel:
                 for component in COMPONENTS:
                     frames[name_of(component, axis)] = (sign, frame_rot, lever)
         return frames
+
+    def _turn_from_setup(self, axis: str, q: NDArray) -> NDArray:
+        """(N, 4, 4) the nominal turn of rotary ``axis`` from its set-up command to ``q``."""
+        spec = self.machine.axes[axis]
+        return rotation("xyz"[spec.direction], spec.sign * (q - self.machine.setup_angle(axis)))
 
     def tool_axis(self, positions: Positions) -> NDArray:
         """(N, 3) unit vector of the tool axis in the bed frame, nominal chain (the tool

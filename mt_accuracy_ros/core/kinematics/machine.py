@@ -95,6 +95,15 @@ class MachineDescription:
     #: offsets are not known, so a tilt's Abbe arm along the tool is fitted, not assumed
     #: (the workbench then offers ``angular_arm``).
     abbe_arms_known: bool = True
+    #: Where the work (the part, an R-test's or a probed sphere) and the tool were set
+    #: up: rotary axis -> command [rad]; an axis not named was at 0. A rotary axis'
+    #: location errors (ISO 230-7) turn the body about the actual axis line *from this
+    #: pose*: at it the body is where the set-up found it (:mod:`.chain`).
+    setup_pose: dict[str, float] = field(default_factory=dict)
+
+    def setup_angle(self, axis: str) -> float:
+        """The set-up command of rotary ``axis`` [rad] (0 when the set-up pose omits it)."""
+        return float(self.setup_pose.get(axis, 0.0))
 
     @property
     def axis_order(self) -> tuple[str, ...]:
@@ -174,9 +183,7 @@ def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
         for key in ("stroke", "offset"):
             if key not in spec:
                 raise MachineDescriptionError(f"{where}: missing required field '{key}'")
-        stroke = np.asarray(spec["stroke"], dtype=np.float64)
-        if stroke.shape != (2,) or not np.all(np.isfinite(stroke)) or stroke[1] <= stroke[0]:
-            raise MachineDescriptionError(f"{where}.stroke: expected [low, high] with low < high")
+        stroke = _stroke(spec["stroke"], letter, f"{where}.stroke")
         offset = _vector(spec["offset"], f"{where}.offset")
         sign = float(spec.get("sign", 1.0))
         if sign not in (1.0, -1.0):
@@ -213,7 +220,88 @@ def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
         scale_distance_m={str(k): float(v) for k, v in (data.get("scale_distance_m") or {}).items()},
         structure_length_m=_positive_or_none(data.get("structure_length_m"),
                                              f"{source}: structure_length_m"),
-        cnc=_cnc_section(data.get("cnc"), f"{source}: cnc"))
+        cnc=_cnc_section(data.get("cnc"), f"{source}: cnc"),
+        setup_pose=read_setup_pose(data.get("setup_pose"), axes, f"{source}: setup_pose"))
+
+
+#: Angle units a rotary stroke or a set-up angle may be given in (to rad).
+ANGLE_UNITS = {"rad": 1.0, "mrad": 1e-3, "deg": np.pi / 180.0}
+#: Length units a linear stroke may be given in (to m).
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "in": 0.0254}
+#: The largest rotary travel a bare list is taken as radians for: beyond two turns and a
+#: little it is degrees written without their unit.
+_MAX_BARE_RAD = 2.0 * 2.0 * np.pi + 1e-6
+
+
+def _stroke(spec, letter: str, where: str) -> np.ndarray:
+    """[low, high] in SI (m, rad): a bare list (SI) or ``{value: [lo, hi], unit: deg}``.
+
+    A bare rotary stroke beyond two turns is refused as degrees written without a unit.
+    """
+    rotary = letter in "ABC"
+    units = ANGLE_UNITS if rotary else LENGTH_UNITS
+    scale = 1.0
+    if isinstance(spec, dict):
+        if set(spec) != {"value", "unit"}:
+            raise MachineDescriptionError(f"{where}: expected [low, high] or {{value: [low, high],"
+                                          f" unit: {'deg' if rotary else 'mm'}}}")
+        unit = str(spec["unit"])
+        if unit not in units:
+            raise MachineDescriptionError(f"{where}: unit {unit!r} is not one of "
+                                          f"{', '.join(units)}")
+        scale, spec = units[unit], spec["value"]
+    try:
+        stroke = np.asarray(spec, dtype=np.float64) * scale
+    except (TypeError, ValueError) as exc:
+        raise MachineDescriptionError(f"{where}: expected [low, high], got {spec!r}") from exc
+    if stroke.shape != (2,) or not np.all(np.isfinite(stroke)) or stroke[1] <= stroke[0]:
+        raise MachineDescriptionError(f"{where}: expected [low, high] with low < high")
+    if rotary and scale == 1.0 and np.max(np.abs(stroke)) > _MAX_BARE_RAD:
+        raise MachineDescriptionError(
+            f"{where}: [{stroke[0]:g}, {stroke[1]:g}] rad is more than two turns - degrees? "
+            f"write {{value: [{stroke[0]:g}, {stroke[1]:g}], unit: deg}}")
+    return stroke
+
+
+def read_setup_pose(spec, axes: dict[str, "Axis"], where: str) -> dict[str, float]:
+    """Rotary axis -> set-up command [rad] from ``{A: {value: -90, unit: deg}, ...}``.
+
+    Every angle carries its unit; an axis the machine lacks, a linear axis, or a bare
+    number is refused in one line saying how to write it.
+    """
+    if spec is None:
+        return {}
+    if not isinstance(spec, dict):
+        raise MachineDescriptionError(f"{where}: expected a mapping like "
+                                      "{C: {value: 0, unit: deg}}")
+    pose: dict[str, float] = {}
+    for axis, value in spec.items():
+        axis = str(axis)
+        if axis not in axes or not axes[axis].is_rotary:
+            rotary = [a for a in axes if axes[a].is_rotary]
+            raise MachineDescriptionError(
+                f"{where}.{axis}: not a rotary axis of this machine (rotary: "
+                f"{', '.join(rotary) or 'none'})")
+        if not (isinstance(value, dict) and set(value) == {"value", "unit"}):
+            raise MachineDescriptionError(
+                f"{where}.{axis}: give the angle with its unit, e.g. {{value: -90, unit: deg}}"
+                f" (got {value!r})")
+        unit = str(value["unit"])
+        if unit not in ANGLE_UNITS:
+            raise MachineDescriptionError(f"{where}.{axis}: unit {unit!r} is not one of "
+                                          f"{', '.join(ANGLE_UNITS)}")
+        try:
+            angle = float(value["value"]) * ANGLE_UNITS[unit]
+        except (TypeError, ValueError) as exc:
+            raise MachineDescriptionError(f"{where}.{axis}: {value['value']!r} is not a number"
+                                          ) from exc
+        low, high = axes[axis].stroke
+        if not (np.isfinite(angle) and low - 1e-9 <= angle <= high + 1e-9):
+            raise MachineDescriptionError(
+                f"{where}.{axis}: {value['value']} {unit} is outside the stroke "
+                f"[{np.degrees(low):g}, {np.degrees(high):g}] deg")
+        pose[axis] = angle
+    return pose
 
 
 #: Keys of a machine's ``cnc:`` section and what each holds (SI units).
@@ -303,7 +391,10 @@ def generic_cartesian(strokes: dict[str, tuple[float, float]], tool_length_m: fl
         if not high > low:
             # An axis that stood still: a nominal 1 mm of travel keeps the description valid.
             low, high = low - 5e-4, low + 5e-4
-        spec[axis] = {"stroke": [low, high], "offset": [0.0, 0.0, 0.0]}
+        # A survey's coordinates are the tool relative to the work, like a CNC's: a table
+        # moves against its command (the bundled vmc.yaml's sign -1).
+        spec[axis] = {"stroke": [low, high], "offset": [0.0, 0.0, 0.0],
+                      "sign": -1.0 if axis in work else 1.0}
     from dataclasses import replace
 
     return replace(machine_from_dict({

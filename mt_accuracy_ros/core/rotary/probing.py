@@ -21,11 +21,11 @@ unknown setup position (3 nuisance parameters), and reports:
   centres before and after (what KinematicsOpt calls the dispersion);
 * the repeatability of repeated cycles at the same configuration.
 
-Not identifiable from one sphere (refused by name when asked for): an axis's
-offset along its own line and its zero-angle error (both look like the
-sphere sitting elsewhere), and - for a rotary axis on the tool side - an
-offset that a probe-length error would mimic (the probe is taken as
-calibrated).
+Each rotary body turns about its actual axis line from the pose where the
+sphere and the probe were set up (ISO 230-7; the machine's ``setup_pose``), so
+an axis' zero-angle error is taken out by the set-up and is never identifiable;
+nor is its offset along its own line. Both are refused by name when asked for,
+and said otherwise.
 """
 from __future__ import annotations
 
@@ -230,9 +230,15 @@ class LocationIdentification:
         if folded:
             lines.append(f"  folded into the parameters above (one sphere cannot part them): "
                          f"{', '.join(sorted(folded))}")
-        if absorbed:
-            lines.append(f"  not observable with one sphere (they move the sphere's set-up "
-                         f"position alone; left at zero): {', '.join(absorbed)}")
+        zeros = [n for n in absorbed if n[1] == n[3]]
+        others = [n for n in absorbed if n[1] != n[3]]
+        if zeros:
+            lines.append(f"  not observable: {', '.join(zeros)} - a zero-angle error is taken "
+                         "out by the set-up (from where the sphere and the probe were set up "
+                         "every axis turns by its commanded increments; left at zero)")
+        if others:
+            lines.append(f"  not observable with one sphere at these positions (they move the "
+                         f"sphere's set-up position alone; left at zero): {', '.join(others)}")
         return "\n".join(lines)
 
 
@@ -384,6 +390,8 @@ def _aliases(machine: MachineDescription, q: dict[str, NDArray], kept: list[str]
 
 
 RANK_TOLERANCE = 1e-7
+#: A column this small against the largest is round-off: the parameter moves nothing.
+ZERO_COLUMN = 1e-7
 #: Condition number (of the scaled Jacobian) above which the design is called badly
 #: conditioned (the simulated +-60 deg plan gives about 16).
 ILL_CONDITIONED = 1e3
@@ -422,7 +430,9 @@ def _scaled_jacobian(predicted, theta: NDArray, labels: list[str], step: float =
         columns.append(((predicted(theta + delta) - predicted(theta - delta)) / (2 * step)).ravel())
     jacobian = np.column_stack(columns)
     scale = np.linalg.norm(jacobian, axis=0)
-    zero = scale < 1e-12
+    # A parameter the set-up takes out (a zero error, an offset along its own line) moves
+    # the centres by round-off alone: relative to the largest column, it moves nothing.
+    zero = scale < max(1e-12, ZERO_COLUMN * float(scale.max(initial=0.0)))
     if zero.any():
         bad = [labels[j] for j in np.flatnonzero(zero)]
         raise CalibrationError(f"probing: {', '.join(bad)} do(es) not change the probed "

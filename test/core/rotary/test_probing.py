@@ -50,13 +50,14 @@ def test_location_errors_and_the_sphere_are_found_within_their_uncertainty():
     # The centre wandered by hundreds of um as the axes turned; what is left is the noise.
     assert result.dispersion_before_m > 100e-6
     assert result.rms_after_m < 1.5e-6 and result.dispersion_after_m < 3e-6
-    # B's frame offsets are constant in the machine: one sphere cannot tell them from the
-    # sphere's own setup position or from A's offsets - said, not guessed.
-    assert set(result.not_observable) == {"EA0A", "EX0B", "EZ0B"}
-    assert "not observable" in result.text()
-    # ... and what the fitted value then stands for (EZ0B folds into EZ0A with -1).
-    assert result.identified_as("EZ0A") == "EZ0A - EZ0B"
-    assert "folded into the parameters above" in result.text()
+    # B turns the probe about its actual line from the set-up pose, so its offsets are
+    # seen (zero here) and nothing folds; the zero-angle errors are taken out where the
+    # sphere and the probe were set up - said, not guessed.
+    assert abs(result.parameters["EX0B"]) <= 3 * result.uncertainties["EX0B"]
+    assert abs(result.parameters["EZ0B"]) <= 3 * result.uncertainties["EZ0B"]
+    assert set(result.not_observable) == {"EA0A", "EB0B"}
+    assert "taken out by the set-up" in result.text()
+    assert result.identified_as("EZ0A") == "EZ0A" and not result.aliases
 
 
 def test_volumetric_error_falls_once_the_identified_errors_are_compensated():
@@ -86,17 +87,27 @@ def test_the_default_parameters_and_what_one_sphere_can_see():
                                                   "EX0B", "EZ0B", "EA0B", "EC0B",
                                                   "EA0A", "EB0B"]
     kept, dropped = observable_parameters(MACHINE, _cycles(), sphere_nominal_m=SPHERE)
-    # B's zero angle is seen by a sphere off B's line; A's is not (issue 30).
-    assert dropped == ["EA0A", "EX0B", "EZ0B"] and "EY0A" in kept and "EB0B" in kept
+    # Both zero angles are taken out where the sphere and the probe were set up; every
+    # offset and tilt of both lines is seen.
+    assert dropped == ["EA0A", "EB0B"]
+    assert set(kept) == {"EY0A", "EZ0A", "EB0A", "EC0A", "EX0B", "EZ0B", "EA0B", "EC0B"}
 
 
-def test_the_b_zero_angle_error_is_identified_where_the_setup_sees_it():
-    """Issue 30: called unidentifiable, yet asked for by name it came back 27.9 +- 3.2 urad
-    with 30 true. Now a default parameter wherever one sphere separates it."""
+def test_a_zero_angle_error_is_taken_out_by_the_set_up_and_said():
+    """A B zero error of 30 urad: the probe was set up at B = 0, so from there it turns by
+    the commanded increments and the centres do not see it. The fit is as good as without
+    it, and the output says why EB0B is not given."""
     q = _cycles()
     truth = {"A": TRUTH["A"], "B": TRUTH["B"] + np.array([0, 0, 0, 0, 30e-6, 0])}
-    result = identify_location_errors(MACHINE, q, _measured(q, truth), sphere_nominal_m=SPHERE)
-    assert abs(result.parameters["EB0B"] - 30e-6) <= 3 * result.uncertainties["EB0B"]
+    with_zero = _measured(q, truth)
+    # Second order only: 30 urad times the other errors.
+    np.testing.assert_allclose(with_zero, _measured(q, TRUTH), rtol=0, atol=1e-10)
+    result = identify_location_errors(MACHINE, q, with_zero, sphere_nominal_m=SPHERE)
+    assert "EB0B" not in result.parameters and "EB0B" in result.not_observable
+    assert "EB0B - a zero-angle error is taken out by the set-up" in result.text()
+    with pytest.raises(CalibrationError, match="EB0B"):
+        identify_location_errors(MACHINE, q, with_zero, ["EB0B", "EB0A"],
+                                 sphere_nominal_m=SPHERE)
 
 
 def test_sphere_fit_recovers_the_centre_and_refuses_a_stray_touch():
@@ -127,8 +138,8 @@ def test_bad_probing_input_is_named():
     bad[2, 1] = np.nan
     with pytest.raises(InputDataError, match="non-finite"):
         identify_location_errors(MACHINE, q, bad)
-    with pytest.raises(CalibrationError, match="EX0B"):
-        identify_location_errors(MACHINE, q, measured, ["EX0B", "EB0A"], sphere_nominal_m=SPHERE)
+    with pytest.raises(CalibrationError, match="EA0A"):
+        identify_location_errors(MACHINE, q, measured, ["EA0A", "EB0A"], sphere_nominal_m=SPHERE)
     still = {**q, "A": np.zeros_like(q["A"])}
     with pytest.raises(InputDataError, match="needs the A axis probed at 3 or more"):
         identify_location_errors(MACHINE, still, measured, ["EB0A"])
