@@ -93,10 +93,11 @@ def tcp_error(layout: Layout, q: dict, errors: Errors) -> np.ndarray:
     """(N, 3) actual minus nominal tool tip, in the workpiece's frame [m]."""
     n = next(iter(q.values())).size
 
-    def chain(axes):
+    def chain(axes, sign):
         total = transform(np.repeat(np.eye(3)[None], n, 0), np.zeros((n, 3)))
         for axis in axes:
-            nominal = transform(np.repeat(np.eye(3)[None], n, 0), q[axis][:, None] * UNIT[axis])
+            nominal = transform(np.repeat(np.eye(3)[None], n, 0),
+                                sign * q[axis][:, None] * UNIT[axis])
             delta, theta = np.zeros((n, 3)), np.zeros((n, 3))
             for c in range(3):
                 if (axis, c) in errors.linear:
@@ -107,14 +108,14 @@ def tcp_error(layout: Layout, q: dict, errors: Errors) -> np.ndarray:
         return total
 
     tip = np.array([0.0, 0.0, layout.tool_z_m, 1.0])
-    tool = chain(layout.tool) @ tip
-    work = chain(layout.work)
+    # A survey's positions are the tool relative to the work, like a CNC's: a table moves
+    # against its command.
+    tool = chain(layout.tool, 1.0) @ tip
+    work = chain(layout.work, -1.0)
     actual = np.einsum("nij,nj->ni", np.linalg.inv(work), tool)[:, :3]
     nominal = np.zeros((n, 3))
-    for axis in layout.tool:
+    for axis in layout.tool + layout.work:
         nominal += q[axis][:, None] * UNIT[axis]
-    for axis in layout.work:
-        nominal -= q[axis][:, None] * UNIT[axis]
     nominal[:, 2] += layout.tool_z_m
     error = actual - nominal
     for term in errors.tcp:

@@ -11,8 +11,9 @@ Chen's RPPPR grinder written out below with exact rotations (Rodrigues' formula)
 * tool branch from the bed: the Y and Z slides, the B axis (about y) 0.3 m below the
   ram, the sphere on the tool ``tool_m`` from the B axis.
 
-Errors: each rotary axis' centre line tilted (small rotations of its frame before it
-turns, about the two directions across it) and its zero shifted (about itself); the A
+Errors: each rotary axis' centre line tilted (the body turns about the tilted line,
+ISO 230-7: a tilt about the axis' own direction is its zero error, taken out by the
+set-up at A = B = 0); the A
 table runs eccentric (a radial shift in the turning table's frame, once per
 revolution) with a once-per-revolution angular positioning error; and a shift of the
 nest on the table (set-up). An R-test zeroed at the work offset reads the sphere's
@@ -84,14 +85,19 @@ def tool_pose(x, y, z, a, b, errors: FiveAxisErrors, geometry: Geometry
     # Workpiece branch: X slide, A axis above it, the nest on the A table.
     origin_a = np.array([x, 0.0, A_ABOVE_X_M])
     turn = a + errors.a_positioning_rad * np.sin(a + errors.a_phase_rad)
-    table = rotation(errors.a_tilt) @ rotation([turn, 0.0, 0.0])
+    # The table turns about its actual (tilted) line, set up at A = 0 (ISO 230-7): the
+    # turn conjugated by the line's tilt; a tilt about A's own axis is its zero error,
+    # which the set-up takes out.
+    line_a = rotation(errors.a_tilt)
+    table = line_a @ rotation([turn, 0.0, 0.0]) @ line_a.T
     eccentric = errors.a_radial_m * np.array([0.0, np.cos(a + errors.a_phase_rad),
                                               np.sin(a + errors.a_phase_rad)])
     work_point = origin_a + table @ (np.asarray(geometry.workpiece_m) + eccentric
                                      + np.asarray(errors.nest_shift_m))
     # Tool branch: Y and Z slides, B axis below the ram, the tool on B.
     origin_b = np.array([0.0, y, z - B_BELOW_Z_M])
-    spindle = rotation(errors.b_tilt) @ rotation([0.0, b, 0.0])
+    line_b = rotation(errors.b_tilt)
+    spindle = line_b @ rotation([0.0, b, 0.0]) @ line_b.T
     tool_point = origin_b + spindle @ np.asarray(geometry.tool_m)
     return tool_point, spindle, work_point, table
 

@@ -152,10 +152,44 @@ def test_the_independent_generators_import_nothing_of_the_package():
     no module of mt_accuracy_ros, directly or through another study."""
     studies = REPO_ROOT / "studies"
     generators = ["foreign_machine.py", "cartesian_surveys.py", "five_axis_rtest.py",
-                  "multirun_logs.py", "shapes.py"]
+                  "multirun_logs.py", "shapes.py", "convention_surveys.py"]
     assert _offending([studies / name for name in generators], ("mt_accuracy_ros",)) == {}
     # Not vacuous: the trial runners beside them do use the package.
     assert _offending([studies / "catalogue_trials.py"], ("mt_accuracy_ros",))
     shared = {name for path in generators for name in imports_of(studies / path)
               if name.startswith("studies")}
     assert all(name.startswith("studies.shapes") for name in shared), shared
+
+
+def _imports_through_studies(path: Path) -> set[str]:
+    """Every module ``path`` imports, following the studies it imports transitively."""
+    seen, todo, found = set(), [path], set()
+    while todo:
+        current = todo.pop()
+        if current in seen:
+            continue
+        seen.add(current)
+        names = imports_of(current)
+        found |= names
+        for name in names:
+            if name.startswith("studies."):
+                candidate = REPO_ROOT / Path(*name.split(".")).with_suffix(".py")
+                if candidate.is_file():
+                    todo.append(candidate)
+    return found
+
+
+def test_the_convention_generator_reaches_nothing_of_the_package_by_any_path():
+    """The randomized-convention generator's data judge the physics: nothing of the
+    package may reach it, directly, through another study, or by a module named at run
+    time (importlib, __import__)."""
+    path = REPO_ROOT / "studies" / "convention_surveys.py"
+    reached = _imports_through_studies(path)
+    assert not [n for n in reached if n == "mt_accuracy_ros" or n.startswith("mt_accuracy_ros.")]
+    assert not [n for n in reached if n == "importlib" or n.startswith("importlib.")]
+    calls = {node.func.id for node in ast.walk(ast.parse(path.read_text()))
+             if isinstance(node, ast.Call) and isinstance(node.func, ast.Name)}
+    assert not calls & {"__import__", "exec", "eval"}
+    # Not vacuous: the follower sees a study's own study imports.
+    assert "studies.shapes" in _imports_through_studies(REPO_ROOT / "studies" /
+                                                        "foreign_machine.py")

@@ -75,11 +75,14 @@ def test_probe_from_the_virtual_machine(tmp_path, capsys):
         assert abs(summary["parameters"][name] - value) <= \
             3 * summary["uncertainties_k1"][name] + 1e-9, name
     assert summary["repeatability_m"] < 1e-6 and summary["dispersion_after_m"] < 3e-6
-    # A's zero angle and B's offset along x move the sphere's set-up position alone; B's
-    # offset along z folds into A's: what is identified is named so (issue 30).
-    assert summary["not_observable"] == ["EA0A", "EX0B", "EZ0B"]
-    assert summary["identified_as"]["EZ0A"] == "EZ0A - EZ0B"
-    assert abs(summary["parameters"]["EB0B"]) <= 3 * summary["uncertainties_k1"]["EB0B"]
+    # Both zero angles are taken out where the sphere and the probe were set up; B turns
+    # the probe about its actual line, so its offsets are seen (none here), the one along
+    # the probe being a probe length's twin - all said.
+    assert summary["not_observable"] == ["EA0A", "EB0B"]
+    for name in ("EX0B", "EZ0B"):
+        assert abs(summary["parameters"][name]) <= 3 * summary["uncertainties_k1"][name]
+    assert set(summary["probe_length_aliases"]) == {"EZ0B"}
+    assert summary["identified_as"]["EZ0A"] == "EZ0A"
     assert "where the rotary axes really are" in (tmp_path / "p.html").read_text()
 
 
@@ -142,7 +145,7 @@ def test_the_instruments_measure_the_five_axis_scenarios_own_machine(tmp_path, c
         # The offsets the scenario leaves at zero come out at zero.
         assert abs(summary["parameters"][name] - truth.get(name, 0.0)) <= \
             3 * summary["uncertainties_k1"][name] + 1e-9, name
-    assert "EX0B" in summary["not_observable"]       # one sphere cannot see it: said so
+    assert summary["not_observable"] == ["EA0A", "EB0B"]   # zero angles: said so
     assert main(["ballbar", str(tmp_path / "b.csv"), "--simulate", "2", "--scenario",
                  "demo_5axis", "--axis", "A", "--json", str(tmp_path / "b.json")]) == 0
     result = json.loads((tmp_path / "b.json").read_text())
@@ -273,8 +276,13 @@ def test_rotary_tools_judge_their_own_fits(tmp_path, capsys):
                                        data["touch_points_m"] + shift[:, None, :], rotary))
     code = main(["probe", str(longer)])
     out, err = capsys.readouterr()
-    assert (code == 0 and "misfit: the fit leaves" in out) or \
-        (code == 2 and "makes the dispersion worse" in err)
+    # The probe turns with B about B's line: a longer probe is B's line offset along the
+    # probe (the tip circles about the line alike). Named as that, with its twin said.
+    assert code == 0, err
+    import re
+
+    said = re.search(r"EZ0B moves the centres as a probe (\d+\.\d) um longer would", out)
+    assert said and abs(float(said.group(1)) - 20.0) <= 0.5, out
 
 
 def test_a_badly_conditioned_arc_is_said(tmp_path, capsys):

@@ -318,6 +318,80 @@ def survey_model(survey, model_text: str | None, machine: str | None,
                    f"other axes' positions and {arm}")
 
 
+def survey_machine(flag: str | None, mapped: str | None, model_text: str | None) -> str | None:
+    """The machine a survey names: ``--machine`` or the column map's ``machine:`` (the same
+    one when both are given; a model names its own)."""
+    if mapped is None:
+        return flag
+    if model_text is not None:
+        raise InputDataError("the column map names a machine and --model names one too: "
+                             "leave the map's machine: out, or give --machine instead of --model")
+    if flag is not None and Path(flag).resolve() != Path(mapped).resolve() and flag != mapped:
+        raise InputDataError(f"--machine {flag} contradicts the column map's machine: "
+                             f"{mapped}: give one")
+    return mapped
+
+
+def refuse_rotary_without_machine(positions: dict, machine) -> None:
+    """One line when the survey has rotary columns its machine has no axes for (a generic
+    Cartesian machine knows no rotary axis: its A and C would be dropped)."""
+    rotary = [a for a in positions if a in "ABC"]
+    missing = [a for a in rotary if a not in machine.axes]
+    if missing:
+        raise InputDataError(
+            f"the survey has rotary position columns ({', '.join(missing)}) that "
+            f"{machine.name} has no axis for: describe the machine (--machine FILE.yaml or "
+            "the map's machine:) - its chain says where the rotary axes are")
+
+
+def survey_targets(survey, column_map):
+    """The readings' target in the workpiece frame: the map's fixed ``target_point``,
+    per-row ``target.x/y/z`` columns, or None (the machining point)."""
+    if survey.targets:
+        return np.column_stack([survey.targets[c] for c in "xyz"])
+    return column_map.target_point_m
+
+
+def setup_note(machine) -> str:
+    """What the check assumed about where the work was set up ("" without rotary axes)."""
+    rotary = [a for a in machine.axis_order if machine.axes[a].is_rotary]
+    if not rotary:
+        return ""
+    pose = ", ".join(f"{a} = {np.degrees(machine.setup_angle(a)):g} deg" for a in rotary)
+    given = "the column map's or the machine's setup_pose" if machine.setup_pose else \
+        "no setup_pose given: every rotary axis at 0"
+    return (f"set-up pose {pose} ({given}): the rotary axes turn about their actual lines "
+            "from there, so their zero-angle errors are taken out by the set-up")
+
+
+def with_tool_direction(obs, direction_errors: dict, machine) -> str:
+    """Put a two-sphere R-test's tool-direction readings into ``obs`` and say so.
+
+    A reading is the change du of the tool axis' unit vector relative to the work
+    (machine frame); the workbench's orientation is the rotation vector across the tool
+    axis, theta = u x du (du = theta x u for theta across u).
+    """
+    from ..core.kinematics.chain import KinematicModel
+
+    missing = [c for c in "xyz" if c not in direction_errors]
+    if missing:
+        raise InputDataError(f"direction_errors: give all three components (missing "
+                             f"{', '.join(missing)}): the change of the tool axis' unit vector")
+    change = np.column_stack([direction_errors[c] for c in "xyz"])
+    axis = KinematicModel(machine).tool_axis(obs.positions)
+    along = np.abs(np.einsum("nc,nc->n", change, axis))
+    if np.any(along > 1e-3):
+        row = int(np.argmax(along))
+        raise InputDataError(f"direction_errors: reading {row + 1} changes the tool direction "
+                             f"along the tool axis by {along[row]:.3g} - not a small change of a "
+                             "unit vector (check the unit: urad?)")
+    obs.measured_orientation_rad = np.cross(axis, change)
+    obs.orientation_measured = np.ones(obs.n, dtype=bool)
+    return (f"tool direction: {obs.n} readings of the tool axis' change (across the tool "
+            f"axis), judged with a k = 2 uncertainty of "
+            f"{obs.orientation_uncertainty_rad * 1e6:.1f} urad")
+
+
 def refuse_contradicting_work_axes(machine, work_axes: tuple[str, ...]) -> None:
     """One line (InputDataError) when a column map's ``work_axes`` are not the given
     machine's axes that carry the workpiece (its chain says which they are)."""
@@ -376,7 +450,7 @@ def arm_verdicts(named: list[dict], tool_offset_m: float | None) -> tuple[list[s
 
 def outside_travel(machine, positions: dict, tolerance_m: float = 1e-6) -> str:
     """One warning line when readings lie outside ``machine``'s strokes ("" if none do)."""
-    parts, outside = [], np.zeros(0, dtype=bool)
+    parts, outside, units = [], np.zeros(0, dtype=bool), []
     for axis, q in positions.items():
         if axis not in machine.axes or not np.size(q):
             continue
@@ -384,27 +458,38 @@ def outside_travel(machine, positions: dict, tolerance_m: float = 1e-6) -> str:
         beyond = (q < low - tolerance_m) | (q > high + tolerance_m)
         outside = beyond if outside.size == 0 else (outside | beyond)
         if beyond.any():
-            scale = 1.0 if machine.axes[axis].is_rotary else 1e3
-            unit = "rad" if machine.axes[axis].is_rotary else "mm"
+            rotary = machine.axes[axis].is_rotary
+            scale, unit = (180.0 / np.pi, "deg") if rotary else (1e3, "mm")
             parts.append(f"{axis} {np.min(q) * scale:.4g}..{np.max(q) * scale:.4g} {unit} "
                          f"against its {low * scale:.4g}..{high * scale:.4g}")
+            as_degrees = np.radians(q)
+            if rotary and as_degrees.min() >= low - 1e-6 and as_degrees.max() <= high + 1e-6:
+                units.append(f"the {axis} column looks like degrees declared as rad")
     if not parts:
         return ""
+    mend = "; ".join(units) + " - declare its unit" if units else \
+        ("its strokes and Abbe arms may not be this machine's - check the position columns' "
+         "units, or give the machine the survey was taken on (--machine), or none for a "
+         "generic one from the data")
     return (f"warning: {int(outside.sum())} of {outside.size} readings lie outside "
-            f"{machine.name}'s travel ({'; '.join(parts)}): its strokes and Abbe arms may not "
-            "be this machine's - give --machine, or none for a generic one from the data")
+            f"{machine.name}'s travel ({'; '.join(parts)}): {mend}")
 
 
 def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[str],
                      auto: int, min_reduction: float, machine: str | None = None) -> dict:
     """A data logger's CSV of reference readings (column map) against a model (or a
     machine, or a generic Cartesian machine from the survey: :func:`survey_model`)."""
+    from ..core.kinematics.machine import with_setup_pose
     from ..core.workbench.diagnosis import Observations
     from ..io.column_map import read_mapped_csv
 
     survey = read_mapped_csv(path, column_map)
+    machine = survey_machine(machine, column_map.machine, model_text)
     model, machine_note = survey_model(survey, model_text, machine, column_map.tool_offset_m,
                                        column_map.work_axes)
+    refuse_rotary_without_machine(survey.positions, model.machine)
+    model = model.with_machine(with_setup_pose(model.machine, column_map.setup_pose,
+                                               "the column map's setup_pose"))
     n = survey.time_s.size
     missing = [a for a in model.machine.axis_order if a not in survey.positions]
     if missing:
@@ -421,7 +506,12 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
                        survey.temperatures, column_map.uncertainty_m,
                        directions=survey.directions, accelerations=survey.accelerations,
                        spindle_speed_rad_s=survey.spindle_speed_rad_s,
-                       run_of_row=survey.run_of_row)
+                       run_of_row=survey.run_of_row,
+                       work_point=survey_targets(survey, column_map))
+    instrument_notes = [setup_note(model.machine)]
+    if survey.direction_errors:
+        instrument_notes.append(with_tool_direction(obs, survey.direction_errors,
+                                                    model.machine))
     warning = outside_travel(model.machine, survey.positions)
     blocks = None
     if survey.run_of_row is not None:
@@ -444,7 +534,9 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
         result.setdefault("warnings", []).extend(notes)
     return {"data": str(path), "kind": "survey_csv", "rows_read": survey.rows_read,
             "rows_dropped": survey.rows_dropped, "rows_note": survey.summary(Path(path).name),
-            "machine": model.machine.name, "machine_note": machine_note,
+            "machine": model.machine.name,
+            "machine_note": "; ".join(n for n in [machine_note, *instrument_notes] if n),
+            "setup_pose_rad": dict(model.machine.setup_pose),
             "travel_warning": warning, "namespace": "", **result}
 
 

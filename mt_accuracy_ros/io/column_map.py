@@ -14,13 +14,27 @@ A **column map** (YAML, or ``--col ROLE=COLUMN[:UNIT]`` flags) says::
     uncertainty: {value: 1.4, unit: um}                    # the instrument's k = 2 figure
     tool_offset: {value: -150, unit: mm}                   # optional: z of the tool tip
                                                            #   from the last axis (Abbe arm)
+    machine: trunnion.yaml                                 # optional: the machine (a YAML
+                                                           #   beside the map, or a bundled name)
+    setup_pose: {A: {value: 0, unit: deg}, C: {value: 0, unit: deg}}   # where the work
+                                                           #   (sphere, part) was set up
+    target_point: {value: [50, 0, 20], unit: mm}           # a fixed sphere, workpiece frame;
+    # or per row (several spheres): {columns: {x: sx, y: sy, z: sz}, unit: mm}
+    direction_errors: {x: {column: dux, unit: urad}, ...}  # the tool direction's change
+                                                           #   (a two-sphere R-test)
     work_axes: [Y, X]                                      # optional: the axes carrying the
                                                            #   workpiece, bed outwards
     run: {column: day}                                     # optional: a survey of many runs
                                                            #   (rows of one run share a value)
 
 Flags: ``time``, ``pos.X``, ``err.x``, ``temp.<sensor>``, ``vel.X``, ``acc.X``,
-``dir.X``, ``spindle``, ``run`` as ROLE, e.g. ``--col pos.X=x_mm:mm --col err.x=dev_x:um``.
+``dir.X``, ``spindle``, ``run``, ``tdir.x`` (tool direction error), ``target.x`` (a
+per-row target) as ROLE, e.g. ``--col pos.X=x_mm:mm --col err.x=dev_x:um``.
+
+A rotary position column (A, B, C) is an angle in a unit the map or the column's name
+gives; a direction error is the change of the tool axis' unit vector relative to the
+work, actual minus nominal, in the machine frame (what a two-sphere R-test measures
+across the tool axis), as a small angle.
 
 A ``run`` column (text or numbers) cuts the survey into runs: each run's rows lie
 together, its time may restart, lags restart at its first reading and whole runs are
@@ -80,6 +94,14 @@ class ColumnMap:
     tool_offset_m: float | None = None
     #: The axes that carry the workpiece, from the bed outwards (the rest carry the tool).
     work_axes: tuple[str, ...] = ()
+    #: The machine the survey was taken on (``machine:``): a machine YAML's path (relative
+    #: ones resolved against the map's folder) or a bundled name; None: not given.
+    machine: str | None = None
+    #: Where the work was set up (``setup_pose:``), rotary axis -> command [rad].
+    setup_pose: dict[str, float] = field(default_factory=dict)
+    #: A fixed target on the workpiece side, workpiece frame (3,) [m] (``target_point:``
+    #: with ``value``); per-row targets are the roles ``target.x/y/z``.
+    target_point_m: np.ndarray | None = None
 
     def quantity(self, role: str) -> str:
         kind, _, axis = role.partition(".")
@@ -91,6 +113,10 @@ class ColumnMap:
             return "temperature"
         if kind in ("dir", "run"):
             return "unitless"
+        if kind == "tdir":
+            return "angle"
+        if kind == "target":
+            return "length"
         rotary = axis.upper() in "ABC" and kind != "err"
         return {"pos": "angle" if rotary else "length", "err": "length",
                 "vel": "velocity", "acc": "acceleration"}.get(kind, "")
@@ -99,7 +125,7 @@ class ColumnMap:
 def _role_from_yaml(section: str, key: str) -> str:
     return {"positions": f"pos.{key}", "errors": f"err.{key}", "temperatures": f"temp.{key}",
             "velocities": f"vel.{key}", "accelerations": f"acc.{key}",
-            "directions": f"dir.{key}"}[section]
+            "directions": f"dir.{key}", "direction_errors": f"tdir.{key}"}[section]
 
 
 def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
@@ -107,7 +133,8 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
         raise ParameterError(f"{source}: expected a mapping (time, positions, errors, ...)")
     known = {"time", "row_period_s", "positions", "errors", "temperatures", "velocities",
              "accelerations", "directions", "spindle_speed", "uncertainty", "machine",
-             "tool_offset", "work_axes", "run"}
+             "tool_offset", "work_axes", "run", "setup_pose", "target_point",
+             "direction_errors"}
     unknown = set(data) - known
     if unknown:
         raise ParameterError(f"{source}: unknown key(s) {', '.join(sorted(unknown))}; known: "
@@ -122,7 +149,7 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
         return str(value["column"]), str(value.get("unit", ""))
 
     for section in ("positions", "errors", "temperatures", "velocities", "accelerations",
-                    "directions"):
+                    "directions", "direction_errors"):
         block = data.get(section) or {}
         if not isinstance(block, dict):
             raise ParameterError(f"{source}: {section} must map names to columns")
@@ -158,7 +185,73 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
             value < 0 else 1.0
         out.tool_offset_m = 0.0 if value == 0 else sign * _convert_scalar(
             abs(value) if sign < 0 else value, unit, "length", f"{source}: tool_offset")
+    if "machine" in data:
+        out.machine = _machine_reference(data["machine"], source)
+    if "setup_pose" in data:
+        out.setup_pose = _setup_pose(data["setup_pose"], f"{source}: setup_pose")
+    if "target_point" in data:
+        _target_point(out, data["target_point"], f"{source}: target_point")
     return out
+
+
+def _machine_reference(value, source: str) -> str:
+    """The map's ``machine:``: a bundled name as it is, a YAML path resolved against the
+    map's folder (the map is usually kept beside the machine it was taken on)."""
+    if not isinstance(value, str) or not value.strip():
+        raise ParameterError(f"{source}: machine: expected a machine YAML's path or a bundled "
+                             f"name, got {value!r}")
+    value = value.strip()
+    if Path(value).suffix and not Path(value).is_absolute() and Path(source).is_file():
+        return str(Path(source).resolve().parent / value)
+    return value
+
+
+def _setup_pose(spec, where: str) -> dict[str, float]:
+    """Rotary axis -> set-up command [rad]; every angle with its unit."""
+    if not isinstance(spec, dict):
+        raise ParameterError(f"{where}: expected {{A: {{value: 0, unit: deg}}, ...}}")
+    pose = {}
+    for axis, value in spec.items():
+        axis = str(axis).upper()
+        if axis not in ("A", "B", "C"):
+            raise ParameterError(f"{where}.{axis}: the set-up pose names rotary axes (A, B, C)")
+        if not (isinstance(value, dict) and set(value) == {"value", "unit"}):
+            raise ParameterError(f"{where}.{axis}: give the angle with its unit, e.g. "
+                                 f"{{value: -90, unit: deg}} (got {value!r})")
+        angle, unit = value["value"], str(value["unit"])
+        if isinstance(angle, bool) or not isinstance(angle, (int, float)) or \
+                not math.isfinite(angle):
+            raise ParameterError(f"{where}.{axis}: expected a number, got {angle!r}")
+        if unit not in _ANGLE:
+            raise ParameterError(f"{where}.{axis}: unknown unit {unit!r}; known: "
+                                 f"{', '.join(_ANGLE)}")
+        pose[axis] = float(angle) * _ANGLE[unit]
+    return pose
+
+
+def _target_point(out: ColumnMap, spec, where: str) -> None:
+    """``{value: [x, y, z], unit: mm}`` (one fixed target) or ``{columns: {x: .., y: ..,
+    z: ..}, unit: mm}`` (a target per row: several spheres)."""
+    if not isinstance(spec, dict) or "unit" not in spec or \
+            len({"value", "columns"} & set(spec)) != 1:
+        raise ParameterError(f"{where}: expected {{value: [x, y, z], unit: mm}} or "
+                             "{columns: {x: COLUMN, y: COLUMN, z: COLUMN}, unit: mm}")
+    unit = str(spec["unit"])
+    if unit not in _LENGTH:
+        raise ParameterError(f"{where}: unknown unit {unit!r}; known: {', '.join(_LENGTH)}")
+    if "columns" in spec:
+        columns = spec["columns"]
+        if not isinstance(columns, dict) or set(columns) != {"x", "y", "z"}:
+            raise ParameterError(f"{where}.columns: name the x, y and z columns")
+        for axis, column in columns.items():
+            out.roles[f"target.{axis}"] = (str(column), unit)
+        return
+    value = spec["value"]
+    if not (isinstance(value, list) and len(value) == 3 and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value)):
+        raise ParameterError(f"{where}.value: expected three numbers [x, y, z]")
+    out.target_point_m = np.asarray(value, dtype=np.float64) * _LENGTH[unit]
 
 
 def _convert_scalar(value, unit: str, quantity: str, where: str) -> float:
@@ -237,7 +330,8 @@ def _scale(column_map: ColumnMap, role: str, unit: str, column: str = ""):
     quantity = column_map.quantity(role)
     if not quantity:
         raise ParameterError(f"column role {role!r} unknown; roles: time, pos.X, err.x, "
-                             "temp.<sensor>, vel.X, acc.X, dir.X, spindle")
+                             "temp.<sensor>, vel.X, acc.X, dir.X, spindle, run, tdir.x, "
+                             "target.x")
     return si_scale(quantity, unit or unit_from_name(column, quantity), role)
 
 
@@ -259,6 +353,10 @@ class MappedSurvey:
     run_names: list[str] | None = None
     #: How the file was written, when it is not a plain UTF-8 comma-separated CSV.
     dialect_note: str = ""
+    #: component -> (N,) the tool direction's change [rad] (``tdir.x`` ...), if mapped.
+    direction_errors: dict[str, np.ndarray] = field(default_factory=dict)
+    #: component -> (N,) each row's target in the workpiece frame [m] (``target.x`` ...).
+    targets: dict[str, np.ndarray] = field(default_factory=dict)
 
     def summary(self, name: str) -> str:
         kept = self.rows_read - self.rows_dropped
@@ -362,8 +460,8 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
         raise ParameterError("column map: no error column (err.x=COLUMN)")
     for role in column_map.roles:
         kind, _, key = role.partition(".")
-        if kind == "err" and key not in ("x", "y", "z"):
-            raise ParameterError(f"{role}: the TCP error components are err.x, err.y, err.z")
+        if kind in ("err", "tdir", "target") and key not in ("x", "y", "z"):
+            raise ParameterError(f"{role}: the components are {kind}.x, {kind}.y, {kind}.z")
         if kind in ("pos", "vel", "acc", "dir") and (len(key) != 1 or key not in "XYZABC"):
             raise ParameterError(f"{role}: name the axis with its letter (X Y Z A B C)")
     scales = {role: _scale(column_map, role, unit, column) for role, (column, unit) in
@@ -449,7 +547,9 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
         time_s = np.arange(kept) * column_map.row_period_s
     pick = lambda kind: {r.split(".", 1)[1].upper() if kind != "temp" else r.split(".", 1)[1]:  # noqa: E731
                          v for r, v in si.items() if r.startswith(kind + ".")}
-    errors = {r.split(".", 1)[1]: v for r, v in si.items() if r.startswith("err.")}
-    return MappedSurvey(time_s, pick("pos"), errors, pick("temp"), pick("vel"), pick("acc"),
-                        pick("dir"), si.get("spindle"), total, dropped, reasons, run_of_row,
-                        run_names, dialect.note())
+    components = lambda kind: {r.split(".", 1)[1]: v for r, v in si.items()  # noqa: E731
+                               if r.startswith(kind + ".")}
+    return MappedSurvey(time_s, pick("pos"), components("err"), pick("temp"), pick("vel"),
+                        pick("acc"), pick("dir"), si.get("spindle"), total, dropped, reasons,
+                        run_of_row, run_names, dialect.note(), components("tdir"),
+                        components("target"))

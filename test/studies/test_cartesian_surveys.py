@@ -29,10 +29,12 @@ def test_the_generators_chain_against_closed_forms():
     np.testing.assert_allclose(error[:, 2], 0.0, atol=1e-9)
     # A table axis (the VMC's X, carried by Y): its yaw about z turns the workpiece under
     # a standing tool - the tip moves by -tilt z x (tip - X's origin) in the table frame.
+    # The tables move against the command (a CNC's coordinates: the tool relative to the
+    # work), so the table's origin sits at (-x, -y) and the arm is (x, y, z + tool).
     layout = LAYOUTS["vmc_500"]
     q = {"X": np.array([0.1, 0.4]), "Y": np.array([0.05, 0.3]), "Z": np.array([-0.1, -0.2])}
     error = tcp_error(layout, q, Errors(angular={("X", 2): lambda x: tilt + 0 * x}))
-    lever = np.column_stack([-q["X"], -q["Y"], q["Z"] - 0.12])
+    lever = np.column_stack([q["X"], q["Y"], q["Z"] - 0.12])
     expected = -np.cross(np.array([0, 0, tilt]), lever)
     np.testing.assert_allclose(error, expected, atol=1e-9)
     # A linear error of the head's Z (tool side) is itself at the tip.

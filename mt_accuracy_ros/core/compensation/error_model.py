@@ -179,6 +179,13 @@ class ErrorModel:
                           dict(self.profiles), self.version + 1, self.machine_source,
                           dict(self.profile_offsets), datum=dict(self.datum))
 
+    def with_machine(self, machine: MachineDescription) -> "ErrorModel":
+        """The same model on ``machine`` (e.g. its description with a survey's set-up pose)."""
+        return ErrorModel(machine, copy.deepcopy(self.effects),
+                          dict(self.reference_temperatures_c), dict(self.profiles),
+                          self.version, self.machine_source, dict(self.profile_offsets),
+                          datum=dict(self.datum))
+
     def without_effect(self, name: str) -> "ErrorModel":
         effects = {k: v for k, v in self.effects.items() if k != name}
         return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),

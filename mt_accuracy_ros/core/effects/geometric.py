@@ -351,7 +351,7 @@ class RotaryLocation(EffectFamily):
     name = "rotary_location"
     group = "rotary"
     complexity = 1
-    summary = "a rotary axis' centre line offset or tilted, or its zero shifted"
+    summary = "a rotary axis' centre line offset or tilted (ISO 230-7)"
     reference = "Khan & Chen position-independent errors (section 5); Zhu ch. 5"
 
     def variants(self, ctx):
@@ -366,12 +366,16 @@ class RotaryLocation(EffectFamily):
         return self.complexity + (len(variant) > 1)
 
     def _names(self, variant):
+        # ISO 230-7's location errors of the line: two offsets and two tilts. The zero-angle
+        # error (EA0A for A) and an offset along the line move nothing: the body turns about
+        # its actual line from where the work was set up (kinematics.chain), so the set-up
+        # takes them out.
         names = []
         for axis in variant:
             along_axis = "XYZ"["ABC".index(axis)]
             offsets = [f"E{c}0{axis}" for c in "XYZ" if c != along_axis]
             tilts = [f"E{c}0{axis}" for c in "ABC" if c != axis]
-            names += offsets + tilts + [f"E{axis}0{axis}"]
+            names += offsets + tilts
         return names
 
     def parameter_names(self, variant, setting):
@@ -387,8 +391,9 @@ class RotaryLocation(EffectFamily):
     def explanation(self, variant, setting):
         which = f"the {variant} axis is" if len(variant) == 1 else \
             f"the {' and '.join(variant)} axes are"
-        return (f"{which} not where the model puts it: centre line offset or tilted, or the "
-                f"zero shifted ({', '.join(self._names(variant))}; Khan & Chen "
+        return (f"{which} not where the model puts it: centre line offset or tilted "
+                f"({', '.join(self._names(variant))}; ISO 230-7 location errors, the body "
+                "turning about the actual line from the set-up pose; Khan & Chen "
                 "position-independent errors)")
 
 

@@ -404,6 +404,29 @@ def generic_cartesian(strokes: dict[str, tuple[float, float]], tool_length_m: fl
         "axes": spec}, name), abbe_arms_known=False)
 
 
+def with_setup_pose(machine: MachineDescription, pose: dict[str, float],
+                    source: str = "setup_pose") -> MachineDescription:
+    """``machine`` with the set-up pose ``pose`` (rotary axis -> command [rad]) on top of
+    its own; an axis that is not one of its rotary axes, or an angle outside its stroke,
+    is refused in one line."""
+    from dataclasses import replace
+
+    if not pose:
+        return machine
+    rotary = [a for a in machine.axis_order if machine.axes[a].is_rotary]
+    for axis, angle in pose.items():
+        if axis not in rotary:
+            raise MachineDescriptionError(
+                f"{source}: {axis} is not a rotary axis of {machine.name} (rotary: "
+                f"{', '.join(rotary) or 'none'})")
+        low, high = machine.axes[axis].stroke
+        if not (np.isfinite(angle) and low - 1e-9 <= angle <= high + 1e-9):
+            raise MachineDescriptionError(
+                f"{source}.{axis}: {np.degrees(angle):g} deg is outside {machine.name}'s stroke "
+                f"[{np.degrees(low):g}, {np.degrees(high):g}] deg")
+    return replace(machine, setup_pose={**machine.setup_pose, **pose})
+
+
 def checked_datum(datum, machine: MachineDescription) -> dict[str, float]:
     """A work offset (axis -> command) checked against ``machine``: every axis once, finite,
     within its stroke (a datum outside it is a unit slip). Empty stays empty."""

@@ -149,6 +149,9 @@ class LocationIdentification:
     #: What a fitted parameter stands for when others fold into it: name -> {folded
     #: name: coefficient} (EZ0A's value is EZ0A + c EZ0B).
     aliases: dict[str, dict[str, float]] = field(default_factory=dict)
+    #: Offsets of a tool-side axis' line along the tool, which move the centres as a probe
+    #: longer or shorter would: name -> the probe length change that mimics +1 of it.
+    probe_length_aliases: dict[str, float] = field(default_factory=dict)
 
     def identified_as(self, name: str) -> str:
         """``EZ0A - EZ0B`` for a parameter others fold into, else the name."""
@@ -183,7 +186,8 @@ class LocationIdentification:
                 "condition_number": self.condition_number,
                 "repeatability_m": self.repeatability_m, "cycles": int(self.measured_m.shape[0]),
                 "not_observable": list(self.not_observable), "misfit": self.misfit,
-                "identified_as": {n: self.identified_as(n) for n in self.parameters}}
+                "identified_as": {n: self.identified_as(n) for n in self.parameters},
+                "probe_length_aliases": dict(self.probe_length_aliases)}
 
     @property
     def misfit(self) -> str:
@@ -230,6 +234,11 @@ class LocationIdentification:
         if folded:
             lines.append(f"  folded into the parameters above (one sphere cannot part them): "
                          f"{', '.join(sorted(folded))}")
+        for name, ratio in self.probe_length_aliases.items():
+            value = self.parameters[name]
+            lines.append(f"  {name} moves the centres as a probe {abs(value * ratio) * 1e6:.1f} um "
+                         f"{'longer' if value * ratio > 0 else 'shorter'} would: one sphere "
+                         "cannot part them (the probe is taken as calibrated)")
         zeros = [n for n in absorbed if n[1] == n[3]]
         others = [n for n in absorbed if n[1] != n[3]]
         if zeros:
@@ -361,7 +370,39 @@ def identify_location_errors(machine: MachineDescription, positions: dict[str, A
         dict(zip(names, (float(v) for v in theta[:p]))),
         dict(zip(names, (float(v) for v in std[:p]))), theta[p:].copy(), residuals, deviations,
         float(singular[0] / singular[-1]), _repeatability(q, deviations), correlations,
-        not_observable, aliases)
+        not_observable, aliases, _probe_length_aliases(machine, q, names, nominal_point))
+
+
+def _probe_length_aliases(machine: MachineDescription, q: dict[str, NDArray],
+                          names: list[str], point: NDArray, step: float = 1e-6
+                          ) -> dict[str, float]:
+    """The fitted offsets of tool-side rotary axes whose effect on the centres is a probe
+    length change's (the columns parallel within 0.1 %, each up to the sphere's set-up):
+    name -> the probe length change that mimics +1 of it."""
+    from dataclasses import replace
+
+    tool = np.asarray(machine.tool, dtype=np.float64)
+    if not np.linalg.norm(tool) or not any(machine.axes[a].is_rotary
+                                           for a in machine.tool_branch):
+        return {}
+    longer = replace(machine, tool=tool + step * tool / np.linalg.norm(tool))
+    # A longer probe moves every found centre by what it moves the tip.
+    length = (KinematicModel(longer).nominal_relative(q, work_point=point) -
+              KinematicModel(machine).nominal_relative(q, work_point=point)) / step
+    predicted = _predictor(machine, q, names, point)
+    base = predicted(np.zeros(len(names) + 3))
+    b = (length - length.mean(axis=0)).ravel()
+    out = {}
+    for j, name in enumerate(names):
+        if name[-1] not in machine.tool_branch or name[1] not in LETTERS:
+            continue
+        theta = np.zeros(len(names) + 3)
+        theta[j] = step
+        column = (predicted(theta) - base) / step
+        a = (column - column.mean(axis=0)).ravel()
+        if a @ a > 0 and b @ b > 0 and abs(a @ b) >= 0.999 * np.sqrt((a @ a) * (b @ b)):
+            out[name] = float(a @ b / (b @ b))
+    return out
 
 
 def _aliases(machine: MachineDescription, q: dict[str, NDArray], kept: list[str],

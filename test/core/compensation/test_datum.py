@@ -15,7 +15,8 @@ from mt_accuracy_ros.core.compensation.error_model import (ErrorModel, model_fro
 from mt_accuracy_ros.core.errors import ParameterError
 from mt_accuracy_ros.core.kinematics.machine import load_machine
 
-DATUM = {"X": 0.3, "Y": 0.2, "Z": 0.2, "A": 0.0, "B": 0.0}
+# Rotaries away from the set-up pose (0): their location errors act at the datum.
+DATUM = {"X": 0.3, "Y": 0.2, "Z": 0.2, "A": 0.3, "B": -0.2}
 EFFECTS = {
     "rotary_location:AB": {"family": "rotary_location", "variant": "AB", "setting": {},
                            "coefficients": {"EY0A": 2e-6, "EZ0A": -1e-6, "EB0A": 40e-6,

@@ -1,0 +1,173 @@
+"""The workbench on surveys whose conventions are drawn at random, made without the package.
+
+``studies.convention_surveys`` (written from the physics alone: it imports nothing of
+``mt_accuracy_ros``) draws per trial a topology (trunnion A/C and B/C, swivel head B/C,
+mixed table/head, three-axis VMC and HMC), an instrument (R-test, laser tracker,
+probing of one or several spheres, machining-point survey), the set-up pose, the
+tables' signs, tilt pivots, units and column names, and one or two hidden effects
+(rotary location errors, table tilts with or without a constant part, squareness) or
+none. Each trial is checked exactly as a user would: ``mt-accuracy check survey.csv
+--columns map.yaml --auto 3 --json``.
+
+Scoring, per trial (every identifiable effect of the truth):
+
+* a rotary location error (EX0C, EY0A, EA0C ...) is right when a ``rotary_location``
+  effect of its axis is named and carries it with the truth's sign, within 30 % or
+  3 U of its value;
+* a table tilt is right when the tilt itself is named (an angular error of that axis,
+  with or without its arm), and - for a tilt with a constant part - the constant part
+  may be named as the squareness of its plane (ISO 230-1) or carried by the tilt;
+  a pivot away from the carriage's origin may add a straightness of the same axis;
+* a squareness is right when a squareness of its plane is named;
+* anything else named is an extra; a null trial is right when nothing is named.
+
+A trial is **right** when every identifiable effect is right and nothing extra is named.
+Run: ``python -m bench.convention_proof --trials 60 --seed 2026 --json out.json``.
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from studies.convention_surveys import generate
+
+ROTATION_AXIS = {"A": "X", "B": "Y", "C": "Z"}
+
+
+def run_check(folder: Path) -> tuple[dict | None, str, float]:
+    """The CLI on one trial: (its JSON or None, what it printed, seconds)."""
+    from mt_accuracy_ros.cli import main
+
+    out = folder / "check.json"
+    printed = io.StringIO()
+    start = time.perf_counter()
+    with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(printed):
+        try:
+            code = main(["check", str(folder / "survey.csv"), "--columns",
+                         str(folder / "map.yaml"), "--auto", "3", "--json", str(out)])
+        except SystemExit as exc:          # argparse refusals
+            code = exc.code
+    seconds = time.perf_counter() - start
+    result = json.loads(out.read_text()) if code == 0 and out.exists() else None
+    return result, printed.getvalue(), seconds
+
+
+def plane_of(variant: str) -> frozenset[str]:
+    """The two linear axes a squareness or constant tilt lies in: ``EB0Z`` (X, Z),
+    ``EZX`` (X, Z), an angular error ``EBX`` (X, Z)."""
+    if len(variant) == 4:                       # E R 0 K: turned about R's axis
+        return frozenset("XYZ") - {ROTATION_AXIS[variant[1]]}
+    if variant[1] in "ABC":                     # an angular error E R K
+        return frozenset("XYZ") - {ROTATION_AXIS[variant[1]]}
+    return frozenset({variant[1], variant[2]})  # E C K: C's error growing with K
+
+
+def matches(effect: dict, named: dict) -> str:
+    """Why ``named`` accounts for the truth ``effect`` ("" when it does not)."""
+    family, variant = named["effect"], named["variant"]
+    iso, kind = effect["iso_name"], effect["kind"]
+    if kind in ("location_offset", "location_tilt"):
+        if family != "rotary_location" or effect["axis"] not in variant:
+            return ""
+        value = named["parameters"].get(iso)
+        if value is None:
+            return ""
+        truth = effect["value_si"]
+        spread = 3.0 * named.get("parameter_uncertainties", {}).get(iso, 0.0)
+        if value * truth > 0 and abs(value - truth) <= max(0.3 * abs(truth), spread):
+            return "value"
+        return "wrong value"
+    if kind == "squareness":
+        return "plane" if family == "squareness" and plane_of(variant) == plane_of(iso) else ""
+    if kind == "table_tilt":
+        axis = effect["axis"]
+        if family in ("angular", "angular_periodic", "angular_arm") and variant == iso:
+            return "tilt"
+        constant = effect.get("constant_part_si") or 0.0
+        if constant and family == "squareness" and axis in plane_of(variant) and \
+                plane_of(variant) == plane_of(iso):
+            return "constant part"
+        if effect.get("pivot_m") and any(effect["pivot_m"]) and \
+                family.startswith("straightness") and variant[2] == axis:
+            return "pivot"
+    return ""
+
+
+def score(truth: dict, result: dict | None) -> dict:
+    """One trial's verdict (see the module docstring)."""
+    if result is None:
+        return {"right": False, "why": "refused", "named": []}
+    named = result.get("named", [])
+    names = [n["name"] for n in named]
+    wanted = [e for e in truth["effects"] if e["identifiable"]]
+    used, problems = set(), []
+    for effect in wanted:
+        how = [(i, matches(effect, n)) for i, n in enumerate(named)]
+        good = [i for i, why in how if why and why != "wrong value"]
+        if not good:
+            wrong = [named[i]["name"] for i, why in how if why == "wrong value"]
+            problems.append(f"{effect['iso_name']} " + (f"wrong value in {wrong[0]}" if wrong
+                                                        else "not named"))
+        used.update(good)
+    extras = [names[i] for i in range(len(named)) if i not in used]
+    if extras:
+        problems.append("extra: " + ", ".join(extras))
+    return {"right": not problems, "why": "; ".join(problems), "named": names}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--trials", type=int, default=60)
+    parser.add_argument("--seed", type=int, default=2026)
+    parser.add_argument("--topology")
+    parser.add_argument("--instrument")
+    parser.add_argument("--json", help="write every trial's outcome here")
+    args = parser.parse_args(argv)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        with contextlib.redirect_stdout(io.StringIO()):
+            generate(str(root), args.trials, args.seed, topology=args.topology,
+                     instrument=args.instrument)
+        index = json.loads((root / "index.json").read_text())
+        for i, entry in enumerate(index["trials"]):
+            folder = root / entry["folder"]
+            truth = json.loads((folder / "truth.json").read_text())
+            result, printed, seconds = run_check(folder)
+            verdict = score(truth, result)
+            truth_names = [e["iso_name"] + ("" if e["identifiable"] else " (unidentifiable)")
+                           for e in truth["effects"]] or ["null"]
+            row = {"trial": entry["name"], "topology": truth["topology"],
+                   "instrument": truth["instrument"], "truth": truth_names,
+                   "setup_pose_deg": truth["conventions"].get("setup_pose_deg"),
+                   "seconds": round(seconds, 2), **verdict}
+            if result is None:
+                row["printed"] = printed.strip().splitlines()[-1:] if printed else []
+            rows.append(row)
+            print(f"[{i + 1}/{len(index['trials'])}] {row['trial']} {row['topology']:<17} "
+                  f"{row['instrument']:<15} truth {', '.join(truth_names):<34} "
+                  f"{'RIGHT' if row['right'] else 'WRONG'} {row['why']}", flush=True)
+    right = sum(r["right"] for r in rows)
+    print(f"right: {right} of {len(rows)}")
+    by = {}
+    for r in rows:
+        key = r["topology"]
+        by.setdefault(key, [0, 0])
+        by[key][0] += r["right"]
+        by[key][1] += 1
+    for key, (good, total) in sorted(by.items()):
+        print(f"  {key:<17} {good} of {total}")
+    if args.json:
+        Path(args.json).write_text(json.dumps({"seed": args.seed, "trials": rows,
+                                               "right": right}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
