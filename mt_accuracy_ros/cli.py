@@ -7,7 +7,8 @@ import sys
 
 
 #: The main job's scenario on each bundled machine.
-DEMO_SCENARIOS = {"kidani_hmc": "demo", "khan_chen_rpppr": "demo_5axis", "vmc": "demo_vmc"}
+DEMO_SCENARIOS = {"kidani_hmc": "demo", "khan_chen_rpppr": "demo_5axis", "vmc": "demo_vmc",
+                  "trunnion_ac": "demo_trunnion"}
 #: Its default rate [sim s per wall s].
 DEMO_RATES = {"kidani_hmc": 1.0, "khan_chen_rpppr": 1.0, "vmc": 1.0}
 
@@ -341,8 +342,9 @@ def build_parser() -> argparse.ArgumentParser:
                       help="bundled scenario or path (default: the machine's demo scenario)")
     demo.add_argument("--machine", default="kidani_hmc", choices=sorted(DEMO_SCENARIOS),
                       help="the virtual machine: the 3-axis HMC (scenario 'demo'), a 3-axis "
-                           "VMC with the work on X and Y tables (scenario 'demo_vmc') or Khan "
-                           "& Chen's 5-axis RPPPR grinder (scenario 'demo_5axis')")
+                           "VMC with the work on X and Y tables (scenario 'demo_vmc'), Khan "
+                           "& Chen's 5-axis RPPPR grinder (scenario 'demo_5axis') or a 5-axis "
+                           "trunnion VMC (scenario 'demo_trunnion')")
     demo.add_argument("--compensation", default="hybrid",
                       choices=["hybrid", "realtime", "table", "off"],
                       help="how the virtual CNC takes the compensation: tables + real-time "

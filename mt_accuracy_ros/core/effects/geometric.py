@@ -34,7 +34,8 @@ from __future__ import annotations
 import numpy as np
 
 from .base import Context, EffectFamily, along
-from .spectral import direct_basis, frequency_grid, grid_periodogram, weight_sums
+from .spectral import (direct_basis, frequency_grid, grid_periodogram, resolvable,
+                       weight_sums)
 
 #: ISO 230-1 component letters of a linear axis' errors, by kind.
 _KIND_COMPONENTS = {"positioning": "self", "straightness": "XYZ", "angular": "ABC"}
@@ -94,8 +95,10 @@ class ComponentError(EffectFamily):
     def settings(self, ctx: Context, variant: str) -> list[dict]:
         if self.periodic:
             low, high = ctx.machine.axes[variant[2]].stroke
-            # Frequencies a quarter cycle apart over the stroke: no peak falls between.
-            return [{"period_m": float(1.0 / f)} for f in frequency_grid(high - low)]
+            # Frequencies a quarter cycle apart over the stroke: no peak falls between;
+            # none the readings' positions would alias (a raster's few lines).
+            grid = resolvable(frequency_grid(high - low), ctx.variables.positions[variant[2]])
+            return [{"period_m": float(1.0 / f)} for f in grid]
         first = 2 if self.kind == "straightness" else 1
         return [{"order": k} for k in range(first, first + _ORDERS)]
 

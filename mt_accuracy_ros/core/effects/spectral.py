@@ -47,6 +47,27 @@ def frequency_grid(span_m: float) -> NDArray[np.float64]:
     return step * np.arange(first, last + 1)
 
 
+def shortest_resolvable_period(q: NDArray[np.float64]) -> float:
+    """The shortest period [m] readings at positions ``q`` can tell from its aliases.
+
+    Readings on a few levels (a raster's lines, a grid of stops) fit any period much
+    shorter than their spacing equally well - a periodogram then finds a "pitch" that
+    is only aliasing. At least two distinct positions per cycle on average (Nyquist on
+    the mean spacing) are asked for: 2 span / (distinct positions - 1). Random positions
+    along the travel (hundreds of them) restrict nothing in :data:`PERIOD_RANGE_M`.
+    """
+    distinct = np.unique(np.round(np.asarray(q, dtype=np.float64), 7))
+    if distinct.size < 3:
+        return float("inf")
+    return 2.0 * float(distinct[-1] - distinct[0]) / (distinct.size - 1)
+
+
+def resolvable(frequencies: NDArray[np.float64], q: NDArray[np.float64]
+               ) -> NDArray[np.float64]:
+    """``frequencies`` [1/m] whose periods :func:`shortest_resolvable_period` allows."""
+    return frequencies[frequencies <= 1.0 / shortest_resolvable_period(q) + 1e-12]
+
+
 def _solve(sum_w, zw1, zw2, sum_t, zt1):
     """Explained sum of squares and fundamental amplitude from the Fourier sums (batched)."""
     cw, sw = zw1.real, -zw1.imag

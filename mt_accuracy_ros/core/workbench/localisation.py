@@ -27,7 +27,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..scales.knn import cross_validate_k_many
-from ..effects.spectral import direct_basis, frequency_grid, grid_periodogram, weight_sums
+from ..effects.spectral import (direct_basis, frequency_grid, grid_periodogram, resolvable,
+                                weight_sums)
 from ..effects.variables import Variables
 
 COMPONENTS = "xyz"
@@ -356,7 +357,9 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
             span = float(np.ptp(q))
             if span <= 0:
                 continue
-            frequencies = frequency_grid(span)
+            frequencies = resolvable(frequency_grid(span), q)
+            if not frequencies.size:
+                continue
             periods = 1.0 / frequencies
             key = (axis, np.asarray(rows).tobytes())
             if key not in bases:
