@@ -16,8 +16,11 @@ Scoring, per trial (every identifiable effect of the truth):
   3 U of its value;
 * a table tilt is right when the tilt itself is named (an angular error of that axis,
   with or without its arm), and - for a tilt with a constant part - the constant part
-  may be named as the squareness of its plane (ISO 230-1) or carried by the tilt;
-  a pivot away from the carriage's origin may add a straightness of the same axis;
+  may be named as the squareness of its plane (ISO 230-1; its two forms together are
+  one rotation of the body) or carried by the tilt; a pivot away from the carriage's
+  origin may add a straightness of the same axis or a slope along it;
+* a zero-angle error the poses can see (an outer axis' zero: a located sphere sees it as
+  the tilt of the axis it carries) is right as that tilt;
 * a squareness is right when a squareness of its plane is named;
 * anything else named is an extra; a null trial is right when nothing is named.
 
@@ -68,10 +71,30 @@ def plane_of(variant: str) -> frozenset[str]:
     return frozenset({variant[1], variant[2]})  # E C K: C's error growing with K
 
 
-def matches(effect: dict, named: dict) -> str:
+def carried_rotary(chain: str, axis: str) -> str:
+    """The rotary axis ``axis`` carries on its side of the chain ("" if none):
+    ``[w C A X Y b Z t]``: A carries C; ``[w X Y b Z C B t]``: C carries B."""
+    letters = chain.strip("[]").split()
+    bed = letters.index("b")
+    work, tool = letters[1:bed][::-1], letters[bed + 1:-1]
+    side = work if axis in work else tool
+    after = side[side.index(axis) + 1:]
+    return next((a for a in after if a in "ABC"), "")
+
+
+def matches(effect: dict, named: dict, chain: str = "") -> str:
     """Why ``named`` accounts for the truth ``effect`` ("" when it does not)."""
     family, variant = named["effect"], named["variant"]
     iso, kind = effect["iso_name"], effect["kind"]
+    if kind == "zero":
+        # A located sphere sees an outer axis' zero error as the tilt of the axis it
+        # carries about the same direction (EA0A as EA0C): the same turn of that line.
+        carried = carried_rotary(chain, effect["axis"]) if chain else ""
+        if not carried or family != "rotary_location" or carried not in variant:
+            return ""
+        effect = dict(effect, iso_name=f"E{effect['axis']}0{carried}",
+                      kind="location_tilt")
+        iso, kind = effect["iso_name"], effect["kind"]
     if kind in ("location_offset", "location_tilt"):
         if family != "rotary_location" or effect["axis"] not in variant:
             return ""
@@ -93,8 +116,12 @@ def matches(effect: dict, named: dict) -> str:
         if constant and family == "squareness" and axis in plane_of(variant) and \
                 plane_of(variant) == plane_of(iso):
             return "constant part"
-        if effect.get("pivot_m") and any(effect["pivot_m"]) and \
-                family.startswith("straightness") and variant[2] == axis:
+        # A pivot away from the carriage's origin adds p x eps(q): a straightness of the
+        # axis, or - for the tilt's linear part - a slope (a squareness along the axis).
+        pivoted = effect.get("pivot_m") and any(effect["pivot_m"])
+        if pivoted and family.startswith("straightness") and variant[2] == axis:
+            return "pivot"
+        if pivoted and family == "squareness" and len(variant) == 3 and variant[2] == axis:
             return "pivot"
     return ""
 
@@ -108,7 +135,7 @@ def score(truth: dict, result: dict | None) -> dict:
     wanted = [e for e in truth["effects"] if e["identifiable"]]
     used, problems = set(), []
     for effect in wanted:
-        how = [(i, matches(effect, n)) for i, n in enumerate(named)]
+        how = [(i, matches(effect, n, truth.get("chain", ""))) for i, n in enumerate(named)]
         good = [i for i, why in how if why and why != "wrong value"]
         if not good:
             wrong = [named[i]["name"] for i, why in how if why == "wrong value"]

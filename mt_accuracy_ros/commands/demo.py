@@ -658,6 +658,35 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
             "orientation": result_orientation}
 
 
+def rotary_location_identified(model_path: Path, machine) -> str:
+    """What the final model says of where the rotary axes really are (ISO 230-7): each
+    location error with its k = 2 uncertainty, and why the zero-angle errors are not
+    among them ("" on a machine without rotary axes or without such an effect)."""
+    import yaml
+
+    rotary = [a for a in machine.axis_order if machine.axes[a].is_rotary]
+    if not rotary or not model_path.is_file():
+        return ""
+    effects = (yaml.safe_load(model_path.read_text()) or {}).get("effects", {}) or {}
+    parts = []
+    for name, entry in effects.items():
+        if not (isinstance(entry, dict) and entry.get("family") == "rotary_location"):
+            continue
+        values, spread = entry.get("coefficients", {}), entry.get("uncertainties", {})
+        for error, value in values.items():
+            offset = error[1] in "XYZ"
+            scale, unit = (1e6, "um") if offset else (1e6, "urad")
+            parts.append(f"{error} {value * scale:+.1f} ± {2 * spread.get(error, 0.0) * scale:.1f}"
+                         f" {unit}")
+    if not parts:
+        return ""
+    zeros = ", ".join(f"E{a}0{a}" for a in rotary)
+    return (f"rotary axes' location errors identified (ISO 230-7, U k = 2): {'; '.join(parts)}"
+            f"; not identifiable: {zeros} (zero-angle errors: taken out by the set-up at "
+            f"{', '.join(f'{a} = {np.degrees(machine.setup_angle(a)):g} deg' for a in rotary)}"
+            "; an outer axis' zero error shows as the tilt of the axis it carries)")
+
+
 def table_tilts(machine, effects: list[str]) -> list[str]:
     """The named effects that tilt an axis carrying the workpiece, each with what it is
     (e.g. 'angular:EBX (the X table's pitch)')."""
@@ -722,6 +751,8 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "missing_effects_found": actions[0]["effects"] if actions else [],
         "table_tilts_named": table_tilts(resolve_scenario(scenario).machine,
                                          actions[0]["effects"]) if actions else [],
+        "rotary_location_identified": rotary_location_identified(
+            out / "model.yaml", resolve_scenario(scenario).machine),
         "where_the_residual_lived": actions[0]["where"] if actions else "",
         "effect_added_accepted": bool(actions and actions[0]["accepted"]),
         "offline_residual_rmse_after_um": float(np.mean(after) * 1e6) if after
@@ -830,6 +861,9 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: 
                 "Tilts of the axes that carry the workpiece named: " + "; ".join(tilts) +
                 ". Each moves the part under the tool by the tilt times the arm from the "
                 "table to the machining point, which changes with the other axes.")
+    located = rotary_location_identified(out / "model.yaml", chosen.machine)
+    if located:
+        run.paragraphs.append(located[0].upper() + located[1:] + ".")
     for when, axis in alarms:
         run.paragraphs.append(f"At {when:.1f} s the {axis} axis raised its deterioration alarm.")
     run.paragraphs.append("Delivery: " + ("; ".join(losses) if losses else

@@ -650,6 +650,13 @@ def _checked_catalogue_entry(name: str, entry: dict, machine: MachineDescription
         raise ParameterError(f"effect {name}: setting {setting!r} does not fit family "
                              f"{family.name} ({exc})") from exc
     coefficients = entry.get("coefficients")
+    if family.name == "rotary_location" and isinstance(coefficients, dict):
+        zeros = sorted(k for k in coefficients if len(k) == 4 and k[1] == k[3] and k[2] == "0")
+        if zeros:
+            raise ParameterError(
+                f"effect {name}: {', '.join(zeros)} is a zero-angle error, which the set-up "
+                "takes out (each rotary body turns about its actual line from the set-up "
+                f"pose, ISO 230-7): remove it; the coefficients are {', '.join(names)}")
     if not isinstance(coefficients, dict) or set(coefficients) != set(names):
         raise ParameterError(f"effect {name}: 'coefficients' must give {', '.join(names)}")
     return {"family": family.name, "variant": variant, "setting": dict(setting),

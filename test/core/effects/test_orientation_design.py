@@ -13,6 +13,7 @@ import pytest
 from mt_accuracy_ros.core.compensation.error_model import ErrorModel
 from mt_accuracy_ros.core.effects import Context, catalogue_orientation, family_named
 from mt_accuracy_ros.core.effects.variables import Variables
+from mt_accuracy_ros.core.errors import ParameterError
 from mt_accuracy_ros.core.kinematics.chain import ErrorOverrides, KinematicModel
 from mt_accuracy_ros.core.kinematics.machine import load_machine
 
@@ -105,10 +106,13 @@ def test_a_fitted_rotary_location_turns_the_models_tool_as_the_chain_does(five_a
     """The model applies what the workbench fitted to the direction as well as to the tip:
     the exact chain with the same location errors is the second formulation."""
     machine, kinematics, q, _ = five_axis
-    errors = {"EY0A": 0.0, "EZ0A": 0.0, "EB0A": 40e-6, "EC0A": -30e-6, "EA0A": 25e-6}
-    model = ErrorModel(machine, {"rotary_location:A": {
-        "family": "rotary_location", "variant": "A", "setting": {},
-        "coefficients": errors}})
+    errors = {"EY0A": 0.0, "EZ0A": 0.0, "EB0A": 40e-6, "EC0A": -30e-6}
+    entry = {"family": "rotary_location", "variant": "A", "setting": {}}
+    # A zero-angle error is the set-up's: a model that still carries one is refused, named.
+    with pytest.raises(ParameterError, match="EA0A is a zero-angle error"):
+        ErrorModel(machine, {"rotary_location:A": {**entry, "coefficients": {
+            **errors, "EA0A": 25e-6}}})
+    model = ErrorModel(machine, {"rotary_location:A": {**entry, "coefficients": errors}})
     position, orientation = model.tcp_error(q)
     overrides = ErrorOverrides()
     overrides.location.update(errors)
