@@ -143,3 +143,30 @@ def test_bad_probing_input_is_named():
     still = {**q, "A": np.zeros_like(q["A"])}
     with pytest.raises(InputDataError, match="needs the A axis probed at 3 or more"):
         identify_location_errors(MACHINE, still, measured, ["EB0A"])
+
+
+@pytest.mark.parametrize("truth", [{"EY0C": -15e-6}, {"EY0A": 25e-6}, {"EX0C": 20e-6},
+                                   {"EX0C": 20e-6, "EZ0A": -10e-6}, {}])
+def test_a_trunnion_probed_at_its_set_up_pose_gives_each_line_offset_alone(truth):
+    """The trunnion VMC ([w C A X Y b Z t]), the sphere touched off at A = C = 0: the
+    virtual machine (its own rigid bodies, turning about the real lines) is probed
+    sweeping A, then C. A C-line offset comes back as itself (not as two cancelling
+    angles), an A-line offset without a spurious C offset, the sphere's set-up where it
+    is, and a zero-angle error is said to be the set-up's."""
+    from mt_accuracy_ros.sim.rotary_instruments import ProbingPlan, probe_sphere
+
+    machine = load_machine("trunnion_ac")
+    plan = ProbingPlan({"A": list(np.arange(-90.0, 31.0, 30.0)),
+                        "C": list(np.arange(0.0, 360.0, 45.0))},
+                       {"X": 0.0, "Y": 0.0, "Z": -0.3}, sphere_m=(0.08, 0.05, 0.03),
+                       sphere_radius_m=12.5e-3, repeats=2)
+    data = probe_sphere(machine, plan, truth, seed=3)
+    rng = np.random.default_rng(7)
+    centres = data["centres_m"] + rng.normal(0.0, 0.3e-6, data["centres_m"].shape)
+    result = identify_location_errors(machine, data["positions"], centres,
+                                      sphere_nominal_m=np.array(plan.sphere_m))
+    for name, value in result.parameters.items():
+        assert abs(value - truth.get(name, 0.0)) <= 4 * result.uncertainties[name] + 1e-12, \
+            (name, value, result.text())
+    np.testing.assert_allclose(result.sphere_offset_m, plan.sphere_offset_m, atol=1e-6)
+    assert result.not_observable == ["EA0A", "EC0C"] and not result.aliases
