@@ -419,6 +419,7 @@ def arm_verdicts(named: list[dict], tool_offset_m: float | None) -> tuple[list[s
     notes, refusal = [], ""
     given = tool_offset_m or 0.0
     along_z = -1.0 if given < 0 else 1.0
+    supported_tools: list[tuple[str, float, float]] = []
     for entry in named:
         if entry.get("effect") != "angular_arm":
             continue
@@ -432,6 +433,7 @@ def arm_verdicts(named: list[dict], tool_offset_m: float | None) -> tuple[list[s
         sigma = float(np.sqrt(np.sum((weights * np.array(
             [spread.get(k, 0.0) for k in values if k.startswith("arm_")])) ** 2)))
         supported = given + along_z * extra
+        supported_tools.append((entry["variant"], supported, sigma))
         if tool_offset_m is None:
             notes.append(f"{entry['name']}: the tilt acts through {extra * 1e3:+.1f} "
                          f"± {2e3 * sigma:.1f} mm of arm along the tool beyond the surveyed "
@@ -445,7 +447,25 @@ def arm_verdicts(named: list[dict], tool_offset_m: float | None) -> tuple[list[s
         else:
             notes.append(f"{entry['name']}: its arm agrees with the map's tool_offset within "
                          f"{abs(extra) * 1e3:.1f} mm")
+    notes += one_tool_for_the_stack(supported_tools)
     return notes, refusal
+
+
+def one_tool_for_the_stack(supported: list[tuple[str, float, float]]) -> list[str]:
+    """The tilts of one stack act through one tool: a line saying whether the tool tips
+    their arms put it at agree ((variant, tool tip [m], its standard uncertainty [m]))."""
+    if len(supported) < 2:
+        return []
+    values = np.array([v for _, v, _ in supported])
+    sigmas = np.array([max(s, 1e-6) for _, _, s in supported])
+    mean = float(np.sum(values / sigmas ** 2) / np.sum(1.0 / sigmas ** 2))
+    names = ", ".join(f"{n} {v * 1e3:.1f} mm" for n, v, _ in supported)
+    if np.all(np.abs(values - mean) <= np.maximum(3.0 * sigmas, 5e-3)):
+        return [f"the tilts of one stack agree on one tool: its tip at {mean * 1e3:.1f} mm "
+                f"({names})"]
+    return [f"warning: the tilts of one stack put the tool tip at different heights ({names}):"
+            " one tool cannot serve both - a tilt is named with a stand-in, or the layout "
+            "(work_axes) is not the machine's"]
 
 
 def outside_travel(machine, positions: dict, tolerance_m: float = 1e-6) -> str:
