@@ -253,16 +253,20 @@ def test_the_same_log_gives_the_same_answer_in_any_process(tmp_path):
     from studies.multirun_logs import write_log
 
     write_log(tmp_path / "days.csv", 3, zeroed=False)
-    answers = []
+    # The two processes run side by side: each is one thread, and the machine has two cores.
+    checks = {}
     for seed in ("1", "2"):
-        out = tmp_path / f"s{seed}.json"
         env = dict(os.environ, PYTHONHASHSEED=seed)
-        subprocess.run([sys.executable, "-m", "mt_accuracy_ros.cli", "check",
-                        str(tmp_path / "days.csv"), "--target", "gauge_um", "--inputs",
-                        "T*_C", "--driver", "spindle_rpm", "--run", "day", "--auto", "3",
-                        "--json", str(out)], check=True, env=env, capture_output=True,
-                       cwd=str(REPO_ROOT))
-        summary = json.loads(out.read_text())
+        with open(tmp_path / f"e{seed}.txt", "w") as errors:
+            checks[seed] = subprocess.Popen(
+                [sys.executable, "-m", "mt_accuracy_ros.cli", "check", str(tmp_path / "days.csv"),
+                 "--target", "gauge_um", "--inputs", "T*_C", "--driver", "spindle_rpm",
+                 "--run", "day", "--auto", "3", "--json", str(tmp_path / f"s{seed}.json")],
+                env=env, stdout=subprocess.DEVNULL, stderr=errors, cwd=str(REPO_ROOT))
+    answers = []
+    for seed, check in checks.items():
+        assert check.wait(timeout=600) == 0, (tmp_path / f"e{seed}.txt").read_text()
+        summary = json.loads((tmp_path / f"s{seed}.json").read_text())
         answers.append((summary["model_chosen"], summary["model_contest_forward_rmse"],
                         summary["final_rmse"], summary["added"]))
     assert answers[0] == answers[1]

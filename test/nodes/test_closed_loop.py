@@ -344,15 +344,17 @@ def test_five_axis_compensation_puts_the_tools_tip_and_direction_right(rclpy_con
                         r.applied_orientation_correction.z) for r in readings])
     rotary = np.array([list(r.applied_rotary_correction) for r in readings])
     without, without_direction = measured - applied, direction - turned
-    # The axis lines' offsets (20-25 um) move the part rigidly: zeroed at the work offset
-    # the R-test does not see them, and the model referred to that datum does not apply
-    # them (without the datum it would move the part by them: the end state of issue 30).
-    # What it sees without compensation is the tilts and the positioning error, acting
-    # through the arm from the A axis to the machining point (up to ~0.6 m): a few um,
-    # well below the offsets' 20-25 um on top.
-    assert np.all(_rms(without[live]) < 10e-6), _rms(without[live])
+    # The axis lines' offsets (20-25 um) turn the part about the real lines from the
+    # set-up pose (A = B = 0, ISO 230-7): (I - R) d, zero there and up to ~2 d at the
+    # poses reached; on top, the tilts and the positioning error through the arm from the
+    # A axis to the machining point (up to ~0.6 m). Without compensation: several um,
+    # below the sum of their magnitudes.
+    assert np.all(_rms(without[live]) < 30e-6), _rms(without[live])
+    assert np.max(_rms(without[live])) > 5e-6, _rms(without[live])
     assert np.all(np.abs(np.mean(without[live], axis=0)) < 15e-6), np.mean(without[live], 0)
-    assert np.sqrt(np.mean(np.sum(without_direction[live] ** 2, axis=1))) > 20e-6
+    # The tilts (30-40 urad) turn the tool by (I - R) eps from the set-up pose: over ten
+    # urad at the poses reached, five times the R-test's band.
+    assert np.sqrt(np.mean(np.sum(without_direction[live] ** 2, axis=1))) > 10e-6
     # The rotary axes did turn (tens of urad), and the machine is right to the band.
     assert np.median(np.abs(rotary[live])) > 5e-6
     assert np.all(_rms(measured[live]) <= 1e-6), _rms(measured[live])
