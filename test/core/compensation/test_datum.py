@@ -20,9 +20,8 @@ DATUM = {"X": 0.3, "Y": 0.2, "Z": 0.2, "A": 0.3, "B": -0.2}
 EFFECTS = {
     "rotary_location:AB": {"family": "rotary_location", "variant": "AB", "setting": {},
                            "coefficients": {"EY0A": 2e-6, "EZ0A": -1e-6, "EB0A": 40e-6,
-                                            "EC0A": -30e-6, "EA0A": 25e-6, "EX0B": 1e-6,
-                                            "EZ0B": 0.0, "EA0B": 30e-6, "EC0B": -20e-6,
-                                            "EB0B": 0.0}},
+                                            "EC0A": -30e-6, "EX0B": 1e-6,
+                                            "EZ0B": 0.0, "EA0B": 30e-6, "EC0B": -20e-6}},
     "structural_thermal_drift:column": {
         "family": "structural_thermal_drift", "variant": "column", "setting": {},
         "coefficients": {"bx": 1e-6, "by": 2e-6, "bz": 3e-6}},
