@@ -70,3 +70,19 @@ def first_live_s(readings: Readings, version: int) -> float | None:
     """Data time [s] of the first reading the CNC took with ``version`` or later applied."""
     at = np.flatnonzero(readings.version >= version)
     return float(readings.time_s[at[0]]) if at.size else None
+
+
+def run_bundled_main_job(base: Path, scenario: str) -> tuple[int, Path, str]:
+    """A bundled scenario's main job in lockstep into ``base/out``: (exit code, the output
+    folder, what it printed)."""
+    import contextlib
+    import io
+
+    from mt_accuracy_ros.commands.demo import run_demo
+    from mt_accuracy_ros.nodes._scenario import BUNDLED
+
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        code = run_demo(out_dir=str(base / "out"), lockstep=True,
+                        scenario=str(BUNDLED / f"{scenario}.yaml"))
+    return code, base / "out", printed.getvalue()

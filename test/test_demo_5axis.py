@@ -12,8 +12,6 @@ recomputed from the bag here), the refit and the datum.
 """
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import numpy as np
@@ -28,15 +26,9 @@ import yaml
 
 @pytest.fixture(scope="module")
 def five_axis_run(tmp_path_factory):
-    from mt_accuracy_ros.commands.demo import run_demo
-    from mt_accuracy_ros.nodes._scenario import BUNDLED
+    from demo_outcome import run_bundled_main_job
 
-    base = tmp_path_factory.mktemp("demo5")
-    printed = io.StringIO()
-    with contextlib.redirect_stdout(printed):
-        code = run_demo(out_dir=str(base / "out"), lockstep=True,
-                        scenario=str(BUNDLED / "demo_5axis.yaml"))
-    return code, base / "out", printed.getvalue()
+    return run_bundled_main_job(tmp_path_factory.mktemp("demo5"), "demo_5axis")
 
 
 def test_the_five_axis_graph_streams_encoders_and_compensates_the_tool_direction(five_axis_run):

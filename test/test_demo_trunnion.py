@@ -10,8 +10,6 @@ which the set-up takes out.
 """
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import pytest
@@ -20,15 +18,9 @@ import yaml
 
 @pytest.fixture(scope="module")
 def trunnion_run(tmp_path_factory):
-    from mt_accuracy_ros.commands.demo import run_demo
-    from mt_accuracy_ros.nodes._scenario import BUNDLED
+    from demo_outcome import run_bundled_main_job
 
-    base = tmp_path_factory.mktemp("trunnion")
-    printed = io.StringIO()
-    with contextlib.redirect_stdout(printed):
-        code = run_demo(out_dir=str(base / "out"), lockstep=True,
-                        scenario=str(BUNDLED / "demo_trunnion.yaml"))
-    return code, base / "out", printed.getvalue()
+    return run_bundled_main_job(tmp_path_factory.mktemp("trunnion"), "demo_trunnion")
 
 
 def test_the_trunnion_job_finds_the_c_centre_and_the_a_pivot_and_ends_in_the_band(
