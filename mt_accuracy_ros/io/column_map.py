@@ -58,6 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError, ParameterError
+from ..core.kinematics.machine import angle_with_unit
 from .csv_dialect import CsvDialect, cell_kind, sniff_dialect, table_rows, to_seconds
 
 _LENGTH = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "micron": 1e-6, "nm": 1e-9,
@@ -215,17 +216,7 @@ def _setup_pose(spec, where: str) -> dict[str, float]:
         axis = str(axis).upper()
         if axis not in ("A", "B", "C"):
             raise ParameterError(f"{where}.{axis}: the set-up pose names rotary axes (A, B, C)")
-        if not (isinstance(value, dict) and set(value) == {"value", "unit"}):
-            raise ParameterError(f"{where}.{axis}: give the angle with its unit, e.g. "
-                                 f"{{value: -90, unit: deg}} (got {value!r})")
-        angle, unit = value["value"], str(value["unit"])
-        if isinstance(angle, bool) or not isinstance(angle, (int, float)) or \
-                not math.isfinite(angle):
-            raise ParameterError(f"{where}.{axis}: expected a number, got {angle!r}")
-        if unit not in _ANGLE:
-            raise ParameterError(f"{where}.{axis}: unknown unit {unit!r}; known: "
-                                 f"{', '.join(_ANGLE)}")
-        pose[axis] = float(angle) * _ANGLE[unit]
+        pose[axis] = angle_with_unit(value, f"{where}.{axis}", ParameterError, _ANGLE)
     return pose
 
 

@@ -263,6 +263,23 @@ def _stroke(spec, letter: str, where: str) -> np.ndarray:
     return stroke
 
 
+def angle_with_unit(value, where: str, error: type[Exception],
+                    units: dict[str, float] | None = None) -> float:
+    """``{value: -90, unit: deg}`` -> rad; a bare number, an unknown unit or a value that
+    is not a finite number is refused with ``error`` naming ``where`` and the mend."""
+    units = ANGLE_UNITS if units is None else units
+    if not (isinstance(value, dict) and set(value) == {"value", "unit"}):
+        raise error(f"{where}: give the angle with its unit, e.g. {{value: -90, unit: deg}}"
+                    f" (got {value!r})")
+    angle, unit = value["value"], str(value["unit"])
+    if unit not in units:
+        raise error(f"{where}: unit {unit!r} is not one of {', '.join(units)}")
+    if isinstance(angle, bool) or not isinstance(angle, (int, float)) or \
+            not np.isfinite(angle):
+        raise error(f"{where}: expected a number, got {angle!r}")
+    return float(angle) * units[unit]
+
+
 def read_setup_pose(spec, axes: dict[str, "Axis"], where: str) -> dict[str, float]:
     """Rotary axis -> set-up command [rad] from ``{A: {value: -90, unit: deg}, ...}``.
 
@@ -282,19 +299,8 @@ def read_setup_pose(spec, axes: dict[str, "Axis"], where: str) -> dict[str, floa
             raise MachineDescriptionError(
                 f"{where}.{axis}: not a rotary axis of this machine (rotary: "
                 f"{', '.join(rotary) or 'none'})")
-        if not (isinstance(value, dict) and set(value) == {"value", "unit"}):
-            raise MachineDescriptionError(
-                f"{where}.{axis}: give the angle with its unit, e.g. {{value: -90, unit: deg}}"
-                f" (got {value!r})")
+        angle = angle_with_unit(value, f"{where}.{axis}", MachineDescriptionError)
         unit = str(value["unit"])
-        if unit not in ANGLE_UNITS:
-            raise MachineDescriptionError(f"{where}.{axis}: unit {unit!r} is not one of "
-                                          f"{', '.join(ANGLE_UNITS)}")
-        try:
-            angle = float(value["value"]) * ANGLE_UNITS[unit]
-        except (TypeError, ValueError) as exc:
-            raise MachineDescriptionError(f"{where}.{axis}: {value['value']!r} is not a number"
-                                          ) from exc
         low, high = axes[axis].stroke
         if not (np.isfinite(angle) and low - 1e-9 <= angle <= high + 1e-9):
             raise MachineDescriptionError(
