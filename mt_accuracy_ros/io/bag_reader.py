@@ -4,6 +4,11 @@ Accepts a bag directory (with or without ``metadata.yaml``; a bag split over
 several ``*.mcap`` files is merged in time order) or a single ``.mcap`` file.
 Messages whose encoding is not ``cdr`` are refused with :class:`BagError`;
 decoding needs the type installed (``rclpy`` deserialisation).
+
+Every file is identified by its first and last bytes before it is parsed
+(:func:`identify_bag_file`): an image, an archive, a CSV, a rosbag2 SQLite bag, an
+empty file, a truncated MCAP (a killed recorder: ``recover`` helps) and an MCAP of
+another kind (not the ``ros2`` profile) are each refused in one line naming what it is.
 """
 from __future__ import annotations
 
@@ -20,6 +25,7 @@ from mcap.reader import make_reader
 from mcap.stream_reader import StreamReader
 
 from ..core.errors import BagError
+from .file_kinds import IDENTIFY_BYTES, MCAP_MAGIC, looks_like_text, signature_kind
 
 
 #: What parsing a damaged or foreign file can raise inside the mcap library and
@@ -48,16 +54,105 @@ class BagMessage:
     type_hash: str = ""
 
 
-def mcap_files(path: str | Path) -> list[Path]:
-    """The MCAP files of a bag path, in name order."""
+#: The MCAP profile of a ROS 2 (rosbag2) bag.
+ROS2_PROFILE = "ros2"
+#: The command lines that read a CSV, said when one is given for a bag.
+CSV_READERS = ("`mt-accuracy check {path} --target COLUMN` (a thermal log) or "
+               "`--columns MAP.yaml` (a survey) reads it")
+
+
+def _not_mcap(path: Path, head: bytes) -> str:
+    """One line saying what ``path`` (no MCAP magic; first bytes ``head``) is instead."""
+    kind = signature_kind(head)
+    if kind:
+        return f"{path} is {kind}, not an MCAP bag or a CSV"
+    if looks_like_text(head):
+        kind = "a CSV" if path.suffix.lower() in (".csv", ".txt", ".tsv") else \
+            "a text file (a CSV?)"
+        return f"{path} is {kind}, not an MCAP bag; {CSV_READERS.format(path=path)}"
+    return f"{path} is not an MCAP file (no MCAP magic) nor text"
+
+
+def _header_profile(head: bytes) -> str | None:
+    """The profile of the Header record right after the magic (None: none readable)."""
+    start = len(MCAP_MAGIC)
+    if len(head) < start + 13 or head[start] != 0x01:
+        return None
+    (length,) = struct.unpack_from("<I", head, start + 9)
+    profile = head[start + 13:start + 13 + length]
+    return profile.decode("utf-8", errors="replace") if len(profile) == length else None
+
+
+def _foreign_encodings(path: Path) -> list[str]:
+    """The message encodings a complete MCAP file's summary lists ([] when unread)."""
+    try:
+        with open(path, "rb") as stream:
+            summary = make_reader(stream).get_summary()
+    except DAMAGED_FILE:
+        return []
+    if summary is None:
+        return []
+    return sorted({c.message_encoding for c in summary.channels.values()})
+
+
+def identify_bag_file(path: str | Path, *, truncated_ok: bool = False) -> None:
+    """Refuse ``path`` in one line unless it is a complete ROS 2 MCAP file.
+
+    What it is instead is named from its first bytes: empty, an image, an archive, a
+    rosbag2 SQLite bag, text (a CSV: the command that reads it), other bytes; an MCAP
+    file that does not end with the MCAP magic is truncated (a recorder killed mid-run:
+    ``recover`` saves its closed chunks) unless ``truncated_ok`` (the readers that scan
+    up to the last complete record); one whose profile is not ``ros2`` is a foreign
+    MCAP (its messages are not CDR: no reader here decodes them).
+
+    Raises
+    ------
+    BagError
+        Naming ``path`` and what it is.
+    """
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as stream:
+            head = stream.read(IDENTIFY_BYTES)
+            stream.seek(max(0, size - len(MCAP_MAGIC)))
+            tail = stream.read()
+    except OSError as exc:
+        raise BagError(f"{path}: cannot read ({exc.strerror})") from exc
+    if size == 0:
+        raise BagError(f"{path} is empty (0 bytes), not an MCAP bag")
+    if not head.startswith(MCAP_MAGIC):
+        raise BagError(_not_mcap(path, head))
+    profile = _header_profile(head)
+    if profile is not None and profile != ROS2_PROFILE:
+        encodings = _foreign_encodings(path)
+        held = f", {'/'.join(encodings)} messages" if encodings else ""
+        raise BagError(f"{path} is an MCAP file of another kind (profile {profile!r}{held}), "
+                       f"not a ROS 2 bag (profile 'ros2', CDR messages, rosbag2 metadata): "
+                       "record it with `mt-accuracy record` or `ros2 bag record`")
+    if not truncated_ok and (size < 2 * len(MCAP_MAGIC) or tail != MCAP_MAGIC):
+        raise BagError(f"{path} is a truncated MCAP file (it ends without its footer and "
+                       f"summary: a recorder killed mid-run?); `mt-accuracy recover {path} "
+                       "NEW_BAG` saves its closed chunks")
+
+
+def mcap_files(path: str | Path, *, truncated_ok: bool = False) -> list[Path]:
+    """The MCAP files of a bag path, in name order, each identified
+    (:func:`identify_bag_file`: a file that is none is refused in one line)."""
     path = Path(path)
     if path.is_file():
-        return [path]
-    if not path.is_dir():
+        files = [path]
+    elif not path.is_dir():
         raise BagError(f"{path}: no such bag (directory or .mcap file)")
-    files = sorted(path.glob("*.mcap"))
-    if not files:
-        raise BagError(f"{path}: no .mcap file in the bag directory")
+    else:
+        files = sorted(path.glob("*.mcap"))
+        if not files:
+            others = sorted(p.name for p in path.glob("*.db3"))
+            raise BagError(f"{path}: no .mcap file in the bag directory" +
+                           (f" ({others[0]} is a rosbag2 SQLite bag: `ros2 bag convert` it "
+                            "to MCAP)" if others else ""))
+    for file in files:
+        identify_bag_file(file, truncated_ok=truncated_ok)
     return files
 
 
@@ -169,7 +264,8 @@ def bag_info(path: str | Path) -> dict:
     """Counts, duration and topics of a bag, like ``ros2 bag info``."""
     topics: dict[str, dict] = {}
     first, last, total = None, None, 0
-    for f in mcap_files(path):
+    files = mcap_files(path)
+    for f in files:
         try:
             with open(f, "rb") as stream:
                 reader = make_reader(stream)
@@ -191,7 +287,7 @@ def bag_info(path: str | Path) -> dict:
             raise BagError(f"{f}: damaged or incomplete MCAP file ({exc}): a recorder killed "
                            f"mid-run leaves no summary; `mt-accuracy recover {path} NEW_BAG` "
                            "saves every closed chunk") from exc
-    return {"files": [str(f) for f in mcap_files(path)], "message_count": total,
+    return {"files": [str(f) for f in files], "message_count": total,
             "start_ns": first or 0, "end_ns": last or 0,
             "duration_s": ((last or 0) - (first or 0)) / 1e9, "topics": topics}
 
@@ -228,6 +324,7 @@ def recover(path: str | Path) -> list[BagMessage]:
     from mcap.records import Channel, Message
 
     path = Path(path)
+    identify_bag_file(path, truncated_ok=True)
     out: list[BagMessage] = []
     schemas: dict[int, str] = {}
     channels: dict = {}
@@ -275,7 +372,7 @@ def topics(path: str | Path) -> dict[str, TopicInfo]:
     from mcap.records import Channel
 
     found: dict[str, TopicInfo] = {}
-    for f in mcap_files(path):
+    for f in mcap_files(path, truncated_ok=True):
         try:
             with open(f, "rb") as stream:
                 summary = make_reader(stream).get_summary()

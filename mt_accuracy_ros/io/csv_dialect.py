@@ -4,6 +4,8 @@ Shops export logs from spreadsheets and loggers set up in their own language: a
 German or French export separates fields with ``;`` and writes ``20,35`` for
 20.35; a logger may separate with tabs, start with a byte-order mark, or write
 ``°C`` in Windows-1252, or write a preamble (title, serial number) before the header.
+Excel's "Unicode text" export is UTF-16 with a byte-order mark: it is read by that
+mark (and said); UTF-16 without one is refused with the mend (save as UTF-8).
 :func:`sniff_dialect` reads the first lines and says which; :func:`table_rows` then
 yields the rows from the header on, and :func:`to_number` reads a cell.
 
@@ -23,6 +25,7 @@ from typing import Iterator
 import numpy as np
 
 from ..core.errors import InputDataError
+from .file_kinds import bom_encoding, signature_kind
 
 #: Bytes read to decide the dialect.
 SNIFF_BYTES = 64 * 1024
@@ -34,6 +37,9 @@ MAX_PREAMBLE_LINES = 30
 SEPARATORS = (",", ";", "\t")
 #: A number written with a decimal comma, nothing else in the cell.
 DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d*,\d+([eE][+-]?\d+)?\s*$")
+#: What :meth:`CsvDialect.note` says of an encoding other than UTF-8.
+ENCODING_NOTES = {"cp1252": "in Windows-1252 (not UTF-8)", "utf-16": "UTF-16 (BOM)",
+                  "utf-32": "UTF-32 (BOM)"}
 #: Date-time layouts beyond ISO 8601 (which :meth:`datetime.fromisoformat` reads).
 DATE_TIME_LAYOUTS = ("%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M:%S,%f",
                      "%d.%m.%Y %H:%M", "%Y/%m/%d %H:%M:%S", "%Y/%m/%d %H:%M")
@@ -58,13 +64,29 @@ class CsvDialect:
             parts.append({";": "semicolon", "\t": "tab"}[self.delimiter] + "-separated")
         if self.decimal_comma:
             parts.append("with decimal commas")
-        if self.encoding != "utf-8-sig":
-            parts.append("in Windows-1252 (not UTF-8)")
+        if self.encoding in ENCODING_NOTES:
+            parts.append(ENCODING_NOTES[self.encoding])
         said = ["read as " + ", ".join(parts)] if parts else []
         if self.preamble_lines:
             said.append(f"{self.preamble_lines} line{'s' if self.preamble_lines > 1 else ''} "
                         "before the header skipped")
         return "; ".join(said)
+
+
+def _decode_by_mark(path: Path, data: bytes, encoding: str, cut: bool) -> str:
+    """``data`` decoded in the ``encoding`` its byte-order mark declares; ``cut``: the bytes
+    are the file's first ones only (the last character may be incomplete)."""
+    if cut and encoding != "utf-8-sig":
+        unit = 4 if encoding == "utf-32" else 2
+        data = data[:len(data) - len(data) % unit]
+    try:
+        return data.decode(encoding)
+    except UnicodeDecodeError as exc:
+        if cut and exc.start >= len(data) - 4:
+            return data[:exc.start].decode(encoding)
+        raise InputDataError(f"{path}: starts with a {ENCODING_NOTES.get(encoding, 'UTF-8')} "
+                             f"byte-order mark but is not such text (byte {exc.start}); "
+                             "save it as UTF-8 CSV") from exc
 
 
 def _text(path: Path, size: int | None) -> tuple[str, str]:
@@ -74,8 +96,18 @@ def _text(path: Path, size: int | None) -> tuple[str, str]:
             data = stream.read() if size is None else stream.read(size)
     except OSError as exc:
         raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
+    kind = signature_kind(data)
+    if kind:
+        reader = "; `mt-accuracy check FILE` reads a bag (no --target, no column map)" \
+            if kind == "an MCAP bag" else ""
+        raise InputDataError(f"{path} is {kind}, not a CSV{reader}")
+    marked = bom_encoding(data)
+    if marked:
+        return _decode_by_mark(path, data, marked, size is not None), marked
     if b"\x00" in data:
-        raise InputDataError(f"{path}: not a text CSV file (it holds NUL bytes)")
+        # UTF-16 without its mark shows as every other byte NUL: the mend is the same.
+        raise InputDataError(f"{path}: not a text CSV file (it holds NUL bytes); a UTF-16 "
+                             "export without a byte-order mark? save it as UTF-8 CSV")
     try:
         return data.decode("utf-8-sig"), "utf-8-sig"
     except UnicodeDecodeError as exc:
@@ -151,7 +183,7 @@ def csv_rows(path: str | Path, dialect: CsvDialect) -> Iterator[list[str]]:
     path = Path(path)
     try:
         stream = open(path, newline="", encoding=dialect.encoding,
-                      errors="strict" if dialect.encoding == "utf-8-sig" else "replace")
+                      errors="replace" if dialect.encoding == "cp1252" else "strict")
     except OSError as exc:
         raise InputDataError(f"{path}: cannot read ({exc.strerror})") from exc
     with stream:
