@@ -47,6 +47,27 @@ def test_the_machine_and_controller_keep_their_wall_clock_pace_at_any_rate():
     assert paced(0.5) == real_time
 
 
+#: A story whose end state showed conformance (ISO 14253-1).
+WITHIN = {"end_state_conformance": "within", "end_state_verdicts": []}
+
+
+def test_an_undecided_end_state_fails_the_main_job():
+    """The end state passed unless proven outside: e_y 0.79 ± 0.28 µm against a 1 µm band
+    (RMS + U = 1.07 µm) was "within". Now only conformance shown passes, and the failure
+    says which component and why."""
+    from mt_accuracy_ros.commands.demo import demo_failures
+
+    good = {"model_checks": 5, "bag_messages": 100, "compensation_applied": 10,
+            "dead_nodes": []}
+    undecided = {"end_state_conformance": "undecided", "end_state_verdicts": [
+        {"name": "e_y", "conformance": "undecided", "sentence": "e_y 0.79 ± 0.28 µm: ..."}]}
+    failure, = demo_failures(good, undecided)
+    assert failure.startswith("the end state's conformance to the instrument's band is not "
+                              "shown: it is undecided") and "e_y 0.79 ± 0.28 µm" in failure
+    # A story without a verdict shows nothing: it fails too.
+    assert demo_failures(good, {"end_state_within_band": True})
+
+
 def test_dead_nodes_are_named_and_fail_the_run():
     """Issue 29: with the estimator and the monitor killed (-9) the demo exited 0 and named
     nobody; now each dead node is a failure line (and the exit status 1)."""
@@ -54,10 +75,10 @@ def test_dead_nodes_are_named_and_fail_the_run():
 
     good = {"model_checks": 5, "bag_messages": 100, "compensation_applied": 10,
             "dead_nodes": []}
-    assert demo_failures(good, {"end_state_within_band": True}) == []
+    assert demo_failures(good, WITHIN) == []
     dead = dict(good, dead_nodes=[f"yaw_estimator (exit {_exit_text(-9)})",
                                   f"model_monitor (exit {_exit_text(1)})"])
-    failure, = demo_failures(dead, {"end_state_within_band": True})
+    failure, = demo_failures(dead, WITHIN)
     assert failure == ("node(s) died during the run: yaw_estimator (exit signal 9), "
                        "model_monitor (exit 1)")
 
@@ -67,13 +88,18 @@ def test_a_failed_end_state_says_whether_the_host_or_the_model_failed():
 
     base = {"model_checks": 5, "bag_messages": 10, "compensation_applied": 3383,
             "compensation_messages": 9000}
-    outside = {"end_state_within_band": False}
-    assert demo_failures(dict(base, compensation_stale=5231), {"end_state_within_band": True}) \
-        == []
+    outside = {"end_state_conformance": "outside", "end_state_verdicts": [
+        {"name": "e_y", "conformance": "outside",
+         "sentence": "e_y 1.60 ± 0.20 µm: RMS - U = 1.40 µm > 1 µm band: nonconformance shown "
+                     "(ISO 14253-1)"}]}
+    assert demo_failures(dict(base, compensation_stale=5231), WITHIN) == []
     late, = demo_failures(dict(base, compensation_stale=5231), outside)
     assert "5231 of 9000 corrections arrived too late to apply (58 %)" in late
     model, = demo_failures(dict(base, compensation_stale=400), outside)
-    assert model == "the end state is outside the instrument's band (see the table above)"
+    assert model == ("the end state's conformance to the instrument's band is not shown: it "
+                     "is outside (ISO 14253-1: RMS + U must not exceed the band): e_y 1.60 ± "
+                     "0.20 µm: RMS - U = 1.40 µm > 1 µm band: nonconformance shown "
+                     "(ISO 14253-1)")
     late_model, = demo_failures(dict(base, compensation_stale=0, added_version_live_at_s=84.0,
                                      run_data_s=90.0), outside)
     assert ("reached the machine at 84 s of 90 s: the monitor's diagnosis or the gates fell "

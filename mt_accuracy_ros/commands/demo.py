@@ -221,10 +221,20 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         COMPENSATION_QOS)
     delivery: dict[str, dict[str, str]] = {}  # node -> latest delivery counters
 
+    # Every WARN a node said (a lockstep participant left out, a sensor gone dead, a
+    # niceness not taken): repeated with each of its statuses, kept here in order.
+    node_warnings: dict[str, list[str]] = {}
+
     def on_diagnostics(message: DiagnosticArray) -> None:
+        from ..nodes._health import warnings_of
+
         for status in message.status:
             if status.name.endswith(": delivery"):
-                delivery[status.name.split(":")[0]] = {v.key: v.value for v in status.values}
+                values = {v.key: v.value for v in status.values}
+                node = status.name.split(":")[0]
+                said = node_warnings.setdefault(node, [])
+                said += [text for text in warnings_of(values) if text not in said]
+                delivery[node] = values
             elif status.name.endswith(": compensation"):
                 delivery[status.name.split(":")[0] + ":compensation"] = {
                     v.key: v.value for v in status.values}
@@ -232,7 +242,8 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     listener.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 50)
     references: list[tuple] = []   # (data time [s], measured (3,), applied (3,), version)
 
-    orientations: list[tuple] = []  # (measured (3,), applied (3,), uncertainty) [rad]
+    # (measured (3,), applied (3,), uncertainty) [rad] per reading, None without a direction
+    orientations: list[tuple | None] = []
 
     def on_reference(m: ReferenceMeasurement) -> None:
         _take_reference(m, start_ns, references, orientations)
@@ -368,6 +379,8 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         listener.destroy_node()
         rclpy.try_shutdown()
     losses = delivery_losses(delivery)
+    warnings = [f"{node.lstrip('/')}: {text}" for node, texts in sorted(node_warnings.items())
+                for text in texts]
     # The headline is computed from the record - the bag the report is made from - so
     # that the summary and the report tell one story, reading for reading.
     try:
@@ -385,8 +398,10 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         # The saved model is the final one, every effect added with its parameters.
         (out / "model.yaml").write_text(models[-1][1].model_yaml)
     story = loop_story(references, models, alarms, compensation_mode=compensation_mode,
-                       orientations=orientations if len(orientations) == len(references)
-                       else None)
+                       orientations=orientations if any(o is not None for o in orientations)
+                       else None, five_axis=five_axis)
+    # A reading without a tool direction on a five-axis machine: a warning everywhere.
+    warnings += story.get("warnings", [])
     print("  the run is over; writing the report", flush=True)
     # In lockstep the machine waits for every check: only a paced run can be late.
     timing = None if lockstep else check_timeliness(
@@ -397,7 +412,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
                          references, losses, story, delivery, scenario,
                          [text for _, text in diagnostics_text], start_ns=start_ns,
-                         dead_nodes=dead_nodes, check_timing=timing)
+                         dead_nodes=dead_nodes, check_timing=timing, warnings=warnings)
     # The headline first: what the instrument measured on the compensated machine.
     for line in story["lines"]:
         print(line)
@@ -407,8 +422,9 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                   f"  {key:42s} {value}")
     print(f"  {'path_scheduling':42s} " + ("; ".join(
         f"{node}: {text}" for node, text in summary["path_scheduling"].items()) or "unknown"))
-    for line in losses:
-        # Overload is loud: a graph that could not keep up says so.
+    for line in summary["warnings"]:
+        # Overload is loud: a graph that could not keep up says so; so is every node's
+        # warning and a reading the verdict could not use.
         print(f"  WARNING {line}")
     for text in summary["model_alarms"]:
         print(f"  ALARM {text}")
@@ -442,7 +458,8 @@ LATE_WARNING_SHARE = 0.01
 def _recorded_references(bag: Path, start_ns: int) -> tuple[list[tuple], list[tuple]]:
     """The reference readings of the bag as the demo's listener holds them: (data time
     [s], measured (3,), applied (3,), version, uncertainty) and, where the tool's
-    direction was measured, (measured (3,), applied (3,), uncertainty) [rad]."""
+    direction was measured, (measured (3,), applied (3,), uncertainty) [rad] (None for a
+    reading without one)."""
     from ..io.bag_reader import decode, read_messages
 
     references, orientations = [], []
@@ -466,12 +483,21 @@ def _take_reference(m, start_ns: int, references: list, orientations: list) -> N
             np.array([m.applied_orientation_correction.x, m.applied_orientation_correction.y,
                       m.applied_orientation_correction.z]),
             float(m.orientation_uncertainty)))
+    else:
+        orientations.append(None)   # one entry per reading: a gap is told, not hidden
 
 
 def _exit_text(code: int | None) -> str:
     if code is None:
         return "running"
     return f"signal {-code}" if code < 0 else str(code)
+
+
+def _conformance_of(story: dict):
+    """The story's overall end state (a story without one: undecided, nothing shown)."""
+    from ..core.workbench.conformance import Conformance
+
+    return Conformance(story.get("end_state_conformance", "undecided"))
 
 
 def demo_failures(summary: dict, story: dict) -> list[str]:
@@ -488,8 +514,13 @@ def demo_failures(summary: dict, story: dict) -> list[str]:
             not summary.get("compensation_applied"):
         out.append("the loop never closed: the CNC applied no real-time correction "
                    f"({summary.get('compensation_stale', 0)} arrived too late to apply)")
-    if not story.get("end_state_within_band"):
-        why = "the end state is outside the instrument's band (see the table above)"
+    state = _conformance_of(story)
+    if state.value != "within":
+        unshown = [v["sentence"] for v in story.get("end_state_verdicts", [])
+                   if v["conformance"] != "within"]
+        why = (f"the end state's conformance to the instrument's band is not shown: it is "
+               f"{state.value} (ISO 14253-1: RMS + U must not exceed the band)"
+               + (": " + "; ".join(unshown) if unshown else ""))
         messages = int(summary.get("compensation_messages") or 0)
         stale = int(summary.get("compensation_stale") or 0)
         live_at, run_s = summary.get("added_version_live_at_s", -1), summary.get("run_data_s")
@@ -547,7 +578,7 @@ def table_row(label: str, cells: list[str], width: int = 20) -> str:
 
 
 def loop_story(references, models, alarms, *, compensation_mode: str,
-               orientations=None) -> dict:
+               orientations=None, five_axis: bool = False) -> dict:
     """The closed loop told in numbers: the machine's TCP error per phase of the run.
 
     ``references``: (data time [s], measured (3,), applied (3,), model version,
@@ -555,14 +586,22 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
     ``alarms``: (time [s], axis). A model version's phase starts at the first
     reading the CNC took with its compensation applied. ``orientations``
     (five-axis: one (measured (3,), applied (3,), uncertainty) [rad] per
-    reading) adds the tool-direction error per phase.
+    reading, None for one without) adds the tool-direction error per phase; on a
+    ``five_axis`` machine the direction is judged too, and readings without one are a
+    warning (``warnings``), never a silent fall-back to the tip alone.
+
+    The end state is judged by ISO 14253-1 (:mod:`..core.workbench.conformance`):
+    ``end_state_conformance`` "within" (conformance shown for every component),
+    "outside" or "undecided"; ``end_state_within_band`` is True only when "within".
     """
     from ..core.workbench.closed_loop import COMPONENTS, loop_phases
+    from ..core.workbench.conformance import Conformance, overall
     from ..core.workbench.statistics import format_with_uncertainty
 
     if len(references) < 10:
         return {"phases": [], "lines": ["  too few reference readings to tell the loop's story"],
-                "end_state_within_band": False}
+                "end_state_within_band": False, "end_state_conformance": "undecided",
+                "end_state_verdicts": [], "warnings": []}
     time_s = np.array([r[0] for r in references])
     order = np.argsort(time_s, kind="stable")
     time_s = time_s[order]
@@ -598,64 +637,113 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
         span = f" [{phase.start_s:.0f}-{phase.end_s:.0f} s]"
         lines.append(row(f"{phase.label}{span}", phase.with_compensation))
     end = phases[-1]
-    within = end.within(band)
-    lines.append(f"  end of the run (last {end.end_s - end.start_s:.0f} s): compensated TCP error "
-                 + ", ".join(f"e_{c} {f.rms * 1e6:.2f} um" for c, f in
-                             zip(COMPONENTS, end.with_compensation))
-                 + (f" - within the instrument's band ({band * 1e6:.1f} um) within their k = 2 "
-                    "uncertainty" if within else
-                    f" - OUTSIDE the instrument's band ({band * 1e6:.1f} um) by more than their "
-                    "uncertainty: something the model lacks remains"))
+    verdicts = end.verdicts(band)
+    lines.append(f"  end of the run (last {end.end_s - end.start_s:.0f} s, {end.count} readings): "
+                 "compensated TCP error against the instrument's band (ISO 14253-1: within "
+                 "only when RMS + U <= band)")
+    lines += [f"    {v.sentence()}" for v in verdicts]
+    warnings: list[str] = []
     result_orientation = None
-    if orientations:
-        turned = np.array([orientations[i][0] for i in order])
-        turn = np.array([orientations[i][1] for i in order])
-        band_rad = float(np.median([o[2] for o in orientations]))
-        tilt = loop_phases(time_s, turned, turn, events, band_rad)
-        lines.append(f"  {'tool direction error at the same readings, RMS [urad]':58s}"
-                     + "".join(f"{'about ' + c:>20s}" for c in COMPONENTS))
-
-        row_urad = row
-
-        lines.append(row_urad("without compensation (whole run)", tilt[0].without))
-        for phase in tilt[1:]:
-            lines.append(row_urad(f"{phase.label} [{phase.start_s:.0f}-{phase.end_s:.0f} s]",
-                                  phase.with_compensation))
-        direction_within = bool(tilt[-1].within(band_rad))
-        end_tilt = tilt[-1]
-        lines.append(f"  end of the run (last {end_tilt.end_s - end_tilt.start_s:.0f} s): tool "
-                     "direction error " + ", ".join(f"about {c} {f.rms * 1e6:.2f} urad" for c, f
-                                                    in zip(COMPONENTS, end_tilt.with_compensation))
-                     + (f" - within the R-test's band ({band_rad * 1e6:.1f} urad) within their "
-                        "k = 2 uncertainty" if direction_within else
-                        f" - OUTSIDE the R-test's band ({band_rad * 1e6:.1f} urad) by more than "
-                        "their uncertainty"))
+    if orientations is not None or five_axis:
+        result_orientation, direction_verdicts = _direction_story(
+            time_s, order, orientations, events, row, lines, warnings)
         # The five-axis end state is judged on both: the tool's tip and its direction.
-        within = within and direction_within
-        result_orientation = {"phases": [p.as_dict() for p in tilt], "band_urad": band_rad * 1e6,
-                              "end_within_band": direction_within}
-    in_end = (time_s >= end.start_s) & (time_s <= end.end_s)
-    if np.count_nonzero(in_end) >= 3:
-        # An R-test or probe is zeroed on the part: a constant offset of the whole end
-        # state is a datum (what a work-offset touch-off takes out), its spread is not.
-        mean, spread = measured[in_end].mean(axis=0), measured[in_end].std(axis=0)
-        lines.append("  end state about its mean (the datum a work-offset touch-off takes out: "
-                     + ", ".join(f"{m * 1e6:+.2f}" for m in mean) + " um): spread "
-                     + ", ".join(f"e_{c} {v * 1e6:.2f} um" for c, v in zip(COMPONENTS, spread))
-                     + (" - within the instrument's band" if np.all(spread <= band) else
-                        " - beyond the instrument's band"))
+        verdicts += direction_verdicts
+    state = overall(v.state for v in verdicts)
+    if result_orientation is not None and not result_orientation["end_verdicts"]:
+        state = overall([state, Conformance.UNDECIDED])   # no direction: nothing shown
+    lines.append(f"  end state: {_state_words(state)}")
+    _datum_line(time_s, measured, end, band, lines)
     for when, axis in alarms:
         after = [p for p in phases if p.label.startswith(f"after the {axis.upper()}")]
         if after:
             lines.append(f"  the {axis.upper()} guideway deterioration was detected at {when:.1f} s; "
                          "its measured yaw change enters the compensation through the live profile "
-                         "(p2 = p1 - delta e); "
-                         + ("absorbed: the end state is back within the band" if within else
-                            "not absorbed by the end of the run"))
+                         "(p2 = p1 - delta e); " + (
+                             "absorbed: the end state is back within the band (conformance "
+                             "shown)" if state is Conformance.WITHIN else
+                             f"not shown absorbed by the end of the run (end state {state.value})"))
     return {"phases": [p.as_dict() for p in phases], "lines": lines,
-            "end_state_within_band": bool(within), "band_um": band * 1e6,
-            "compensation_mode": compensation_mode,
-            "orientation": result_orientation}
+            "end_state_within_band": state is Conformance.WITHIN,
+            "end_state_conformance": state.value,
+            "end_state_verdicts": [v.as_dict() for v in verdicts],
+            "band_um": band * 1e6, "compensation_mode": compensation_mode,
+            "orientation": result_orientation, "warnings": warnings}
+
+
+def _state_words(state) -> str:
+    """The overall end state in words (ISO 14253-1)."""
+    from ..core.workbench.conformance import Conformance
+
+    return {Conformance.WITHIN: "within the band - conformance shown for every component "
+                                "(ISO 14253-1)",
+            Conformance.OUTSIDE: "OUTSIDE the band - nonconformance shown for a component "
+                                 "(ISO 14253-1): something the model lacks remains",
+            Conformance.UNDECIDED: "UNDECIDED - conformance not shown for every component, "
+                                   "nonconformance for none (ISO 14253-1): the uncertainty "
+                                   "straddles the band"}[state]
+
+
+def _direction_story(time_s, order, orientations, events, row, lines: list[str],
+                     warnings: list[str]) -> tuple[dict, list]:
+    """The tool-direction table and its end-state verdicts (five-axis), judged on the
+    readings that carry a direction; a reading without one is a warning, never a silent
+    fall-back to the tip alone. ``orientations``: one (measured, applied, U) [rad] or None
+    per reading, in the readings' order (None: no reading has one)."""
+    from ..core.workbench.closed_loop import COMPONENTS, loop_phases
+
+    given = [orientations[i] if orientations is not None else None for i in order]
+    has = np.array([o is not None for o in given], dtype=bool)
+    if not has.all():
+        warnings.append(f"{int((~has).sum())} of {has.size} reference readings carry no tool "
+                        "direction: the direction is judged on the "
+                        f"{int(has.sum())} that do" + (
+                            "; with none, it is not judged and the end state's conformance "
+                            "is not shown" if not has.any() else ""))
+    if has.sum() < 10:
+        return {"phases": [], "band_urad": float("nan"), "end_within_band": False,
+                "end_conformance": "undecided", "end_verdicts": []}, []
+    turned = np.array([o[0] for o in given if o is not None])
+    turn = np.array([o[1] for o in given if o is not None])
+    band_rad = float(np.median([o[2] for o in given if o is not None]))
+    tilt = loop_phases(time_s[has], turned, turn, events, band_rad)
+    lines.append(f"  {'tool direction error at the same readings, RMS [urad]':58s}"
+                 + "".join(f"{'about ' + c:>20s}" for c in COMPONENTS))
+    lines.append(row("without compensation (whole run)", tilt[0].without))
+    for phase in tilt[1:]:
+        lines.append(row(f"{phase.label} [{phase.start_s:.0f}-{phase.end_s:.0f} s]",
+                         phase.with_compensation))
+    end_tilt = tilt[-1]
+    verdicts = end_tilt.verdicts(band_rad, unit="µrad", prefix="direction about ")
+    lines.append(f"  end of the run (last {end_tilt.end_s - end_tilt.start_s:.0f} s): tool "
+                 "direction error against the R-test's band (ISO 14253-1)")
+    lines += [f"    {v.sentence()}" for v in verdicts]
+    state = end_tilt.conformance(band_rad)
+    return {"phases": [p.as_dict() for p in tilt], "band_urad": band_rad * 1e6,
+            "end_within_band": state.value == "within", "end_conformance": state.value,
+            "end_verdicts": [v.as_dict() for v in verdicts]}, verdicts
+
+
+def _datum_line(time_s, measured, end, band: float, lines: list[str]) -> None:
+    """The end state about its mean, judged against the band: an R-test or probe is zeroed
+    on the part, so a constant offset of the whole end state is a datum (what a
+    work-offset touch-off takes out); its spread is not."""
+    from ..core.workbench.closed_loop import COMPONENTS
+    from ..core.workbench.conformance import judge, overall
+    from ..core.workbench.statistics import rms_with_uncertainty
+
+    in_end = (time_s >= end.start_s) & (time_s <= end.end_s)
+    if np.count_nonzero(in_end) < 3:
+        return
+    mean = measured[in_end].mean(axis=0)
+    verdicts = []
+    for j, c in enumerate(COMPONENTS):
+        f = rms_with_uncertainty(measured[in_end, j] - mean[j], band, seed=70 + j)
+        verdicts.append(judge(f"e_{c}", f.rms * 1e6, f.rms_u_k2 * 1e6, band * 1e6, "µm"))
+    lines.append("  end state about its mean (the datum a work-offset touch-off takes out: "
+                 + ", ".join(f"{m * 1e6:+.2f}" for m in mean) + " um): spread "
+                 + "; ".join(f"{v.name} {v.rms:.2f} ± {v.u_k2:.2f} um" for v in verdicts)
+                 + f" - {overall(v.state for v in verdicts).value} the band (ISO 14253-1)")
 
 
 def rotary_location_identified(model_path: Path, machine) -> str:
@@ -710,7 +798,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
                references, losses: list[str], story: dict, delivery: dict,
                scenario: str = "demo", model_alarms: list[str] | None = None,
                start_ns: int = 0, dead_nodes: list[str] | None = None,
-               check_timing: dict | None = None) -> dict:
+               check_timing: dict | None = None, warnings: list[str] | None = None) -> dict:
     from ..io.bag_reader import bag_info
     from ..nodes._scenario import resolve_scenario
 
@@ -740,7 +828,13 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         "tcp_error_uncompensated_rms_um": pooled(whole, "without_compensation"),
         "tcp_error_compensated_rms_um": pooled(whole, "with_compensation"),
         "tcp_error_end_state_rms_um": pooled(end, "with_compensation"),
-        "end_state_within_band": story["end_state_within_band"],
+        # ISO 14253-1: "within" only when RMS + U <= band for every component (and the
+        # tool's direction on a five-axis machine); the old key is True only then.
+        "end_state_conformance": _conformance_of(story).value,
+        "end_state_conformance_by_component": {
+            v["name"]: v["conformance"] for v in story.get("end_state_verdicts", [])},
+        "end_state_verdicts": [v["sentence"] for v in story.get("end_state_verdicts", [])],
+        "end_state_within_band": _conformance_of(story).value == "within",
         "compensation_input": story.get("compensation_mode", "hybrid"),
         "instrument_band_um": story.get("band_um", float("nan")),
         "model_checks": len(checks),
@@ -806,13 +900,13 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
     late = late_warning(summary)
     if late:
         losses.append(late)
-    summary["warnings"] = list(losses)
+    summary["warnings"] = list(losses) + list(warnings or [])
     summary["failures"] = demo_failures(summary, story)
     from ..core.errors import BagError
 
     try:
         report = _write_report(out, checks, actions, alarms, losses, story, scenario,
-                               summary["dead_nodes"], summary["failures"])
+                               summary["dead_nodes"], summary["failures"], warnings or [])
         summary["report"] = report.as_dict()
     except BagError as exc:
         # The run's numbers stand; without a readable bag there is no report, and the
@@ -825,7 +919,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
 
 def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: dict,
                   scenario: str = "demo", dead_nodes: list[str] | None = None,
-                  failures: list[str] | None = None):
+                  failures: list[str] | None = None, warnings: list[str] | None = None):
     """The bag's full report, with the run as the demo's user saw it live."""
     from .check import check_bag
     from ..core.errors import MtAccuracyError
@@ -868,6 +962,11 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: 
         run.paragraphs.append(f"At {when:.1f} s the {axis} axis raised its deterioration alarm.")
     run.paragraphs.append("Delivery: " + ("; ".join(losses) if losses else
                                           "every node processed every sample and message."))
+    for warning in warnings or []:
+        run.paragraphs.append(f"WARNING: {warning}")
+    run.paragraphs.append(f"End state: {_state_words(_conformance_of(story))}")
+    run.paragraphs += [verdict["sentence"] + "." for verdict in
+                       story.get("end_state_verdicts", [])]
     if dead_nodes:
         run.paragraphs.append("Node(s) died during the run: " + ", ".join(dead_nodes) + ".")
     for failure in failures or []:

@@ -141,8 +141,10 @@ def _measured_headline(data: BagData) -> tuple[Table, str] | None:
                     for f in phase.with_compensation],
                   css_class="best" if phase.label == "end state" and phase.within(band) else "")
     end = phases[-1]
-    verdict = (f"End of the run: {'within' if end.within(band) else 'OUTSIDE'} the instrument's "
-               f"band (± {band * UM:.2g} µm, k = 2).")
+    verdict = (f"End of the run (last {end.end_s - end.start_s:.0f} s): "
+               f"{end.conformance(band).value} the instrument's band (± {band * UM:.2g} µm, "
+               "k = 2; ISO 14253-1: within only when RMS + U <= band). "
+               + "; ".join(v.sentence() for v in end.verdicts(band)) + ".")
     return table, verdict
 
 
@@ -214,6 +216,17 @@ def loop_events(data: BagData) -> list[tuple[float, str]]:
     return events
 
 
+def _conformance_words(state) -> str:
+    """An end state's conformance to the band in words (ISO 14253-1)."""
+    return {"within": "within the instrument's band, conformance shown for every component "
+                      "(ISO 14253-1: RMS + U <= band).",
+            "outside": "outside the instrument's band, nonconformance shown (RMS - U > band): "
+                       "an effect the model lacks remains.",
+            "undecided": "undecided: conformance to the instrument's band not shown for "
+                         "every component, nonconformance for none (the uncertainty "
+                         "straddles the band)."}[state.value]
+
+
 def closed_loop_section(data: BagData, directory: Path, stem: str) -> Section:
     """The machine's error with and without the compensation the CNC applied."""
     from ..core.workbench.closed_loop import loop_phases
@@ -253,10 +266,8 @@ def closed_loop_section(data: BagData, directory: Path, stem: str) -> Section:
         f"(last {end.end_s - end.start_s:.0f} s): "
         + ", ".join(f"e_{c} {f.rms * UM:.2f} µm" for c, f in zip(COMPONENTS,
                                                                end.with_compensation))
-        + (" - within the instrument's band (no component's RMS exceeds it by more than its "
-           "k = 2 uncertainty)." if end.within(band) else
-           " - outside the instrument's band by more than the uncertainty: an effect the model "
-           "lacks remains."))
+        + f": {_conformance_words(end.conformance(band))} "
+        + "; ".join(v.sentence() for v in end.verdicts(band)) + ".")
     plt = pyplot()
     fig, axes = plt.subplots(3, 1, figsize=(10, 6.4), sharex=True)
     for c, ax in enumerate(axes):

@@ -21,9 +21,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import InputDataError
+from .conformance import Conformance, Verdict, judge, overall
 from .statistics import Figure, rms_with_uncertainty
 
 COMPONENTS = ("x", "y", "z")
+#: The end state: the run's last this many seconds [s of data]. Long enough that the
+#: RMS's uncertainty allows a decision against a band of the instrument's own U (at a
+#: reading every 0.37 s, ~80 readings: U(RMS) about 0.15 U, against ~0.28 U over 10 s).
+END_WINDOW_S = 30.0
 
 
 @dataclass(frozen=True)
@@ -45,16 +50,25 @@ class Phase:
                 "readings": self.count, "without_compensation": um(self.without),
                 "with_compensation": um(self.with_compensation)}
 
-    def within(self, band_m: float) -> bool:
-        """No component's compensated RMS is shown to exceed ``band_m``.
+    def verdicts(self, band: float, *, unit: str = "µm", scale: float = 1e6,
+                 prefix: str = "e_") -> list[Verdict]:
+        """Each component's compensated RMS judged against ``band`` (the figures' unit,
+        m or rad) by ISO 14253-1 (:mod:`.conformance`), shown in ``unit`` (x ``scale``).
 
-        Decision rule with the figure's own uncertainty (as ISO 14253-1 treats a
-        measured value near a limit): a component is outside only when
-        RMS - U(RMS) > band. The RMS includes the instrument's own noise (u = U/2
-        per reading), so a perfect compensation reads about U/2 with an instrument
-        of band U.
+        The RMS includes the instrument's own noise (u = U/2 per reading), so a perfect
+        compensation reads about U/2 with an instrument of band U: conformance is shown
+        only when the phase has enough readings for RMS + U(RMS) to fall below the band.
         """
-        return all(f.rms - f.rms_u_k2 <= band_m for f in self.with_compensation)
+        return [judge(f"{prefix}{c}", f.rms * scale, f.rms_u_k2 * scale, band * scale, unit)
+                for c, f in zip(COMPONENTS, self.with_compensation)]
+
+    def conformance(self, band: float) -> Conformance:
+        """Every component's verdict together (:func:`.conformance.overall`)."""
+        return overall(v.state for v in self.verdicts(band))
+
+    def within(self, band: float) -> bool:
+        """Conformance shown for every component (RMS + U <= band, ISO 14253-1)."""
+        return self.conformance(band) is Conformance.WITHIN
 
 
 def _figures(values: np.ndarray, instrument_u_k2: float, seed: int) -> tuple:
@@ -64,7 +78,7 @@ def _figures(values: np.ndarray, instrument_u_k2: float, seed: int) -> tuple:
 
 def loop_phases(time_s: ArrayLike, measured_m: ArrayLike, applied_m: ArrayLike,
                 events: list[tuple[float, str]], instrument_u_k2: float, *,
-                settle_s: float = 1.0, end_window_s: float = 10.0,
+                settle_s: float = 1.0, end_window_s: float = END_WINDOW_S,
                 min_readings: int = 5) -> list[Phase]:
     """Phases of a closed-loop run.
 

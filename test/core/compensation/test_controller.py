@@ -212,7 +212,9 @@ def test_loop_phases_split_a_run_and_judge_the_end_state():
     machine = np.tile([4e-6, -6e-6, 2e-6], (t.size, 1))
     applied = np.where(t[:, None] >= 10.0, -machine, 0.0)
     noise = rng.normal(0.0, 0.5e-6, machine.shape)
-    phases = loop_phases(t, machine + applied + noise, applied, [(10.0, "compensated")], 1e-6)
+    # The end state over the last 10 s: all of it compensated (the default window is 30 s).
+    phases = loop_phases(t, machine + applied + noise, applied, [(10.0, "compensated")], 1e-6,
+                         end_window_s=10.0)
     assert [p.label for p in phases] == ["whole run", "start", "compensated", "end state"]
     # Without compensation is the machine's own error (the noise on top).
     np.testing.assert_allclose([f.rms for f in phases[0].without], [4e-6, 6e-6, 2e-6], rtol=0.05)
