@@ -1,22 +1,47 @@
-"""The ``mt-accuracy`` command line."""
+"""The ``mt-accuracy`` command line.
+
+Every option is checked before any work, by the command's validator
+(``set_defaults(validate=...)``, run by :func:`main` before the handler): a value out of
+its range, an option given where nothing reads it, an output path that cannot be
+written (:mod:`~mt_accuracy_ros.io.output_paths`) is refused in one line naming the flag,
+the value and what was expected. Every refusal is a :class:`MtAccuracyError` that
+:func:`main` prints as one line with exit status 2.
+"""
 from __future__ import annotations
 
 import argparse
 import os
 import sys
+from pathlib import Path
+
+from .core.errors import InputDataError, ParameterError
+from .core.inputs.options import in_range, not_applicable
+from .io.output_paths import Output, check_outputs
 
 
 #: The main job's scenario on each bundled machine.
 DEMO_SCENARIOS = {"kidani_hmc": "demo", "khan_chen_rpppr": "demo_5axis", "vmc": "demo_vmc",
                   "trunnion_ac": "demo_trunnion"}
-#: Its default rate [sim s per wall s].
-DEMO_RATES = {"kidani_hmc": 1.0, "khan_chen_rpppr": 1.0, "vmc": 1.0}
+#: Its default rate [sim s per wall s] (real time, on every machine).
+DEMO_RATE = 1.0
+#: Niceness a process may be given (Linux).
+NICENESS_RANGE = (-20, 19)
+
+
+def _validate_demo(args: argparse.Namespace) -> None:
+    in_range("--rate", args.rate, low=0, low_open=True, unit="sim s per wall s")
+    if args.lockstep and args.rate is not None:
+        raise not_applicable("--rate", "a demo in real time", "--lockstep (it streams in "
+                             "data time, at the pace of the slowest node)")
+    in_range("--niceness", args.niceness, low=NICENESS_RANGE[0], high=NICENESS_RANGE[1],
+             what="an integer")
+    check_outputs([Output("--out", args.out, "directory")])
 
 
 def _demo(args: argparse.Namespace) -> int:
     from .commands.demo import run_demo
 
-    rate = args.rate if args.rate is not None else DEMO_RATES[args.machine]
+    rate = args.rate if args.rate is not None else DEMO_RATE
     return run_demo(out_dir=args.out, rate_factor=rate,
                     scenario=args.scenario or DEMO_SCENARIOS[args.machine],
                     compensation_mode=args.compensation, path_niceness=args.niceness,
@@ -24,14 +49,9 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
-    from .core.errors import BagError
     from .io.bag_reader import bag_info
 
-    try:
-        info = bag_info(args.bag)
-    except BagError as exc:
-        print(f"mt-accuracy info: {exc}", file=sys.stderr)
-        return 2
+    info = bag_info(args.bag)
     print(f"Files:          {', '.join(info['files'])}")
     print(f"Duration:       {info['duration_s']:.3f} s")
     print(f"Start:          {info['start_ns'] / 1e9:.9f} s")
@@ -44,23 +64,26 @@ def _info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _validate_recover(args: argparse.Namespace) -> None:
+    from .io.bag_reader import mcap_files
+
+    check_outputs([Output("OUTPUT", args.output, "new directory")], [args.bag])
+    # A damaged bag is what recover is for: only a file that is no MCAP at all is refused.
+    mcap_files(args.bag, truncated_ok=True)
+
+
 def _recover(args: argparse.Namespace) -> int:
     """Every message of the closed chunks of a damaged bag, into a new complete bag."""
-    from .core.errors import BagError
     from .io.bag_reader import mcap_files, recover
     from .io.bag_writer import BagWriter
 
-    try:
-        messages = [m for f in mcap_files(args.bag) for m in recover(f)]
-        messages.sort(key=lambda m: m.log_time_ns)
-        with BagWriter(args.output) as bag:
-            for message in messages:
-                bag.add_topic(message.topic, message.type)
-                bag.write(message.topic, message.data, message.log_time_ns,
-                          message.publish_time_ns)
-    except BagError as exc:
-        print(f"mt-accuracy recover: {exc}", file=sys.stderr)
-        return 2
+    messages = [m for f in mcap_files(args.bag, truncated_ok=True) for m in recover(f)]
+    messages.sort(key=lambda m: m.log_time_ns)
+    with BagWriter(args.output) as bag:
+        for message in messages:
+            bag.add_topic(message.topic, message.type)
+            bag.write(message.topic, message.data, message.log_time_ns,
+                      message.publish_time_ns)
     print(f"recovered {len(messages)} messages on "
           f"{len({m.topic for m in messages})} topics into {args.output}")
     return 0
@@ -69,13 +92,25 @@ def _recover(args: argparse.Namespace) -> int:
 def _ros_args(parameters: dict, remaps: list[str]) -> list[str]:
     from .commands.processes import ros_arguments
 
+    return ros_arguments(parameters, remappings=_remappings(remaps))
+
+
+def _remappings(remaps: list[str]) -> dict[str, str]:
+    """``--remap OLD:=NEW`` flags as {OLD: NEW}."""
     pairs = {}
     for remap in remaps:
         source, sep, target = remap.partition(":=")
         if not sep or not source or not target:
-            raise SystemExit(f"mt-accuracy: --remap expects OLD:=NEW, got {remap!r}")
+            raise ParameterError(f"--remap must be OLD:=NEW, got {remap!r}")
         pairs[source] = target
-    return ros_arguments(parameters, remappings=pairs)
+    return pairs
+
+
+def _validate_record(args: argparse.Namespace) -> None:
+    in_range("--max-bag-size", args.max_bag_size, low=0, what="an integer", unit="bytes; 0: "
+             "no split")
+    in_range("--max-bag-duration", args.max_bag_duration, low=0, unit="s; 0: no split")
+    check_outputs([Output("-o/--output", args.output, "new directory")])
 
 
 def _record(args: argparse.Namespace) -> int:
@@ -86,6 +121,16 @@ def _record(args: argparse.Namespace) -> int:
     if args.topics:
         parameters["topics"] = args.topics
     return recorder_main(["mt-accuracy-record", *_ros_args(parameters, [])])
+
+
+def _validate_play(args: argparse.Namespace) -> None:
+    from .io.bag_reader import mcap_files
+
+    in_range("-r/--rate", args.rate, low=0, low_open=True, what="a speed factor")
+    in_range("--start-offset", args.start_offset, low=0, unit="s")
+    in_range("--wait-for-subscribers", args.wait_for_subscribers, low=0, unit="s")
+    _remappings(args.remap)
+    mcap_files(args.bag)
 
 
 def _play(args: argparse.Namespace) -> int:
@@ -100,36 +145,36 @@ def _play(args: argparse.Namespace) -> int:
     return player_main(["mt-accuracy-play", *_ros_args(parameters, args.remap)])
 
 
+def _validate_simulate(args: argparse.Namespace) -> None:
+    in_range("--csv-stride", args.csv_stride, low=1, what="an integer")
+    in_range("--reference-period", args.reference_period, low=0, low_open=True, unit="s")
+    if args.no_csv and args.csv_stride is not None:
+        raise not_applicable("--csv-stride", "the CSV files", "--no-csv (none is written)")
+    if args.no_bag and args.reference_period is not None:
+        raise not_applicable("--reference-period", "the bag", "--no-bag (none is written)")
+    out = Path(args.out)
+    check_outputs([Output("--out", out, "directory")])
+    if not args.no_bag and (out / "bag").exists():
+        raise ParameterError(f"--out {out}: {out / 'bag'} already exists (a bag is never "
+                             "overwritten); give another --out or --no-bag")
+
+
 def _simulate(args: argparse.Namespace) -> int:
     import json
-    import math
     import time
-    from pathlib import Path
 
-    from .core.errors import MtAccuracyError
     from .sim.export import write_bag, write_csv
     from .sim.machine_tool import simulate
     from .sim.scenario import load_scenario
 
-    try:
-        scenario = load_scenario(args.scenario)
-    except MtAccuracyError as exc:
-        print(f"mt-accuracy simulate: {exc}", file=sys.stderr)
-        return 2
-    if args.reference_period is not None and not (math.isfinite(args.reference_period)
-                                                  and args.reference_period > 0):
-        print("mt-accuracy simulate: --reference-period must be a finite number of seconds "
-              "> 0", file=sys.stderr)
-        return 2
+    scenario = load_scenario(args.scenario)
     out = Path(args.out)
-    if (out / "bag").exists():
-        print(f"mt-accuracy simulate: {out / 'bag'} already exists", file=sys.stderr)
-        return 2
     started = time.perf_counter()
     result = simulate(scenario)
     elapsed = time.perf_counter() - started
     out.mkdir(parents=True, exist_ok=True)
-    files = [] if args.no_csv else write_csv(result, out, stride=args.csv_stride)
+    stride = 1 if args.csv_stride is None else args.csv_stride
+    files = [] if args.no_csv else write_csv(result, out, stride=stride)
     if not args.no_bag:
         write_bag(result, out / "bag", progress=not args.quiet,
                   reference_period_s=args.reference_period)
@@ -152,73 +197,133 @@ SHOWN_REFUSALS = 5
 SHOWN_CONTESTANTS = 5
 
 
-def _check(args: argparse.Namespace) -> int:
-    from pathlib import Path
+#: What ``check`` reads: a bag, a thermal log (a CSV with --target) or a survey (a CSV
+#: with a column map), as the refusals name them.
+CHECK_DATA_KINDS = {"bag": "a bag", "log": "a thermal log (a CSV with --target)",
+                    "survey": "a survey (a CSV with a column map: --columns or --col)"}
+#: Each data-specific option of ``check`` (its argparse name), as typed, and the kinds of
+#: data whose reader takes it; given with any other it would be ignored, so it is refused.
+CHECK_OPTION_SCOPES = {
+    "model": ("--model", ("bag", "survey")), "namespace": ("--namespace", ("bag",)),
+    "machine": ("--machine", ("survey",)), "columns": ("--columns", ("survey",)),
+    "col": ("--col", ("survey",)), "uncertainty_um": ("--uncertainty-um", ("log", "survey")),
+    "row_period": ("--row-period", ("log", "survey")),
+    "time_column": ("--time-column", ("log",)), "target": ("--target", ("log",)),
+    "inputs": ("--inputs", ("log",)), "driver": ("--driver", ("log",)),
+    "term": ("--term", ("log",)), "component": ("--component", ("log",)),
+    "structure_length": ("--structure-length", ("log",)),
+    "train_fraction": ("--train-fraction", ("log",)), "run": ("--run", ("log",)),
+    "zeroed_runs": ("--zeroed-runs", ("log",))}
+#: Suffixes of table files; other text files are tables too, unless they are descriptions.
+TABLE_SUFFIXES = (".csv", ".tsv", ".txt", ".dat")
+DESCRIPTION_SUFFIXES = (".yaml", ".yml", ".json", ".xml", ".html")
+#: Defaults of the thermal log's options (None in the parser: given or not is known).
+LOG_TIME_COLUMN, LOG_TRAIN_FRACTION, LOG_COMPONENT = "time_s", 0.5, "z"
 
-    from .commands.check import check_bag, write_outputs
+
+def _is_table(path: Path) -> bool:
+    """Whether ``check`` reads ``path`` as a CSV table (by its suffix, or a text file that
+    is no description) rather than a bag."""
+    from .io.file_kinds import MCAP_MAGIC, looks_like_text, read_head
+
+    suffix = path.suffix.lower()
+    if suffix in TABLE_SUFFIXES:
+        return True
+    if suffix in DESCRIPTION_SUFFIXES or not path.is_file():
+        return False
+    try:
+        head = read_head(path)
+    except OSError:
+        return False
+    return not head.startswith(MCAP_MAGIC) and looks_like_text(head)
+
+
+def _check_kind(args: argparse.Namespace) -> str:
+    """What ``check``'s DATA is: "bag", "log" or "survey" (:data:`CHECK_DATA_KINDS`)."""
+    if not _is_table(Path(args.data)):
+        return "bag"
+    return "survey" if args.columns or args.col else "log"
+
+
+def _validate_check(args: argparse.Namespace) -> None:
+    kind = _check_kind(args)
+    if kind == "log" and not args.target:
+        raise ParameterError("a CSV needs --target COLUMN (a thermal log) or a column map "
+                             "(--columns FILE.yaml or --col ROLE=COLUMN[:UNIT]) for a "
+                             "reference survey")
+    for name, (flag, kinds) in CHECK_OPTION_SCOPES.items():
+        if kind not in kinds and getattr(args, name) not in (None, False, "", []):
+            raise not_applicable(flag, " or ".join(CHECK_DATA_KINDS[k] for k in kinds),
+                                 CHECK_DATA_KINDS[kind])
+    if args.zeroed_runs and not args.run:
+        raise not_applicable("--zeroed-runs", "a log of many runs (--run COLUMN)",
+                             "a log of one run (no --run)")
+    in_range("--auto", args.auto, low=0, what="an integer")
+    in_range("--min-reduction", args.min_reduction, low=0, high=1, high_open=True,
+             what="a fraction")
+    in_range("--uncertainty-um", args.uncertainty_um, low=0, low_open=True, unit="um, k = 2")
+    in_range("--row-period", args.row_period, low=0, low_open=True, unit="s")
+    in_range("--train-fraction", args.train_fraction, low=0, high=1, low_open=True,
+             high_open=True, what="a fraction")
+    in_range("--structure-length", args.structure_length, low=0, low_open=True, unit="m")
+    check_outputs([Output("--json", args.json), Output("--report", args.report)],
+                  [args.data, args.columns])
+    if kind == "bag" and Path(args.data).exists():
+        from .io.bag_reader import mcap_files
+
+        mcap_files(args.data)       # a truncated or foreign bag: refused before the model
+
+
+def _column_map(args: argparse.Namespace):
+    """The survey's column map from --columns and --col."""
+    import yaml
+
+    from .io.column_map import ColumnMap, column_map_from_dict, parse_col_flags
+
+    column_map = ColumnMap()
+    if args.columns:
+        try:
+            text = Path(args.columns).read_text()
+            column_map = column_map_from_dict(yaml.safe_load(text), args.columns)
+        except (OSError, yaml.YAMLError) as exc:
+            raise InputDataError(f"column map {args.columns}: {exc}") from exc
+    column_map = parse_col_flags(args.col or [], column_map)
+    if args.uncertainty_um is not None:
+        column_map.uncertainty_m = args.uncertainty_um * 1e-6
+    if args.row_period is not None:
+        column_map.row_period_s = args.row_period
+    return column_map
+
+
+def _check_result(args: argparse.Namespace) -> dict:
+    """``check``'s result of its DATA, by kind (the options checked by
+    :func:`_validate_check`)."""
+    from .commands.check import check_bag, check_mapped_csv
     from .commands.check_log import check_csv
-    from .core.errors import MtAccuracyError
 
     data = Path(args.data)
-    try:
-        if data.suffix.lower() == ".csv" and (args.columns or args.col):
-            import yaml
+    kind = _check_kind(args)
+    if kind == "survey":
+        return check_mapped_csv(data, _column_map(args), args.model, args.add or [], args.auto,
+                                args.min_reduction, machine=args.machine)
+    if kind == "log":
+        return check_csv(
+            data, args.target, args.time_column or LOG_TIME_COLUMN, args.inputs or ["*"],
+            args.driver or [], args.add or [], args.auto,
+            LOG_TRAIN_FRACTION if args.train_fraction is None else args.train_fraction,
+            args.min_reduction, args.term or [], row_period_s=args.row_period,
+            component=args.component or LOG_COMPONENT,
+            uncertainty_m=None if args.uncertainty_um is None else args.uncertainty_um * 1e-6,
+            structure_length_m=args.structure_length, run_column=args.run,
+            zeroed_runs=args.zeroed_runs)
+    return check_bag(data, args.model or "demo", args.add or [], args.auto,
+                     args.namespace or "", args.min_reduction)
 
-            from .commands.check import check_mapped_csv
-            from .io.column_map import ColumnMap, column_map_from_dict, parse_col_flags
 
-            column_map = ColumnMap()
-            if args.columns:
-                try:
-                    text = Path(args.columns).read_text()
-                    column_map = column_map_from_dict(yaml.safe_load(text), args.columns)
-                except (OSError, yaml.YAMLError) as exc:
-                    print(f"mt-accuracy check: column map {args.columns}: {exc}", file=sys.stderr)
-                    return 2
-            column_map = parse_col_flags(args.col or [], column_map)
-            if args.uncertainty_um is not None:
-                if not args.uncertainty_um > 0:
-                    print("mt-accuracy check: --uncertainty-um must be > 0", file=sys.stderr)
-                    return 2
-                column_map.uncertainty_m = args.uncertainty_um * 1e-6
-            if args.row_period is not None:
-                column_map.row_period_s = args.row_period
-            result = check_mapped_csv(data, column_map, args.model, args.add or [], args.auto,
-                                      args.min_reduction, machine=args.machine)
-        elif data.suffix.lower() == ".csv":
-            if not args.target:
-                print("mt-accuracy check: a CSV needs --target COLUMN (a thermal log) or a "
-                      "column map (--columns FILE.yaml or --col ROLE=COLUMN[:UNIT]) for a "
-                      "reference survey", file=sys.stderr)
-                return 2
-            if args.machine is not None:
-                print("mt-accuracy check: --machine is for surveys (a column map); a thermal "
-                      "log (--target) has no machine", file=sys.stderr)
-                return 2
-            if args.row_period is not None and not args.row_period > 0:
-                print("mt-accuracy check: --row-period must be > 0 [s]", file=sys.stderr)
-                return 2
-            if args.uncertainty_um is not None and not args.uncertainty_um > 0:
-                print("mt-accuracy check: --uncertainty-um must be > 0", file=sys.stderr)
-                return 2
-            result = check_csv(data, args.target, args.time_column, args.inputs or ["*"],
-                               args.driver or [], args.add or [], args.auto, args.train_fraction,
-                               args.min_reduction, args.term or [], row_period_s=args.row_period,
-                               component=args.component,
-                               uncertainty_m=None if args.uncertainty_um is None
-                               else args.uncertainty_um * 1e-6,
-                               structure_length_m=args.structure_length,
-                               run_column=args.run, zeroed_runs=args.zeroed_runs)
-        else:
-            if args.machine is not None:
-                print("mt-accuracy check: --machine is for surveys (a CSV with a column map); "
-                      "a bag's model names its machine (--model)", file=sys.stderr)
-                return 2
-            result = check_bag(data, args.model or "demo", args.add or [], args.auto,
-                               args.namespace, args.min_reduction)
-    except (MtAccuracyError, OSError) as exc:
-        print(f"mt-accuracy check: {exc}", file=sys.stderr)
-        return 2
+def _check(args: argparse.Namespace) -> int:
+    from .commands.check import write_outputs
+
+    result = _check_result(args)
     write_outputs(result, args.json, args.report)
     if result.get("rows_note"):
         print(result["rows_note"])
@@ -289,12 +394,25 @@ def _check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _validate_fleet(args: argparse.Namespace) -> None:
+    if args.scheduler and args.workers is not None:
+        raise not_applicable("--workers", "the local cluster", "--scheduler (its workers "
+                             "are the scheduler's)")
+    in_range("--workers", args.workers, low=1, what="an integer")
+    in_range("--auto", args.auto, low=0, what="an integer")
+    in_range("--min-reduction", args.min_reduction, low=0, high=1, high_open=True,
+             what="a fraction")
+    check_outputs([Output("--json", args.json), Output("--report", args.report)],
+                  [*args.inputs, args.columns])
+
+
 def _fleet(args: argparse.Namespace) -> int:
     from .commands.fleet import print_summary, run_fleet, write_fleet_outputs
 
     # A bad input is one line on stderr and exit 2, by main().
+    workers = args.workers if args.workers is not None else os.cpu_count() or 1
     summary = run_fleet(args.inputs, model=args.model, columns=args.columns,
-                        scheduler=args.scheduler, workers=args.workers, auto=args.auto,
+                        scheduler=args.scheduler, workers=workers, auto=args.auto,
                         min_reduction=args.min_reduction, progress=not args.quiet)
     write_fleet_outputs(summary, args.json, args.report)
     print_summary(summary)
@@ -305,9 +423,26 @@ def _fleet(args: argparse.Namespace) -> int:
     return 0 if summary["day_count"] else 1
 
 
-def _iso230_2(args: argparse.Namespace) -> int:
-    from pathlib import Path
+#: Expansion coefficients a material may have [um/m/K] (Invar ~1, steel 11.5, aluminium
+#: 23, polymers up to ~200); below :data:`EXPANSION_PER_K_LIKE` a value is one in 1/K.
+EXPANSION_LIMIT_UM_M_K = 300.0
+EXPANSION_PER_K_LIKE = 1e-3
 
+
+def _validate_iso230_2(args: argparse.Namespace) -> None:
+    in_range("--expansion", args.expansion, low=-EXPANSION_LIMIT_UM_M_K,
+             high=EXPANSION_LIMIT_UM_M_K, unit="um/m/K")
+    if args.expansion is not None and 0 < abs(args.expansion) < EXPANSION_PER_K_LIKE:
+        raise ParameterError(f"--expansion must be in um/m/K (steel 11.5), got "
+                             f"{args.expansion:g}: that looks like 1/K (times 1e6: "
+                             f"{args.expansion * 1e6:g})")
+    if not args.axis.strip() or any(c.isspace() for c in args.axis):
+        raise ParameterError(f"--axis must be an axis name without spaces (X, Y, Z, A), got "
+                             f"{args.axis!r}")
+    check_outputs([Output("--json", args.json), Output("--report", args.report)], [args.run])
+
+
+def _iso230_2(args: argparse.Namespace) -> int:
     from .commands.iso230 import evaluate_run, print_run, write_run_outputs
 
     # A bad run is one line on stderr and exit 2, by main().
@@ -356,8 +491,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--lockstep", action="store_true",
                       help="stream in data time: the machine sends each batch once every node "
                            "of the loop has caught up, so the outcome is the same on any host "
-                           "(the tests run so); --rate is then ignored")
-    demo.set_defaults(handler=_demo)
+                           "(the tests run so); not with --rate")
+    demo.set_defaults(handler=_demo, validate=_validate_demo)
     info = commands.add_parser("info", help="counts, duration, topics and types of a bag")
     info.add_argument("bag", help="bag directory or .mcap file")
     info.set_defaults(handler=_info)
@@ -365,7 +500,8 @@ def build_parser() -> argparse.ArgumentParser:
                                   "(a killed recorder) into a new complete bag")
     salvage.add_argument("bag", help="damaged bag directory or .mcap file")
     salvage.add_argument("output", help="new bag directory (must not exist)")
-    salvage.set_defaults(handler=_recover)
+    salvage.set_defaults(handler=_recover,
+                         validate=_validate_recover)
     record = commands.add_parser("record", help="record topics to a rosbag2-compatible MCAP bag")
     record.add_argument("topics", nargs="*", help="topics to record (none: all)")
     record.add_argument("-o", "--output", help="bag directory (default rosbag2_<date>)")
@@ -373,18 +509,20 @@ def build_parser() -> argparse.ArgumentParser:
     record.add_argument("--max-bag-size", type=int, default=0, help="split after N bytes")
     record.add_argument("--max-bag-duration", type=float, default=0.0,
                         help="split after S seconds")
-    record.set_defaults(handler=_record)
+    record.set_defaults(handler=_record, validate=_validate_record)
     sim = commands.add_parser("simulate", help="run a scenario on the virtual machine tool")
     sim.add_argument("scenario", help="scenario YAML (see mt_accuracy_ros.sim.scenario)")
     sim.add_argument("--out", required=True, help="output directory (bag/ and CSV files)")
     sim.add_argument("--no-bag", action="store_true")
     sim.add_argument("--no-csv", action="store_true")
-    sim.add_argument("--csv-stride", type=int, default=1, help="write every N-th sample")
+    sim.add_argument("--csv-stride", type=int, default=None,
+                     help="write every N-th sample (default 1: every one)")
     sim.add_argument("--reference-period", type=float, default=None, metavar="S",
                      help="bag: a reference probe's TCP error every S seconds of data time "
                           "(the uncompensated machine; what mt-accuracy check and fleet read)")
     sim.add_argument("-q", "--quiet", action="store_true")
-    sim.set_defaults(handler=_simulate)
+    sim.set_defaults(handler=_simulate,
+                     validate=_validate_simulate)
     check = commands.add_parser("check", help="model vs measurement: rank missing effects, add them")
     check.add_argument("data", help="bag (this package's topics) or CSV file")
     check.add_argument("--model", default=None,
@@ -399,7 +537,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="add up to N top significant candidates by themselves")
     check.add_argument("--report", help="HTML report path")
     check.add_argument("--json", help="JSON summary path")
-    check.add_argument("--namespace", default="", help="machine namespace in the bag (/mt1)")
+    check.add_argument("--namespace", default=None, help="bag: machine namespace in the bag "
+                       "(/mt1)")
     check.add_argument("--min-reduction", type=float, default=0.05,
                        help="smallest CV error reduction that counts")
     check.add_argument("--columns", metavar="FILE.yaml",
@@ -412,7 +551,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="CSV survey: the instrument's k = 2 uncertainty [um]")
     check.add_argument("--row-period", type=float, default=None,
                        help="CSV survey without a time column: seconds between rows")
-    check.add_argument("--time-column", default="time_s", help="CSV: time column [s]")
+    check.add_argument("--time-column", default=None,
+                       help=f"CSV log: time column [s] (default {LOG_TIME_COLUMN})")
     check.add_argument("--target", metavar="COLUMN[:UNIT]",
                        help="CSV log: the measured displacement column (unit from the flag or "
                             "the name's suffix, e.g. ch5_um)")
@@ -422,14 +562,16 @@ def build_parser() -> argparse.ArgumentParser:
                        help="CSV log: the spindle speed (rpm, rad/s, Hz), a heat source")
     check.add_argument("--term", action="append",
                        help="CSV log: effects the starting model holds (fitted first)")
-    check.add_argument("--component", default="z", choices=["x", "y", "z"],
-                       help="CSV log: the direction the target displacement is measured in")
+    check.add_argument("--component", default=None, choices=["x", "y", "z"],
+                       help="CSV log: the direction the target displacement is measured in "
+                            f"(default {LOG_COMPONENT})")
     check.add_argument("--structure-length", type=float, default=None, metavar="METRES",
                        help="CSV log: structure between the sensors and the tool (bounds a "
                             "physical thermal gain; default 1 m)")
-    check.add_argument("--train-fraction", type=float, default=0.5,
-                       help="CSV: fit on this leading fraction, judge on the rest (with "
-                            "--run: at the run boundary nearest it)")
+    check.add_argument("--train-fraction", type=float, default=None,
+                       help="CSV log: fit on this leading fraction, judge on the rest (with "
+                            f"--run: at the run boundary nearest it; default "
+                            f"{LOG_TRAIN_FRACTION})")
     check.add_argument("--run", metavar="COLUMN",
                        help="CSV log of many runs: rows of one run share this column's value "
                             "(time restarts or jumps between runs; lags restart each run; "
@@ -437,7 +579,7 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--zeroed-runs", action="store_true",
                        help="CSV log with --run: the instrument was zeroed at each run's "
                             "start (each run has its own zero; default: absolute readings)")
-    check.set_defaults(handler=_check)
+    check.set_defaults(handler=_check, validate=_validate_check)
     fleet = commands.add_parser("fleet", help="diagnose many machines' bags and surveys on "
                                 "Dask: error over time, shared effects, drift ranked")
     fleet.add_argument("inputs", nargs="+", metavar="INPUT",
@@ -447,8 +589,9 @@ def build_parser() -> argparse.ArgumentParser:
     fleet.add_argument("--scheduler", metavar="ADDRESS",
                        help="an existing Dask scheduler (tcp://host:8786) whose workers have "
                             "this package; default: a local cluster of --workers processes")
-    fleet.add_argument("--workers", type=int, default=os.cpu_count() or 1,
-                       help="worker processes of the local cluster (default: one per core)")
+    fleet.add_argument("--workers", type=int, default=None,
+                       help="worker processes of the local cluster (default: one per core; "
+                            "not with --scheduler)")
     fleet.add_argument("--model", default=None,
                        help="model of the machines that have none of their own (bags: "
                             "default 'demo'; a folder's model.yaml or the manifest's model: "
@@ -462,7 +605,7 @@ def build_parser() -> argparse.ArgumentParser:
     fleet.add_argument("--json", help="JSON summary path (every machine-day's result)")
     fleet.add_argument("--report", help="HTML fleet report path")
     fleet.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    fleet.set_defaults(handler=_fleet)
+    fleet.set_defaults(handler=_fleet, validate=_validate_fleet)
     iso = commands.add_parser("iso230-2", help="ISO 230-2 figures of a laser interferometer's "
                               "positioning runs (CSV)")
     iso.add_argument("run", help="CSV: one reading per row, in the order measured")
@@ -475,7 +618,8 @@ def build_parser() -> argparse.ArgumentParser:
                           "a temperature column, deviations are referred to 20 degC")
     iso.add_argument("--json", help="JSON summary path")
     iso.add_argument("--report", help="HTML report path")
-    iso.set_defaults(handler=_iso230_2)
+    iso.set_defaults(handler=_iso230_2,
+                     validate=_validate_iso230_2)
     play = commands.add_parser("play", help="publish a bag's messages in recorded time, with /clock")
     play.add_argument("bag", help="bag directory or .mcap file")
     play.add_argument("--topics", nargs="+", help="topics to play (default all)")
@@ -487,7 +631,7 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--start-paused", action="store_true")
     play.add_argument("--wait-for-subscribers", type=float, default=0.0, metavar="S",
                       help="wait up to S seconds for subscribers before playing")
-    play.set_defaults(handler=_play)
+    play.set_defaults(handler=_play, validate=_validate_play)
     from .commands.model_tools import add_parser as add_model_parser
     from .commands.rotary_tools import add_parser as add_rotary_parser
     from .commands.topic_tools import add_parser as add_topic_parser
@@ -509,6 +653,10 @@ def main(argv: list[str] | None = None) -> int:
     # The commands' numerics allocate and free arrays of megabytes: from the heap.
     keep_freed_arrays()
     try:
+        # Every option and output path before any work: a refusal writes nothing.
+        validate = getattr(args, "validate", None)
+        if validate is not None:
+            validate(args)
         return int(args.handler(args) or 0)
     except (MtAccuracyError, OSError, ValueError, KeyError) as exc:
         text = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)

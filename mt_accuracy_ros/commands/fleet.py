@@ -248,12 +248,15 @@ def run_fleet(inputs: list[str], *, model: str | None = None, columns: str | Non
               scheduler: str | None = None, workers: int = 2, auto: int = 3,
               min_reduction: float = 0.05, progress: bool = True) -> dict:
     """Find the fleet's data, diagnose every machine's days on Dask, summarise."""
+    from ..core.inputs.options import in_range
     from ..io.fleet_inputs import discover, plan_days
 
-    if scheduler is None and not (isinstance(workers, int) and workers >= 1):
-        raise InputDataError(f"--workers must be an integer >= 1, got {workers}")
-    if not (isinstance(auto, int) and auto >= 0):
-        raise InputDataError(f"--auto must be an integer >= 0, got {auto}")
+    # The command line checked these already; a caller from Python gets the same words.
+    if scheduler is None:
+        in_range("--workers", workers, low=1, what="an integer")
+    in_range("--auto", auto, low=0, what="an integer")
+    in_range("--min-reduction", min_reduction, low=0, high=1, high_open=True,
+             what="a fraction")
     days = plan_days(discover(inputs, model, columns))
     tasks = [d.as_task(auto, min_reduction) for d in days]
     started = time.perf_counter()

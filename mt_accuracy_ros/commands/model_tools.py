@@ -102,6 +102,17 @@ def _show(args: argparse.Namespace) -> int:
     return 0
 
 
+def validate_args(args: argparse.Namespace) -> None:
+    """Refuse, in one line, a --timeout that is not a finite number of seconds > 0 or a
+    --monitor that is no node name."""
+    from ..core.inputs.options import in_range
+
+    in_range("--timeout", args.timeout, low=0, low_open=True, unit="s")
+    monitor = getattr(args, "monitor", "/model_monitor")
+    if not monitor.strip() or any(c.isspace() for c in monitor):
+        raise ParameterError(f"--monitor must be a node name (/model_monitor), got {monitor!r}")
+
+
 def add_parser(commands) -> None:
     """The ``model`` sub-command and its verbs."""
     model = commands.add_parser("model", help="change or show the live model (add / remove "
@@ -116,7 +127,7 @@ def add_parser(commands) -> None:
         parser.add_argument("--monitor", default="/model_monitor",
                             help="the model monitor node (default /model_monitor)")
         parser.add_argument("--timeout", type=float, default=30.0, metavar="S")
-        parser.set_defaults(handler=_change)
+        parser.set_defaults(handler=_change, validate=validate_args)
     show = verbs.add_parser("show", help="print the live model version")
     show.add_argument("--timeout", type=float, default=10.0, metavar="S")
-    show.set_defaults(handler=_show)
+    show.set_defaults(handler=_show, validate=validate_args)

@@ -152,7 +152,7 @@ def cmd_list(args, out=None) -> int:
     else:
         node = _node("mt_accuracy_topic_list")
         try:
-            found = {name: types[0] for name, types in _discover(node, args.spin_time).items()}
+            found = {name: types[0] for name, types in _discover(node, spin_time(args)).items()}
         finally:
             _close(node)
     for name in sorted(found):
@@ -173,7 +173,7 @@ def cmd_info(args, out=None) -> int:
         return 0
     node = _node("mt_accuracy_topic_info")
     try:
-        type_name = _live_type(node, args.topic, args.spin_time)
+        type_name = _live_type(node, args.topic, spin_time(args))
         print(f"Type: {type_name}\nPublisher count: {node.count_publishers(args.topic)}\n"
               f"Subscription count: {node.count_subscribers(args.topic)}", file=out)
     finally:
@@ -204,7 +204,7 @@ def cmd_echo(args, out=None) -> int:
             shown[0] += 1
 
     try:
-        _subscribe(node, args.topic, _live_type(node, args.topic, args.spin_time), on_message)
+        _subscribe(node, args.topic, _live_type(node, args.topic, spin_time(args)), on_message)
         end = time.monotonic() + args.duration if args.duration else float("inf")
         while rclpy.ok() and (not limit or shown[0] < limit) and time.monotonic() < end:
             rclpy.spin_once(node, timeout_sec=0.05)
@@ -236,7 +236,7 @@ def cmd_hz(args, out=None) -> int:
     arrivals: list[int] = []
     reports = 0
     try:
-        _subscribe(node, args.topic, _live_type(node, args.topic, args.spin_time),
+        _subscribe(node, args.topic, _live_type(node, args.topic, spin_time(args)),
                    lambda _: arrivals.append(time.monotonic_ns()))
         end = time.monotonic() + args.duration if args.duration else float("inf")
         next_report = time.monotonic() + 1.0
@@ -257,6 +257,42 @@ def cmd_hz(args, out=None) -> int:
     return 0
 
 
+#: Discovery on the live graph when --spin-time is not given [s].
+SPIN_TIME_S = 1.5
+#: Options that only the live graph reads (argparse name: as typed); hz's -n counts live
+#: reports too.
+LIVE_ONLY = {"spin_time": "--spin-time", "duration": "--duration"}
+#: Options that only a bag's reading takes.
+BAG_ONLY = {"use_header_stamp": "--use-header-stamp"}
+
+
+def spin_time(args) -> float:
+    """Seconds of discovery on the live graph: --spin-time or :data:`SPIN_TIME_S`."""
+    return SPIN_TIME_S if args.spin_time is None else args.spin_time
+
+
+def validate_args(args) -> None:
+    """Refuse, in one line, an option out of its range or given where the verb does not
+    read it (live-graph options with --bag, bag options without)."""
+    from ..core.inputs.options import in_range, not_applicable
+
+    live_only = dict(LIVE_ONLY, **({"count": "-n/--count"} if args.verb == "hz" else {}))
+    for name, flag in live_only.items():
+        if args.bag and getattr(args, name, None) is not None:
+            raise not_applicable(flag, "the live graph", f"a bag (--bag {args.bag})")
+    for name, flag in BAG_ONLY.items():
+        if not args.bag and getattr(args, name, False):
+            raise not_applicable(flag, "a bag (--bag)", "the live graph")
+    in_range("--spin-time", getattr(args, "spin_time", None), low=0, low_open=True, unit="s")
+    in_range("--duration", getattr(args, "duration", None), low=0, unit="s; 0: no limit")
+    in_range("-n/--count", getattr(args, "count", None), low=0, what="an integer",
+             unit="0: no limit")
+    in_range("--truncate-length", getattr(args, "truncate_length", None), low=0,
+             what="an integer", unit="0: whole arrays")
+    in_range("-w/--window", getattr(args, "window", None), low=0, what="an integer",
+             unit="messages; 0: all")
+
+
 def add_parser(commands) -> None:
     """The ``topic`` sub-command and its verbs."""
     topic = commands.add_parser("topic", help="inspect topics, live or in a bag (like ros2 topic)")
@@ -266,16 +302,17 @@ def add_parser(commands) -> None:
         if needs_topic:
             parser.add_argument("topic", help="topic name, e.g. /scales")
         parser.add_argument("--bag", help="read a recorded bag instead of the live graph")
-        parser.add_argument("--spin-time", type=float, default=1.5,
-                            help="seconds of discovery on the live graph")
+        parser.add_argument("--spin-time", type=float, default=None,
+                            help=f"seconds of discovery on the live graph (default "
+                                 f"{SPIN_TIME_S:g})")
 
     listing = verbs.add_parser("list", help="topic names")
     common(listing, needs_topic=False)
     listing.add_argument("-t", "--show-types", action="store_true")
-    listing.set_defaults(handler=cmd_list)
+    listing.set_defaults(handler=cmd_list, validate=validate_args)
     info = verbs.add_parser("info", help="type, publisher and subscription counts")
     common(info)
-    info.set_defaults(handler=cmd_info)
+    info.set_defaults(handler=cmd_info, validate=validate_args)
     echo = verbs.add_parser("echo", help="messages as YAML")
     common(echo)
     echo.add_argument("--once", action="store_true")
@@ -283,13 +320,13 @@ def add_parser(commands) -> None:
     echo.add_argument("--no-arr", action="store_true", help="print array lengths only")
     echo.add_argument("--truncate-length", type=int, default=0, metavar="N",
                       help="print at most N elements of each array")
-    echo.add_argument("--duration", type=float, default=0.0, help="live: stop after S seconds")
-    echo.set_defaults(handler=cmd_echo)
+    echo.add_argument("--duration", type=float, default=None, help="live: stop after S seconds")
+    echo.set_defaults(handler=cmd_echo, validate=validate_args)
     hz = verbs.add_parser("hz", help="publishing rate")
     common(hz)
     hz.add_argument("-w", "--window", type=int, default=10000)
     hz.add_argument("--use-header-stamp", action="store_true",
                     help="bag: rate of the header stamps instead of the receive times")
-    hz.add_argument("-n", "--count", type=int, default=0, help="live: stop after N reports")
-    hz.add_argument("--duration", type=float, default=0.0, help="live: stop after S seconds")
-    hz.set_defaults(handler=cmd_hz)
+    hz.add_argument("-n", "--count", type=int, default=None, help="live: stop after N reports")
+    hz.add_argument("--duration", type=float, default=None, help="live: stop after S seconds")
+    hz.set_defaults(handler=cmd_hz, validate=validate_args)

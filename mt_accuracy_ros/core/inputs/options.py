@@ -1,0 +1,68 @@
+"""Command-line options checked against their range: one wording for every refusal.
+
+Each refusal is one :class:`ParameterError` line ``FLAG must be EXPECTED, got VALUE``
+(e.g. ``--train-fraction must be a fraction in (0, 1), got 2``), or ``FLAG applies to
+..., not to ...`` for an option given where nothing reads it.
+"""
+from __future__ import annotations
+
+import math
+
+from ..errors import ParameterError
+
+
+def _shown(value) -> str:
+    """``value`` as a user typed it (``2``, ``0.5``, ``nan``)."""
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _interval(low: float, high: float, low_open: bool, high_open: bool) -> str:
+    """``> 0``, ``>= 1``, ``<= 19`` or ``in [0, 1)``."""
+    if math.isinf(high):
+        return f"{'>' if low_open else '>='} {_shown(low)}"
+    if math.isinf(low):
+        return f"{'<' if high_open else '<='} {_shown(high)}"
+    return f"in {'(' if low_open else '['}{_shown(low)}, {_shown(high)}{')' if high_open else ']'}"
+
+
+def in_range(flag: str, value: float | int | None, *, low: float = -math.inf,
+             high: float = math.inf, low_open: bool = False, high_open: bool = False,
+             what: str = "a number", unit: str = "") -> None:
+    """Refuse ``value`` of ``flag`` unless it is finite and within the bounds.
+
+    Parameters
+    ----------
+    flag
+        The option as typed (``--rate``).
+    value
+        Its value; None (not given) passes.
+    low, high
+        Bounds, in the option's own unit; infinite: none.
+    low_open, high_open
+        The bound itself is outside the range.
+    what
+        What the option is (``"an integer"``, ``"a fraction"``), for the message.
+    unit
+        The option's unit shown after the range (``"s"``), "" for none.
+
+    Raises
+    ------
+    ParameterError
+        ``FLAG must be WHAT RANGE [UNIT], got VALUE``.
+    """
+    if value is None:
+        return
+    inside = math.isfinite(value) and (value > low if low_open else value >= low) and \
+        (value < high if high_open else value <= high)
+    if not inside:
+        bounds = "" if math.isinf(low) and math.isinf(high) else \
+            " " + _interval(low, high, low_open, high_open)
+        finite = "a finite " + what.removeprefix("a ").removeprefix("an ") \
+            if not math.isfinite(value) else what
+        raise ParameterError(f"{flag} must be {finite}{bounds}{f' [{unit}]' if unit else ''}, "
+                             f"got {_shown(value)}")
+
+
+def not_applicable(flag: str, applies_to: str, given_with: str) -> ParameterError:
+    """The error of ``flag`` given where nothing reads it (raise it)."""
+    return ParameterError(f"{flag} applies to {applies_to}, not to {given_with}; leave it out")
