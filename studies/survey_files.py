@@ -25,6 +25,6 @@ def write_logger_survey(trial: Trial, csv_path: Path, map_path: Path) -> None:
         "time": {"column": "minutes", "unit": "min"},
         "positions": {a: {"column": f"{a}_mm", "unit": "mm"} for a in "XYZ"},
         "errors": {c: {"column": f"dev_{c}_um", "unit": "um"} for c in "xyz"},
-        "temperatures": {"column": "T_col", "bed": "T_bed", "spindle": "T_spin",
-                         "ambient": "T_amb"},
+        "temperatures": {k: {"column": c, "unit": "degC"} for k, c in (
+            ("column", "T_col"), ("bed", "T_bed"), ("spindle", "T_spin"), ("ambient", "T_amb"))},
         "uncertainty": {"value": 1.4, "unit": "um"}}))

@@ -109,9 +109,12 @@ def test_deviations_are_referred_to_20c_with_the_material_temperature(tmp_path):
 
 @pytest.mark.parametrize("kwargs, flags, message", [
     ({"runs": 1}, [], "too few runs: 1"),
+    # The third run (index 2) as the file counts runs: run 3.
     ({"drop": (2, 3, -1)}, [], "unequal target sets: target 190.5 mm has no reading going "
-                               "down in run 2"),
-    ({"actual_in_um": True}, ["--col", "measured=actual_um:mm"], "mixed units"),
+                               "down in run 3"),
+    # Micrometres declared as millimetres: a 430 m position, refused naming the unit.
+    ({"actual_in_um": True}, ["--col", "measured=actual_um:mm"],
+     "measured column 'actual_um': values 1.25e+04 … 4.3e+05 declared mm look like µm"),
     ({}, ["--expansion", "11.5"], "no temperature column"),
     ({}, ["--col", "speed=x"], "ROLE one of"),
 ])

@@ -552,6 +552,9 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
         if refusal:
             raise InputDataError(f"{path}: {refusal}")
         result.setdefault("warnings", []).extend(notes)
+    if column_map.uncertainty_note():
+        # Said as the bag path says its default: printed and in the JSON's warnings.
+        result.setdefault("warnings", []).insert(0, column_map.uncertainty_note())
     return {"data": str(path), "kind": "survey_csv", "rows_read": survey.rows_read,
             "rows_dropped": survey.rows_dropped, "rows_note": survey.summary(Path(path).name),
             "machine": model.machine.name,
@@ -566,18 +569,21 @@ def _column_and_unit(flag: str, names: list[str], quantity: str, what: str,
     """``COLUMN[:UNIT]`` -> (column, SI scale, unit); the unit from the flag, else from a
     units row under the header (``units``), else the column's name (``ch5_um``,
     ``dial [µm]``, ``spindle_rpm``)."""
-    from ..io.column_map import UNITS, column_unit
+    from ..io.column_map import UNIT_SPELLINGS, UNITS, column_unit
 
     column, unit = (flag.rsplit(":", 1) + [""])[:2] if ":" in flag else (flag, "")
     column, unit = column.strip(), unit.strip()
     if column not in names:
         raise InputDataError(f"no {what} column {column!r}; have {', '.join(names)}")
     table = UNITS[quantity]
-    unit = unit or column_unit(column, quantity, units)
-    if unit not in table or not unit:
+    known = ", ".join(u for u in table if u)
+    if unit and UNIT_SPELLINGS.get(unit, unit) not in table:
+        raise InputDataError(f"{what} {column!r}: unknown {quantity} unit {unit!r}; known: "
+                             f"{known}")
+    unit = UNIT_SPELLINGS.get(unit, unit) or column_unit(column, quantity, units)
+    if not unit:
         raise InputDataError(f"{what} {column!r}: give its unit as {column}:UNIT (one of "
-                             f"{', '.join(u for u in table if u)}); none could be read off "
-                             "its name")
+                             f"{known}); none could be read off its name")
     return column, float(table[unit]), unit
 
 

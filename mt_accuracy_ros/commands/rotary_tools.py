@@ -42,7 +42,8 @@ def _report_dir(report: str) -> tuple[Path, str]:
 
 def _ballbar(args: argparse.Namespace) -> int:
     from ..core.rotary.ballbar import ARCSEC, calibrate
-    from ..io.rotary_csv import atomic_write_text, ballbar_csv_text, read_ballbar_csv
+    from ..io.rotary_csv import (BALLBAR_UNITS_NOTE, atomic_write_text, ballbar_csv_text,
+                                 read_ballbar_csv)
     from ..sim.rotary_instruments import BallBarPlan, RotaryTableTruth, ballbar_test
 
     if args.simulate is not None and args.scenario:
@@ -69,20 +70,23 @@ def _ballbar(args: argparse.Namespace) -> int:
               f"{', with a rotary backlash' if args.backlash else ''})")
     short, long = read_ballbar_csv(args.file, args.radius_mm * 1e-3, args.socket_height_mm * 1e-3)
     result = calibrate(short, long, socket_change_m=args.socket_change_um * 1e-6)
+    print(f"{args.file}: {BALLBAR_UNITS_NOTE}")
     print(result.text())
     if args.report or args.json:
         from ..report.rotary import ballbar_sections
 
         sections = ballbar_sections(result, *_report_dir(args.report)) if args.report else []
         _finish(sections, "mt-accuracy ballbar", f"Rotary-table calibration from {args.file} "
-                "(Zhu 2008, ch. 5)", args.report, result.as_dict(), args.json)
+                "(Zhu 2008, ch. 5)", args.report,
+                {**result.as_dict(), "units": BALLBAR_UNITS_NOTE}, args.json)
     return 0
 
 
 def _probe(args: argparse.Namespace) -> int:
     from ..core.kinematics.machine import load_machine
     from ..core.rotary.probing import fit_sphere, identify_location_errors
-    from ..io.rotary_csv import atomic_write_text, probing_csv_text, read_probing_csv
+    from ..io.rotary_csv import (atomic_write_text, probing_csv_text, probing_units_note,
+                                 read_probing_csv)
     from ..sim.rotary_instruments import ProbingPlan, probe_sphere
 
     scenario_truth = None
@@ -121,13 +125,15 @@ def _probe(args: argparse.Namespace) -> int:
     result = identify_location_errors(machine, positions, centres,
                                       args.parameters.split(",") if args.parameters else None,
                                       sphere_nominal_m=sphere)
+    units = probing_units_note(tuple(machine.axis_order), rotary)
+    print(f"{args.file}: {units}")
     print(result.text())
     if args.report or args.json:
         from ..report.rotary import probing_section
 
         _finish([probing_section(result)], "mt-accuracy probe",
                 f"Rotary-axis location errors of {machine.name} from {args.file}", args.report,
-                result.as_dict(), args.json)
+                {**result.as_dict(), "units": units}, args.json)
     return 0
 
 

@@ -40,9 +40,18 @@ A ``run`` column (text or numbers) cuts the survey into runs: each run's rows li
 together, its time may restart, lags restart at its first reading and whole runs are
 the validation folds (:mod:`~..core.workbench.log_runs`).
 
+Every quantity is read in a stated unit or refused: a column's unit comes from the map,
+the flag (``:UNIT``) or the end of its name (``dev_x_um``, ``T3 [°C]``); a column with
+none, a bare ``uncertainty: 1.4`` or ``tool_offset: -150`` is refused in one line that
+says how to give it (no unit defaults to SI). Values implausible in their stated unit
+(errors of metres, travels of hundreds of metres, temperatures of 293 °C) are refused
+naming the unit they look like (:mod:`~..core.inputs.plausibility`), before any search.
+A survey that states no uncertainty takes the 1 µm default, announced
+(:meth:`ColumnMap.uncertainty_note`).
+
 Everything is converted to SI (REP-103; temperatures stay in degC). A
-missing column, an unknown unit, a column that is not numeric, too few
-rows, or times that go backwards give one :class:`InputDataError` that
+missing column, an unknown role or unit, a column that is not numeric, too few
+rows, or times that go backwards give one error that
 names the column or row; a row with a bad cell in a mapped column is
 dropped and counted (:class:`~.csv_table.CsvTable` style).
 """
@@ -58,28 +67,20 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError, ParameterError
+from ..core.inputs.plausibility import (ANGLE, LENGTH, TEMPERATURE, UNITS, check_plausible,
+                                        temperature_quantity)
 from ..core.kinematics.machine import angle_with_unit
 from .csv_dialect import CsvDialect, cell_kind, sniff_dialect, table_rows, to_seconds
 
-_LENGTH = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "micron": 1e-6, "nm": 1e-9,
-           "in": 0.0254, "inch": 0.0254}
-_ANGLE = {"rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6, "deg": math.pi / 180.0,
-          "arcsec": math.pi / 648000.0}
-UNITS = {
-    "length": _LENGTH, "angle": _ANGLE,
-    "time": {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0},
-    "velocity": {"m/s": 1.0, "mm/s": 1e-3, "mm/min": 1e-3 / 60.0, "m/min": 1.0 / 60.0,
-                 "rad/s": 1.0, "deg/s": math.pi / 180.0},
-    "acceleration": {"m/s^2": 1.0, "mm/s^2": 1e-3, "rad/s^2": 1.0},
-    "speed": {"rad/s": 1.0, "rpm": 2.0 * math.pi / 60.0, "1/min": 2.0 * math.pi / 60.0,
-              "Hz": 2.0 * math.pi},
-    "unitless": {"1": 1.0, "": 1.0},
-}
-#: Temperatures in degC (as sensor_msgs/Temperature): (scale, offset) to degC.
-TEMPERATURE = {"degC": (1.0, 0.0), "C": (1.0, 0.0), "K": (1.0, -273.15),
-               "degF": (5.0 / 9.0, -32.0 * 5.0 / 9.0)}
-DEFAULT_UNITS = {"time": "s", "length": "m", "angle": "rad", "velocity": "m/s",
-                 "acceleration": "m/s^2", "speed": "rad/s", "unitless": "1"}
+# The unit tables live with the plausibility bounds (one table of each, in the core).
+_LENGTH, _ANGLE = LENGTH, ANGLE
+#: A unit a message proposes for a role's column when none is given (what a logger's
+#: column of that kind usually holds).
+EXAMPLE_UNITS = {"time": "s", "length": "mm", "angle": "deg", "velocity": "mm/min",
+                 "acceleration": "m/s^2", "speed": "rpm", "temperature": "degC"}
+#: The column roles (``KIND.KEY``) and what their key is.
+ROLES_HELP = ("time, pos.X, err.x, temp.<sensor>, vel.X, acc.X, dir.X, spindle, run, "
+              "tdir.x, target.x")
 
 
 @dataclass
@@ -88,7 +89,9 @@ class ColumnMap:
 
     roles: dict[str, tuple[str, str]] = field(default_factory=dict)
     row_period_s: float = 1.0
-    uncertainty_m: float = 1e-6
+    #: The instrument's k = 2 uncertainty the map (``uncertainty:``) or a flag stated [m];
+    #: None: not stated (:attr:`uncertainty_m` is then the documented default, announced).
+    stated_uncertainty_m: float | None = None
     #: z of the tool tip relative to the last linear axis' reference point [m], negative
     #: when it points down (None: not given): without a machine, the generic machine's
     #: tool, so angular errors act through the real arm.
@@ -103,6 +106,41 @@ class ColumnMap:
     #: A fixed target on the workpiece side, workpiece frame (3,) [m] (``target_point:``
     #: with ``value``); per-row targets are the roles ``target.x/y/z``.
     target_point_m: np.ndarray | None = None
+
+    @property
+    def uncertainty_m(self) -> float:
+        """The k = 2 uncertainty [m]: the stated one, else the documented default."""
+        from ..core.workbench.statistics import DEFAULT_POSITION_UNCERTAINTY_M
+
+        return DEFAULT_POSITION_UNCERTAINTY_M if self.stated_uncertainty_m is None else \
+            self.stated_uncertainty_m
+
+    @uncertainty_m.setter
+    def uncertainty_m(self, value: float) -> None:
+        self.stated_uncertainty_m = float(value)
+
+    def uncertainty_note(self) -> str:
+        """The sentence announcing the default uncertainty ("" when one was stated)."""
+        if self.stated_uncertainty_m is not None:
+            return ""
+        return (f"uncertainty: the column map states none; {self.uncertainty_m * 1e6:g} um "
+                "(k = 2) assumed - give the instrument's as uncertainty: {value: V, unit: um} "
+                "or --uncertainty-um")
+
+    def plausible_as(self, role: str) -> str | None:
+        """The quantity of :data:`~..core.inputs.plausibility.BOUNDS` a role's values are
+        judged as (None: not judged - directions, runs, a rotary axis' acceleration)."""
+        kind, _, key = role.partition(".")
+        rotary = len(key) == 1 and key in "ABC"
+        if kind == "temp":
+            return temperature_quantity(key)
+        if kind == "acc" and rotary:
+            return None
+        return {"time": "duration", "spindle": "spindle_speed", "err": "error",
+                "tdir": "angle_error", "target": "position",
+                "pos": "angle" if rotary else "position",
+                "vel": "angular_velocity" if rotary else "velocity",
+                "acc": "acceleration"}.get(kind)
 
     def quantity(self, role: str) -> str:
         kind, _, axis = role.partition(".")
@@ -167,9 +205,10 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
         if not (out.row_period_s > 0 and math.isfinite(out.row_period_s)):
             raise ParameterError(f"{source}: row_period_s must be a positive number of seconds")
     if "uncertainty" in data:
-        u = data["uncertainty"]
-        value, unit = (u.get("value"), u.get("unit", "m")) if isinstance(u, dict) else (u, "m")
+        value, unit = _value_with_unit(data["uncertainty"], f"{source}: uncertainty", "um")
         out.uncertainty_m = _convert_scalar(value, unit, "length", f"{source}: uncertainty")
+        check_plausible(np.array([value]), "uncertainty", unit, f"{source}: uncertainty",
+                        "the instrument's k = 2 figure: {value: V, unit: um}")
     if "work_axes" in data:
         work = data["work_axes"]
         if not isinstance(work, list) or not all(isinstance(a, str) and a.upper() in "XYZ"
@@ -179,13 +218,7 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
                                  "once, from the bed outwards, e.g. [Y, X]")
         out.work_axes = tuple(a.upper() for a in work)
     if "tool_offset" in data:
-        t = data["tool_offset"]
-        value, unit = (t.get("value"), t.get("unit", "m")) if isinstance(t, dict) else (t, "m")
-        # Signed: the magnitude is checked like any length, the sign kept.
-        sign = -1.0 if isinstance(value, (int, float)) and not isinstance(value, bool) and \
-            value < 0 else 1.0
-        out.tool_offset_m = 0.0 if value == 0 else sign * _convert_scalar(
-            abs(value) if sign < 0 else value, unit, "length", f"{source}: tool_offset")
+        out.tool_offset_m = _tool_offset(data["tool_offset"], f"{source}: tool_offset")
     if "machine" in data:
         out.machine = _machine_reference(data["machine"], source)
     if "setup_pose" in data:
@@ -193,6 +226,35 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
     if "target_point" in data:
         _target_point(out, data["target_point"], f"{source}: target_point")
     return out
+
+
+def _value_with_unit(spec, where: str, example_unit: str) -> tuple[object, str]:
+    """(value, unit) of ``{value: V, unit: U}``: a bare number, or one without its unit, is
+    refused - no quantity defaults to SI silently."""
+    if isinstance(spec, dict) and "value" in spec and str(spec.get("unit", "")).strip():
+        return spec["value"], UNIT_SPELLINGS.get(str(spec["unit"]).strip(),
+                                                 str(spec["unit"]).strip())
+    value = spec.get("value", "V") if isinstance(spec, dict) else spec
+    key = where.rsplit(": ", 1)[-1]
+    raise ParameterError(f"{where}: {value!r} has no unit; give it as {key}: "
+                         f"{{value: {value}, unit: {example_unit}}}")
+
+
+def _tool_offset(spec, where: str) -> float:
+    """The map's signed tool offset [m] (a bare 0 is zero in any unit)."""
+    if spec == 0 and not isinstance(spec, bool):
+        return 0.0
+    value, unit = _value_with_unit(spec, where, "mm")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+            not math.isfinite(value):
+        raise ParameterError(f"{where}: expected a number, got {value!r}")
+    if value == 0:
+        return 0.0
+    # Signed: the magnitude is checked like any length, the sign kept.
+    magnitude = _convert_scalar(abs(value), unit, "length", where)
+    check_plausible(np.array([value]), "tool_offset", unit, where,
+                    "the tool tip's z from the last axis: {value: -150, unit: mm}")
+    return math.copysign(magnitude, value)
 
 
 def _machine_reference(value, source: str) -> str:
@@ -255,8 +317,34 @@ def _convert_scalar(value, unit: str, quantity: str, where: str) -> float:
     return float(value) * table[unit]
 
 
+#: Role kind -> the keys it takes: axis letters, components, any sensor name (None), or
+#: no key ("").
+_ROLE_KEYS = {"pos": "XYZABC", "vel": "XYZABC", "acc": "XYZABC", "dir": "XYZABC",
+              "err": "xyz", "tdir": "xyz", "target": "xyz", "temp": None, "time": "",
+              "spindle": "", "run": ""}
+
+
+def refuse_unknown_role(role: str, where: str = "column map") -> None:
+    """One line naming ``role`` when it is no column role (listing the known ones) or its
+    key is not one the role takes."""
+    kind, dot, key = role.partition(".")
+    if kind not in _ROLE_KEYS:
+        raise ParameterError(f"{where}: unknown role {role!r}; known roles: {ROLES_HELP}")
+    keys = _ROLE_KEYS[kind]
+    if keys == "" and dot:
+        raise ParameterError(f"{where}: role {role!r}: {kind} takes no .KEY; known roles: "
+                             f"{ROLES_HELP}")
+    if keys is None and not key:
+        raise ParameterError(f"{where}: role {role!r}: name the sensor (temp.<sensor>)")
+    if kind in ("err", "tdir", "target") and key not in ("x", "y", "z"):
+        raise ParameterError(f"{role}: the components are {kind}.x, {kind}.y, {kind}.z")
+    if keys and (len(key) != 1 or key not in keys):
+        raise ParameterError(f"{role}: name the axis with its letter (X Y Z A B C)")
+
+
 def parse_col_flags(flags: list[str], base: ColumnMap | None = None) -> ColumnMap:
-    """``ROLE=COLUMN[:UNIT]`` flags on top of ``base``."""
+    """``ROLE=COLUMN[:UNIT]`` flags on top of ``base``; an unknown role or unit is refused
+    naming it and what is known."""
     out = base or ColumnMap()
     for flag in flags:
         role, sep, rest = flag.partition("=")
@@ -264,25 +352,23 @@ def parse_col_flags(flags: list[str], base: ColumnMap | None = None) -> ColumnMa
             raise ParameterError(f"--col {flag!r}: expected ROLE=COLUMN[:UNIT], e.g. "
                                  "pos.X=x_mm:mm")
         column, _, unit = rest.rpartition(":") if ":" in rest else (rest, "", "")
-        out.roles[role.strip()] = (column.strip(), unit.strip())
+        role, unit = role.strip(), UNIT_SPELLINGS.get(unit.strip(), unit.strip())
+        refuse_unknown_role(role, f"--col {flag!r}")
+        quantity = out.quantity(role)
+        if unit and quantity != "unitless":
+            si_scale(quantity, unit, f"--col {flag!r}")
+        out.roles[role] = (column.strip(), unit)
     return out
 
 
 def si_scale(quantity: str, unit: str, what: str) -> tuple[float, float]:
-    """(scale, offset) that take ``unit`` of ``quantity`` to SI (temperatures to degC; an
-    empty unit is the quantity's default); raises naming ``what`` and the known units."""
-    if quantity == "temperature":
-        unit = unit or "degC"
-        if unit not in TEMPERATURE:
-            raise ParameterError(f"{what}: unknown temperature unit {unit!r}; known: "
-                                 f"{', '.join(TEMPERATURE)}")
-        return TEMPERATURE[unit]
-    unit = unit or DEFAULT_UNITS[quantity]
-    table = UNITS[quantity]
-    if unit not in table:
+    """(scale, offset) that take ``unit`` of ``quantity`` to SI (temperatures to degC);
+    raises naming ``what`` and the known units (an empty unit too: none is assumed)."""
+    table = TEMPERATURE if quantity == "temperature" else UNITS[quantity]
+    if unit not in table or not unit:
         raise ParameterError(f"{what}: unknown {quantity} unit {unit!r}; known: "
                              f"{', '.join(u for u in table if u)}")
-    return table[unit], 0.0
+    return TEMPERATURE[unit] if quantity == "temperature" else (table[unit], 0.0)
 
 
 #: Units as spreadsheets write them in a header, and the names this module knows them by.
@@ -314,16 +400,48 @@ def column_unit(column: str, quantity: str, units: dict[str, str] | None = None)
         unit_from_name(column, quantity)
 
 
-def _scale(column_map: ColumnMap, role: str, unit: str, column: str = ""):
-    """(scale, offset) that take the column to SI; raises naming the role's unit. Without a
-    unit in the map the column's name may say it (``x_mm``): a millimetre column is never
-    read as metres."""
+def role_unit(column_map: ColumnMap, role: str) -> str:
+    """The unit of ``role``'s column: the map's or flag's, else the one its name ends in
+    (``x_mm``); refused in one line when neither gives one - a millimetre column is never
+    read as metres, nor any column in a unit nobody stated ("" for directions and runs)."""
+    column, unit = column_map.roles[role]
     quantity = column_map.quantity(role)
-    if not quantity:
-        raise ParameterError(f"column role {role!r} unknown; roles: time, pos.X, err.x, "
-                             "temp.<sensor>, vel.X, acc.X, dir.X, spindle, run, tdir.x, "
-                             "target.x")
-    return si_scale(quantity, unit or unit_from_name(column, quantity), role)
+    if quantity == "unitless":
+        return ""
+    unit = UNIT_SPELLINGS.get(unit, unit) or unit_from_name(column, quantity)
+    if not unit:
+        kind = role.partition(".")[0]
+        example = {"err": "um", "tdir": "urad"}.get(kind, EXAMPLE_UNITS[quantity])
+        raise ParameterError(
+            f"column {column} ({role}) has no unit: give it in the map ({{column: {column}, "
+            f"unit: {example}}}), the flag (--col {role}={column}:{example}) or the name "
+            f"({column}_{example})")
+    si_scale(quantity, unit, role)
+    return unit
+
+
+def _scale(column_map: ColumnMap, role: str) -> tuple[float, float]:
+    """(scale, offset) that take ``role``'s column to SI (:func:`role_unit`)."""
+    quantity = column_map.quantity(role)
+    if quantity == "unitless":
+        return 1.0, 0.0
+    return si_scale(quantity, role_unit(column_map, role), role)
+
+
+def refuse_implausible(column_map: ColumnMap, values: dict[str, list],
+                       units: dict[str, str]) -> None:
+    """One line when a column's values (in their declared unit) are implausible for what
+    the role measures, naming the unit they look like (:mod:`~..core.inputs.plausibility`)
+    - read before any search, so nothing runs on metres that are millimetres."""
+    for role, unit in units.items():
+        quantity = column_map.plausible_as(role)
+        if quantity is None or not values.get(role):
+            continue
+        column = column_map.roles[role][0]
+        check_plausible(np.asarray(values[role], dtype=np.float64), quantity, unit,
+                        f"column {column} ({role})",
+                        f"declare its unit ({{column: {column}, unit: UNIT}} in the map or "
+                        f"--col {role}={column}:UNIT)")
 
 
 @dataclass
@@ -450,13 +568,13 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     if not any(r.startswith("err.") for r in column_map.roles):
         raise ParameterError("column map: no error column (err.x=COLUMN)")
     for role in column_map.roles:
-        kind, _, key = role.partition(".")
-        if kind in ("err", "tdir", "target") and key not in ("x", "y", "z"):
-            raise ParameterError(f"{role}: the components are {kind}.x, {kind}.y, {kind}.z")
-        if kind in ("pos", "vel", "acc", "dir") and (len(key) != 1 or key not in "XYZABC"):
-            raise ParameterError(f"{role}: name the axis with its letter (X Y Z A B C)")
-    scales = {role: _scale(column_map, role, unit, column) for role, (column, unit) in
-              column_map.roles.items() if role != "run"}
+        refuse_unknown_role(role)
+    # Every unit before a row is read (a time of date-times needs none: when its first
+    # cell is read).
+    units = {role: role_unit(column_map, role) for role in column_map.roles
+             if role not in ("run", "time")}
+    scales = {role: si_scale(column_map.quantity(role), unit, role) if unit else (1.0, 0.0)
+              for role, unit in units.items()}
     values = {role: [] for role in column_map.roles}
     bad_in_column = {role: 0 for role in column_map.roles}
     first_bad = {}
@@ -486,6 +604,8 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
                 break
             if number == 1 and "time" in index:
                 dated = _dated(chunk[0], index["time"], dialect)
+                units["time"] = "s" if dated else role_unit(column_map, "time")
+                scales["time"] = si_scale("time", units["time"], "time")
             first = number + 1
             number += len(chunk)
             if _parse_clean_chunk(chunk, header, index, values, comma, dated):
@@ -513,6 +633,7 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     if kept < min_rows:
         raise InputDataError(f"{path}: {kept} usable rows; at least {min_rows} needed"
                              + (f" ({reasons[0]})" if reasons else ""))
+    refuse_implausible(column_map, values, units)
     if dated:
         # Date-times are seconds already (the map's unit is for numbers); since the first.
         scales["time"] = (1.0, -values["time"][0] if values["time"] else 0.0)

@@ -6,22 +6,31 @@ off the header (``target_mm``, ``deviation_um``, ``actual_mm``, ``direction``,
 ``run``, ``temperature_C``):
 
 ======================  ==============================================  ==========
-role                    meaning                                         default unit
+role                    meaning                                         unit
 ======================  ==============================================  ==========
-``target``              target position P_i                             mm
-``measured``            actual position (deviation = measured - target) mm
-``deviation``           positional deviation x_ij (instead of measured) um
+``target``              target position P_i                             length
+``measured``            actual position (deviation = measured - target) length
+``deviation``           positional deviation x_ij (instead of measured) length
 ``direction``           approach: +1 / -1, or as instruments write it   -
                         (``+``/``-``, ``up``/``down``, ``fwd``/``bwd``,
                         ``forward``/``backward``, ``↑``/``↓``)
 ``run``                 run j: a number or a name                       -
-``temperature``         the material (scale) temperature                degC
+``temperature``         the material (scale) temperature                temperature
 ======================  ==============================================  ==========
 
 A header names its unit as the survey map's units do: ``target_mm``, ``target [mm]``,
-``Target (mm)``, ``deviation_µm``, ``temperature [degF]``. A row whose cell is not a
-number, or whose direction is no direction, is refused and named with its reason (every
-one, ``LaserRun.refused``).
+``Target (mm)``, ``deviation_µm``, ``temperature [degF]`` (or a units row under the
+header, or ``--col ROLE=COLUMN:UNIT``). A length or temperature column whose unit none of
+these gives is refused, naming the column and how to give it: no unit is assumed.
+Targets that span an implausible travel (under 1 mm: metres written as mm) and deviations
+of an implausible size or spread (under 10 nm over the run: millimetres written as µm)
+are refused naming the unit they look like (:mod:`~..core.inputs.plausibility`).
+
+A row whose cell in a read column is not a finite number (``nan``, ``inf``, text,
+empty), or whose direction is no direction, is refused in one line naming its row as an
+editor numbers it (the header is row 1), its column and its value: a positioning run
+needs every reading. Runs are numbered as the file calls them (a numbered run column's
+numbers; else 1, 2, ... in the order the file reaches them).
 
 Without a direction column, each reading's approach is the sign of the move that
 brought the axis to its target (a target read twice in a row at a turnaround: the
@@ -35,17 +44,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import InputDataError
 import re
 
-from .column_map import si_scale
+from ..core.errors import InputDataError
+from ..core.inputs.plausibility import check_plausible
+from .column_map import UNIT_SPELLINGS, si_scale, unit_from_name
 from .csv_table import csv_header, read_csv_table
 
 #: Reasons the one-line rows note carries (``LaserRun.refused`` holds every one).
 SUMMARY_REASONS = 3
 
 ROLES = ("target", "measured", "deviation", "direction", "run", "temperature")
-DEFAULT_UNIT = {"target": "mm", "measured": "mm", "deviation": "um", "temperature": "degC"}
+#: The unit a refusal proposes for a role's column (what laser software writes).
+EXAMPLE_UNIT = {"target": "mm", "measured": "mm", "deviation": "um", "temperature": "degC"}
 #: Header names tried for a role when no flag names its column (lower case, unit
 #: suffix allowed: ``target_mm``, ``deviation_um``).
 GUESSES = {"target": ("target", "nominal", "position"),
@@ -62,7 +73,7 @@ class LaserRun:
     target_m: np.ndarray
     deviation_m: np.ndarray
     direction: np.ndarray          # +1 / -1
-    run: np.ndarray                # 0, 1, ...
+    run: np.ndarray                # as the file numbers them (1, 2, ... for named runs)
     temperature_c: np.ndarray | None
     columns: dict[str, str] = field(default_factory=dict)
     rows_note: str = ""
@@ -118,9 +129,49 @@ def _guess(role: str, names: list[str]) -> tuple[str, str] | None:
     return None
 
 
-def _scale(role: str, unit: str, column: str) -> tuple[float, float]:
-    quantity = "temperature" if role == "temperature" else "length"
-    return si_scale(quantity, unit or DEFAULT_UNIT[role], f"{role} column {column!r}")
+def _quantity(role: str) -> str:
+    return "temperature" if role == "temperature" else "length"
+
+
+def _unit(role: str, column: str, unit: str, units_row: dict[str, str]) -> str:
+    """The unit of ``role``'s column: the flag's, the header's (``target_mm``) or a units
+    row's; refused naming the column when none gives one (none is assumed)."""
+    unit = UNIT_SPELLINGS.get(unit, unit) or \
+        UNIT_SPELLINGS.get(units_row.get(column, "").strip(), units_row.get(column, "").strip())
+    if not unit:
+        example = EXAMPLE_UNIT[role]
+        raise InputDataError(f"{role} column {column!r} has no unit: give it in the header "
+                             f"({column}_{example}, {column} [{example}]) or the flag (--col "
+                             f"{role}={column}:{example})")
+    si_scale(_quantity(role), unit, f"{role} column {column!r}")
+    return unit
+
+
+#: What a direction refusal lists as the accepted forms.
+DIRECTION_FORMS = "+/-, up/down, fwd/bwd, forward/backward, ↑/↓, +1/-1"
+
+
+def _refuse_bad_rows(path: Path, table, roles: dict[str, tuple[str, str]]) -> None:
+    """One line for the first row (as an editor numbers it) whose cell in a read column
+    is not a finite number or, in the direction column, no direction: a positioning run
+    needs every reading, and a dropped one only surfaces later as a gap in some run."""
+    read = [column for column, _ in roles.values()]
+    bad = [(int(re.match(r"row (\d+)", reason).group(1)), reason)
+           for reason in table.drop_reasons
+           if any(f" column {column}: " in reason for column in read)]
+    if "direction" in roles:
+        column = roles["direction"][0]
+        # data_rows count from the first data row: the file's row adds the header (and a
+        # units row under it).
+        first_row = 2 if table.units else 1
+        bad += [(int(table.data_rows[k]) + first_row,
+                 f"row {int(table.data_rows[k]) + first_row} column {column}: "
+                 f"{str(cell)[:20]!r} is not a direction ({DIRECTION_FORMS})")
+                for k, cell in enumerate(table.columns[column])
+                if direction_of(str(cell)) is None][:1]
+    if bad:
+        raise InputDataError(f"{Path(path).name}: {min(bad)[1]}; a positioning run needs "
+                             "every reading: correct or delete the row")
 
 
 def infer_directions(target: np.ndarray) -> np.ndarray:
@@ -145,6 +196,38 @@ def infer_runs(direction: np.ndarray) -> np.ndarray:
     return np.cumsum(turns).astype(np.int64)
 
 
+def run_numbers(labels: list[str]) -> np.ndarray:
+    """Each reading's run as the file numbers it: whole numbers as written, names (or
+    numbers that are not whole) 1, 2, ... in the order the file first reaches them."""
+    try:
+        numbers = [float(label) for label in labels]
+        if all(n.is_integer() for n in numbers):
+            return np.array(numbers, dtype=np.int64)
+    except ValueError:
+        pass
+    order = {label: k + 1 for k, label in enumerate(dict.fromkeys(labels))}
+    return np.array([order[label] for label in labels], dtype=np.int64)
+
+
+def _mend(role: str, column: str) -> str:
+    return f"give the column's unit (--col {role}={column}:UNIT, or {column}_UNIT in the header)"
+
+
+def _refuse_implausible(roles: dict[str, tuple[str, str]], units: dict[str, str],
+                        raw) -> None:
+    """One line when targets, positions, deviations or temperatures are implausible in
+    their declared unit (a 0.5 mm travel, a deviation of metres, 300 degC of steel)."""
+    checks = {"target": ("position", "travel"), "measured": ("position",),
+              "deviation": ("error",), "temperature": ("temperature",)}
+    for role, quantities in checks.items():
+        if role not in roles:
+            continue
+        for quantity in quantities:
+            check_plausible(raw(role), quantity, units[role],
+                            f"{role} column {roles[role][0]!r}", _mend(role, roles[role][0]),
+                            error=InputDataError)
+
+
 def read_laser_run(path: str | Path, flags: list[str] | None = None, *,
                    resolution_m: float = 1e-6) -> LaserRun:
     """Read ``path`` (see the module docstring); raises :class:`InputDataError` naming
@@ -153,7 +236,8 @@ def read_laser_run(path: str | Path, flags: list[str] | None = None, *,
     roles: dict[str, tuple[str, str]] = {}
     for flag in flags or []:
         role, column, unit = _split_flag(flag)
-        roles[role] = (column, unit)
+        roles[role] = (column, unit or (unit_from_name(column, _quantity(role))
+                                        if role in EXAMPLE_UNIT else ""))
     for role in ROLES:
         if role not in roles and not (role == "deviation" and "measured" in roles) and \
                 not (role == "measured" and "deviation" in roles):
@@ -173,30 +257,21 @@ def read_laser_run(path: str | Path, flags: list[str] | None = None, *,
                              f"deviation=COLUMN:um); columns: {', '.join(names)}")
     text = tuple(roles[r][0] for r in ("direction", "run") if r in roles)
     table = read_csv_table(path, text_columns=text, keep_reasons=10 ** 9)
+    units = {role: _unit(role, column, unit, table.units) for role, (column, unit)
+             in roles.items() if role in EXAMPLE_UNIT}
+    _refuse_bad_rows(path, table, roles)
+    # Rows dropped for a column no role reads are named, not refused.
     refused = list(table.drop_reasons)
     table.drop_reasons = refused[:SUMMARY_REASONS]
-    if "direction" in roles:
-        column = roles["direction"][0]
-        read = [direction_of(str(cell)) for cell in table.columns[column]]
-        bad = [k for k, d in enumerate(read) if d is None]
-        for k in bad:
-            refused.append(f"row {int(table.data_rows[k]) + 1} column {column}: "
-                           f"{str(table.columns[column][k])[:20]!r} is not a direction (+/-, "
-                           "up/down, fwd/bwd, forward/backward, ↑/↓, +1/-1)")
-        keep = np.array([d is not None for d in read], dtype=bool)
-        if not keep.any():
-            raise InputDataError(f"direction column {column!r}: no row has a direction (+/-, "
-                                 "up/down, fwd/bwd, forward/backward, ↑/↓, +1/-1)")
-        table.columns = {name: values[keep] for name, values in table.columns.items()}
-        table.data_rows = table.data_rows[keep]
-        table.rows_dropped += len(bad)
-        table.drop_reasons = refused[:SUMMARY_REASONS]
+
+    def raw(role):
+        return np.asarray(table.columns[roles[role][0]], dtype=np.float64)
 
     def values(role):
-        column, unit = roles[role]
-        scale, offset = _scale(role, unit, column)
-        return np.asarray(table.columns[column], dtype=np.float64) * scale + offset
+        scale, offset = si_scale(_quantity(role), units[role], role)
+        return raw(role) * scale + offset
 
+    _refuse_implausible(roles, units, raw)
     target = values("target")
     if "deviation" in roles:
         deviation = values("deviation")
@@ -212,18 +287,21 @@ def read_laser_run(path: str | Path, flags: list[str] | None = None, *,
             f"mixed units: the median |deviation| {np.median(np.abs(deviation)) * 1e3:.4g} mm "
             f"is over a tenth of the target spacing {spacing * 1e3:.4g} mm - check the units "
             f"of {roles['target'][0]!r} and {roles[which][0]!r} (COLUMN:UNIT)")
+    which = "deviation" if "deviation" in roles else "measured"
+    # The deviations' spread in the unit their column declares (measured - target
+    # differences in the measured column's).
+    check_plausible(deviation / si_scale("length", units[which], which)[0], "deviation_spread",
+                    units[which], f"{which} column {roles[which][0]!r}",
+                    _mend(which, roles[which][0]), error=InputDataError)
     if "direction" in roles:
         direction = np.array([direction_of(str(cell)) for cell in
                               table.columns[roles["direction"][0]]], dtype=np.float64)
     else:
         direction = infer_directions(target)
     if "run" in roles:
-        # Runs by name or number, in the order the file first reaches them.
-        labels = [str(cell).strip() for cell in table.columns[roles["run"][0]]]
-        order = {label: k for k, label in enumerate(dict.fromkeys(labels))}
-        run = np.array([order[label] for label in labels], dtype=np.int64)
+        run = run_numbers([str(cell).strip() for cell in table.columns[roles["run"][0]]])
     else:
-        run = infer_runs(direction)
+        run = infer_runs(direction) + 1
     temperature = values("temperature") if "temperature" in roles else None
     return LaserRun(target, deviation, direction, np.asarray(run, dtype=np.int64), temperature,
                     {role: column for role, (column, _) in roles.items()}, table.summary(),

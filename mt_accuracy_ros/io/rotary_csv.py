@@ -19,6 +19,12 @@ linear, ``<axis>_deg`` for rotary axes) are the commanded positions; ``px/py/pz`
 the touch point relative to where the CNC expected the sphere's centre, in
 machine axes.
 
+The units are the formats': each column's name states its unit (``bar_mm``,
+``angle_deg``, ``change_um``, ``<axis>_mm`` / ``<axis>_deg``, ``px_mm``), and a file
+without those columns is refused. Values implausible in that unit (a bar of 0.1 mm: metres
+written in the mm column) are refused naming the unit they look like
+(:mod:`~..core.inputs.plausibility`); the commands print the units they read.
+
 Every error names the file and the line.
 """
 from __future__ import annotations
@@ -31,9 +37,26 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError, reraise_as
+from ..core.inputs.plausibility import check_plausible
 from ..core.rotary.ballbar import BallBarRun, BallBarSetup
 
 BALLBAR_COLUMNS = ("bar_mm", "repetition", "angle_deg", "change_um")
+#: What a ball-bar command says of the units it read (the format defines them).
+BALLBAR_UNITS_NOTE = ("units as the ball-bar format defines them: bar_mm in mm, angle_deg "
+                      "in deg, change_um in um")
+
+
+def probing_units_note(axes: tuple[str, ...], rotary: set[str]) -> str:
+    """What a probing command says of the units it read (the format defines them)."""
+    axis_units = ", ".join(f"{a}_{'deg in deg' if a in rotary else 'mm in mm'}" for a in axes)
+    return f"units as the probing format defines them: {axis_units}, px/py/pz_mm in mm"
+
+
+def _refuse_implausible(path: Path, values, quantity: str, unit: str, column: str) -> None:
+    """One line when a column's values are implausible in the unit its name states."""
+    check_plausible(np.asarray(values, dtype=np.float64), quantity, unit,
+                    f"{path}: column {column}", f"the format reads {column} in {unit}: "
+                    "convert the file's values", error=InputDataError)
 
 
 def _rows(path: Path, required: tuple[str, ...]) -> tuple[list[str], list[tuple[int, dict]]]:
@@ -76,6 +99,11 @@ def read_ballbar_csv(path, radius_m: float, socket_height_m: float = 0.0
         rep = int(_number(path, line, row, "repetition"))
         runs.setdefault(bar, {}).setdefault(rep, []).append(
             (_number(path, line, row, "angle_deg"), _number(path, line, row, "change_um")))
+    _refuse_implausible(path, [b for b in runs], "bar_length", "mm", "bar_mm")
+    changes = [c for repetitions in runs.values() for values in repetitions.values()
+               for _, c in values]
+    _refuse_implausible(path, changes, "error", "um", "change_um")
+    _refuse_implausible(path, changes, "deviation_spread", "um", "change_um")
     if len(runs) != 2:
         raise InputDataError(f"{path}: {len(runs)} bar length(s) "
                              f"({', '.join(f'{b:g}' for b in runs)} mm); the two-setup method "
@@ -145,6 +173,13 @@ def read_probing_csv(path, axes: tuple[str, ...], rotary: set[str]
                                  f"(first at line {entry['line']})")
         entry["points"].append([_number(path, line, row, c) * 1e-3
                                 for c in ("px_mm", "py_mm", "pz_mm")])
+    for i, (axis, column) in enumerate(zip(axes, columns)):
+        _refuse_implausible(path, [c["q"][i] for c in cycles.values()],
+                            "angle" if axis in rotary else "position",
+                            "deg" if axis in rotary else "mm", column)
+    _refuse_implausible(path, np.concatenate([1e3 * np.asarray(c["points"]).ravel()
+                                              for c in cycles.values()]),
+                        "position", "mm", "px/py/pz_mm")
     positions = {a: np.array([c["q"][i] for c in cycles.values()], float) *
                  (np.pi / 180 if a in rotary else 1e-3) for i, a in enumerate(axes)}
     return positions, [np.array(c["points"]) for c in cycles.values()]

@@ -43,18 +43,24 @@ def test_units_are_converted_to_si(tmp_path):
 
 def test_a_map_without_units_reads_them_off_the_column_names(tmp_path):
     """A millimetre column named ``x_mm`` is never read as metres: without a unit in the
-    map, a known unit at the end of the column's name is taken; a name without one keeps
-    the quantity's SI default."""
+    map, a known unit at the end of the column's name is taken; a name without one is
+    refused (no quantity defaults to SI)."""
     path = tmp_path / "named.csv"
     path.write_text("t_min,x_mm,y,dev_um,T_K\n" +
-                    "\n".join(f"{k},{10 * k},{k},{k},{293.15 + k}" for k in range(25)) + "\n")
-    survey = read_mapped_csv(path, column_map_from_dict({
-        "time": "t_min", "positions": {"X": "x_mm", "Y": "y"}, "errors": {"x": "dev_um"},
-        "temperatures": {"bed": "T_K"}}))
+                    "\n".join(f"{k},{10 * k},{k / 10},{k},{293.15 + k}" for k in range(25)) +
+                    "\n")
+    named = {"time": "t_min", "positions": {"X": "x_mm", "Y": "y"}, "errors": {"x": "dev_um"},
+             "temperatures": {"bed": "T_K"}}
+    with pytest.raises(ParameterError, match=r"^column y \(pos.Y\) has no unit: give it in "
+                       r"the map \(\{column: y, unit: mm\}\), the flag \(--col pos.Y=y:mm\) "
+                       r"or the name \(y_mm\)$"):
+        read_mapped_csv(path, column_map_from_dict(named))
+    named["positions"]["Y"] = {"column": "y", "unit": "m"}
+    survey = read_mapped_csv(path, column_map_from_dict(named))
     k = np.arange(25)
     np.testing.assert_allclose(survey.time_s, 60.0 * k)
     np.testing.assert_allclose(survey.positions["X"], 0.01 * k)
-    np.testing.assert_allclose(survey.positions["Y"], 1.0 * k)        # no unit: metres
+    np.testing.assert_allclose(survey.positions["Y"], 0.1 * k)        # stated: metres
     np.testing.assert_allclose(survey.errors["x"], 1e-6 * k)
     np.testing.assert_allclose(survey.temperatures["bed"], 20.0 + k)
 
@@ -80,7 +86,7 @@ def test_a_bad_cell_drops_its_row_and_is_counted(tmp_path):
 
 
 @pytest.mark.parametrize("change, error, message", [
-    (lambda m: m["positions"].update({"Y": {"column": "y"}}), InputDataError,
+    (lambda m: m["positions"].update({"Y": {"column": "y", "unit": "mm"}}), InputDataError,
      "no column 'y' \\(for pos.Y\\)"),
     (lambda m: m["errors"]["x"].update({"unit": "furlong"}), ParameterError,
      "err.x: unknown length unit 'furlong'"),

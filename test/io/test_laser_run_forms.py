@@ -70,27 +70,35 @@ def test_both_approaches_of_one_run_are_read_as_bidirectional(tmp_path, plain):
     assert _figures(path)[0] == pytest.approx(plain, abs=1e-9)
 
 
-def test_every_refused_row_is_named_with_its_reason(tmp_path, plain, capsys):
+@pytest.mark.parametrize("bad, column, shown", [
+    ("5,10.0,sideways,1.0", "direction", "'sideways' is not a direction (+/-, up/down, "
+     "fwd/bwd, forward/backward, ↑/↓, +1/-1)"),
+    ("5,n/a,+,1.0", "target_mm", "'n/a' is not a number"),
+    ("5,60.0,+,", "deviation_um", "'' is not a number"),
+    ("5,60.0,+,nan", "deviation_um", "nan is not finite"),
+    ("5,inf,+,1.0", "target_mm", "inf is not finite"),
+    ("6,60.0,0,2.0", "direction", "'0' is not a direction"),
+])
+def test_a_bad_row_is_refused_naming_its_row_column_and_value(tmp_path, capsys, bad, column,
+                                                             shown):
+    """A positioning run needs every reading: a dropped one would only surface later as
+    "unequal target sets" in some run. The row is numbered as an editor shows it (the
+    header is row 1); nothing is written."""
     from mt_accuracy_ros.cli import main
 
     path = _write(tmp_path / "junk.csv", "run,target_mm,direction,deviation_um",
                   lambda j, t, d, e: f"{j},{t},{'+' if d > 0 else '-'},{e:.5f}")
     lines = path.read_text().splitlines()
-    lines += ["5,10.0,sideways,1.0", "5,n/a,+,1.0", "5,60.0,+,", "6,60.0,0,2.0"]
+    lines.insert(7, bad)
+    lines.append("7,60.0,sideways,1.0")          # a later bad row: the first one is named
     path.write_text("\n".join(lines) + "\n")
-    figures, result = _figures(path)
-    assert figures == pytest.approx(plain, abs=1e-9)
-    rows = len(lines)
-    assert result["refused_rows"] == [
-        f"row {rows - 2} column target_mm: 'n/a' is not a number",
-        f"row {rows - 1} column deviation_um: '' is not a number",
-        f"row {rows - 3} column direction: 'sideways' is not a direction (+/-, up/down, "
-        "fwd/bwd, forward/backward, ↑/↓, +1/-1)",
-        f"row {rows} column direction: '0' is not a direction (+/-, up/down, fwd/bwd, "
-        "forward/backward, ↑/↓, +1/-1)"]
-    assert main(["iso230-2", str(path)]) == 0
-    out = capsys.readouterr().out
-    assert out.count("refused: row ") == 4
+    assert main(["iso230-2", str(path), "--json", str(tmp_path / "s.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"mt-accuracy iso230-2: junk.csv: row 8 column {column}: {shown}; a "
+                   "positioning run needs every reading: correct or delete the row") \
+        or (err.startswith(f"mt-accuracy iso230-2: junk.csv: row 8 column {column}: {shown}")
+            and "\n" not in err)
+    assert not (tmp_path / "s.json").exists()
 
 
 def test_direction_of_reads_what_instruments_write():

@@ -27,6 +27,7 @@ deviation_spread    max - min   ≥ 10 nm                an axis's deviations ov
                                                        travel (a laser resolves 1 nm; the
                                                        best axes spread ≥ 0.1 µm)
 uncertainty         value       1 nm … 1 mm            an instrument's k = 2 figure
+bar_length          value       10 mm … 2 m            a ball bar (50 … 1500 mm made)
 tool_offset         max |x|     ≤ 2 m                  a tool's length (Abbe arm)
 angle               max |x|     ≤ 40 pi rad            a rotary axis (20 turns)
 angle_error         max |x|     ≤ 0.01 rad             a tool direction's change
@@ -103,6 +104,8 @@ BOUNDS: dict[str, Bound] = {
     "deviation_spread": Bound("span", 1e-8, 5e-3, 1e-5, "length", "spread of deviations",
                               "10 nm … 5 mm"),
     "uncertainty": Bound("value", 1e-9, 1e-3, 1e-6, "length", "uncertainty", "1 nm … 1 mm"),
+    "bar_length": Bound("value", 1e-2, 2.0, 0.15, "length", "ball-bar length",
+                        "10 mm … 2 m"),
     "tool_offset": Bound("magnitude", 0.0, 2.0, 0.15, "length", "tool offset", "|x| ≤ 2 m"),
     "angle": Bound("magnitude", 0.0, 40.0 * math.pi, math.pi, "angle", "rotary position",
                    "|angle| ≤ 20 turns"),
