@@ -20,11 +20,12 @@ from __future__ import annotations
 
 import dataclasses
 import fnmatch
+import re
 from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import InputDataError
+from ..core.errors import InputDataError, ParameterError
 
 #: A candidate whose forward-CV error reduction is at least this is "a large gain":
 #: when it is not added, the output says which test refused it.
@@ -227,11 +228,210 @@ def _in_celsius(temperatures: dict[str, np.ndarray], units: dict[str, str] | Non
     out, converted = {}, []
     for name, values in temperatures.items():
         unit = column_unit(name, "temperature", units) or "degC"
+        check_temperature_units(name, values, unit)
         scale, offset = TEMPERATURE[unit]
         out[name] = values * scale + offset if (scale, offset) != (1.0, 0.0) else values
         if unit not in ("degC", "C"):
             converted.append(f"{name} ({unit})")
     return out, ([f"temperatures converted to °C: {', '.join(converted)}"] if converted else [])
+
+
+def validate_log_options(auto: int, train_fraction: float) -> None:
+    """Refuse the options a log cannot use, naming the flag (whatever the parser let by).
+
+    Raises
+    ------
+    ParameterError
+        ``auto`` negative (a count of terms); ``train_fraction`` outside 0.2 ... 0.9 (the
+        rows after it judge the model; fewer than a tenth cannot).
+    """
+    if not (isinstance(auto, (int, np.integer)) and auto >= 0):
+        raise ParameterError(f"--auto {auto}: give a count of terms to add, 0 or more (0 adds "
+                             "nothing by itself)")
+    if not (np.isfinite(train_fraction) and 0.2 <= train_fraction <= 0.9):
+        raise ParameterError(f"--train-fraction {train_fraction}: between 0.2 and 0.9 (the "
+                             "rows after it judge the model)")
+
+
+#: Words of a column name that make it a temperature when no unit says so.
+TEMPERATURE_NAME = re.compile(r"^(t|temp|temperature|tc|th)[\W_]*\d*([\W_]|$)|temp",
+                              re.IGNORECASE)
+
+#: Quantities whose unit in a column's name or units row makes it no temperature.
+OTHER_QUANTITIES = ("length", "speed", "time", "velocity", "acceleration", "angle")
+
+
+def temperature_look(name: str, values: np.ndarray, units: dict[str, str]) -> str:
+    """"" when column ``name`` looks like a temperature (a temperature unit in its name or
+    units row, a temperature's name - T3, temp_bed -, or readings a temperature of a
+    machine would have), else why not ("spindle_rpm (rpm)")."""
+    from ..core.inputs.plausibility import likely_unit
+    from ..io.column_map import column_unit
+
+    if column_unit(name, "temperature", units):
+        return ""
+    for quantity in OTHER_QUANTITIES:
+        unit = column_unit(name, quantity, units)
+        if unit:
+            return f"{name} ({unit})"
+    if TEMPERATURE_NAME.search(name):
+        return ""
+    finite = values[np.isfinite(values)]
+    if finite.size and likely_unit(np.percentile(finite, [5, 95]), "temperature_hot", "") \
+            is not None:
+        return ""
+    span = (f"{finite.min():.4g} ... {finite.max():.4g}" if finite.size else "no reading")
+    return f"{name} (reads {span}, no temperature)"
+
+
+def select_temperature_inputs(names: list[str], patterns: list[str], excluded: tuple,
+                              columns: dict[str, np.ndarray], units: dict[str, str]
+                              ) -> tuple[list[str], list[str]]:
+    """(the columns the ``--inputs`` patterns match that look like temperatures, a note
+    naming the matched ones left out).
+
+    Raises
+    ------
+    InputDataError
+        A pattern that matches no temperature column (each pattern must match one).
+    """
+    selected: list[str] = []
+    left_out: dict[str, str] = {}
+    for pattern in patterns:
+        matched = [n for n in names if fnmatch.fnmatch(n, pattern) and n not in excluded]
+        found = []
+        for name in matched:
+            why = temperature_look(name, columns[name], units)
+            if why:
+                left_out[name] = why
+            else:
+                found.append(name)
+        if not found:
+            raise InputDataError(
+                f"--inputs {pattern!r} matches no temperature column"
+                + (f" (it matched {', '.join(left_out[n] for n in matched)})" if matched else "")
+                + f"; columns: {', '.join(n for n in names if n not in excluded)}")
+        selected += [n for n in found if n not in selected]
+    notes = [f"--inputs {' '.join(patterns)} also matched {', '.join(left_out.values())}: "
+             "no temperatures, left out of the inputs"] if left_out else []
+    return selected, notes
+
+
+def _target_has_a_unit(flag: str, names: list[str], units: dict[str, str]) -> None:
+    """Refuse a target whose unit neither its flag, its name nor a units row gives, saying
+    how to give it."""
+    from ..io.column_map import column_unit
+
+    if ":" not in flag and flag.strip() in names and \
+            not column_unit(flag.strip(), "length", units):
+        raise InputDataError(f"target {flag.strip()}: no unit in --target, its name or a units "
+                             f"row; give it, e.g. --target {flag.strip()}:um (or mm, m, nm, in)")
+
+
+def check_target(column: str, values: np.ndarray, unit: str, data_rows) -> None:
+    """Refuse a target with nothing to model or in an implausible unit.
+
+    Raises
+    ------
+    InputDataError
+        The target is constant; or its values, in ``unit``, are no thermal displacement
+        (beyond 5 mm, or spanning under 10 nm): naming the unit they look like.
+    """
+    from ..core.inputs.plausibility import check_plausible, likely_unit
+
+    finite = values[np.isfinite(values)]
+    if finite.size >= 2 and np.ptp(finite) == 0.0:
+        raise InputDataError(f"target {column} is constant ({finite[0]:g} {unit} on all "
+                             f"{finite.size} rows): nothing to model")
+    for quantity in ("error", "deviation_spread"):
+        guess = likely_unit(finite, quantity, unit)
+        check_plausible(finite, quantity, unit, f"target {column}",
+                        mend=f"declare its unit: --target {column}:{guess or 'UNIT'}",
+                        error=InputDataError)
+
+
+def check_temperature_units(name: str, values: np.ndarray, declared: str) -> None:
+    """Refuse a sensor whose readings, in their ``declared`` unit, lie mostly where no
+    machine's temperature does and another unit would put them (kelvin declared as degC).
+    Readings beyond any unit (a dead sensor's -180) are the sensors' judge's, row by row.
+
+    Raises
+    ------
+    InputDataError
+        Naming the sensor, its values, the declared unit and the likely one.
+    """
+    from ..core.inputs.plausibility import (BOUNDS, check_plausible, likely_unit,
+                                            temperature_quantity, to_si)
+
+    finite = values[np.isfinite(values)]
+    if finite.size == 0:
+        return
+    quantity = temperature_quantity(name)
+    middle = float(np.median(to_si(finite, "temperature", declared)))
+    if BOUNDS[quantity].low <= middle <= BOUNDS[quantity].high:
+        return
+    low, high = np.percentile(finite, [5, 95])
+    core = finite[(finite >= low) & (finite <= high)]
+    guess = likely_unit(core, quantity, declared)
+    if guess is not None:
+        check_plausible(core, quantity, declared, f"sensor {name}",
+                        mend=f"give its unit in its name ({name}_{guess}) or a units row",
+                        error=InputDataError)
+
+
+def _complete_rows(temperatures: dict[str, np.ndarray]) -> np.ndarray:
+    """(N,) rows where every sensor has a reading."""
+    values = list(temperatures.values())
+    return np.all([np.isfinite(v) for v in values], axis=0) if values else np.zeros(0, bool)
+
+
+def clock_of_log(time_s: np.ndarray, time_column: str, data_rows, run_of_row, run_names,
+                 row_period_s: float | None):
+    """(time [s], run of each row, run names, rows after a clock jump, notes): the log's
+    clock judged.
+
+    Equal stamps on every row are no time: refused, or - with ``--row-period`` - the row
+    order at that period, said. A clock jump (:func:`~..core.workbench.log_runs.clock_breaks`)
+    is a break between runs when the log has no run column (said, with its row and size);
+    inside a run of a run column it is refused. Equal stamps are named with their rows.
+
+    Raises
+    ------
+    InputDataError
+        One stamp on every row without ``--row-period``; a clock jump inside a run.
+    """
+    from ..core.workbench.log_runs import clock_breaks, run_labels
+
+    notes = []
+    finite = time_s[np.isfinite(time_s)]
+    if time_column and finite.size >= 2 and np.ptp(finite) == 0.0:
+        if row_period_s is None:
+            raise InputDataError(f"time column {time_column} holds one stamp ({finite[0]:g}) "
+                                 "on every row: no time to model lags with; give --row-period "
+                                 "SECONDS to take the row order, one row every SECONDS")
+        time_s = np.arange(time_s.size, dtype=np.float64) * float(row_period_s)
+        notes.append(f"time column {time_column} holds one stamp on every row: the row order "
+                     f"taken, one row every {row_period_s:g} s (--row-period)")
+        return time_s, run_of_row, run_names, np.zeros(time_s.size, bool), notes
+    breaks, clock_notes = clock_breaks(time_s, data_rows)
+    rows = np.arange(1, time_s.size + 1) if data_rows is None else np.asarray(data_rows)
+    if breaks.any() and run_of_row is not None:
+        inside = np.flatnonzero(breaks[1:] & (np.diff(run_of_row) == 0)) + 1
+        if inside.size:
+            k = int(inside[0])
+            raise InputDataError(f"the clock jumps by {time_s[k] - time_s[k - 1]:g} s inside "
+                                 f"run {run_names[run_of_row[k]]!r} at data row {int(rows[k])}: "
+                                 "start a new run there (a new value in the run column) or "
+                                 "fix the stamps")
+        breaks[:] = False
+        clock_notes = [n for n in clock_notes if not n.startswith("the clock jumps")]
+    elif breaks.any():
+        labels = np.cumsum(breaks) + 1
+        run_of_row, run_names = run_labels(labels.astype(str), data_rows, "clock-break")
+        notes.append(f"{len(run_names)} runs between the clock's jumps: " + ", ".join(
+            f"run {name} (data rows {int(rows[labels == k + 1][0])}-"
+            f"{int(rows[labels == k + 1][-1])})" for k, name in enumerate(run_names)))
+    return time_s, run_of_row, run_names, breaks, clock_notes + notes
 
 
 def read_log(path: Path, target: str, time_column: str, inputs: list[str],
@@ -257,6 +457,7 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
                            time_columns=(time_column,))
     names = table.names
     columns = table.columns
+    _target_has_a_unit(target, names, table.units)
     target_column, target_scale, unit = _column_and_unit(target, names, "length", "target",
                                                          table.units)
     time_note = ""
@@ -273,10 +474,9 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
         raise InputDataError(f"{path}: no time column {time_column!r} (give --time-column"
                              f"{' ' + timely[0] if timely else ''}, or --row-period SECONDS "
                              f"for one row every SECONDS); columns: {', '.join(names)}")
-    selected = [n for n in names if any(fnmatch.fnmatch(n, p) for p in inputs)
-                and n not in (target_column, time_column, run_column, *split_time)]
-    if not selected:
-        raise InputDataError(f"{path}: no input column matches {inputs}")
+    selected, input_notes = select_temperature_inputs(
+        names, inputs, (target_column, time_column, run_column, *split_time), columns,
+        table.units)
     speed = None
     for driver in drivers:
         column, scale, _ = _column_and_unit(driver, names, "speed", "driver", table.units)
@@ -285,8 +485,10 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
                                  "catalogue models, heat_source:spindle_speed)")
         speed = columns[column] * scale
     run_of_row, run_names = None, None
+    check_target(target_column, columns[target_column], unit, table.data_rows)
     target_m = columns[target_column] * target_scale
     temperatures, notes = _in_celsius({n: columns[n] for n in selected}, table.units)
+    notes += input_notes
     notes += [time_note] if time_note else []
     if table.units:
         notes.append("units from the row under the header: " + ", ".join(
@@ -299,13 +501,25 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
                      "(seconds since its first, a stamp without a zone taken as UTC)")
     if run_column:
         run_of_row, run_names = run_labels(columns[run_column], table.data_rows, run_column)
-    temperatures, dead_notes = leave_out_dead_sensors(temperatures, run_of_row, run_names)
-    notes += dead_notes
-    # A few holes in a live sensor: those rows are left out, counted with their reasons.
+    time_s, run_of_row, run_names, breaks, clock_notes = clock_of_log(
+        time_s, time_column if time_column in names else "", table.data_rows, run_of_row,
+        run_names, row_period_s)
+    notes += clock_notes
+    complete_before = _complete_rows(temperatures)
+    temperatures, health_notes = leave_out_dead_sensors(temperatures, run_of_row, run_names,
+                                                        table.data_rows, breaks)
+    notes += health_notes
+    # A few holes in a live sensor: those rows are left out, counted with their reasons;
+    # so are the few bad readings the sensors' judge set aside (named in the notes).
     table.drop_gaps_of(set(temperatures))
+    judged_out = int(np.sum(complete_before & ~_complete_rows(temperatures)))
+    if judged_out:
+        table.rows_dropped += judged_out
+        table.drop_reasons.append(f"{judged_out} with a bad sensor reading (see the notes)")
     if not temperatures:
-        raise InputDataError(f"{path}: every input sensor is dead (no reading in most rows)")
-    if run_column:
+        raise InputDataError(f"{path}: every input sensor is left out ({'; '.join(health_notes)})"
+                             [:400] + " - give live sensors with --inputs")
+    if run_of_row is not None:
         problem = mixed_units_problem(target_m, temperatures, run_of_row, run_names,
                                       zeroed_runs)
         if problem:
@@ -347,9 +561,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                                               held_out_residual, held_out_rmse, log_model)
     from .check import _model_yaml, candidate_named, error_figures
 
-    if not 0.2 <= train_fraction <= 0.9:
-        raise InputDataError(f"--train-fraction {train_fraction}: between 0.2 and 0.9 (the "
-                             "rows after it judge the model)")
+    validate_log_options(auto, train_fraction)
     if zeroed_runs and not run_column:
         raise InputDataError("--zeroed-runs needs --run COLUMN (the instrument was zeroed at "
                              "each run's start)")

@@ -150,7 +150,9 @@ def mixed_units_problem(target: NDArray[np.float64], temperatures: dict[str, NDA
 
     The target: a run whose spread (its range; or, absolute, its level too) is
     :data:`UNIT_SLIP_RATIO` times the median run's or more, either way. A sensor: a run
-    whose median lies :data:`TEMPERATURE_SLIP_K` from the median of the other runs.
+    whose readings, mapped by a unit slip's conversion (:func:`unit_slip_of_run`), match
+    the other runs' while its raw readings do not - a different process (a hotter day)
+    is not a unit slip.
     """
     starts = list(run_starts(run_of_row)) + [run_of_row.size]
     slices = [slice(a, b) for a, b in zip(starts[:-1], starts[1:])]
@@ -164,50 +166,116 @@ def mixed_units_problem(target: NDArray[np.float64], temperatures: dict[str, NDA
                         "run's - mixed units across runs? (mm among um: 1000x); convert it")
     if len(slices) >= 2:
         for sensor, values in temperatures.items():
-            levels = np.array([float(np.nanmedian(values[s])) if np.isfinite(values[s]).any()
-                               else np.nan for s in slices])
-            for k, level in enumerate(levels):
-                others = float(np.nanmedian(np.delete(levels, k)))
-                if abs(level - others) >= TEMPERATURE_SLIP_K:
-                    return (f"run {names[k]!r}: sensor {sensor} reads {level:.4g} where the "
-                            f"other runs read {others:.4g} - mixed units across runs? (degF, "
-                            "K); give every run in degC")
+            for k, run in enumerate(slices):
+                rest = np.concatenate([values[s] for j, s in enumerate(slices) if j != k])
+                slip = unit_slip_of_run(values[run], rest,
+                                        [values[s] for j, s in enumerate(slices) if j != k])
+                if slip:
+                    unit, converted = slip
+                    own = values[run][np.isfinite(values[run])]
+                    return (f"run {names[k]!r}: sensor {sensor} reads {np.median(own):.4g} "
+                            f"where the other runs read {np.nanmedian(rest):.4g} - mixed "
+                            f"units across runs? ({unit}: converted it reads "
+                            f"{converted:.4g} degC, as the others do); give every run in "
+                            "degC")
     return ""
 
 
-#: A sensor without a reading in more than this share of the rows is dead: it is left
-#: out, not its rows (a few glitches leave their rows out instead).
-DEAD_SHARE = 0.2
+#: Unit slips of a temperature: unit -> (degC from it, where its raw readings of a
+#: machine's structure lie [unit]).
+TEMPERATURE_SLIPS = {"K": (lambda v: v - 273.15, (250.0, 400.0)),
+                     "degF": (lambda v: (v - 32.0) / 1.8, (14.0, 248.0))}
 
-#: ... or in more than this share of one run (an open thermocouple for a day).
-DEAD_RUN_SHARE = 0.5
+
+def unit_slip_of_run(run: NDArray[np.float64], rest: NDArray[np.float64],
+                     other_runs: list[NDArray[np.float64]]) -> tuple[str, float] | None:
+    """(the unit, the run's median converted [degC]) when one run's readings are another
+    unit's, else None.
+
+    A unit slip is an affine map over a whole run: the run's raw readings lie outside the
+    other runs' range (widened by :data:`TEMPERATURE_SLIP_K`/8), lie where only that unit
+    puts a structure's temperature, and - converted - fall inside the others' range with
+    a spread like theirs (when they spread by a kelvin or more).
+    """
+    run, rest = run[np.isfinite(run)], rest[np.isfinite(rest)]
+    if run.size < 2 or rest.size < 2:
+        return None
+    tolerance = TEMPERATURE_SLIP_K / 8.0
+    low, high = np.percentile(rest, [1, 99])
+    low, high = low - tolerance, high + tolerance
+    if low <= np.median(run) <= high:
+        return None
+    spreads = [np.ptp(r[np.isfinite(r)]) for r in other_runs if np.isfinite(r).sum() >= 2]
+    usual_spread = float(np.median(spreads)) if spreads else 0.0
+    for unit, (to_celsius, (raw_low, raw_high)) in TEMPERATURE_SLIPS.items():
+        if not (raw_low <= np.percentile(run, 1) and np.percentile(run, 99) <= raw_high):
+            continue
+        converted = to_celsius(run)
+        inside = low <= np.percentile(converted, 5) and np.percentile(converted, 95) <= high
+        alike = usual_spread < 1.0 or 0.5 <= np.ptp(converted) / usual_spread <= 2.0
+        if inside and alike:
+            return unit, float(np.median(converted))
+    return None
+
+
+#: A step of the clock this many times its median step, and at least
+#: :data:`CLOCK_JUMP_MIN_S`, is a break of the record (a logger restarted days later).
+CLOCK_JUMP_FACTOR = 100.0
+CLOCK_JUMP_MIN_S = 3600.0
+
+
+def clock_breaks(time_s: NDArray[np.float64], data_rows: ArrayLike | None = None
+                 ) -> tuple[NDArray[np.bool_], list[str]]:
+    """((N,) rows right after a clock jump, one note per jump and one for equal stamps).
+
+    A jump: a forward step :data:`CLOCK_JUMP_FACTOR` times the median step and
+    :data:`CLOCK_JUMP_MIN_S` or more. Equal stamps are named with their rows (a logger's
+    resolution: the lags hold still over them). A step back is the caller's to refuse."""
+    t = np.asarray(time_s, dtype=np.float64)
+    rows = np.arange(1, t.size + 1) if data_rows is None else np.asarray(data_rows)
+    breaks = np.zeros(t.size, dtype=bool)
+    notes: list[str] = []
+    if t.size < 3:
+        return breaks, notes
+    steps = np.diff(t)
+    forward = steps[np.isfinite(steps) & (steps > 0)]
+    usual = float(np.median(forward)) if forward.size else 0.0
+    for k in np.flatnonzero(steps >= max(CLOCK_JUMP_FACTOR * usual, CLOCK_JUMP_MIN_S)) + 1:
+        breaks[k] = True
+        notes.append(f"the clock jumps by {_duration(steps[k - 1])} at data row "
+                     f"{int(rows[k])} (its usual step {usual:g} s): taken as a break between "
+                     "runs (lags and time restart there)")
+    equal = np.flatnonzero(steps == 0) + 1
+    if equal.size:
+        from ..inputs.sensor_health import row_ranges
+
+        notes.append(f"equal time stamps at data rows {row_ranges(rows[equal])} ({equal.size} "
+                     "rows): taken as the logger's resolution (the lags hold still over them)")
+    return breaks, notes
+
+
+def _duration(seconds: float) -> str:
+    """A duration in the largest unit that keeps it above 1 (s, min, h, d)."""
+    for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if seconds >= size:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds:.3g} s"
 
 
 def leave_out_dead_sensors(temperatures: dict[str, NDArray[np.float64]],
-                           run_of_row: NDArray[np.intp] | None, names: list[str] | None
+                           run_of_row: NDArray[np.intp] | None, names: list[str] | None,
+                           data_rows: NDArray[np.intp] | None = None,
+                           breaks: NDArray[np.bool_] | None = None
                            ) -> tuple[dict[str, NDArray[np.float64]], list[str]]:
-    """(the sensors kept, one note per sensor left out). A sensor with no reading (NaN) in
-    more than :data:`DEAD_SHARE` of the rows, or :data:`DEAD_RUN_SHARE` of one run, is
-    dead - a broken
-    thermocouple - and is left out of every model; its rows stay. A few holes leave
-    their rows out instead (the caller's complete-row rule)."""
-    kept, notes = {}, []
-    for sensor, values in temperatures.items():
-        bad = ~np.isfinite(values)
-        if not bad.any():
-            kept[sensor] = values
-            continue
-        where = ""
-        dead = bad.mean() > DEAD_SHARE
-        if run_of_row is not None:
-            share = np.bincount(run_of_row, weights=bad, minlength=len(names)) / \
-                np.bincount(run_of_row, minlength=len(names))
-            runs = [names[k] for k in np.flatnonzero(share > DEAD_RUN_SHARE)]
-            dead = dead or bool(runs)
-            where = f" (run{'s' if len(runs) > 1 else ''} {', '.join(runs)})" if runs else ""
-        if dead:
-            notes.append(f"sensor {sensor}: no reading in {int(bad.sum())} of {bad.size} rows"
-                         f"{where} - dead, left out of every model (its rows kept)")
-        else:
-            kept[sensor] = values
-    return kept, notes
+    """(the sensors kept, one note per finding): every sensor judged by
+    :func:`~..inputs.sensor_health.judge_sensors` (dead, out of range, stuck, dropping out,
+    jumping). A sensor bad on more than
+    :data:`~..inputs.sensor_health.LEAVE_OUT_SHARE` of the rows, or
+    :data:`~..inputs.sensor_health.LEAVE_OUT_RUN_SHARE` of one run, or jumping, is left out
+    of every model and its rows kept; a few bad rows are NaN in the sensor kept (the
+    caller's complete-row rule leaves those rows out). ``data_rows`` (N,) number the rows
+    in the notes; ``breaks`` (N,) mark rows after a clock jump."""
+    from ..inputs.sensor_health import judge_sensors
+
+    health = judge_sensors(temperatures, data_rows, run_of_row, names, breaks)
+    return health.kept, health.notes

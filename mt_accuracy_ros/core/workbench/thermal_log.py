@@ -25,6 +25,8 @@ from numpy.typing import NDArray
 
 from ..compensation.error_model import ErrorModel
 from ..errors import InputDataError, InsufficientDataError
+# One rule for a signal's noise, shared with the sensors' judge (re-exported here).
+from ..inputs.sensor_health import noise_from_differences  # noqa: F401
 from ..kinematics.machine import generic_cartesian
 from .diagnosis import Observations
 from .log_runs import run_starts, stitched_time
@@ -45,15 +47,6 @@ def log_machine(structure_length_m: float = DEFAULT_STRUCTURE_LENGTH_M):
         raise InputDataError(f"structure length {structure_length_m!r} m: give a length > 0")
     machine = generic_cartesian({a: (0.0, 0.0) for a in "XYZ"}, name="thermal_log")
     return dataclasses.replace(machine, structure_length_m=float(structure_length_m))
-
-
-def noise_from_differences(values: NDArray[np.float64]) -> float:
-    """The white-noise sigma of a smooth signal from its successive differences (von
-    Neumann): the median absolute difference / (0.6745 sqrt 2), robust to steps."""
-    steps = np.diff(np.asarray(values, dtype=np.float64))
-    if steps.size < 2:
-        return 0.0
-    return float(np.median(np.abs(steps - np.median(steps))) / 0.6745 / np.sqrt(2.0))
 
 
 def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],

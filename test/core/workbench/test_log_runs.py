@@ -77,8 +77,11 @@ def test_a_dead_sensor_is_left_out_not_its_rows():
     kept, notes = leave_out_dead_sensors({"a": good, "b": dead, "c": holes}, runs,
                                          ["mon", "tue", "wed"])
     assert list(kept) == ["a", "c"]
+    # The glitches are named too (never silent): their rows go, the sensor stays.
     assert notes == ["sensor b: no reading in 100 of 300 rows (run tue) - dead, left out of "
-                     "every model (its rows kept)"]
+                     "every model (its rows kept)",
+                     "sensor c: no reading at data rows 6, 251 (2 of 300 rows) - those rows "
+                     "left out"]
 
 
 def test_lags_restart_at_each_run_from_its_first_reading():

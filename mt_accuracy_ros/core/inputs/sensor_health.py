@@ -1,0 +1,385 @@
+"""Every temperature sensor judged before it is used: one rule for logs, surveys, bags, nodes.
+
+A thermocouple breaks, a channel freezes, a logger writes a sentinel for "no
+value", a sensor is re-seated mid-log. Fed to a model such a reading decides
+it: a dead thermocouple at -180 degC becomes the "best" sensor, a constant one
+makes its candidates vanish without a word. Here each sensor's readings
+(degC, one per row) are judged; each problem found is a :class:`SensorFinding`
+naming the sensor, its kind, its rows and what was done:
+
+========== ================================================================ ==================
+kind       what it is                                                       what is done
+========== ================================================================ ==================
+dead       a physically absent value: outside :data:`PHYSICAL_RANGE_C`      its rows, or the
+           (an open thermocouple's -180, -273, 850) or exactly 0 over       sensor (below)
+           :data:`MIN_ZERO_ROWS` rows or more (a logger's empty cell)
+out_of     outside the workshop's :func:`workshop_range_c` (the plausibility   its rows, or the
+_range     table's; possible in physics, not on a machine tool)             sensor
+stuck      constant (exactly or within its quantisation) over               its rows, or the
+           :data:`STUCK_MIN_SHARE` of the rows or more while the other      sensor
+           sensors move (or, alone, over every row)
+dropout    no reading (NaN): a gap in the logger's record                   its rows, or the
+                                                                            sensor
+jumping    a step :data:`JUMP_SIGMAS` times its own noise and at least      the sensor (which
+           :data:`JUMP_MIN_K` that persists and no other sensor shares      side is right
+                                                                            cannot be told)
+========== ================================================================ ==================
+
+"Its rows, or the sensor": a sensor whose bad rows are more than :data:`LEAVE_OUT_SHARE`
+of the rows (or :data:`LEAVE_OUT_RUN_SHARE` of one run) is left out of every model and its
+rows kept; fewer bad rows are left out themselves (the other sensors' readings on them
+go too: a model needs every sensor on a row). Nothing is dropped or kept silently: each
+finding's ``text`` says which.
+
+Pure numpy, no ROS: :func:`judge_sensors` is the one implementation of the rule.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .plausibility import BOUNDS, temperature_quantity
+
+#: Readings outside this [degC] are not a temperature of anything on a machine tool: a
+#: sensor's "no value" (open thermocouple, -273, a logger's overflow).
+PHYSICAL_RANGE_C = (-50.0, 200.0)
+
+#: A machine tool's structure in a workshop [degC] (the plausibility table's: a spindle's,
+#: a motor's sensor - by its name - up to its hot bound); outside it a reading is possible
+#: in physics but not there (a sensor off its part, a wrong channel).
+WORKSHOP_RANGE_C = (BOUNDS["temperature"].low, BOUNDS["temperature"].high)
+
+
+def workshop_range_c(sensor: str) -> tuple[float, float]:
+    """The plausible readings [degC] of ``sensor``: hot ones (spindle, motor ... by name)
+    up to the plausibility table's hot bound."""
+    bound = BOUNDS[temperature_quantity(sensor)]
+    return bound.low, bound.high
+
+#: Exactly 0 on this many rows in a row is a logger's empty cell, not 0 degC.
+MIN_ZERO_ROWS = 3
+
+#: A constant stretch over this share of the rows (at least :data:`STUCK_MIN_ROWS`) is a
+#: stuck sensor when the others move.
+STUCK_MIN_SHARE = 0.1
+STUCK_MIN_ROWS = 20
+
+#: "The others move" over a stretch: one of them spans this much [K] there, at least (a
+#: quiet night holds every sensor within a quantum; a warm-up moves one by far more).
+OTHERS_MOVE_K = 0.5
+
+#: A step of this many times the sensor's own noise (and at least :data:`JUMP_MIN_K`)
+#: that lasts :data:`JUMP_WINDOW` rows and no other sensor shares is a jump.
+JUMP_SIGMAS = 30.0
+JUMP_MIN_K = 1.0
+JUMP_WINDOW = 20
+
+#: More bad rows than this share of the rows (or of one run) leave the sensor out.
+LEAVE_OUT_SHARE = 0.2
+LEAVE_OUT_RUN_SHARE = 0.5
+
+#: Row ranges a finding's text names, at most.
+SHOWN_RANGES = 3
+
+
+@dataclasses.dataclass(frozen=True)
+class SensorFinding:
+    """One problem of one sensor.
+
+    Attributes
+    ----------
+    sensor : str
+        The sensor (column) name.
+    kind : str
+        "dead", "out_of_range", "stuck", "dropout" or "jumping".
+    rows : tuple of int
+        Its bad rows' numbers (the caller's ``data_rows``: 1-based rows of the file's data).
+    text : str
+        One line for the user: the sensor, the kind, the rows, what was done.
+    left_out : bool
+        The sensor is left out of every model (else only ``rows`` are left out).
+    """
+
+    sensor: str
+    kind: str
+    rows: tuple[int, ...]
+    text: str
+    left_out: bool
+
+
+@dataclasses.dataclass
+class SensorHealth:
+    """The sensors judged: those kept (their bad rows NaN), and every finding."""
+
+    kept: dict[str, NDArray[np.float64]]
+    findings: list[SensorFinding]
+
+    @property
+    def notes(self) -> list[str]:
+        """Each finding's one line."""
+        return [f.text for f in self.findings]
+
+    @property
+    def left_out(self) -> list[str]:
+        """The sensors left out of every model, in the order found."""
+        return list(dict.fromkeys(f.sensor for f in self.findings if f.left_out))
+
+
+def noise_from_differences(values: ArrayLike) -> float:
+    """The white-noise sigma of a smooth signal from its successive differences (von
+    Neumann): the median absolute difference / (0.6745 sqrt 2), robust to steps. Same
+    unit as ``values``."""
+    steps = np.diff(np.asarray(values, dtype=np.float64))
+    steps = steps[np.isfinite(steps)]
+    if steps.size < 2:
+        return 0.0
+    return float(np.median(np.abs(steps - np.median(steps))) / 0.6745 / np.sqrt(2.0))
+
+
+def row_ranges(rows: ArrayLike, shown: int = SHOWN_RANGES) -> str:
+    """Row numbers (sorted) as "5, 9-40, 77 and 2 more ranges"."""
+    rows = np.asarray(rows, dtype=np.int64)
+    if rows.size == 0:
+        return "no row"
+    cuts = np.flatnonzero(np.diff(rows) != 1) + 1
+    parts = [f"{int(p[0])}" if p.size == 1 else f"{int(p[0])}-{int(p[-1])}"
+             for p in np.split(rows, cuts)]
+    more = len(parts) - shown
+    return ", ".join(parts[:shown]) + (f" and {more} more range{'s' if more > 1 else ''}"
+                                       if more > 0 else "")
+
+
+def _stretches(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
+    """[(start, stop)) of each run of True in ``mask``."""
+    edges = np.diff(np.concatenate(([0], mask.astype(np.int8), [0])))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
+def dead_rows(values: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """(N,) rows reading a physically absent value: outside :data:`PHYSICAL_RANGE_C`, or
+    exactly 0 over :data:`MIN_ZERO_ROWS` rows in a row."""
+    low, high = PHYSICAL_RANGE_C
+    finite = np.isfinite(values)
+    dead = finite & ((values < low) | (values > high))
+    zero = finite & (values == 0.0)
+    for a, b in _stretches(zero):
+        if b - a >= MIN_ZERO_ROWS:
+            dead[a:b] = True
+    return dead
+
+
+def out_of_range_rows(values: NDArray[np.float64],
+                      workshop_c: tuple[float, float] = WORKSHOP_RANGE_C) -> NDArray[np.bool_]:
+    """(N,) finite rows outside ``workshop_c`` [degC] (dead ones not counted)."""
+    low, high = workshop_c
+    return np.isfinite(values) & ((values < low) | (values > high)) & ~dead_rows(values)
+
+
+def _quantum(values: NDArray[np.float64]) -> float:
+    """The sensor's resolution [K]: its smallest non-zero step (0 when it never moves)."""
+    steps = np.abs(np.diff(values[np.isfinite(values)]))
+    steps = steps[steps > 0]
+    return float(steps.min()) if steps.size else 0.0
+
+
+def _flat_stretches(values: NDArray[np.float64], tolerance: float) -> list[tuple[int, int]]:
+    """[(start, stop)) of the longest stretches, taken greedily from the first row, whose
+    finite readings span ``tolerance`` or less (a NaN ends a stretch)."""
+    out, start, low, high = [], 0, np.inf, -np.inf
+    for i, value in enumerate(values.tolist()):
+        if value != value:                         # NaN
+            out.append((start, i))
+            start, low, high = i + 1, np.inf, -np.inf
+            continue
+        low, high = min(low, value), max(high, value)
+        if high - low > tolerance:
+            out.append((start, i))
+            start, low, high = i, value, value
+    out.append((start, len(values)))
+    return [(a, b) for a, b in out if b - a >= 2]
+
+
+def stuck_rows(values: NDArray[np.float64], others: list[NDArray[np.float64]]
+               ) -> NDArray[np.bool_]:
+    """(N,) rows of a stretch where the sensor holds still (within one quantum) over
+    :data:`STUCK_MIN_SHARE` of the rows or more while another sensor spans
+    :data:`OTHERS_MOVE_K` or more; with no other sensor, only a sensor constant on every
+    finite row."""
+    n = values.size
+    stuck = np.zeros(n, dtype=bool)
+    finite = np.isfinite(values)
+    if finite.sum() < 2:
+        return stuck
+    if not others:
+        if np.ptp(values[finite]) == 0.0:
+            stuck[finite] = True
+        return stuck
+    quantum = _quantum(values)
+    # Resolutions coarser than a tenth of a kelvin are a logger's, not a frozen channel's.
+    tolerance = quantum * (1 + 1e-9) if 0 < quantum <= 0.1 else 0.0
+    least = max(STUCK_MIN_ROWS, int(np.ceil(STUCK_MIN_SHARE * n)))
+    for start, stop in _flat_stretches(values, tolerance):
+        if stop - start < least:
+            continue
+        moving = [np.ptp(o[start:stop][np.isfinite(o[start:stop])]) for o in others
+                  if np.isfinite(o[start:stop]).sum() >= 2]
+        if moving and max(moving) >= OTHERS_MOVE_K:
+            stuck[start:stop] = True
+    return stuck
+
+
+def _step_at(values: NDArray[np.float64], k: int, window: int) -> float:
+    """The level after row k-1 minus the level before it (medians of ``window`` rows)."""
+    before = values[max(0, k - window):k]
+    after = values[k:k + window]
+    before, after = before[np.isfinite(before)], after[np.isfinite(after)]
+    if before.size < 2 or after.size < 2:
+        return 0.0
+    return float(np.median(after) - np.median(before))
+
+
+def jump_rows(values: NDArray[np.float64], others: list[NDArray[np.float64]],
+              breaks: NDArray[np.bool_] | None = None) -> list[int]:
+    """Rows (indices) where the sensor steps by :data:`JUMP_SIGMAS` times its noise and
+    :data:`JUMP_MIN_K` or more, the step lasting :data:`JUMP_WINDOW` rows, while no other
+    sensor steps by more than its own :data:`JUMP_SIGMAS` noises there. ``breaks`` (N,):
+    rows that start a new run or follow a clock jump (a step there is the break's)."""
+    # A quantised sensor's noise reads 0 off its differences: one quantum is its floor.
+    noise = max(noise_from_differences(values), _quantum(values))
+    threshold = max(JUMP_SIGMAS * noise, JUMP_MIN_K)
+    steps = np.abs(np.diff(values))
+    candidates = np.flatnonzero(np.nan_to_num(steps, nan=0.0) >= 0.5 * threshold) + 1
+    found = []
+    for k in candidates:
+        if breaks is not None and breaks[k]:
+            continue
+        if abs(_step_at(values, int(k), JUMP_WINDOW)) < threshold:
+            continue
+        shared = any(abs(_step_at(o, int(k), JUMP_WINDOW)) >=
+                     max(JUMP_SIGMAS * noise_from_differences(o), JUMP_MIN_K) for o in others)
+        if not shared and (not found or k - found[-1] > JUMP_WINDOW):
+            found.append(int(k))
+    return found
+
+
+def _too_many(bad: NDArray[np.bool_], run_of_row: NDArray[np.intp] | None,
+              run_names: list[str] | None) -> tuple[bool, list[str]]:
+    """(leave the sensor out, the runs mostly bad) by :data:`LEAVE_OUT_SHARE` and
+    :data:`LEAVE_OUT_RUN_SHARE`."""
+    runs: list[str] = []
+    if run_of_row is not None and bad.size:
+        count = int(run_of_row.max()) + 1
+        share = np.bincount(run_of_row, weights=bad, minlength=count) / \
+            np.maximum(np.bincount(run_of_row, minlength=count), 1)
+        names = run_names or [str(k) for k in range(count)]
+        runs = [names[k] for k in np.flatnonzero(share > LEAVE_OUT_RUN_SHARE)]
+    return bool(bad.mean() > LEAVE_OUT_SHARE) or bool(runs), runs
+
+
+def _describe(kind: str, values: NDArray[np.float64], bad: NDArray[np.bool_],
+              others: bool = True, workshop_c: tuple[float, float] = WORKSHOP_RANGE_C) -> str:
+    """What the bad rows read, in words."""
+    seen = values[bad & np.isfinite(values)]
+    if kind == "dropout":
+        return "no reading"
+    if kind == "stuck":
+        return f"stuck at {seen[0]:.6g} degC{' while the others move' if others else ''}"
+    span = f"{seen.min():.4g}" if np.ptp(seen) < 0.05 * max(abs(seen.min()), 1.0) else \
+        f"{seen.min():.4g} ... {seen.max():.4g}"
+    if kind == "dead":
+        return f"reads {span} degC, a physically absent value (dead)"
+    low, high = workshop_c
+    return f"reads {span} degC, outside a workshop's {low:g} ... {high:g} degC"
+
+
+def judge_sensors(temperatures: dict[str, ArrayLike], data_rows: ArrayLike | None = None,
+                  run_of_row: ArrayLike | None = None, run_names: list[str] | None = None,
+                  breaks: ArrayLike | None = None) -> SensorHealth:
+    """Judge each sensor (module docstring): the sensors kept and every finding.
+
+    Parameters
+    ----------
+    temperatures : dict of str to array, shape (N,)
+        Each sensor's readings [degC]; NaN where it gave none.
+    data_rows : array of int, shape (N,), optional
+        Each row's number for the texts (default 1..N).
+    run_of_row, run_names : optional
+        The run of each row and the runs' names: a sensor mostly bad in one run is left
+        out, and a step at a run's start is not a jump.
+    breaks : array of bool, shape (N,), optional
+        Rows after a break of the record (a clock jump): a step there is not a jump.
+
+    Returns
+    -------
+    SensorHealth
+        ``kept``: the sensors used, each a float copy with its bad rows NaN (the caller
+        leaves those rows out); ``findings``: one per problem, in sensor order.
+    """
+    series = {name: np.asarray(v, dtype=np.float64).copy() for name, v in temperatures.items()}
+    n = next(iter(series.values())).size if series else 0
+    rows = np.arange(1, n + 1) if data_rows is None else np.asarray(data_rows)
+    runs = None if run_of_row is None else np.asarray(run_of_row, dtype=np.intp)
+    cut = np.zeros(n, dtype=bool) if breaks is None else np.asarray(breaks, dtype=bool).copy()
+    if runs is not None and n:
+        cut[1:] |= np.diff(runs) != 0
+    kept, findings = {}, []
+    for name, values in series.items():
+        # A sensor is judged against the others' sane readings only.
+        others = [np.where(dead_rows(o) | out_of_range_rows(o, workshop_range_c(other)),
+                           np.nan, o)
+                  for other, o in series.items() if other != name]
+        sensor_findings = _judge_one(name, values, others, rows, runs, run_names, cut)
+        findings += sensor_findings
+        if any(f.left_out for f in sensor_findings):
+            continue
+        for finding in sensor_findings:
+            values[np.isin(rows, finding.rows)] = np.nan
+        kept[name] = values
+    return SensorHealth(kept, findings)
+
+
+def _judge_one(name: str, values: NDArray[np.float64], others: list[NDArray[np.float64]],
+               rows: NDArray, runs: NDArray[np.intp] | None, run_names: list[str] | None,
+               breaks: NDArray[np.bool_]) -> list[SensorFinding]:
+    """The findings of one sensor (see :func:`judge_sensors`)."""
+    workshop_c = workshop_range_c(name)
+    dead = dead_rows(values)
+    outside = out_of_range_rows(values, workshop_c)
+    missing = ~np.isfinite(values)
+    sane = np.where(dead | outside, np.nan, values)
+    stuck = stuck_rows(sane, others) & ~missing
+    bad_kinds = [("dead", dead), ("out_of_range", outside), ("stuck", stuck),
+                 ("dropout", missing)]
+    bad = dead | outside | stuck | missing
+    leave_out, mostly_bad_runs = _too_many(bad, runs, run_names)
+    jumps = [] if leave_out else jump_rows(np.where(stuck, np.nan, sane), others, breaks)
+    leave_out = leave_out or bool(jumps)
+    where = (f" (run{'s' if len(mostly_bad_runs) > 1 else ''} {', '.join(mostly_bad_runs)})"
+             if mostly_bad_runs else "")
+    action = "left out of every model (its rows kept)" if leave_out else \
+        "those rows left out"
+    findings = []
+    for kind, mask in bad_kinds:
+        if not mask.any():
+            continue
+        count = int(mask.sum())
+        if kind == "dropout" and leave_out and count == int(bad.sum()):
+            # The wording a dead thermocouple's gaps have always had.
+            text = (f"sensor {name}: no reading in {count} of {values.size} rows{where} - "
+                    f"dead, {action}")
+        else:
+            text = (f"sensor {name}: {_describe(kind, values, mask, bool(others), workshop_c)} at data rows "
+                    f"{row_ranges(rows[mask])} ({count} of {values.size} rows){where} - "
+                    f"{action}")
+        findings.append(SensorFinding(name, kind, tuple(int(r) for r in rows[mask]), text,
+                                      leave_out))
+    for k in jumps:
+        step = _step_at(np.where(stuck, np.nan, sane), k, JUMP_WINDOW)
+        findings.append(SensorFinding(
+            name, "jumping", tuple(int(r) for r in rows[k:]),
+            f"sensor {name}: jumps by {step:+.3g} K at data row {int(rows[k])} (its noise "
+            f"{noise_from_differences(sane):.2g} K; no other sensor steps there) - left out "
+            "of every model (which side is right cannot be told)", True))
+    return findings
