@@ -18,6 +18,16 @@ from rclpy.clock import Clock, ClockType
 
 #: Counters kept per stream.
 COUNTERS = ("processed", "refused", "lost", "out_of_order", "late")
+#: Key prefix of the warnings a node has said, sent with every status
+#: (``warning.0``, ``warning.1`` ...): see :func:`warnings_of`.
+WARNING_KEY = "warning"
+
+
+def warnings_of(values: dict[str, str]) -> list[str]:
+    """The warnings in a ``<node>: delivery`` status' values (key -> value), in order."""
+    numbered = [(int(key.split(".", 1)[1]), text) for key, text in values.items()
+                if key.startswith(f"{WARNING_KEY}.") and key.split(".", 1)[1].isdigit()]
+    return [text for _, text in sorted(numbered)]
 
 
 class DeliveryHealth:
@@ -32,6 +42,10 @@ class DeliveryHealth:
         self._reported: dict[str, Counter] = defaultdict(Counter)
         #: Facts about the node sent with every status (e.g. ``scheduling``).
         self.notes: dict[str, str] = {}
+        #: Every WARN this node has said, in order: repeated with every status as
+        #: ``warning.<n>`` so that a listener that missed the moment (or came late)
+        #: still hears it - a run's summary must carry them all.
+        self.warnings: list[str] = []
         node.create_timer(period_s, self.publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
         # rclpy refuses a value outside its descriptor (range, type, read-only) before any
         # on-set callback runs: counted here, before that check, so that every refused
@@ -58,10 +72,14 @@ class DeliveryHealth:
     def warn(self, message: str) -> None:
         """A WARN on /diagnostics now (and in the log): a condition the node runs on with."""
         self._node.get_logger().warning(message)
+        if message not in self.warnings:
+            self.warnings.append(message)
         self._send([self._status(DiagnosticStatus.WARN, message, self._note_values())])
 
     def _note_values(self) -> list[KeyValue]:
-        return [KeyValue(key=key, value=value) for key, value in sorted(self.notes.items())]
+        return [KeyValue(key=key, value=value) for key, value in sorted(self.notes.items())] + \
+            [KeyValue(key=f"{WARNING_KEY}.{k}", value=text)
+             for k, text in enumerate(self.warnings)]
 
     def alarm(self, message: str, topic: str = "model") -> None:
         """An ERROR on /diagnostics (``<node>: <topic>``): something the operator must act on."""
@@ -171,3 +189,76 @@ def descriptor_problem(node, parameter) -> str:
         if not (low - slack <= value <= high + slack):
             return f"{parameter.name}: {value} outside [{low}, {high}]"
     return ""
+
+
+class LiveSensorWatch:
+    """Each live temperature sensor judged reading by reading, by the rules the offline
+    judge uses (:mod:`mt_accuracy_ros.core.inputs.sensor_health`): no value (NaN, inf),
+    a physically absent value (outside ``PHYSICAL_RANGE_C``: an open thermocouple's
+    -180 degC), a value outside the workshop's range, or frozen - the very same value
+    over ``STUCK_MIN_ROWS`` readings in a row while another sensor moves by
+    ``OTHERS_MOVE_K`` or more over them. Live, "frozen" is bit-identical (the offline
+    rule's one-quantum tolerance needs the whole log to find the quantum; a live window
+    is too short to tell a 0.01 K logger from a stuck one).
+
+    Pure bookkeeping, no ROS: the node says what :meth:`judge` finds on /diagnostics.
+    """
+
+    def __init__(self, window: int | None = None) -> None:
+        from collections import deque
+
+        from ..core.inputs.sensor_health import STUCK_MIN_ROWS
+
+        self.window = int(window or STUCK_MIN_ROWS)
+        self._recent: dict[str, "deque[float]"] = {}
+        self._deque = deque
+
+    def judge(self, readings: dict[str, float]
+              ) -> tuple[dict[str, float], dict[str, tuple[str, str]]]:
+        """One message's readings [degC] (in data-time order): (the readings the model may
+        use, sensor -> (kind, why it is left out)), the kinds those of the offline judge
+        ("dropout", "dead", "out_of_range", "stuck"), e.g. ("dead", "reads -180 degC, a
+        physically absent value (outside -50 ... 200 degC: dead)")."""
+        import numpy as np
+
+        from ..core.inputs.sensor_health import (OTHERS_MOVE_K, PHYSICAL_RANGE_C,
+                                                 WORKSHOP_RANGE_C, dead_rows, out_of_range_rows)
+
+        for name, value in readings.items():
+            self._recent.setdefault(name, self._deque(maxlen=self.window)).append(float(value))
+        good, bad = {}, {}
+        for name, value in readings.items():
+            one = np.array([value], dtype=np.float64)
+            if not np.isfinite(value):
+                bad[name] = ("dropout", f"no value ({value})")
+            elif dead_rows(one)[0]:
+                low, high = PHYSICAL_RANGE_C
+                bad[name] = ("dead", f"reads {value:.4g} degC, a physically absent value "
+                             f"(outside {low:g} ... {high:g} degC: dead)")
+            elif out_of_range_rows(one)[0]:
+                low, high = WORKSHOP_RANGE_C
+                bad[name] = ("out_of_range", f"reads {value:.4g} degC, outside a workshop's "
+                             f"{low:g} ... {high:g} degC (a wrong unit or channel?)")
+            elif self._frozen(name, OTHERS_MOVE_K):
+                bad[name] = ("stuck", f"frozen at {value:.6g} degC for {self.window} readings "
+                             f"while another sensor moves by {OTHERS_MOVE_K:g} K or more")
+            else:
+                good[name] = float(value)
+        return good, bad
+
+    def _frozen(self, name: str, others_move_k: float) -> bool:
+        import numpy as np
+
+        from ..core.inputs.sensor_health import PHYSICAL_RANGE_C as physical
+
+        mine = self._recent[name]
+        if len(mine) < self.window or len(set(mine)) != 1:
+            return False
+        for other, values in self._recent.items():
+            seen = np.array(values, dtype=np.float64)
+            low, high = physical
+            seen = seen[np.isfinite(seen) & (seen >= low) & (seen <= high)]   # sane ones only
+            if other != name and len(values) == self.window and seen.size >= 2 and \
+                    np.ptp(seen) >= others_move_k:
+                return True
+        return False

@@ -33,7 +33,9 @@ Besides, every participant that follows model versions (``model_version_settled
 >= 0``) must have settled - made live or refused - the newest version any
 participant published. A participant silent for ``lockstep_timeout_s`` of wall
 time while the machine waits on it is left out, with a WARN: a dead node must
-not hang the machine.
+not hang the machine. The WARN is repeated with every status the machine sends
+(``warning.<n>``, :class:`._health.DeliveryHealth`), so the main job's summary
+names the participant left out among its warnings, whenever it listened.
 """
 from __future__ import annotations
 

@@ -8,6 +8,7 @@ from mt_accuracy_msgs.msg import ModelVersion, SystematicProfile, TemperatureArr
 
 from ..core.compensation.error_model import ErrorModel, model_to_dict, resolve_model
 from ..core.errors import InputDataError, MtAccuracyError
+from ._health import LiveSensorWatch
 from ._common import (LATCHED_QOS, RESULT_QOS, SENSOR_QOS, TABLE_QOS,  # noqa: F401
                       stamp_to_nanoseconds, unpack_float64)
 
@@ -111,7 +112,9 @@ class ModelInputs:
         self.settled_version = int(self.model.version)
         self.on_settled = None
         self.temperatures: dict[str, float] = {}
-        self.dead: set[str] = set()
+        #: Sensors whose latest reading is left out (dead, frozen, implausible) -> kind.
+        self.dead_kinds: dict[str, str] = {}
+        self._watch = LiveSensorWatch()
         self.on_change = on_change
         self.delay_ns = int(delay_s * 1e9)
         self._applied_until = -1  # data time [ns] up to which inputs have been applied
@@ -245,13 +248,12 @@ class ModelInputs:
                                  "temperatures")
         self.health.sequence("temperatures", message.sequence)
         self.health.processed("temperatures")
-        good = {name: float(v) for name, v in zip(message.sensor_names, values) if np.isfinite(v)}
-        dead = {name for name, v in zip(message.sensor_names, values) if not np.isfinite(v)}
+        readings = {name: float(v) for name, v in zip(message.sensor_names, values)}
         stamp = stamp_to_nanoseconds(message.header.stamp)
         self.last_stamp["temperatures"] = max(self.last_stamp.get("temperatures", stamp), stamp)
         if stamp <= self._applied_until:
             self.health.late("temperatures")
-        self._pending_temperatures.append((stamp, good, dead))
+        self._pending_temperatures.append((stamp, readings))
         self._pending_temperatures.sort(key=lambda item: item[0])
 
     def _on_profile(self, message: SystematicProfile) -> None:
@@ -282,15 +284,19 @@ class ModelInputs:
         limit = stamp_ns - self.delay_ns
         self._applied_until = max(self._applied_until, limit)
         while self._pending_temperatures and self._pending_temperatures[0][0] <= limit:
-            _, good, dead = self._pending_temperatures.pop(0)
-            self.temperatures.update(good)  # a dead sensor keeps its last valid value
+            _, readings = self._pending_temperatures.pop(0)
+            # Judged in data-time order (a frozen sensor is a run of readings): what the
+            # judge leaves out never reaches the model, which holds the sensor's last
+            # valid value.
+            good, dead = self._watch.judge(readings)
+            self._say_dead(dead)
+            self.temperatures.update(good)
             # Rises count from the first reading of each sensor in data time - the
             # cold state the model and the work zero refer to - not from whenever the
             # model happens to be evaluated first (a late reference is a constant
             # error of beta x the rise missed; every node gets the same one).
             for sensor, value in good.items():
                 self.model.reference_temperatures_c.setdefault(sensor, value)
-            self.dead = dead
         changed = False
         while self._pending_profiles and self._pending_profiles[0][0] <= limit:
             _, name, positions, values, difference = self._pending_profiles.pop(0)
@@ -300,6 +306,26 @@ class ModelInputs:
                 self.health.refused(f"systematic/{name}", f"profile ignored: {exc}")
         if changed and self.on_profiles is not None:
             self.on_profiles()
+
+    @property
+    def dead(self) -> set[str]:
+        """The sensors whose latest reading was left out."""
+        return set(self.dead_kinds)
+
+    def _say_dead(self, dead: dict[str, tuple[str, str]]) -> None:
+        """A WARN on /diagnostics naming each sensor that goes bad, once per kind of
+        trouble (a log line when it reads valid again): never silently dropped, never
+        silently used."""
+        for name, (kind, why) in dead.items():
+            if self.dead_kinds.get(name) != kind:
+                held = self.temperatures.get(name)
+                self.health.warn(
+                    f"temperature sensor {name}: {why} - left out of the model's inputs"
+                    + (f"; its last valid value {held:.2f} degC is held" if held is not None
+                       else "; no valid value yet, the model goes without it"))
+        for name in set(self.dead_kinds) - set(dead):
+            self.node.get_logger().info(f"temperature sensor {name} reads valid values again")
+        self.dead_kinds = {name: kind for name, (kind, _) in dead.items()}
 
     def silent(self, stamp_ns: int, horizon_s: float) -> dict[str, float]:
         """Input streams seen before that sent nothing for more than ``horizon_s`` of data
