@@ -457,3 +457,18 @@ def test_a_log_with_a_clock_and_no_date_runs_across_midnight(tmp_path, capsys):
     assert "note: time from the clock of Uhrzeit" in capsys.readouterr().out
     assert figures[0][0] == figures[1][0] and figures[0][0]
     assert figures[0][1] == pytest.approx(figures[1][1], rel=1e-9)
+
+
+def test_a_flag_s_unknown_unit_is_named_not_taken_for_a_missing_one():
+    """``--target dev:microns``: the unit is named as unknown with the known ones listed
+    (it was reported as none read off the column's name); a flag without a unit and a
+    name without one still asks for it."""
+    from mt_accuracy_ros.commands.check import _column_and_unit
+    from mt_accuracy_ros.core.errors import InputDataError
+
+    with pytest.raises(InputDataError, match=r"^target 'dev': unknown length unit 'microns'; "
+                                             r"known: m, mm, um"):
+        _column_and_unit("dev:microns", ["dev"], "length", "target")
+    with pytest.raises(InputDataError, match=r"give its unit as dev:UNIT"):
+        _column_and_unit("dev", ["dev"], "length", "target")
+    assert _column_and_unit("dev:μm", ["dev"], "length", "target")[1] == 1e-6
