@@ -61,9 +61,22 @@ def rms(values: np.ndarray) -> np.ndarray:
     return np.sqrt(np.mean(np.asarray(values) ** 2, axis=0))
 
 
-def end_rows(readings: Readings, window_s: float = 10.0) -> np.ndarray:
+#: The end state's length [s of data]: the demo's (core/workbench/closed_loop.py
+#: END_WINDOW_S), written out here so that a change there shows as a test failure.
+END_WINDOW_S = 30.0
+
+
+def end_rows(readings: Readings, window_s: float = END_WINDOW_S) -> np.ndarray:
     """The readings of the run's last ``window_s`` seconds (the end state)."""
     return readings.time_s >= readings.time_s[-1] - window_s
+
+
+def least_u_of_rms(instrument_u_k2: float, count: int) -> float:
+    """The smallest expanded uncertainty (k = 2) an RMS of ``count`` readings can have with
+    an instrument of ``instrument_u_k2``: its instrument part alone, 2 (U/2) / sqrt(N).
+    ISO 14253-1 shows conformance only when RMS + U <= band, so RMS + this <= band is a
+    necessary condition the demo's "within" must meet, whatever its sampling part."""
+    return float(instrument_u_k2) / np.sqrt(count)
 
 
 def first_live_s(readings: Readings, version: int) -> float | None:

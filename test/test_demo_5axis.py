@@ -88,6 +88,11 @@ def test_the_five_axis_job_names_the_rotary_axes_from_the_direction_and_ends_in_
     direction = summary["tool_direction"]
     assert code == 0 and summary["end_state_within_band"], (summary["failures"], printed)
     assert direction["end_within_band"], direction
+    # ISO 14253-1: conformance shown for the tip and the direction, each component.
+    assert summary["end_state_conformance"] == "within"
+    assert set(summary["end_state_conformance_by_component"]) == {
+        "e_x", "e_y", "e_z", "direction about x", "direction about y", "direction about z"}
+    assert set(summary["end_state_conformance_by_component"].values()) == {"within"}
     # The outcome recomputed from the bag (independent decoder, plain RMS): the user's
     # model live from its decision (32.9 s of data) to the end; the end state's position
     # and tool direction below the R-test's bands, far below the machine's own error.

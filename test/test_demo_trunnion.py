@@ -35,6 +35,7 @@ def test_the_trunnion_job_finds_the_c_centre_and_the_a_pivot_and_ends_in_the_ban
                                                     "structural_thermal_drift:column"], printed
     assert summary["effect_added_accepted"] and summary["end_state_within_band"]
     assert summary["tool_direction"]["end_within_band"]
+    assert summary["end_state_conformance"] == "within"   # ISO 14253-1: tip and direction
     truth = resolve_scenario("demo_trunnion").parameters("rotary_location")["errors"]
     found = yaml.safe_load((out / "model.yaml").read_text())["effects"][
         "rotary_location:AC"]["coefficients"]

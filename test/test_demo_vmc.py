@@ -70,6 +70,7 @@ def test_the_vmc_loop_closes_within_the_band_recomputed_from_the_bag(vmc_run):
     end = end_rows(readings)
     compensated = rms(readings.measured_m[end])
     assert np.all(compensated < 1e-6), compensated
+    assert summary["end_state_conformance"] == "within"   # ISO 14253-1: RMS + U <= band
     assert np.all(rms(readings.measured_m[end] - readings.applied_m[end]) > 4 * compensated)
     figures = summary["closed_loop"][-1]["with_compensation"]
     assert [figures[c]["rms_um"] for c in "xyz"] == pytest.approx(compensated * 1e6, abs=1e-9)
