@@ -743,7 +743,12 @@ def _datum_line(time_s, measured, end, band: float, lines: list[str]) -> None:
     lines.append("  end state about its mean (the datum a work-offset touch-off takes out: "
                  + ", ".join(f"{m * 1e6:+.2f}" for m in mean) + " um): spread "
                  + "; ".join(f"{v.name} {v.rms:.2f} ± {v.u_k2:.2f} um" for v in verdicts)
-                 + f" - {overall(v.state for v in verdicts).value} the band (ISO 14253-1)")
+                 + f" - {_BAND_WORDS[overall(v.state for v in verdicts).value]} (ISO 14253-1)")
+
+
+#: An overall state as the printed lines say it of the band.
+_BAND_WORDS = {"within": "within the band", "outside": "outside the band",
+               "undecided": "undecided against the band"}
 
 
 def rotary_location_identified(model_path: Path, machine) -> str:
