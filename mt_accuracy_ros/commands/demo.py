@@ -836,6 +836,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         # ISO 14253-1: "within" only when RMS + U <= band for every component (and the
         # tool's direction on a five-axis machine); the old key is True only then.
         "end_state_conformance": _conformance_of(story).value,
+        "end_state_verdict": _state_words(_conformance_of(story)),
         "end_state_conformance_by_component": {
             v["name"]: v["conformance"] for v in story.get("end_state_verdicts", [])},
         "end_state_verdicts": [v["sentence"] for v in story.get("end_state_verdicts", [])],
