@@ -141,9 +141,8 @@ def _measured_headline(data: BagData) -> tuple[Table, str] | None:
                     for f in phase.with_compensation],
                   css_class="best" if phase.label == "end state" and phase.within(band) else "")
     end = phases[-1]
-    verdict = (f"End of the run (last {end.end_s - end.start_s:.0f} s): "
-               f"{end.conformance(band).value} the instrument's band (± {band * UM:.2g} µm, "
-               "k = 2; ISO 14253-1: within only when RMS + U <= band). "
+    verdict = (f"End of the run (last {end.end_s - end.start_s:.0f} s, the instrument's "
+               f"band ± {band * UM:.2g} µm, k = 2): {_conformance_words(end.conformance(band))} "
                + "; ".join(v.sentence() for v in end.verdicts(band)) + ".")
     return table, verdict
 
