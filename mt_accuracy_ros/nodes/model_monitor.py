@@ -688,10 +688,19 @@ class ModelMonitor(Node):
         check.diagnosis = (f"tool-direction residual {check.rmse * 1e6:.1f} urad RMS over "
                            f"{obs.n} readings (the machine's own error {before * 1e6:.1f} urad; "
                            f"instrument band {band * 1e6:.1f} urad)")
+        # ISO 14253-1 (core/workbench/conformance.py): within only when RMS + U <= band.
+        from ..core.workbench.conformance import judge
+        from ..core.workbench.statistics import rms_with_uncertainty
+
+        figure = rms_with_uncertainty(norm, band)
+        verdict = judge("tool-direction residual", figure.rms * 1e6, figure.rms_u_k2 * 1e6,
+                        band * 1e6, "urad")
         check.verdict = ("the model explains the tool's direction within the instrument's band"
-                         if check.rmse <= band else
+                         if verdict.state.value == "within" else
                          f"an unexplained tool-direction error of {check.rmse * 1e6:.1f} urad "
-                         "remains")
+                         "remains" if verdict.state.value == "outside" else
+                         "undecided whether the model explains the tool's direction within "
+                         "the instrument's band") + f": {verdict.sentence()}"
         self._direction_check.publish(check)
 
     def _search_settings(self) -> tuple[float, int, bool]:
