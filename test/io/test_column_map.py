@@ -311,3 +311,50 @@ def test_a_survey_time_column_of_date_times_reads_as_seconds_since_the_first(tmp
     np.testing.assert_array_equal(survey.time_s, 15.0 * kept)
     plain = read_mapped_csv(_write(tmp_path / "plain.csv", rows), column_map_from_dict(MAP))
     np.testing.assert_array_equal(survey.positions["X"], np.delete(plain.positions["X"], 7))
+
+
+def test_no_quantity_defaults_to_si_and_the_default_uncertainty_is_announced(tmp_path):
+    """A bare uncertainty or tool offset, an unknown role or unit are one line that says
+    how to give it; a map without an uncertainty takes the 1 um default and says so."""
+    with pytest.raises(ParameterError, match=r"^m.yaml: uncertainty: 1.4 has no unit; give it "
+                                             r"as uncertainty: \{value: 1.4, unit: um\}$"):
+        column_map_from_dict({"uncertainty": 1.4}, "m.yaml")
+    with pytest.raises(ParameterError, match=r"tool_offset: -150 has no unit; give it as "
+                                             r"tool_offset: \{value: -150, unit: mm\}"):
+        column_map_from_dict({"tool_offset": {"value": -150}})
+    with pytest.raises(ParameterError, match=r"unknown role 'pos_X'; known roles: time, pos.X"):
+        parse_col_flags(["pos_X=x:mm"])
+    with pytest.raises(ParameterError, match=r"unknown temperature unit 'Rankine'; known: "
+                                             r"degC, C, K, degF"):
+        parse_col_flags(["temp.bed=Tb:Rankine"])
+    assert parse_col_flags(["temp.bed=Tb:°C"]).roles["temp.bed"] == ("Tb", "degC")
+    silent = column_map_from_dict({"positions": {"X": "x_mm"}})
+    assert silent.uncertainty_m == pytest.approx(1e-6)
+    assert silent.uncertainty_note().startswith("uncertainty: the column map states none; "
+                                                "1 um (k = 2) assumed")
+    assert column_map_from_dict(MAP).uncertainty_note() == ""
+
+
+def test_a_time_column_of_date_times_needs_no_unit_but_numbers_do(tmp_path):
+    import datetime as dt
+
+    start = dt.datetime(2026, 11, 20, 7, 0, 0)
+    rows = _rows()
+    dated = [f"{start + dt.timedelta(seconds=15 * k):%Y-%m-%d %H:%M:%S}" + row[row.index(","):]
+             for k, row in enumerate(rows)]
+    data = dict(MAP, time="t")
+    survey = read_mapped_csv(_write(tmp_path / "dated.csv", dated), column_map_from_dict(data))
+    np.testing.assert_array_equal(survey.time_s, 15.0 * np.arange(25))
+    with pytest.raises(ParameterError, match=r"^column t \(time\) has no unit"):
+        read_mapped_csv(_write(tmp_path / "plain.csv", rows), column_map_from_dict(data))
+
+
+def test_implausible_values_are_refused_naming_the_unit_they_look_like(tmp_path):
+    kelvin = dict(MAP, temperatures={"col": {"column": "Tc", "unit": "degC"}})
+    with pytest.raises(ParameterError, match=r"^column Tc \(temp.col\): values 293.1 … 317.1 "
+                                             r"declared °C look like K"):
+        read_mapped_csv(_write(tmp_path / "a.csv", _rows()), column_map_from_dict(kelvin))
+    metres = dict(MAP, errors={"x": {"column": "x", "unit": "m"}})
+    with pytest.raises(ParameterError, match=r"column x \(err.x\): values 0 … 240 declared m "
+                                             r"look like µm"):
+        read_mapped_csv(_write(tmp_path / "a.csv", _rows()), column_map_from_dict(metres))
