@@ -81,6 +81,9 @@ def test_the_figures_are_the_standards_definitions(tmp_path, capsys):
         assert summary["figures_um"][symbol] == pytest.approx(value, abs=2e-4), symbol
     assert summary["figures_m"]["accuracy"] == pytest.approx(expected["A"] * 1e-6, abs=2e-10)
     assert f"  A   {expected['A']:9.3f} um   accuracy, bidirectional" in out
+    # The units each column was read in are said (here: the header's).
+    assert "units: target 'target_mm' in mm, measured 'actual_mm' in mm" in out
+    assert summary["units_note"] == "units: target 'target_mm' in mm, measured 'actual_mm' in mm"
     assert len(summary["per_target"]) == len(TARGETS_MM) and not summary["notes"]
     # The report: the figures, the per-target table and the standard's plot.
     titles = [s["title"] for s in summary["report"]["sections"]]

@@ -61,7 +61,8 @@ def evaluate_run(path: Path, flags: list[str], axis: str = "X",
                      "repeatability figures rest on fewer.")
     result = iso230_2(targets, up, down)
     return {"data": str(path), "kind": "iso230_2", "axis": axis, "columns": run.columns,
-            "rows_note": run.rows_note, "targets": int(targets.size), "runs": int(up.shape[1]),
+            "rows_note": run.rows_note, "units_note": run.units_note(),
+            "targets": int(targets.size), "runs": int(up.shape[1]),
             "figures_m": result.summary(),
             "figures_um": {symbol: getattr(result, name) * 1e6 for name, symbol, _ in FIGURES},
             "per_target": [{"target_mm": float(t * 1e3), "mean_up_um": float(a * 1e6),
@@ -78,6 +79,7 @@ def evaluate_run(path: Path, flags: list[str], axis: str = "X",
 def print_run(result: dict) -> None:
     print(f"{result['rows_note']}; {result['targets']} targets x {result['runs']} runs "
           f"x 2 directions, axis {result['axis']}")
+    print(result["units_note"])
     for name, symbol, meaning in FIGURES:
         print(f"  {symbol:3s} {result['figures_um'][symbol]:9.3f} um   {meaning}")
     print(f"  {'target [mm]':>12s} {'x↑ [um]':>9s} {'x↓ [um]':>9s} {'s↑ [um]':>8s} "

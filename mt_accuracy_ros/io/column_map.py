@@ -78,7 +78,7 @@ _LENGTH, _ANGLE = LENGTH, ANGLE
 #: column of that kind usually holds).
 EXAMPLE_UNITS = {"time": "s", "length": "mm", "angle": "deg", "velocity": "mm/min",
                  "acceleration": "m/s^2", "speed": "rpm", "temperature": "degC"}
-#: The column roles (``KIND.KEY``) and what their key is.
+#: The column roles (``KIND.KEY``), as a refusal of an unknown one lists them.
 ROLES_HELP = ("time, pos.X, err.x, temp.<sensor>, vel.X, acc.X, dir.X, spindle, run, "
               "tdir.x, target.x")
 

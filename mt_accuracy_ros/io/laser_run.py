@@ -77,8 +77,15 @@ class LaserRun:
     temperature_c: np.ndarray | None
     columns: dict[str, str] = field(default_factory=dict)
     rows_note: str = ""
-    #: Every refused row: "row N column C: why".
+    #: Rows dropped for a cell in a column no role reads: "row N column C: why".
     refused: list[str] = field(default_factory=list)
+    #: role -> the unit its column was read in (the flag's, the header's or a units row's).
+    units: dict[str, str] = field(default_factory=dict)
+
+    def units_note(self) -> str:
+        """What the run was read in: ``units: target 'target_mm' in mm, ...``."""
+        return "units: " + ", ".join(f"{role} {self.columns[role]!r} in {unit}"
+                                     for role, unit in self.units.items())
 
 
 #: How instruments write an approach direction (lower case; numbers by their sign).
@@ -305,4 +312,4 @@ def read_laser_run(path: str | Path, flags: list[str] | None = None, *,
     temperature = values("temperature") if "temperature" in roles else None
     return LaserRun(target, deviation, direction, np.asarray(run, dtype=np.int64), temperature,
                     {role: column for role, (column, _) in roles.items()}, table.summary(),
-                    refused)
+                    refused, units)
