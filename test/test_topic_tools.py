@@ -86,3 +86,25 @@ def test_on_the_live_graph(tmp_path):
         assert "average rate:" in out.getvalue() or "no new messages" in out.getvalue()
     finally:
         publisher.stop()
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["hz", "/topic", "--bag", str(TALKER), "--duration", "2"],
+     "--duration applies to the live graph, not to a bag"),
+    (["list", "--bag", str(TALKER), "--spin-time", "3"],
+     "--spin-time applies to the live graph, not to a bag"),
+    (["hz", "/topic", "--bag", str(TALKER), "-n", "3"],
+     "-n/--count applies to the live graph, not to a bag"),
+    (["hz", "/topic", "--use-header-stamp"],
+     "--use-header-stamp applies to a bag (--bag), not to the live graph"),
+    (["echo", "/topic", "--bag", str(TALKER), "--truncate-length", "-1"],
+     "--truncate-length must be an integer >= 0 [0: whole arrays], got -1"),
+    (["hz", "/topic", "--bag", str(TALKER), "-w", "-2"],
+     "-w/--window must be an integer >= 0 [messages; 0: all], got -2"),
+    (["echo", "/topic", "--spin-time", "0"], "--spin-time must be > 0 [s], got 0"),
+    (["list", "--bag", "/no/such/bag"], "no such bag"),
+])
+def test_options_out_of_range_or_out_of_place_are_refused_in_one_line(capsys, argv, words):
+    assert main(["topic", *argv]) == 2
+    error = capsys.readouterr().err
+    assert words in error and error.count("\n") == 1

@@ -101,9 +101,11 @@ def _text(path: Path, size: int | None) -> tuple[str, str]:
         reader = "; `mt-accuracy check FILE` reads a bag (no --target, no column map)" \
             if kind == "an MCAP bag" else ""
         raise InputDataError(f"{path} is {kind}, not a CSV{reader}")
+    # Only a read that filled its size may have stopped inside a character.
+    cut = size is not None and len(data) >= size
     marked = bom_encoding(data)
     if marked:
-        return _decode_by_mark(path, data, marked, size is not None), marked
+        return _decode_by_mark(path, data, marked, cut), marked
     if b"\x00" in data:
         # UTF-16 without its mark shows as every other byte NUL: the mend is the same.
         raise InputDataError(f"{path}: not a text CSV file (it holds NUL bytes); a UTF-16 "
@@ -111,7 +113,7 @@ def _text(path: Path, size: int | None) -> tuple[str, str]:
     try:
         return data.decode("utf-8-sig"), "utf-8-sig"
     except UnicodeDecodeError as exc:
-        if size is not None and exc.start >= len(data) - 4:
+        if cut and exc.start >= len(data) - 4:
             # The sniffed bytes may end inside a character: decide on what came before.
             return data[:exc.start].decode("utf-8-sig"), "utf-8-sig"
     # Not UTF-8: a spreadsheet's Windows export. Every byte is a character in it, so a

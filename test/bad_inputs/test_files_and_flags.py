@@ -61,7 +61,7 @@ CLASSES = [
     ("play_rate_zero", "play with --rate 0", "refused: -r/--rate must be a speed factor > 0, "
      "got 0"),
     ("play_negative_start_offset", "play with --start-offset -5",
-     "refused: --start-offset must be a number >= 0 [s], got -5"),
+     "refused: --start-offset must be >= 0 [s], got -5"),
     ("malformed_remap", "play with --remap /a/b (no :=)",
      "refused: --remap must be OLD:=NEW, got '/a/b'"),
     ("csv_stride_zero", "simulate with --csv-stride 0",

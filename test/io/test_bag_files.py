@@ -233,3 +233,70 @@ def test_header_schemas_and_channels_are_on_disk_before_the_first_chunk(tmp_path
 
     with AnyReader([tmp_path / "bag"]) as reader:
         assert sorted(c.topic for c in reader.connections) == ["/chatter", "/scales"]
+
+
+def _foreign_mcap(path: Path, profile: str = "", encoding: str = "json") -> Path:
+    from mcap.writer import Writer
+
+    with open(path, "wb") as stream:
+        writer = Writer(stream)
+        writer.start(profile=profile, library="another tool")
+        schema = writer.register_schema(name="Pose", encoding="jsonschema", data=b"{}")
+        channel = writer.register_channel(topic="/pose", message_encoding=encoding,
+                                          schema_id=schema)
+        writer.add_message(channel_id=channel, log_time=1, publish_time=1, data=b"{}")
+        writer.finish()
+    return path
+
+
+@pytest.mark.parametrize("content, words", [
+    (b"", "is empty (0 bytes), not an MCAP bag"),
+    (b"\x89PNG\r\n\x1a\n" + bytes(64), "is a PNG image, not an MCAP bag or a CSV"),
+    (b"SQLite format 3\x00" + bytes(64), "is a rosbag2 SQLite (.db3) bag (this package "
+     "reads MCAP bags: `ros2 bag convert` it to MCAP)"),
+    (bytes(range(256)) * 4, "is not an MCAP file (no MCAP magic) nor text"),
+    (b"time_s,t1_C\n0,20\n", "is a text file (a CSV?), not an MCAP bag; `mt-accuracy check"),
+])
+def test_a_file_that_is_no_mcap_is_named_for_what_it_is(tmp_path, content, words):
+    path = tmp_path / "data.mcap"
+    path.write_bytes(content)
+    for read in (lambda: list(read_messages(path)), lambda: bag_info(path), lambda: recover(path)):
+        with pytest.raises(BagError) as error:
+            read()
+        assert words in str(error.value)
+
+
+def test_a_truncated_mcap_is_refused_by_readers_and_scanned_by_recover_and_topics(data_dir,
+                                                                                   tmp_path):
+    from mt_accuracy_ros.io.bag_reader import topics
+
+    whole = (data_dir / "rosbag2_samples" / "talker" / "talker.mcap").read_bytes()
+    path = tmp_path / "killed.mcap"
+    path.write_bytes(whole[:len(whole) * 2 // 3])
+    for read in (lambda: list(read_messages(path)), lambda: bag_info(path)):
+        with pytest.raises(BagError, match="is a truncated MCAP file .* `mt-accuracy recover"):
+            read()
+    assert "/topic" in topics(path)           # a killed recorder's topics: still listed
+    assert len(recover(path)) > 0
+
+
+def test_an_mcap_of_another_kind_is_refused_naming_its_profile_and_encoding(tmp_path):
+    path = _foreign_mcap(tmp_path / "foreign.mcap")
+    with pytest.raises(BagError, match=r"is an MCAP file of another kind \(profile '', json "
+                                       r"messages\), not a ROS 2 bag"):
+        list(read_messages(path))
+
+
+def test_a_bag_directory_of_sqlite_files_says_so(tmp_path):
+    (tmp_path / "bag").mkdir()
+    (tmp_path / "bag" / "bag_0.db3").write_bytes(b"SQLite format 3\x00")
+    with pytest.raises(BagError, match="bag_0.db3 is a rosbag2 SQLite bag: `ros2 bag convert`"):
+        bag_info(tmp_path / "bag")
+
+
+def test_rosbag2_samples_pass_identification(data_dir):
+    from mt_accuracy_ros.io.bag_reader import identify_bag_file, mcap_files
+
+    for sample in ("talker", "multiple_files", "wrong_rmw_test"):
+        for path in mcap_files(data_dir / "rosbag2_samples" / sample):
+            identify_bag_file(path)     # complete, profile ros2 (wrong_rmw: refused later)

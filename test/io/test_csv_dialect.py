@@ -168,3 +168,51 @@ def test_a_date_and_a_time_of_day_in_two_columns_join_and_a_bad_pair_drops_its_r
     np.testing.assert_array_equal(table.columns["T1"], [20.0, 20.1, 20.3])
     assert table.rows_dropped == 1 and table.drop_reasons == [
         "row 4 column Datum+Uhrzeit: '21.11.2026 später' is not a date-time"]
+
+
+@pytest.mark.parametrize("encoding, note", [("utf-16", "read as UTF-16 (BOM)"),
+                                            ("utf-16-be", "read as UTF-16 (BOM)"),
+                                            ("utf-32", "read as UTF-32 (BOM)")])
+def test_a_unicode_text_export_is_read_by_its_byte_order_mark_and_said(tmp_path, encoding,
+                                                                       note):
+    """Excel's "Unicode text" is UTF-16 with a byte-order mark: read as the plain file."""
+    plain = read_csv_table(_write(tmp_path / "plain.csv", ROWS))
+    path = tmp_path / "unicode.csv"
+    text = "\r\n".join(",".join(row) for row in ROWS) + "\r\n"
+    mark = {"utf-16-be": b"\xfe\xff"}.get(encoding, b"")
+    path.write_bytes(mark + text.encode(encoding))
+    dialect = sniff_dialect(path)
+    assert dialect.note() == note
+    table = read_csv_table(path)
+    assert table.names == ROWS[0]      # "°C", "µm" decoded, the mark not in the first name
+    for name in ROWS[0]:
+        np.testing.assert_array_equal(table.columns[name], plain.columns[name])
+    assert table.summary().endswith(f"({note})")
+
+
+def test_a_long_utf16_file_is_sniffed_on_whole_characters(tmp_path):
+    """The sniffed bytes end where they end: never inside a UTF-16 character."""
+    rows = [ROWS[0]] + [[str(60 * i), "20.5", "19.5", "0.25"] for i in range(3000)]
+    path = tmp_path / "long.csv"
+    path.write_bytes(("\n".join(",".join(r) for r in rows) + "\n").encode("utf-16"))
+    assert path.stat().st_size > 64 * 1024
+    table = read_csv_table(path)
+    assert table.rows_read == 3000 and table.rows_dropped == 0
+
+
+@pytest.mark.parametrize("content, words", [
+    ("a,b\n1,2\n".encode("utf-16-le"), "holds NUL bytes); a UTF-16 export without a "
+     "byte-order mark? save it as UTF-8 CSV"),
+    (b"\xff\xfe" + b"a\x00,\x00\x00\xd8", "starts with a UTF-16 (BOM) byte-order mark but is "
+     "not such text"),
+    (b"\x89PNG\r\n\x1a\n" + bytes(50), "is a PNG image, not a CSV"),
+    (b"\x89MCAP0\r\n" + bytes(50), "is an MCAP bag, not a CSV; `mt-accuracy check FILE` "
+     "reads a bag"),
+    (b"PK\x03\x04" + bytes(50), "is a ZIP archive (a spreadsheet .xlsx"),
+])
+def test_a_file_that_is_no_csv_is_named_for_what_it_is(tmp_path, content, words):
+    path = tmp_path / "data.csv"
+    path.write_bytes(content)
+    with pytest.raises(InputDataError) as error:
+        read_csv_table(path)
+    assert words in str(error.value) and "\n" not in str(error.value)

@@ -27,7 +27,7 @@ def _interval(low: float, high: float, low_open: bool, high_open: bool) -> str:
 
 def in_range(flag: str, value: float | int | None, *, low: float = -math.inf,
              high: float = math.inf, low_open: bool = False, high_open: bool = False,
-             what: str = "a number", unit: str = "") -> None:
+             what: str = "", unit: str = "") -> None:
     """Refuse ``value`` of ``flag`` unless it is finite and within the bounds.
 
     Parameters
@@ -41,14 +41,15 @@ def in_range(flag: str, value: float | int | None, *, low: float = -math.inf,
     low_open, high_open
         The bound itself is outside the range.
     what
-        What the option is (``"an integer"``, ``"a fraction"``), for the message.
+        What the option is (``"an integer"``, ``"a fraction"``; "" for a number), for the
+        message.
     unit
         The option's unit shown after the range (``"s"``), "" for none.
 
     Raises
     ------
     ParameterError
-        ``FLAG must be WHAT RANGE [UNIT], got VALUE``.
+        ``FLAG must be [WHAT] RANGE [UNIT], got VALUE`` (``--rate must be > 0, got 0``).
     """
     if value is None:
         return
@@ -56,10 +57,11 @@ def in_range(flag: str, value: float | int | None, *, low: float = -math.inf,
         (value < high if high_open else value <= high)
     if not inside:
         bounds = "" if math.isinf(low) and math.isinf(high) else \
-            " " + _interval(low, high, low_open, high_open)
-        finite = "a finite " + what.removeprefix("a ").removeprefix("an ") \
-            if not math.isfinite(value) else what
-        raise ParameterError(f"{flag} must be {finite}{bounds}{f' [{unit}]' if unit else ''}, "
+            _interval(low, high, low_open, high_open)
+        kind = what if math.isfinite(value) else \
+            "a finite " + (what.removeprefix("a ").removeprefix("an ") or "number")
+        expected = " ".join(part for part in (kind, bounds) if part)
+        raise ParameterError(f"{flag} must be {expected}{f' [{unit}]' if unit else ''}, "
                              f"got {_shown(value)}")
 
 
