@@ -324,8 +324,10 @@ def _target_has_a_unit(flag: str, names: list[str], units: dict[str, str]) -> No
 
     if ":" not in flag and flag.strip() in names and \
             not column_unit(flag.strip(), "length", units):
-        raise InputDataError(f"target {flag.strip()}: no unit in --target, its name or a units "
-                             f"row; give it, e.g. --target {flag.strip()}:um (or mm, m, nm, in)")
+        name = flag.strip()
+        raise InputDataError(f"target {name}: no unit in --target, its name or a units row; "
+                             f"give its unit as {name}:UNIT, e.g. --target {name}:um (or mm, "
+                             "m, nm, in)")
 
 
 def check_target(column: str, values: np.ndarray, unit: str, data_rows) -> None:
@@ -374,7 +376,9 @@ def check_temperature_units(name: str, values: np.ndarray, declared: str) -> Non
     core = finite[(finite >= low) & (finite <= high)]
     guess = likely_unit(core, quantity, declared)
     if guess is not None:
-        check_plausible(core, quantity, declared, f"sensor {name}",
+        # The whole column is shown when its every reading fits the likely unit.
+        shown = finite if likely_unit(finite, quantity, declared) == guess else core
+        check_plausible(shown, quantity, declared, f"sensor {name}",
                         mend=f"give its unit in its name ({name}_{guess}) or a units row",
                         error=InputDataError)
 
@@ -382,7 +386,7 @@ def check_temperature_units(name: str, values: np.ndarray, declared: str) -> Non
 def _complete_rows(temperatures: dict[str, np.ndarray]) -> np.ndarray:
     """(N,) rows where every sensor has a reading."""
     values = list(temperatures.values())
-    return np.all([np.isfinite(v) for v in values], axis=0) if values else np.zeros(0, bool)
+    return np.all([np.isfinite(v) for v in values], axis=0) if values else np.asarray(True)
 
 
 def clock_of_log(time_s: np.ndarray, time_column: str, data_rows, run_of_row, run_names,
@@ -400,7 +404,7 @@ def clock_of_log(time_s: np.ndarray, time_column: str, data_rows, run_of_row, ru
     InputDataError
         One stamp on every row without ``--row-period``; a clock jump inside a run.
     """
-    from ..core.workbench.log_runs import clock_breaks, run_labels
+    from ..core.workbench.log_runs import clock_breaks, duration_text, run_labels
 
     notes = []
     finite = time_s[np.isfinite(time_s)]
@@ -419,7 +423,8 @@ def clock_of_log(time_s: np.ndarray, time_column: str, data_rows, run_of_row, ru
         inside = np.flatnonzero(breaks[1:] & (np.diff(run_of_row) == 0)) + 1
         if inside.size:
             k = int(inside[0])
-            raise InputDataError(f"the clock jumps by {time_s[k] - time_s[k - 1]:g} s inside "
+            raise InputDataError(f"the clock jumps by {duration_text(time_s[k] - time_s[k - 1])} "
+                                 "inside "
                                  f"run {run_names[run_of_row[k]]!r} at data row {int(rows[k])}: "
                                  "start a new run there (a new value in the run column) or "
                                  "fix the stamps")
@@ -441,7 +446,7 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     """The log's columns as observations (SI), its runs checked, dead sensors left out;
     one-line errors naming the row, run or column (see :func:`check_csv`)."""
     from ..core.workbench.log_runs import (leave_out_dead_sensors, mixed_units_problem,
-                                           run_labels, run_starts)
+                                           run_labels, run_level_notes, run_starts)
     from ..core.workbench.thermal_log import log_observations
     from ..io.csv_table import csv_header, joined_columns, read_csv_table
     from .check import _column_and_unit
@@ -524,6 +529,7 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
                                       zeroed_runs)
         if problem:
             raise InputDataError(problem)
+        notes += run_level_notes(temperatures, run_of_row, run_names)
     obs = log_observations(time_s, target_m, temperatures, spindle_speed_rad_s=speed,
                            component=component, uncertainty_m=uncertainty_m,
                            run_of_row=run_of_row, run_names=run_names, zeroed_runs=zeroed_runs,

@@ -181,6 +181,28 @@ def mixed_units_problem(target: NDArray[np.float64], temperatures: dict[str, NDA
     return ""
 
 
+def run_level_notes(temperatures: dict[str, NDArray], run_of_row: NDArray[np.intp],
+                    names: list[str]) -> list[str]:
+    """One note per sensor whose level in a run lies :data:`TEMPERATURE_SLIP_K` or more
+    from the other runs' while no unit slip maps it onto them (:func:`unit_slip_of_run`):
+    a different process (a hotter day, a machine at work), said and kept."""
+    starts = list(run_starts(run_of_row)) + [run_of_row.size]
+    slices = [slice(a, b) for a, b in zip(starts[:-1], starts[1:])]
+    notes = []
+    for sensor, values in temperatures.items():
+        for k, run in enumerate(slices):
+            own = values[run][np.isfinite(values[run])]
+            rest = np.concatenate([values[s] for j, s in enumerate(slices) if j != k])
+            rest = rest[np.isfinite(rest)]
+            if own.size and rest.size and \
+                    abs(np.median(own) - np.median(rest)) >= TEMPERATURE_SLIP_K:
+                notes.append(f"run {names[k]!r}: sensor {sensor} reads {np.median(own):.4g} "
+                             f"where the other runs read {np.median(rest):.4g}; no unit slip "
+                             "(K, degF) maps one onto the other: taken as a different process")
+                break
+    return notes
+
+
 #: Unit slips of a temperature: unit -> (degC from it, where its raw readings of a
 #: machine's structure lie [unit]).
 TEMPERATURE_SLIPS = {"K": (lambda v: v - 273.15, (250.0, 400.0)),
@@ -242,7 +264,7 @@ def clock_breaks(time_s: NDArray[np.float64], data_rows: ArrayLike | None = None
     usual = float(np.median(forward)) if forward.size else 0.0
     for k in np.flatnonzero(steps >= max(CLOCK_JUMP_FACTOR * usual, CLOCK_JUMP_MIN_S)) + 1:
         breaks[k] = True
-        notes.append(f"the clock jumps by {_duration(steps[k - 1])} at data row "
+        notes.append(f"the clock jumps by {duration_text(steps[k - 1])} at data row "
                      f"{int(rows[k])} (its usual step {usual:g} s): taken as a break between "
                      "runs (lags and time restart there)")
     equal = np.flatnonzero(steps == 0) + 1
@@ -254,7 +276,7 @@ def clock_breaks(time_s: NDArray[np.float64], data_rows: ArrayLike | None = None
     return breaks, notes
 
 
-def _duration(seconds: float) -> str:
+def duration_text(seconds: float) -> str:
     """A duration in the largest unit that keeps it above 1 (s, min, h, d)."""
     for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
         if seconds >= size:
