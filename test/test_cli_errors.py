@@ -109,3 +109,75 @@ def test_abbreviated_options_are_refused(argv, capsys):
         main(argv)
     assert exit_info.value.code == 2
     assert f"unrecognized arguments: {argv[-2]}" in capsys.readouterr().err
+
+
+def _log_csv(tmp_path):
+    path = tmp_path / "log.csv"
+    path.write_text("time_s,t1_C,e_um\n" + "".join(f"{i},{20 + 0.1 * i},{i}\n"
+                                                   for i in range(30)))
+    return path
+
+
+@pytest.mark.parametrize("argv_tail, words", [
+    (["--json", "{missing}/s.json"], "--json {missing}/s.json: the directory {missing} does "
+                                     "not exist"),
+    (["--train-fraction", "1"], "--train-fraction must be a fraction in (0, 1), got 1"),
+    (["--row-period", "nan"], "--row-period must be a finite number > 0 [s], got nan"),
+    (["--structure-length", "-1"], "--structure-length must be > 0 [m], got -1"),
+    (["--namespace", "/mt1"], "--namespace applies to a bag, not to a thermal log"),
+])
+def test_check_refuses_before_any_work(tmp_path, capsys, monkeypatch, argv_tail, words):
+    """A bad option or output path is refused before the log is even read: the engine
+    is never called, nothing is written."""
+    import mt_accuracy_ros.commands.check_log as check_log
+
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("the check ran before its options were checked")
+
+    monkeypatch.setattr(check_log, "check_csv", must_not_run)
+    missing = tmp_path / "missing"
+    argv = ["check", str(_log_csv(tmp_path)), "--target", "e_um",
+            *[a.format(missing=missing) for a in argv_tail]]
+    error = _one_line_error(capsys, argv)
+    assert words.format(missing=missing) in error
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["log.csv"]
+
+
+def test_simulate_refuses_an_existing_bag_before_simulating(tmp_path, capsys, monkeypatch):
+    import mt_accuracy_ros.sim.machine_tool as machine_tool
+
+    monkeypatch.setattr(machine_tool, "simulate", lambda *a, **k: pytest.fail("simulated"))
+    (tmp_path / "out" / "bag").mkdir(parents=True)
+    error = _one_line_error(capsys, ["simulate", "demo", "--out", str(tmp_path / "out")])
+    assert "bag already exists (a bag is never overwritten); give another --out or --no-bag" \
+        in error
+
+
+def test_a_column_map_that_is_no_yaml_is_one_line(tmp_path, capsys):
+    columns = tmp_path / "map.yaml"
+    columns.write_text("columns: [unclosed\n  more: {\n")
+    error = _one_line_error(capsys, ["check", str(_log_csv(tmp_path)), "--columns",
+                                     str(columns)])
+    assert error.startswith("mt-accuracy check: ") and "map.yaml" in error
+
+
+def test_output_paths_rules(tmp_path):
+    """One helper decides for every command: a file's directory must exist; a directory
+    output may be created under a writable ancestor; a new directory must not exist."""
+    from mt_accuracy_ros.core.errors import ParameterError
+    from mt_accuracy_ros.io.output_paths import Output, check_output, check_outputs
+
+    assert check_output(Output("--json", None)) is None
+    assert check_output(Output("--json", tmp_path / "s.json")) == tmp_path / "s.json"
+    assert check_output(Output("--out", tmp_path / "a" / "b", "directory")) == \
+        tmp_path / "a" / "b"
+    assert not (tmp_path / "a").exists()          # checked, not created
+    (tmp_path / "bag").mkdir()
+    with pytest.raises(ParameterError, match="OUTPUT .*bag already exists; give a new"):
+        check_output(Output("OUTPUT", tmp_path / "bag", "new directory"))
+    with pytest.raises(ParameterError, match="--report .* is a directory; give a file name"):
+        check_output(Output("--report", tmp_path))
+    with pytest.raises(ParameterError, match=r"--json: an empty path"):
+        check_output(Output("--json", ""))
+    with pytest.raises(ParameterError, match="is the input .*it would be overwritten"):
+        check_outputs([Output("--json", tmp_path / "in.csv")], [tmp_path / "in.csv"])
