@@ -8,7 +8,8 @@ import pytest
 from mt_accuracy_ros.core.effects.variables import (Variables, first_order_lag, run_starts_of,
                                                     subset_run_starts)
 from mt_accuracy_ros.core.errors import InputDataError
-from mt_accuracy_ros.core.workbench.log_runs import (leave_out_dead_sensors,
+from mt_accuracy_ros.core.workbench.log_runs import (clock_breaks, leave_out_dead_sensors,
+                                                     run_level_notes,
                                                      mixed_units_problem, run_blocks, run_labels,
                                                      split_at_run, stitched_time)
 
@@ -104,3 +105,49 @@ def test_lags_restart_at_each_run_from_its_first_reading():
     assert run_starts_of(["a", "a", "b", "c", "c"]).tolist() == [0, 2, 3]
     with pytest.raises(InputDataError, match="run starts"):
         Variables({"X": np.zeros(10)}, np.arange(10.0), run_starts=[1, 5])
+
+
+def _two_days(levels, slip=None, rows: int = 60, seed: int = 3):
+    """Runs warming 3 K from their ``levels`` [degC]; ``slip``: (run, map) of its readings."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(rows) * 60.0
+    days = []
+    for k, level in enumerate(levels):
+        warm = level + 3.0 * (1 - np.exp(-t / 1500.0)) + rng.normal(0, 0.02, rows)
+        days.append(slip[1](warm) if slip and slip[0] == k else warm)
+    return np.concatenate(days), np.repeat(np.arange(len(levels)), rows)
+
+
+@pytest.mark.parametrize("slip, unit", [(lambda v: v * 1.8 + 32.0, "degF"),
+                                         (lambda v: v + 273.15, "K")])
+def test_a_run_in_degf_or_kelvin_is_a_unit_slip(slip, unit):
+    values, runs = _two_days([20.0, 20.5, 19.8], (1, slip))
+    problem = mixed_units_problem(np.zeros(values.size), {"t1": values}, runs,
+                                  ["a", "b", "c"], False)
+    assert problem.startswith("run 'b': sensor t1 reads") and \
+        f"mixed units across runs? ({unit}: converted it reads 2" in problem
+
+
+def test_a_hotter_run_of_a_motion_system_is_no_unit_slip_and_is_said():
+    """A motor at 105 degC one day and 62 the other: 40 K apart, but neither run mapped by
+    degF or K lies where the other does - a different process, kept and said."""
+    values, runs = _two_days([102.0, 59.0])
+    assert mixed_units_problem(np.zeros(values.size), {"T_motor": values}, runs,
+                               ["1", "2"], False) == ""
+    (note,) = run_level_notes({"T_motor": values}, runs, ["1", "2"])
+    assert note.startswith("run '1': sensor T_motor reads 104.") and \
+        note.endswith("no unit slip (K, degF) maps one onto the other: taken as a different "
+                      "process")
+
+
+def test_a_clock_jump_is_a_break_named_with_its_row_and_equal_stamps_with_theirs():
+    t = np.arange(100) * 60.0
+    t[40:] += 10 * 86400.0
+    t[[70, 71]] = t[69]
+    breaks, notes = clock_breaks(t, np.arange(100) + 1)
+    assert np.flatnonzero(breaks).tolist() == [40]
+    assert notes == ["the clock jumps by 10 d at data row 41 (its usual step 60 s): taken as a "
+                     "break between runs (lags and time restart there)",
+                     "equal time stamps at data rows 71-72 (2 rows): taken as the logger's "
+                     "resolution (the lags hold still over them)"]
+    assert clock_breaks(np.arange(100) * 15.0)[1] == []
