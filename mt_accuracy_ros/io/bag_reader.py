@@ -172,9 +172,9 @@ def _file_messages(path: Path, topics: set[str] | None) -> Iterator[BagMessage]:
     except BagError:
         raise
     except DAMAGED_FILE as exc:
-        raise BagError(f"{path}: damaged, incomplete or foreign MCAP file ({exc}); a recorder "
-                       "killed mid-run leaves such a file: `mt-accuracy recover BAG NEW_BAG` "
-                       "saves its closed chunks") from exc
+        # Identified before (complete, ros2 profile): the damage is inside the file.
+        raise BagError(f"{path}: damaged MCAP file ({exc}); `mt-accuracy recover {path} "
+                       "NEW_BAG` saves the complete chunks before the damage") from exc
 
 
 def read_messages(path: str | Path, topics: list[str] | None = None) -> Iterator[BagMessage]:
@@ -284,9 +284,8 @@ def bag_info(path: str | Path) -> dict:
                     first = stats.message_start_time if first is None else min(first, stats.message_start_time)
                     last = stats.message_end_time if last is None else max(last, stats.message_end_time)
         except DAMAGED_FILE as exc:
-            raise BagError(f"{f}: damaged or incomplete MCAP file ({exc}): a recorder killed "
-                           f"mid-run leaves no summary; `mt-accuracy recover {path} NEW_BAG` "
-                           "saves every closed chunk") from exc
+            raise BagError(f"{f}: damaged MCAP file ({exc}); `mt-accuracy recover {f} "
+                           "NEW_BAG` saves the complete chunks before the damage") from exc
     return {"files": [str(f) for f in files], "message_count": total,
             "start_ns": first or 0, "end_ns": last or 0,
             "duration_s": ((last or 0) - (first or 0)) / 1e9, "topics": topics}
@@ -384,11 +383,17 @@ def topics(path: str | Path) -> dict[str, TopicInfo]:
                 found.setdefault(channel.topic, _channel_info(channel, schema.name if schema else ""))
             continue
         schemas: dict[int, str] = {}
+        channels = 0
         try:
             for record in _complete_records(f, schemas):
                 if isinstance(record, Channel):
+                    channels += 1
                     found.setdefault(record.topic,
                                      _channel_info(record, schemas.get(record.schema_id, "")))
-        except _Truncated:
-            pass  # keep what was complete
+        except _Truncated as exc:
+            if not channels:
+                # Nothing complete before the damage: no topic to list (and none to recover).
+                raise BagError(f"{f}: damaged MCAP file, no topic readable before the damage "
+                               f"({exc.__cause__})") from exc
+            # else keep what was complete
     return found

@@ -300,3 +300,14 @@ def test_rosbag2_samples_pass_identification(data_dir):
     for sample in ("talker", "multiple_files", "wrong_rmw_test"):
         for path in mcap_files(data_dir / "rosbag2_samples" / sample):
             identify_bag_file(path)     # complete, profile ros2 (wrong_rmw: refused later)
+
+
+def test_a_bag_damaged_before_its_first_topic_lists_none_and_says_so(data_dir, tmp_path):
+    from mt_accuracy_ros.io.bag_reader import topics
+
+    data = bytearray((data_dir / "rosbag2_samples" / "talker" / "talker.mcap").read_bytes())
+    data[3000:3400] = b"\xab" * 400         # inside the first chunk; magic and footer intact
+    path = tmp_path / "damaged.mcap"
+    path.write_bytes(bytes(data))
+    with pytest.raises(BagError, match="damaged MCAP file, no topic readable before the damage"):
+        topics(path)
