@@ -15,6 +15,15 @@ Every decision is made inside the training rows:
    same way;
 3. every candidate with a large CV gain that is not added is reported with
    the test that refused it and its numbers.
+
+Before any of it the log is judged, and nothing is silent: the options
+(:func:`validate_log_options`), the target's unit and that it moves
+(:func:`check_target`), each sensor's unit (:func:`check_temperature_units`),
+the ``--inputs`` patterns (only temperatures: :func:`select_temperature_inputs`),
+the clock (:func:`clock_of_log`: equal stamps, jumps as breaks between runs) and
+every sensor's health (:mod:`~..core.inputs.sensor_health`: dead, out of range,
+stuck, dropping out, jumping - named with their rows and left out). A refusal is
+one line; a decision taken is a note.
 """
 from __future__ import annotations
 
@@ -330,7 +339,7 @@ def _target_has_a_unit(flag: str, names: list[str], units: dict[str, str]) -> No
                              "m, nm, in)")
 
 
-def check_target(column: str, values: np.ndarray, unit: str, data_rows) -> None:
+def check_target(column: str, values: np.ndarray, unit: str) -> None:
     """Refuse a target with nothing to model or in an implausible unit.
 
     Raises
@@ -439,6 +448,21 @@ def clock_of_log(time_s: np.ndarray, time_column: str, data_rows, run_of_row, ru
     return time_s, run_of_row, run_names, breaks, clock_notes + notes
 
 
+def _table_notes(table, time_column: str, split_time: list[str]) -> list[str]:
+    """What the file itself told: a units row, a clock or date-time time column."""
+    notes = []
+    if table.units:
+        notes.append("units from the row under the header: " + ", ".join(
+            f"{name} {unit}" for name, unit in table.units.items()))
+    if time_column in table.clock_columns:
+        notes.append(f"time from the clock of {time_column} (times of day without a date: "
+                     "a step back of more than 12 h is taken as midnight passing)")
+    elif time_column in table.date_time_columns:
+        notes.append(f"time from the date-times of {' + '.join(split_time) or time_column} "
+                     "(seconds since its first, a stamp without a zone taken as UTC)")
+    return notes
+
+
 def read_log(path: Path, target: str, time_column: str, inputs: list[str],
              drivers: list[str], row_period_s: float | None, component: str,
              uncertainty_m: float | None, run_column: str | None, zeroed_runs: bool
@@ -490,20 +514,12 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
                                  "catalogue models, heat_source:spindle_speed)")
         speed = columns[column] * scale
     run_of_row, run_names = None, None
-    check_target(target_column, columns[target_column], unit, table.data_rows)
+    check_target(target_column, columns[target_column], unit)
     target_m = columns[target_column] * target_scale
     temperatures, notes = _in_celsius({n: columns[n] for n in selected}, table.units)
     notes += input_notes
     notes += [time_note] if time_note else []
-    if table.units:
-        notes.append("units from the row under the header: " + ", ".join(
-            f"{name} {unit}" for name, unit in table.units.items()))
-    if time_column in table.clock_columns:
-        notes.append(f"time from the clock of {time_column} (times of day without a date: "
-                     "a step back of more than 12 h is taken as midnight passing)")
-    elif time_column in table.date_time_columns:
-        notes.append(f"time from the date-times of {' + '.join(split_time) or time_column} "
-                     "(seconds since its first, a stamp without a zone taken as UTC)")
+    notes += _table_notes(table, time_column, split_time)
     if run_column:
         run_of_row, run_names = run_labels(columns[run_column], table.data_rows, run_column)
     time_s, run_of_row, run_names, breaks, clock_notes = clock_of_log(

@@ -15,7 +15,13 @@ eighteen. Here every run is its own record:
 * :func:`split_at_run` puts ``train_fraction`` at the nearest run boundary,
   and :func:`run_blocks` makes whole runs the blocks of forward validation;
 * :func:`mixed_units_problem` names a run whose readings are in another unit
-  than the others' (a day logged in mm among days in um; a sensor in degF).
+  than the others' (a day logged in mm among days in um; a sensor in degF) -
+  for a sensor only when the run, converted, matches the other runs
+  (:func:`unit_slip_of_run`); a run merely hotter is said (:func:`run_level_notes`);
+* :func:`clock_breaks` finds a clock that jumps (a logger restarted days later: a
+  break between runs) and names equal stamps with their rows;
+* :func:`leave_out_dead_sensors` judges every sensor by the one rule of
+  :mod:`~..inputs.sensor_health`.
 """
 from __future__ import annotations
 
