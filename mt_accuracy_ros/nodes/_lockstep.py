@@ -167,8 +167,9 @@ def lockstep_qos():
 
 
 class ProgressReporter:
-    """Publishes one node's ``DataProgress`` on ``lockstep``: at each change and every
-    0.25 s of wall time (so a machine that subscribes late still hears it)."""
+    """Publishes one node's ``DataProgress`` on ``lockstep``: at each change (a report
+    that changes nothing is not sent) and every 0.25 s of wall time (so a machine that
+    subscribes late still hears it)."""
 
     def __init__(self, node, name: str | None = None, *, follows_models: bool = False,
                  publishes_models: bool = False) -> None:
@@ -188,11 +189,16 @@ class ProgressReporter:
     def report(self, *, handled_ns: int | None = None, last_check_ns: int | None = None,
                check_handled_ns: int | None = None, published: int | None = None,
                settled: int | None = None) -> None:
-        self.state = self.state.merged(Progress(
+        state = self.state.merged(Progress(
             handled_ns or 0, last_check_ns or 0, check_handled_ns or 0,
             -1 if published is None else int(published),
             -1 if settled is None else int(settled)))
-        self.publish()
+        # A report that changes nothing tells the machine nothing: every participant
+        # receives every report, and repeats cost each of them a callback per batch.
+        # The 0.25 s heartbeat still repeats the state for a late subscriber.
+        if state != self.state:
+            self.state = state
+            self.publish()
 
     def publish(self) -> None:
         from ._common import nanoseconds_to_stamp

@@ -133,9 +133,12 @@ class TemperaturePublisher(Node):
         if self._next >= self._time.size:
             self.finished = True
         if self._progress is not None:
-            # Once the last one is out, nothing will ever hold the machine again.
+            # Every reading stamped before the next one is out, so the machine may run
+            # up to that stamp without hearing from this node again: one report per
+            # reading instead of one per scale batch. Once the last one is out, nothing
+            # will ever hold the machine again.
             self._progress.report(handled_ns=2**62 if self.finished else
-                                  self._scenario_clock.stamp_ns(now_s))
+                                  self._scenario_clock.stamp_ns(self._time[self._next]) - 1)
 
 
 def main(args: list[str] | None = None) -> int:
