@@ -255,16 +255,20 @@ def _validate_check(args: argparse.Namespace) -> None:
         if kind not in kinds and getattr(args, name) not in (None, False, "", []):
             raise not_applicable(flag, " or ".join(CHECK_DATA_KINDS[k] for k in kinds),
                                  CHECK_DATA_KINDS[kind])
-    if args.zeroed_runs and not args.run:
-        raise not_applicable("--zeroed-runs", "a log of many runs (--run COLUMN)",
-                             "a log of one run (no --run)")
+    if kind == "log":
+        from .commands.check_log import validate_log_options
+
+        # The thermal log's own rule (one implementation), before any row is read.
+        validate_log_options(args.auto, LOG_TRAIN_FRACTION if args.train_fraction is None
+                             else args.train_fraction)
+        if args.zeroed_runs and not args.run:
+            raise ParameterError("--zeroed-runs needs --run COLUMN (the instrument was zeroed "
+                                 "at each run's start)")
     in_range("--auto", args.auto, low=0, what="an integer")
     in_range("--min-reduction", args.min_reduction, low=0, high=1, high_open=True,
              what="a fraction")
     in_range("--uncertainty-um", args.uncertainty_um, low=0, low_open=True, unit="um, k = 2")
     in_range("--row-period", args.row_period, low=0, low_open=True, unit="s")
-    in_range("--train-fraction", args.train_fraction, low=0, high=1, low_open=True,
-             high_open=True, what="a fraction")
     in_range("--structure-length", args.structure_length, low=0, low_open=True, unit="m")
     check_outputs([Output("--json", args.json), Output("--report", args.report)],
                   [args.data, args.columns])

@@ -121,7 +121,8 @@ def _log_csv(tmp_path):
 @pytest.mark.parametrize("argv_tail, words", [
     (["--json", "{missing}/s.json"], "--json {missing}/s.json: the directory {missing} does "
                                      "not exist"),
-    (["--train-fraction", "1"], "--train-fraction must be a fraction in (0, 1), got 1"),
+    (["--train-fraction", "1"], "--train-fraction 1.0: between 0.2 and 0.9"),
+    (["--min-reduction", "-0.1"], "--min-reduction must be a fraction in [0, 1), got -0.1"),
     (["--row-period", "nan"], "--row-period must be a finite number > 0 [s], got nan"),
     (["--structure-length", "-1"], "--structure-length must be > 0 [m], got -1"),
     (["--namespace", "/mt1"], "--namespace applies to a bag, not to a thermal log"),

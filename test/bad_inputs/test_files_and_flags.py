@@ -42,7 +42,8 @@ CLASSES = [
     ("sqlite_bag_to_play", "a rosbag2 SQLite bag (a directory of .db3) given to play",
      "refused: is a rosbag2 SQLite bag: `ros2 bag convert` it to MCAP"),
     ("train_fraction_out_of_range", "check of a thermal log with --train-fraction 2",
-     "refused: --train-fraction must be a fraction in (0, 1), got 2"),
+     "refused: --train-fraction 2.0: between 0.2 and 0.9 (the rows after it judge the "
+     "model)"),
     ("log_flag_with_a_survey", "check of a survey (a column map) with --train-fraction, "
      "which only a thermal log reads",
      "refused: --train-fraction applies to a thermal log (a CSV with --target), not to a "
@@ -52,7 +53,7 @@ CLASSES = [
     ("survey_flag_with_a_bag", "check of a bag with --columns, which only a survey reads",
      "refused: --columns applies to a survey (a CSV with a column map: --columns or --col), "
      "not to a bag"),
-    ("negative_auto", "check with --auto -1",
+    ("negative_auto", "check of a bag with --auto -1",
      "refused: --auto must be an integer >= 0, got -1"),
     ("min_reduction_out_of_range", "fleet with --min-reduction 1.5",
      "refused: --min-reduction must be a fraction in [0, 1), got 1.5"),
@@ -75,7 +76,8 @@ CLASSES = [
     ("rate_with_lockstep", "demo with --rate 2 and --lockstep (data time: no rate)",
      "refused: --rate applies to a demo in real time, not to --lockstep"),
     ("zeroed_runs_without_run", "check of a thermal log with --zeroed-runs but no --run",
-     "refused: --zeroed-runs applies to a log of many runs (--run COLUMN)"),
+     "refused: --zeroed-runs needs --run COLUMN (the instrument was zeroed at each run's "
+     "start)"),
     ("live_flag_with_a_bag", "topic hz on a bag with --duration (a live-graph option)",
      "refused: --duration applies to the live graph, not to a bag"),
     ("json_in_a_missing_directory", "check with --json into a directory that does not exist",
@@ -174,7 +176,7 @@ def _build(name: str, tmp_path: Path) -> list[str]:
                                            "0.6", "--json", str(json_path)],
         "log_flag_with_a_bag": lambda: ["check", TALKER, "--target", "e_um"],
         "survey_flag_with_a_bag": lambda: ["check", TALKER, "--columns", "map.yaml"],
-        "negative_auto": lambda: ["check", log(), "--target", "e_um", "--auto", "-1"],
+        "negative_auto": lambda: ["check", TALKER, "--auto", "-1"],
         "min_reduction_out_of_range": lambda: ["fleet", str(tmp_path), "--min-reduction",
                                                "1.5", "--json", str(json_path)],
         "zero_workers": lambda: ["fleet", str(tmp_path), "--workers", "0"],
