@@ -226,15 +226,11 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     node_warnings: dict[str, list[str]] = {}
 
     def on_diagnostics(message: DiagnosticArray) -> None:
-        from ..nodes._health import warnings_of
-
         for status in message.status:
             if status.name.endswith(": delivery"):
                 values = {v.key: v.value for v in status.values}
-                node = status.name.split(":")[0]
-                said = node_warnings.setdefault(node, [])
-                said += [text for text in warnings_of(values) if text not in said]
-                delivery[node] = values
+                hear_warnings(node_warnings, status.name, values)
+                delivery[status.name.split(":")[0]] = values
             elif status.name.endswith(": compensation"):
                 delivery[status.name.split(":")[0] + ":compensation"] = {
                     v.key: v.value for v in status.values}
@@ -379,8 +375,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         listener.destroy_node()
         rclpy.try_shutdown()
     losses = delivery_losses(delivery)
-    warnings = [f"{node.lstrip('/')}: {text}" for node, texts in sorted(node_warnings.items())
-                for text in texts]
+    warnings = warning_lines(node_warnings)
     # The headline is computed from the record - the bag the report is made from - so
     # that the summary and the report tell one story, reading for reading.
     try:
@@ -491,6 +486,22 @@ def _exit_text(code: int | None) -> str:
     if code is None:
         return "running"
     return f"signal {-code}" if code < 0 else str(code)
+
+
+def hear_warnings(node_warnings: dict[str, list[str]], status_name: str,
+                  values: dict[str, str]) -> None:
+    """Keep the warnings a ``<node>: delivery`` status carries (``warning.<n>``, every WARN
+    the node said: :class:`..nodes._health.DeliveryHealth`), once each, in order."""
+    from ..nodes._health import warnings_of
+
+    said = node_warnings.setdefault(status_name.split(":")[0], [])
+    said += [text for text in warnings_of(values) if text not in said]
+
+
+def warning_lines(node_warnings: dict[str, list[str]]) -> list[str]:
+    """The nodes' warnings as the summary's lines: '<node>: <warning>'."""
+    return [f"{node.lstrip('/')}: {text}" for node, texts in sorted(node_warnings.items())
+            for text in texts]
 
 
 def _conformance_of(story: dict):

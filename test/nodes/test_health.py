@@ -83,6 +83,17 @@ def test_every_warning_is_repeated_with_each_status_until_the_end(rclpy_context)
     assert spin_until(node, lambda: periodic() is not None, 10)
     assert warnings_of(periodic()) == [
         left_out, "temperature sensor bed: no value (nan) - left out of the model's inputs"]
+    # The main job's summary takes them from the statuses it hears, once each.
+    from mt_accuracy_ros.commands.demo import hear_warnings, warning_lines
+
+    heard: dict[str, list[str]] = {}
+    for array in received:
+        for status in array.status:
+            hear_warnings(heard, status.name, {v.key: v.value for v in status.values})
+    assert warning_lines(heard) == [
+        f"warner_under_test: {left_out}",
+        "warner_under_test: temperature sensor bed: no value (nan) - left out of the model's "
+        "inputs"]
     node.destroy_node()
 
 
