@@ -457,6 +457,63 @@ def _iso230_2(args: argparse.Namespace) -> int:
     return 0
 
 
+def _validate_seed_and_simulation_options(args: argparse.Namespace,
+                                          simulation_only: dict[str, str]) -> None:
+    """--simulate SEED >= 0, and the options only a simulation reads refused without it."""
+    in_range("--simulate", args.simulate, low=0, what="an integer seed")
+    if args.simulate is None:
+        for name, flag in simulation_only.items():
+            if getattr(args, name) not in (None, False):
+                raise not_applicable(flag, "a simulated measurement (--simulate SEED)",
+                                     f"a measured file ({args.file})")
+
+
+def _file_outputs(args: argparse.Namespace) -> None:
+    """--json, --report and, with --simulate, FILE (written first) checked as outputs."""
+    outputs = [Output("--json", args.json), Output("--report", args.report)]
+    if args.simulate is not None:
+        outputs.append(Output("FILE (written by --simulate)", args.file))
+    check_outputs(outputs, [] if args.simulate is not None else [args.file])
+
+
+def _validate_ballbar(args: argparse.Namespace) -> None:
+    in_range("--radius-mm", args.radius_mm, low=0, low_open=True, unit="mm")
+    in_range("--socket-height-mm", args.socket_height_mm, unit="mm")
+    in_range("--socket-change-um", args.socket_change_um, low=0, unit="um")
+    _validate_seed_and_simulation_options(args, {"scenario": "--scenario",
+                                                 "backlash": "--backlash"})
+    _file_outputs(args)
+
+
+def _validate_probe(args: argparse.Namespace) -> None:
+    in_range("--sphere-radius-mm", args.sphere_radius_mm, low=0, low_open=True, unit="mm")
+    for axis, value in zip("XYZ", args.sphere_mm):
+        in_range(f"--sphere-mm ({axis})", value, unit="mm")
+    in_range("--tolerance-um", args.tolerance_um, low=0, low_open=True, unit="um")
+    _validate_seed_and_simulation_options(args, {})
+    _file_outputs(args)
+
+
+#: Options of ``export`` that one controller's tables read (argparse name: flag, controller).
+EXPORT_CONTROLLER_OPTIONS = {"unilateral": ("--unilateral", "twincat"),
+                             "fanuc_step_limit": ("--fanuc-step-limit", "fanuc")}
+
+
+def _validate_export(args: argparse.Namespace) -> None:
+    in_range("--spacing-mm", args.spacing_mm, low=0, low_open=True, unit="mm")
+    in_range("--band-um", args.band_um, low=0, low_open=True, unit="um")
+    in_range("--max-points", args.max_points, low=2, what="an integer")
+    in_range("--detection-unit-um", args.detection_unit_um, low=0, low_open=True, unit="um")
+    in_range("--fanuc-step-limit", args.fanuc_step_limit, low=1, what="an integer")
+    for name, (flag, controller) in EXPORT_CONTROLLER_OPTIONS.items():
+        if getattr(args, name) not in (None, False) and args.controller != controller:
+            raise not_applicable(flag, f"--controller {controller}",
+                                 f"--controller {args.controller}" if args.controller
+                                 else "the generic tables (no --controller)")
+    check_outputs([Output("--out", args.out, "directory"), Output("--json", args.json),
+                   Output("--report", args.report)])
+
+
 class _Parser(argparse.ArgumentParser):
     """No abbreviated options anywhere (``--rat 2`` is an error, not ``--rate 2``);
     subcommands' parsers are of this class too (argparse makes them with type(parent))."""
@@ -643,6 +700,10 @@ def build_parser() -> argparse.ArgumentParser:
     add_topic_parser(commands)
     add_model_parser(commands)
     add_rotary_parser(commands)
+    # The rotary tools' options, checked here before their handlers run.
+    for name, validate in (("ballbar", _validate_ballbar), ("probe", _validate_probe),
+                           ("export", _validate_export)):
+        commands.choices[name].set_defaults(validate=validate)
     return parser
 
 

@@ -119,8 +119,7 @@ def _log_csv(tmp_path):
 
 
 @pytest.mark.parametrize("argv_tail, words", [
-    (["--json", "{missing}/s.json"], "--json {missing}/s.json: the directory {missing} does "
-                                     "not exist"),
+    (["--json", "{log}/s.json"], "--json {log}/s.json: {log} is a file, not a directory"),
     (["--train-fraction", "1"], "--train-fraction 1.0: between 0.2 and 0.9"),
     (["--min-reduction", "-0.1"], "--min-reduction must be a fraction in [0, 1), got -0.1"),
     (["--row-period", "nan"], "--row-period must be a finite number > 0 [s], got nan"),
@@ -136,11 +135,10 @@ def test_check_refuses_before_any_work(tmp_path, capsys, monkeypatch, argv_tail,
         raise AssertionError("the check ran before its options were checked")
 
     monkeypatch.setattr(check_log, "check_csv", must_not_run)
-    missing = tmp_path / "missing"
-    argv = ["check", str(_log_csv(tmp_path)), "--target", "e_um",
-            *[a.format(missing=missing) for a in argv_tail]]
+    log = _log_csv(tmp_path)
+    argv = ["check", str(log), "--target", "e_um", *[a.format(log=log) for a in argv_tail]]
     error = _one_line_error(capsys, argv)
-    assert words.format(missing=missing) in error
+    assert words.format(log=log) in error
     assert sorted(p.name for p in tmp_path.iterdir()) == ["log.csv"]
 
 
@@ -170,6 +168,12 @@ def test_output_paths_rules(tmp_path):
 
     assert check_output(Output("--json", None)) is None
     assert check_output(Output("--json", tmp_path / "s.json")) == tmp_path / "s.json"
+    # A file's missing directory is made by its writer: accepted, not made by the check.
+    assert check_output(Output("--json", tmp_path / "new" / "s.json"))
+    assert not (tmp_path / "new").exists()
+    (tmp_path / "notes.txt").write_text("x")
+    with pytest.raises(ParameterError, match="notes.txt is a file, not a directory"):
+        check_output(Output("--report", tmp_path / "notes.txt" / "d" / "r.html"))
     assert check_output(Output("--out", tmp_path / "a" / "b", "directory")) == \
         tmp_path / "a" / "b"
     assert not (tmp_path / "a").exists()          # checked, not created

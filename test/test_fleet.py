@@ -89,7 +89,7 @@ def test_a_plant_on_a_local_cluster_of_two_processes(plant, tmp_path, capsys):
     # the truncated and the foreign bag: their own tasks failed, reasons given
     refused = {(r["machine"], Path(r["file"]).name): r["reason"] for r in summary["refused"]}
     assert set(refused) == {("hmc-c", "2026-11-17"), ("cell-7", "talker")}
-    assert "damaged or incomplete MCAP file" in refused[("hmc-c", "2026-11-17")]
+    assert "is a truncated MCAP file" in refused[("hmc-c", "2026-11-17")]
     assert "no /reference/tcp_error topic" in refused[("cell-7", "talker")]
     assert summary["machines"]["cell-7"]["trend"] is None
     assert "refused: hmc-c 2026-11-17 2026-11-17: " in out

@@ -8,8 +8,9 @@ and nothing has been computed or written yet.
 The rules (one place, for every command):
 
 * A **file** (``--json``, ``--report``) may exist (it is replaced) but must not be a
-  directory; its directory must **exist** - it is not created, so that a typo in a folder
-  name is refused instead of building a tree somewhere else - and be writable.
+  directory; its directory is **created** when missing (as every writer of this package
+  does, ``mkdir -p``), so its nearest existing ancestor must be a writable directory - a
+  path through a file (``notes.txt/s.json``) is refused.
 * A **directory** (``--out`` of ``demo`` and ``simulate``) may exist (it must be a
   directory then) or not: the command creates it, parents included, so its nearest
   existing ancestor must be a writable directory.
@@ -76,11 +77,7 @@ def check_output(output: Output) -> Path | None:
         if path.is_dir():
             raise ParameterError(f"{flag} {path} is a directory; give a file name in it, "
                                  f"e.g. {path / 'summary'}{'.json' if 'json' in flag else '.html'}")
-        parent = path.parent
-        if not parent.exists():
-            raise ParameterError(f"{flag} {path}: the directory {parent} does not exist "
-                                 "(create it first; it is not created for a file)")
-        _writable_directory(flag, path, parent)
+        _writable_directory(flag, path, _nearest_existing(path.parent))
         return path
     if path.exists():
         if output.kind == "new directory":
