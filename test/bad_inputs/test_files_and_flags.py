@@ -20,6 +20,8 @@ from mt_accuracy_ros.cli import main
 CLASSES = [
     ("utf16_csv", "a thermal log saved by Excel as \"Unicode text\" (UTF-16 with a "
      "byte-order mark)", "announced: read as UTF-16 (BOM)"),
+    ("utf16_big_endian_csv", "a thermal log in big-endian UTF-16 with its byte-order mark",
+     "announced: read as UTF-16 (BOM)"),
     ("utf16_csv_without_bom", "a UTF-16 CSV whose byte-order mark was lost (every other "
      "byte NUL)", "refused: holds NUL bytes); a UTF-16 export without a byte-order mark? "
      "save it as UTF-8 CSV"),
@@ -41,6 +43,16 @@ CLASSES = [
      "refused: is a PNG image, not a CSV"),
     ("sqlite_bag_to_play", "a rosbag2 SQLite bag (a directory of .db3) given to play",
      "refused: is a rosbag2 SQLite bag: `ros2 bag convert` it to MCAP"),
+    ("mcap_damaged_inside", "an MCAP bag whose first chunk is overwritten (magic and footer "
+     "intact) given to topic list", "refused: damaged MCAP file, no topic readable before "
+     "the damage"),
+    ("ballbar_simulation_option_on_a_measured_file", "ballbar of a measured file with "
+     "--backlash (only a simulated table has one)",
+     "refused: --backlash applies to a simulated measurement (--simulate SEED), not to a "
+     "measured file"),
+    ("export_option_of_another_controller", "export for a SINUMERIK with --fanuc-step-limit",
+     "refused: --fanuc-step-limit applies to --controller fanuc, not to --controller "
+     "siemens"),
     ("train_fraction_out_of_range", "check of a thermal log with --train-fraction 2",
      "refused: --train-fraction 2.0: between 0.2 and 0.9 (the rows after it judge the "
      "model)"),
@@ -103,9 +115,17 @@ def _thermal_log_rows() -> str:
                                           for i in range(40))
 
 
-def _log(tmp_path: Path, encoding: str = "utf-8") -> Path:
+def _log(tmp_path: Path, encoding: str = "utf-8", mark: bytes = b"") -> Path:
     path = tmp_path / "log.csv"
-    path.write_bytes(_thermal_log_rows().encode(encoding))
+    path.write_bytes(mark + _thermal_log_rows().encode(encoding))
+    return path
+
+
+def _damaged_bag(tmp_path: Path) -> Path:
+    data = bytearray((DATA / "rosbag2_samples" / "talker" / "talker.mcap").read_bytes())
+    data[3000:3400] = b"\xab" * 400
+    path = tmp_path / "damaged.mcap"
+    path.write_bytes(bytes(data))
     return path
 
 
@@ -150,6 +170,14 @@ def _build(name: str, tmp_path: Path) -> list[str]:
     builders = {
         "utf16_csv": lambda: ["check", str(_log(tmp_path, "utf-16")), "--target", "e_um",
                               "--json", str(json_path)],
+        "utf16_big_endian_csv": lambda: ["check", str(_log(tmp_path, "utf-16-be", b"\xfe\xff")),
+                                         "--target", "e_um", "--json", str(json_path)],
+        "mcap_damaged_inside": lambda: ["topic", "list", "--bag", str(_damaged_bag(tmp_path))],
+        "ballbar_simulation_option_on_a_measured_file": lambda: [
+            "ballbar", log(), "--backlash", "--json", str(json_path)],
+        "export_option_of_another_controller": lambda: [
+            "export", "demo", "--out", str(tmp_path / "tables"), "--controller", "siemens",
+            "--fanuc-step-limit", "7"],
         "utf16_csv_without_bom": lambda: ["check", str(_log(tmp_path, "utf-16-le")),
                                           "--target", "e_um", "--json", str(json_path)],
         "png_as_bag": lambda: ["check", str(_png(tmp_path / "photo.png")), "--json",
