@@ -224,7 +224,7 @@ LOG_TIME_COLUMN, LOG_TRAIN_FRACTION, LOG_COMPONENT = "time_s", 0.5, "z"
 def _is_table(path: Path) -> bool:
     """Whether ``check`` reads ``path`` as a CSV table (by its suffix, or a text file that
     is no description) rather than a bag."""
-    from .io.file_kinds import MCAP_MAGIC, looks_like_text, read_head
+    from .core.inputs.file_kinds import MCAP_MAGIC, looks_like_text, read_head
 
     suffix = path.suffix.lower()
     if suffix in TABLE_SUFFIXES:

@@ -103,7 +103,7 @@ def test_a_plant_on_a_local_cluster_of_two_processes(plant, tmp_path, capsys):
     assert (tmp_path / "fleet_over_time.png").stat().st_size > 10_000
     html = (tmp_path / "fleet.html").read_text()
     for text in ("Machines that drift, ranked", "Effects common to many machines",
-                 "Refused data", "damaged or incomplete MCAP file", "Machine hmc-a"):
+                 "Refused data", "is a truncated MCAP file", "Machine hmc-a"):
         assert text in html
     titles = [s["title"] for s in summary["report"]["sections"]]
     assert titles[:4] == ["The fleet", "Machines that drift, ranked",

@@ -25,7 +25,7 @@ from mcap.reader import make_reader
 from mcap.stream_reader import StreamReader
 
 from ..core.errors import BagError
-from .file_kinds import IDENTIFY_BYTES, MCAP_MAGIC, looks_like_text, signature_kind
+from ..core.inputs.file_kinds import IDENTIFY_BYTES, MCAP_MAGIC, looks_like_text, signature_kind
 
 
 #: What parsing a damaged or foreign file can raise inside the mcap library and

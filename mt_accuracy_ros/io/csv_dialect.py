@@ -25,7 +25,7 @@ from typing import Iterator
 import numpy as np
 
 from ..core.errors import InputDataError
-from .file_kinds import bom_encoding, signature_kind
+from ..core.inputs.file_kinds import bom_encoding, signature_kind
 
 #: Bytes read to decide the dialect.
 SNIFF_BYTES = 64 * 1024

@@ -292,3 +292,20 @@ def test_a_truncated_bag_is_still_recovered(tmp_path, capsys):
     assert "recovered" in capsys.readouterr().out
     assert main(["info", str(tmp_path / "salvaged")]) == 0
     shutil.rmtree(tmp_path / "salvaged")
+
+
+def test_a_model_saved_as_utf16_by_a_windows_editor_is_read(tmp_path):
+    """A description's byte-order mark declares its encoding: read by it, same text."""
+    from mt_accuracy_ros.core.errors import ParameterError
+    from mt_accuracy_ros.core.inputs.safe_files import read_description
+
+    text = "machine: kidani_hmc\neffects: {}\n"
+    path = tmp_path / "model.yaml"
+    path.write_bytes(text.encode("utf-16"))
+    assert read_description(path, "model", ParameterError) == text
+    _png(path)
+    with pytest.raises(ParameterError, match="model is a PNG image, not a YAML text file"):
+        read_description(path, "model", ParameterError)
+    path.write_bytes(text.encode("utf-16-le"))
+    with pytest.raises(ParameterError, match="UTF-16 without a byte-order mark"):
+        read_description(path, "model", ParameterError)

@@ -16,6 +16,7 @@ import stat
 from pathlib import Path
 
 from ..errors import MtAccuracyError
+from .file_kinds import bom_encoding, signature_kind
 
 #: The largest machine or model description read [bytes] (the bundled ones are < 10 kB).
 MAX_DESCRIPTION_BYTES = 1 << 20
@@ -31,10 +32,11 @@ def plain_name(text: str) -> bool:
 
 def read_description(path: str | Path, what: str, error_class: type[MtAccuracyError],
                      max_bytes: int = MAX_DESCRIPTION_BYTES) -> str:
-    """The UTF-8 text of the description file ``path``.
+    """The text of the description file ``path`` (UTF-8, or the encoding its byte-order
+    mark declares).
 
     Raises ``error_class`` (naming ``path`` and ``what``, never the content) when it is
-    missing, not a regular file, larger than ``max_bytes`` or not UTF-8 text.
+    missing, not a regular file, larger than ``max_bytes`` or not text.
     """
     path = Path(path)
     try:
@@ -57,10 +59,26 @@ def read_description(path: str | Path, what: str, error_class: type[MtAccuracyEr
         raise error_class(f"{path}: cannot read {what} ({exc.strerror})") from exc
     if len(data) > max_bytes:
         raise error_class(f"{path}: {what} exceeds the {max_bytes}-byte limit")
+    return _description_text(data, path, what, error_class)
+
+
+def _description_text(data: bytes, path: Path, what: str,
+                      error_class: type[MtAccuracyError]) -> str:
+    """``data`` decoded: by its byte-order mark (a Windows editor's "Unicode" is UTF-16),
+    else as UTF-8; what is neither is refused naming its kind and the mend."""
+    encoding = bom_encoding(data) or "utf-8"
+    kind = signature_kind(data)
+    if kind:
+        raise error_class(f"{path}: {what} is {kind}, not a YAML text file")
+    if encoding == "utf-8" and b"\x00" in data:
+        # NUL is valid UTF-8 but never in a description: UTF-16 that lost its mark.
+        raise error_class(f"{path}: {what} holds NUL bytes, not UTF-8 text; UTF-16 without "
+                          "a byte-order mark? save it as UTF-8")
     try:
-        return data.decode("utf-8")
+        return data.decode(encoding)
     except UnicodeDecodeError as exc:
-        raise error_class(f"{path}: {what} is not UTF-8 text (byte {exc.start})") from exc
+        name = "UTF-8" if encoding == "utf-8" else encoding.upper().replace("-SIG", "")
+        raise error_class(f"{path}: {what} is not {name} text (byte {exc.start})") from exc
 
 
 def yaml_problem(exc: Exception) -> str:
