@@ -42,7 +42,7 @@ from ..core.errors import InputDataError, MtAccuracyError
 from ..core.validation import sample_period
 from ..core.kinematics.machine import load_machine
 from ..core.scales.streaming import StreamingSystematic
-from ._health import DeliveryHealth
+from ._health import DeliveryHealth, LiveSensorWatch
 from ._priority import declare_niceness
 from ._lockstep import ProgressReporter, report_after
 from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor, int_descriptor,
@@ -124,6 +124,9 @@ class YawEstimator(Node):
         self._profile_publishers: dict = {}
         self._temperature_reference: dict[str, float] = {}
         self._rises: dict[str, float] = {}
+        # Each sensor judged by the live rules (dead, frozen, implausible): left out, named.
+        self._sensor_watch = LiveSensorWatch()
+        self._sensors_left_out: dict[str, str] = {}
         self._last_index: int | None = None
         self._last_stamp = -1
         self._history = StreamHistory(float(self.get_parameter("stream_horizon_s").value))
@@ -211,16 +214,17 @@ class YawEstimator(Node):
             self._use_temperatures(names, values)
 
     def _use_temperatures(self, names, values) -> None:
-        dead = []
-        for name, value in zip(names, values):
-            if not np.isfinite(value):
-                dead.append(name)
-                continue
-            self._temperature_reference.setdefault(name, float(value))
-            self._rises[name] = float(value) - self._temperature_reference[name]
-        if dead:
-            self._report(DiagnosticStatus.WARN, f"no valid reading from {', '.join(dead)}; "
-                                                "their last value is used")
+        good, bad = self._sensor_watch.judge(dict(zip(names, (float(v) for v in values))))
+        for name, value in good.items():
+            self._temperature_reference.setdefault(name, value)
+            self._rises[name] = value - self._temperature_reference[name]
+        # Said once per sensor and kind of trouble; its last valid value is used meanwhile.
+        for name, (kind, why) in bad.items():
+            if self._sensors_left_out.get(name) != kind:
+                self._report(DiagnosticStatus.WARN, f"no valid reading from {name} "
+                                                    f"(temperature sensor: {why}) - left out; "
+                                                    "its last valid value is used")
+        self._sensors_left_out = {name: kind for name, (kind, _) in bad.items()}
 
     def _on_batch(self, message: ScaleBatch) -> None:
         channels = list(message.channel_names)
