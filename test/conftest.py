@@ -7,9 +7,21 @@ from pathlib import Path
 
 import pytest
 
+
+
+def _domain_of_this_run() -> int:
+    """A ROS domain of this test process's own: parallel workers of one run (pytest-xdist
+    names them gw0, gw1, ...) share a parent, so each takes its parent's pair of domains
+    plus its index - two workers never meet, whatever their pids."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
+    if worker.startswith("gw") and worker[2:].isdigit():
+        return 20 + (os.getppid() % 20) * 4 + int(worker[2:]) % 4
+    return 20 + os.getpid() % 80
+
+
 # Every process started by the tests inherits these: a domain of its own so that
 # two test runs (or a developer's demo) on one machine do not hear each other.
-os.environ.setdefault("ROS_DOMAIN_ID", str(20 + os.getpid() % 80))
+os.environ.setdefault("ROS_DOMAIN_ID", str(_domain_of_this_run()))
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 os.environ.setdefault("AMENT_PREFIX_PATH", sys.prefix)
 
@@ -38,3 +50,20 @@ def rclpy_context():
 def data_dir() -> Path:
     """The repository's ``data/`` folder (fl_thermal, rosbag2 samples)."""
     return DATA
+
+
+#: Test files that take longest, longest first: they start first, so that parallel workers
+#: (``-n 2``) do not end with one of them running alone (from ``--durations`` runs).
+SLOWEST_FILES = (
+    "test_demo_5axis.py", "test_demo_trunnion.py", "test_demo.py", "test_demo_vmc.py",
+    "test_closed_loop.py", "test_thermal_studies.py", "test_selection_issue28.py",
+    "test_record_play.py", "test_lockstep.py", "test_thesis_results.py", "test_graph.py",
+    "test_hidden_effects.py", "test_monitor_refit.py", "test_check_log_runs.py",
+    "test_check_cli.py", "test_context_memo.py", "test_model_gate.py",
+    "test_catalogue_trials.py", "test_survey_conventions.py", "test_fem.py",
+)
+
+
+def pytest_collection_modifyitems(session, config, items):
+    rank = {name: i for i, name in enumerate(SLOWEST_FILES)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))

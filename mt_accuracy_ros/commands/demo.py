@@ -182,6 +182,9 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         quiet=True)
     rclpy.init()
     listener = rclpy.create_node("demo_user")
+    # Held by the global executor for the whole run: rclpy.spin_once(listener) would
+    # otherwise add and remove it at every call and rebuild the wait set each time.
+    rclpy.get_global_executor().add_node(listener)
     user_progress = None
     if lockstep:
         from ..nodes._lockstep import ProgressReporter
