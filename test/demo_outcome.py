@@ -99,3 +99,35 @@ def run_bundled_main_job(base: Path, scenario: str) -> tuple[int, Path, str]:
         code = run_demo(out_dir=str(base / "out"), lockstep=True,
                         scenario=str(BUNDLED / f"{scenario}.yaml"))
     return code, base / "out", printed.getvalue()
+
+
+def iso_14253_state(rms: float, u_k2: float, band: float) -> str:
+    """The decision rule written out here, apart from the package's: within when
+    RMS + U <= band, outside when RMS - U > band, else undecided."""
+    if rms + u_k2 <= band:
+        return "within"
+    return "outside" if rms - u_k2 > band else "undecided"
+
+
+def assert_the_verdict_follows_the_figures(code: int, summary: dict) -> str:
+    """The end state's verdict in ``summary.json`` is the one its own figures give by
+    ISO 14253-1, component by component and overall; the job passes (exit 0, no failure)
+    exactly when conformance is shown. Returns the overall state."""
+    band = summary["instrument_band_um"]
+    figures = summary["closed_loop"][-1]["with_compensation"]
+    states = {f"e_{c}": iso_14253_state(figures[c]["rms_um"], figures[c]["u_k2_um"], band)
+              for c in "xyz"}
+    direction = summary.get("tool_direction")
+    if direction:
+        end = direction["phases"][-1]["with_compensation"]
+        states.update({f"direction about {c}": iso_14253_state(
+            end[c]["rms_um"], end[c]["u_k2_um"], direction["band_urad"]) for c in "xyz"})
+    by_component = summary["end_state_conformance_by_component"]
+    assert {k: by_component[k] for k in states} == states, (by_component, states)
+    overall = ("within" if all(s == "within" for s in states.values()) else
+               "outside" if "outside" in states.values() else "undecided")
+    assert summary["end_state_conformance"] == overall
+    assert summary["end_state_within_band"] is (overall == "within")
+    assert (code == 0) is (overall == "within"), (code, overall, summary["failures"])
+    assert bool(summary["failures"]) is (overall != "within"), summary["failures"]
+    return overall
