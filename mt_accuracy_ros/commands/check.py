@@ -80,16 +80,10 @@ def observations_from_bag(bag: Path, namespace: str = "", kinematics=None):
     readings.sort(key=lambda r: r[0])
     axes = [a.upper() for a in readings[0][1].command_axes]
     stamps = np.array([r[0] for r in readings], dtype=np.int64)
-    temperatures = {}
-    if temps:
-        temps.sort(key=lambda t: t[0])
-        names = temps[-1][1]
-        t_stamps = np.array([t[0] for t in temps], dtype=np.float64)
-        for j, name in enumerate(names):
-            values = np.array([t[2][j] if j < len(t[2]) else np.nan for t in temps])
-            ok = np.isfinite(values)
-            if ok.sum() >= 2:
-                temperatures[name] = np.interp(stamps.astype(float), t_stamps[ok], values[ok])
+    temperatures = sampled_temperatures(temps, stamps)
+    keep, sensor_notes = judge_bag_sensors(temperatures, stamps, prefix)
+    readings, stamps = [r for r, k in zip(readings, keep) if k], stamps[keep]
+    temperatures = {name: values[keep] for name, values in temperatures.items()}
     obs = Observations(
         positions={a: np.array([r[1].command_positions[i] for r in readings]) for i, a in
                    enumerate(axes)},
@@ -104,7 +98,7 @@ def observations_from_bag(bag: Path, namespace: str = "", kinematics=None):
     obs.uncertainty_m, note = stated_uncertainty([r[1].uncertainty for r in readings],
                                                  DEFAULT_POSITION_UNCERTAINTY_M,
                                                  "reference readings", "m")
-    notes = [note] if note else []
+    notes = sensor_notes + ([note] if note else [])
     if all(len(getattr(r[1], "command_directions", [])) == len(axes) for r in readings):
         obs.directions = {a: np.array([r[1].command_directions[i] or
                                        np.sign(obs.velocities[a][k])
@@ -120,6 +114,88 @@ def observations_from_bag(bag: Path, namespace: str = "", kinematics=None):
             raise InputDataError(f"{bag}: readings with a target_point need the model's chain")
         obs.work_point = work_points(kinematics, obs.positions, targets)
     return obs, stamps, sorted(profiles, key=lambda p: p[0]), notes
+
+
+def sampled_temperatures(temps: list[tuple[int, list[str], np.ndarray]], stamps: np.ndarray
+                         ) -> dict[str, np.ndarray]:
+    """Each sensor's temperature [degC] at the reference readings' ``stamps`` [ns].
+
+    Linear between the ``/temperatures`` messages (stamp [ns], sensor names, readings
+    [degC]) around a stamp; NaN where the message nearest the stamp gave no reading (a
+    gap stays a gap for the sensors' judge, and a sensor with no reading at all is
+    judged dead, not dropped unsaid). The sensors are the last message's."""
+    if not temps:
+        return {}
+    temps = sorted(temps, key=lambda t: t[0])
+    at = stamps.astype(np.float64)
+    t_stamps = np.array([t[0] for t in temps], dtype=np.float64)
+    first_after = np.searchsorted(t_stamps, at)
+    after = np.minimum(first_after, t_stamps.size - 1)
+    before = np.maximum(first_after - 1, 0)
+    nearest = np.where(np.abs(t_stamps[after] - at) <= np.abs(t_stamps[before] - at),
+                       after, before)
+    out = {}
+    for j, name in enumerate(temps[-1][1]):
+        values = np.array([t[2][j] if j < len(t[2]) else np.nan for t in temps])
+        ok = np.isfinite(values)
+        sampled = np.interp(at, t_stamps[ok], values[ok]) if ok.any() else \
+            np.full(at.size, np.nan)
+        sampled[~ok[nearest]] = np.nan
+        out[name] = sampled
+    return out
+
+
+def judge_bag_sensors(temperatures: dict[str, np.ndarray], stamps: np.ndarray,
+                      prefix: str = "") -> tuple[np.ndarray, list[str]]:
+    """(the reference readings kept (N,), one note per finding): the bag's temperatures,
+    as sampled at the readings, judged by the one rule of logs and surveys
+    (:func:`~..core.inputs.sensor_health.judge_sensors`). A sensor mostly bad (dead,
+    stuck, jumping ...) is left out of every model (``temperatures`` loses it); a few bad
+    readings leave out those reference readings. Findings name the reference readings
+    by index (1-based, in stamp order); the first note says so, with reading 1's stamp."""
+    from ..core.inputs.sensor_health import judge_sensors
+
+    keep = np.ones(stamps.size, dtype=bool)
+    if not temperatures:
+        return keep, []
+    health = judge_sensors(temperatures, np.arange(1, stamps.size + 1), row_label="reading")
+    for name in list(temperatures):
+        if name in health.kept:
+            temperatures[name] = health.kept[name]
+        else:
+            del temperatures[name]
+    if not health.findings:
+        return keep, []
+    bad = health.rows_left_out
+    if bad.size:
+        keep = ~bad
+    notes = [f"temperature sensors judged at the {stamps.size} reference readings "
+             f"({prefix}/reference/tcp_error, numbered 1.. in stamp order; reading 1 at "
+             f"stamp {int(stamps[0])} ns), the temperatures sampled at their stamps"]
+    notes += health.notes
+    if not keep.all():
+        notes.append(f"{int((~keep).sum())} reference readings with a bad sensor reading "
+                     "left out (see the notes above)")
+    return keep, notes
+
+
+def judge_survey_sensors(survey) -> list[str]:
+    """The survey's temperature columns judged by the one rule of logs and bags
+    (:func:`~..core.inputs.sensor_health.judge_sensors`): a sensor mostly bad is left out
+    of every model, a few bad rows leave out those rows (counted in the survey's dropped
+    rows, as a log's are). Findings name the file's rows (the header is row 1). One note
+    per finding."""
+    from ..core.inputs.sensor_health import judge_sensors
+
+    if not survey.temperatures:
+        return []
+    health = judge_sensors(survey.temperatures, survey.file_rows, survey.run_of_row,
+                           survey.run_names, row_label="file row")
+    survey.temperatures = health.kept
+    bad = health.rows_left_out
+    if bad.size and bad.any():
+        survey.without_rows(bad, f"{int(bad.sum())} with a bad sensor reading (see the notes)")
+    return health.notes
 
 
 def predict_with_history(model, obs, stamps, profiles, delay_ns: int = 500_000_000,
@@ -504,6 +580,7 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
     from ..io.column_map import read_mapped_csv
 
     survey = read_mapped_csv(path, column_map)
+    sensor_notes = judge_survey_sensors(survey)
     machine = survey_machine(machine, column_map.machine, model_text)
     model, machine_note = survey_model(survey, model_text, machine, column_map.tool_offset_m,
                                        column_map.work_axes)
@@ -555,6 +632,10 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
     if column_map.uncertainty_note():
         # Said as the bag path says its default: printed and in the JSON's warnings.
         result.setdefault("warnings", []).insert(0, column_map.uncertainty_note())
+    if sensor_notes:
+        # Printed and in the JSON's warnings (the bag's way), and apart as sensor_notes.
+        result.setdefault("warnings", []).extend(sensor_notes)
+        result["sensor_notes"] = sensor_notes
     return {"data": str(path), "kind": "survey_csv", "rows_read": survey.rows_read,
             "rows_dropped": survey.rows_dropped, "rows_note": survey.summary(Path(path).name),
             "machine": model.machine.name,

@@ -365,31 +365,18 @@ def check_temperature_units(name: str, values: np.ndarray, declared: str) -> Non
     """Refuse a sensor whose readings, in their ``declared`` unit, lie mostly where no
     machine's temperature does and another unit would put them (kelvin declared as degC).
     Readings beyond any unit (a dead sensor's -180) are the sensors' judge's, row by row.
+    The surveys' rule too (:func:`~..core.inputs.sensor_health.refuse_wrong_temperature_unit`).
 
     Raises
     ------
     InputDataError
         Naming the sensor, its values, the declared unit and the likely one.
     """
-    from ..core.inputs.plausibility import (BOUNDS, check_plausible, likely_unit,
-                                            temperature_quantity, to_si)
+    from ..core.inputs.sensor_health import refuse_wrong_temperature_unit
 
-    finite = values[np.isfinite(values)]
-    if finite.size == 0:
-        return
-    quantity = temperature_quantity(name)
-    middle = float(np.median(to_si(finite, "temperature", declared)))
-    if BOUNDS[quantity].low <= middle <= BOUNDS[quantity].high:
-        return
-    low, high = np.percentile(finite, [5, 95])
-    core = finite[(finite >= low) & (finite <= high)]
-    guess = likely_unit(core, quantity, declared)
-    if guess is not None:
-        # The whole column is shown when its every reading fits the likely unit.
-        shown = finite if likely_unit(finite, quantity, declared) == guess else core
-        check_plausible(shown, quantity, declared, f"sensor {name}",
-                        mend=f"give its unit in its name ({name}_{guess}) or a units row",
-                        error=InputDataError)
+    refuse_wrong_temperature_unit(name, values, declared, f"sensor {name}",
+                                  f"give its unit in its name ({name}_{{guess}}) or a units row",
+                                  InputDataError)
 
 
 def _complete_rows(temperatures: dict[str, np.ndarray]) -> np.ndarray:

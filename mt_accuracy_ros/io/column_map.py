@@ -432,16 +432,30 @@ def refuse_implausible(column_map: ColumnMap, values: dict[str, list],
                        units: dict[str, str]) -> None:
     """One line when a column's values (in their declared unit) are implausible for what
     the role measures, naming the unit they look like (:mod:`~..core.inputs.plausibility`)
-    - read before any search, so nothing runs on metres that are millimetres."""
+    - read before any search, so nothing runs on metres that are millimetres.
+
+    A temperature column is refused only when most of its readings fit another unit
+    (kelvin declared as degC); a dead stretch (-180, 0 from a row on) is a sensor problem,
+    named and left out by the sensors' judge - the thermal logs' rule
+    (:func:`~..core.inputs.sensor_health.refuse_wrong_temperature_unit`)."""
+    from ..core.inputs.sensor_health import refuse_wrong_temperature_unit
+
     for role, unit in units.items():
         quantity = column_map.plausible_as(role)
         if quantity is None or not values.get(role):
             continue
         column = column_map.roles[role][0]
+        where = f"column {column} ({role})"
+        mend = (f"declare its unit ({{column: {column}, unit: UNIT}} in the map or "
+                f"--col {role}={column}:UNIT)")
+        if role.startswith("temp."):
+            # The mend's braces are text, not the likely unit's placeholder.
+            refuse_wrong_temperature_unit(role.split(".", 1)[1], values[role], unit, where,
+                                          mend.replace("{", "{{").replace("}", "}}"),
+                                          ParameterError)
+            continue
         check_plausible(np.asarray(values[role], dtype=np.float64), quantity, unit,
-                        f"column {column} ({role})",
-                        f"declare its unit ({{column: {column}, unit: UNIT}} in the map or "
-                        f"--col {role}={column}:UNIT)")
+                        where, mend)
 
 
 @dataclass
@@ -466,6 +480,24 @@ class MappedSurvey:
     direction_errors: dict[str, np.ndarray] = field(default_factory=dict)
     #: component -> (N,) each row's target in the workpiece frame [m] (``target.x`` ...).
     targets: dict[str, np.ndarray] = field(default_factory=dict)
+    #: (N,) each row's number in the file, as an editor shows it (the header is row 1).
+    file_rows: np.ndarray | None = None
+
+    def without_rows(self, drop: np.ndarray, reason: str) -> None:
+        """Leave out the rows ``drop`` (N,) marks from every per-row column, counted in
+        ``rows_dropped`` with ``reason`` ("3 with a bad sensor reading (see the notes)")."""
+        drop = np.asarray(drop, dtype=bool)
+        if not drop.any():
+            return
+        keep = ~drop
+        for name in ("positions", "errors", "temperatures", "velocities", "accelerations",
+                     "directions", "direction_errors", "targets"):
+            setattr(self, name, {k: v[keep] for k, v in getattr(self, name).items()})
+        for name in ("time_s", "spindle_speed_rad_s", "run_of_row", "file_rows"):
+            if getattr(self, name) is not None:
+                setattr(self, name, getattr(self, name)[keep])
+        self.rows_dropped += int(drop.sum())
+        self.drop_reasons.append(reason)
 
     def summary(self, name: str) -> str:
         kept = self.rows_read - self.rows_dropped
@@ -543,11 +575,18 @@ def _parse_row(path: Path, row: list[str], number: int, header: list[str],
                 problem = problem or f"row {number} column {header[j]}: empty run"
             parsed[role] = cell
             continue
+        number_read = True
         try:
             value = to_seconds(cell) if role == "time" and dated else \
                 float(cell.replace(",", ".") if decimal_comma else cell)
         except ValueError:
-            value = math.nan
+            value, number_read = math.nan, False
+        if role.startswith("temp.") and (not cell or number_read and not math.isfinite(value)):
+            # A thermocouple's gap (empty, nan, inf): kept as NaN, the sensors' judge
+            # decides (named with its rows; the sensor or those rows left out). A word
+            # there is a bad cell like any other.
+            parsed[role] = math.nan
+            continue
         if not math.isfinite(value):
             bad_in_column[role] += 1
             first_bad.setdefault(role, (number, cell))
@@ -664,4 +703,4 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
     return MappedSurvey(time_s, pick("pos"), components("err"), pick("temp"), pick("vel"),
                         pick("acc"), pick("dir"), si.get("spindle"), total, dropped, reasons,
                         run_of_row, run_names, dialect.note(), components("tdir"),
-                        components("target"))
+                        components("target"), np.asarray(kept_rows, dtype=np.intp) + 1)

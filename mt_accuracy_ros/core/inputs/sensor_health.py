@@ -122,6 +122,16 @@ class SensorHealth:
         return [f.text for f in self.findings]
 
     @property
+    def rows_left_out(self) -> NDArray[np.bool_]:
+        """(N,) rows on which a kept sensor has no usable reading (a few bad rows set
+        aside, or its own gaps): a model needs every sensor on a row, so the caller leaves
+        these rows out. Empty (shape (0,)) when no sensor is kept."""
+        values = list(self.kept.values())
+        if not values:
+            return np.zeros(0, dtype=bool)
+        return ~np.all([np.isfinite(v) for v in values], axis=0)
+
+    @property
     def left_out(self) -> list[str]:
         """The sensors left out of every model, in the order found."""
         return list(dict.fromkeys(f.sensor for f in self.findings if f.left_out))
@@ -296,7 +306,8 @@ def _describe(kind: str, values: NDArray[np.float64], bad: NDArray[np.bool_],
 
 def judge_sensors(temperatures: dict[str, ArrayLike], data_rows: ArrayLike | None = None,
                   run_of_row: ArrayLike | None = None, run_names: list[str] | None = None,
-                  breaks: ArrayLike | None = None) -> SensorHealth:
+                  breaks: ArrayLike | None = None, *, row_label: str = "data row"
+                  ) -> SensorHealth:
     """Judge each sensor (module docstring): the sensors kept and every finding.
 
     Parameters
@@ -310,6 +321,10 @@ def judge_sensors(temperatures: dict[str, ArrayLike], data_rows: ArrayLike | Non
         out, and a step at a run's start is not a jump.
     breaks : array of bool, shape (N,), optional
         Rows after a break of the record (a clock jump): a step there is not a jump.
+    row_label : str
+        What ``data_rows`` number, in the texts ("data row" for a log's rows after its
+        header, "file row" for a survey's rows counted with the header as row 1,
+        "reading" for a bag's reference readings).
 
     Returns
     -------
@@ -330,7 +345,8 @@ def judge_sensors(temperatures: dict[str, ArrayLike], data_rows: ArrayLike | Non
         others = [np.where(dead_rows(o) | out_of_range_rows(o, workshop_range_c(other)),
                            np.nan, o)
                   for other, o in series.items() if other != name]
-        sensor_findings = _judge_one(name, values, others, rows, runs, run_names, cut)
+        sensor_findings = _judge_one(name, values, others, rows, runs, run_names, cut,
+                                     row_label)
         findings += sensor_findings
         if any(f.left_out for f in sensor_findings):
             continue
@@ -342,7 +358,8 @@ def judge_sensors(temperatures: dict[str, ArrayLike], data_rows: ArrayLike | Non
 
 def _judge_one(name: str, values: NDArray[np.float64], others: list[NDArray[np.float64]],
                rows: NDArray, runs: NDArray[np.intp] | None, run_names: list[str] | None,
-               breaks: NDArray[np.bool_]) -> list[SensorFinding]:
+               breaks: NDArray[np.bool_], row_label: str = "data row"
+               ) -> list[SensorFinding]:
     """The findings of one sensor (see :func:`judge_sensors`)."""
     workshop_c = workshop_range_c(name)
     dead = dead_rows(values)
@@ -370,7 +387,7 @@ def _judge_one(name: str, values: NDArray[np.float64], others: list[NDArray[np.f
             text = (f"sensor {name}: no reading in {count} of {values.size} rows{where} - "
                     f"dead, {action}")
         else:
-            text = (f"sensor {name}: {_describe(kind, values, mask, bool(others), workshop_c)} at data rows "
+            text = (f"sensor {name}: {_describe(kind, values, mask, bool(others), workshop_c)} at {row_label}s "
                     f"{row_ranges(rows[mask])} ({count} of {values.size} rows){where} - "
                     f"{action}")
         findings.append(SensorFinding(name, kind, tuple(int(r) for r in rows[mask]), text,
@@ -379,7 +396,59 @@ def _judge_one(name: str, values: NDArray[np.float64], others: list[NDArray[np.f
         step = _step_at(np.where(stuck, np.nan, sane), k, JUMP_WINDOW)
         findings.append(SensorFinding(
             name, "jumping", tuple(int(r) for r in rows[k:]),
-            f"sensor {name}: jumps by {step:+.3g} K at data row {int(rows[k])} (its noise "
+            f"sensor {name}: jumps by {step:+.3g} K at {row_label} {int(rows[k])} (its noise "
             f"{noise_from_differences(sane):.2g} K; no other sensor steps there) - left out "
             "of every model (which side is right cannot be told)", True))
     return findings
+
+
+def refuse_wrong_temperature_unit(name: str, values: ArrayLike, declared: str, where: str,
+                                  mend: str, error: type[Exception]) -> None:
+    """Refuse a sensor whose readings, in their ``declared`` unit, lie mostly where no
+    machine's temperature does and another unit would put them (kelvin declared as degC).
+
+    The one line between a unit problem and a sensor problem, for logs and surveys alike:
+    the *share* of the rows decides. When the median reading is a plausible temperature
+    the column is in its unit and a dead stretch (an open thermocouple's -180, a logger's
+    0) is a sensor problem for :func:`judge_sensors`, row by row. When most readings are
+    implausible and the middle 90 % of them fit another unit, it is a unit problem,
+    refused. Readings beyond any unit (a dead sensor's -180 on every row) fit none: the
+    judge's too.
+
+    Parameters
+    ----------
+    name : str
+        The sensor's name (a spindle's or a motor's is allowed hotter: by name).
+    values : array
+        Its readings in ``declared`` (NaN where it gave none).
+    declared : str
+        Their unit (a key of the temperature unit table).
+    where, mend : str
+        What the values are and how to give another unit, for the message; ``{guess}``
+        in ``mend`` becomes the likely unit.
+    error : type
+        The exception raised (the caller's: ParameterError, InputDataError).
+
+    Raises
+    ------
+    error
+        One line naming the values, the declared unit and the likely one.
+    """
+    from .plausibility import check_plausible, likely_unit, to_si
+
+    raw = np.asarray(values, dtype=np.float64)
+    finite = raw[np.isfinite(raw)]
+    if finite.size == 0:
+        return
+    quantity = temperature_quantity(name)
+    middle = float(np.median(to_si(finite, "temperature", declared)))
+    if BOUNDS[quantity].low <= middle <= BOUNDS[quantity].high:
+        return
+    low, high = np.percentile(finite, [5, 95])
+    core = finite[(finite >= low) & (finite <= high)]
+    guess = likely_unit(core, quantity, declared)
+    if guess is not None:
+        # The whole column is shown when its every reading fits the likely unit.
+        shown = finite if likely_unit(finite, quantity, declared) == guess else core
+        check_plausible(shown, quantity, declared, where, mend=mend.format(guess=guess),
+                        error=error)
