@@ -9,11 +9,27 @@ docs/results.md (``python -m bench.workbench_catalogue``).
 """
 from __future__ import annotations
 
+import json
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from studies.catalogue_trials import run_trial
 from studies.foreign_machine import ErrorSet, make_trial, read_geometry, tcp_point
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+#: The catalogue proof's one run: every outcome and its summary
+#: (``python -m bench.workbench_catalogue --seeds 5 --nulls 20 --pairs 15 --out ...``).
+PROOF = DOCS / "catalogue_proof.json"
+
+
+def recorded(machine: str, kinds: tuple[str, ...], seed: int) -> dict:
+    """The outcome docs/catalogue_proof.json records for one trial."""
+    outcomes = json.loads(PROOF.read_text())["outcomes"]
+    return next(o for o in outcomes
+                if (o["machine"], tuple(o["kinds"]), o["seed"]) == (machine, kinds, seed))
 
 
 def test_the_generator_is_a_rigid_body_chain_of_its_own():
@@ -46,6 +62,11 @@ def test_a_hidden_effect_outside_the_package_is_named_located_and_removed(machin
     outcome = run_trial(machine, (kind,), seed)
     assert outcome.named_first, (outcome.found, outcome.text)
     assert outcome.localised, (outcome.top_variable, outcome.sentence)
+    # The names, in their order, and the share removed are the proof's own for this seed
+    # (docs/catalogue_proof.json), to round-off: a change of either fails here.
+    proof = recorded(machine, (kind,), seed)
+    assert outcome.found == proof["found"], (outcome.found, proof["found"])
+    assert outcome.removed == pytest.approx(proof["removed"], abs=1e-4)
     # Shapes outside the catalogue's forms (issue 39) leave what its family cannot hold:
     # a measured-looking pitch (a periodic spline) harmonics beyond the second (72 %
     # removed here; medians 52-94 % in the catalogue proof, docs/results.md), a twist whose
@@ -70,6 +91,37 @@ def test_two_hidden_effects_are_both_named(machine, kinds, seed):
     outcome = run_trial(machine, kinds, seed)
     assert outcome.all_named, outcome.found
     assert outcome.removed >= 0.8
+    proof = recorded(machine, kinds, seed)
+    assert outcome.found == proof["found"], (outcome.found, proof["found"])
+    assert outcome.removed == pytest.approx(proof["removed"], abs=1e-4)
+
+
+def test_the_results_table_states_the_proofs_own_summary():
+    """docs/results.md's catalogue table (its bold column) is the run the JSON holds:
+    the same figures, rounded as printed, and the same counts."""
+    summary = json.loads(PROOF.read_text())["summary"]
+    text = (DOCS / "results.md").read_text()
+
+    def row(start: str) -> str:
+        return next(line for line in text.splitlines() if line.startswith(start))
+
+    singles = summary["single_trials"]
+    first = row("| right effect named first (170 single trials) |")
+    assert f"**{100 * summary['named_first']:.1f} %** " \
+        f"({round(summary['named_first'] * singles)} of {singles})" in first, first
+    localised = row("| right variable localised |")
+    assert f"**{100 * summary['localised']:.1f} %** " \
+        f"({round(summary['localised'] * singles)} of {singles}; the top variable alone: " \
+        f"{100 * summary['localised_by_the_top_variable_alone']:.1f} %)" in localised, localised
+    assert f"**{100 * summary['median_removed']:.1f} %**" in row("| median residual RMS removed |")
+    assert f"**{100 * summary['false_alarms']:.0f} %**" in \
+        row(f"| false alarms, nothing hidden ({summary['null_trials']} trials) |")
+    pairs = summary["pair_trials"]
+    both = row(f"| both of two simultaneous hidden effects named ({pairs} pairs) |")
+    assert f"**{100 * summary['both_named']:.1f} %** ({round(summary['both_named'] * pairs)} " \
+        f"of {pairs}; median {100 * summary['pair_median_removed']:.1f} % removed)" in both, both
+    assert re.search(r"Not named first, (\d+) of 170", text).group(1) == \
+        str(singles - round(summary["named_first"] * singles))
 
 
 def test_magnitudes_are_drawn_in_the_issue_range():
