@@ -356,7 +356,8 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
         result.setdefault("warnings", []).append(
             f"{len(refused)} of {len(profiles)} recorded profiles could not be applied and "
             f"were left out of the predictions (the first, {name}: {why})")
-    return {"data": str(bag), "kind": "bag", "namespace": namespace, **result}
+    return {"data": str(bag), "kind": "bag", "namespace": namespace,
+            "sensors_kept": sorted(obs.temperatures), **result}
 
 
 def survey_model(survey, model_text: str | None, machine: str | None,
@@ -636,6 +637,7 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
         # Printed and in the JSON's warnings (the bag's way), and apart as sensor_notes.
         result.setdefault("warnings", []).extend(sensor_notes)
         result["sensor_notes"] = sensor_notes
+    result["sensors_kept"] = sorted(survey.temperatures)
     return {"data": str(path), "kind": "survey_csv", "rows_read": survey.rows_read,
             "rows_dropped": survey.rows_dropped, "rows_note": survey.summary(Path(path).name),
             "machine": model.machine.name,

@@ -648,7 +648,7 @@ def read_mapped_csv(path: str | Path, column_map: ColumnMap, *, min_rows: int = 
             first = number + 1
             number += len(chunk)
             if _parse_clean_chunk(chunk, header, index, values, comma, dated):
-                kept_rows.extend(range(first - 1, number - 1))
+                kept_rows.extend(range(first - 1, number))
                 continue
             # A chunk with a bad row: row by row, each row's reason kept.
             for offset, row in enumerate(chunk):
