@@ -20,6 +20,7 @@ DOC = REPO / "docs" / "reliability.md"
 SECTIONS = {
     "test_survey_inputs.py": "Surveys, column maps, laser runs, ball-bar and probing files",
     "test_log_inputs.py": "Thermal logs",
+    "test_survey_and_bag_sensors.py": "Temperature sensors in surveys and bags",
     "test_files_and_flags.py": "Files, encodings, bags and flags",
     "test_live_inputs.py": "Live messages to the running nodes",
 }
