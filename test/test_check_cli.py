@@ -472,3 +472,73 @@ def test_a_flag_s_unknown_unit_is_named_not_taken_for_a_missing_one():
     with pytest.raises(InputDataError, match=r"give its unit as dev:UNIT"):
         _column_and_unit("dev", ["dev"], "length", "target")
     assert _column_and_unit("dev:μm", ["dev"], "length", "target")[1] == 1e-6
+
+
+def test_a_bag_s_temperatures_keep_their_gaps_when_sampled_at_the_readings():
+    """A reading whose nearest /temperatures message gave no reading gets none (NaN, for
+    the sensors' judge), the others the line between the messages around it; a sensor
+    that never read is all NaN (judged dead), not dropped unsaid as it was."""
+    from mt_accuracy_ros.commands.check import sampled_temperatures
+
+    temps = [(k * 10, ["a", "b"], np.array([20.0 + k, np.nan]) if k != 2 else
+              np.array([np.nan, np.nan])) for k in range(4)]
+    sampled = sampled_temperatures(temps, np.array([5, 14, 19, 26, 30], dtype=np.int64))
+    np.testing.assert_allclose(sampled["a"][:2], [20.5, 21.4])
+    assert np.isnan(sampled["a"][2])                # nearest message (20) read nothing
+    np.testing.assert_allclose(sampled["a"][3:], [22.0 + 0.6 * 1.0, 23.0])
+    assert np.isnan(sampled["b"]).all()
+
+
+def test_a_survey_s_dead_sensor_is_left_out_and_its_kelvin_twin_refused(tmp_path, capsys):
+    """One line between a unit problem and a sensor problem (the logs' rule): a
+    temperature column dead (-180 degC) on a third of its rows is named and left out,
+    the run goes on; the same column in kelvin declared degC on every row is refused in
+    one line naming K, exit code 2, no JSON written."""
+    from mt_accuracy_ros.cli import main
+    import yaml
+
+    rows = 60
+    x = np.linspace(0.0, 400.0, rows)
+    t3_dead = np.where(np.arange(rows) >= 40, -180.0, 20.0 + x / 400.0)
+    t3_kelvin = 293.15 + x / 400.0
+    column_map = {"time": {"column": "t", "unit": "s"},
+                  "positions": {"X": {"column": "x", "unit": "mm"}},
+                  "errors": {"x": {"column": "dev_x", "unit": "um"}},
+                  "temperatures": {"T3": {"column": "T3", "unit": "degC"}},
+                  "uncertainty": {"value": 1.4, "unit": "um"}}
+    (tmp_path / "map.yaml").write_text(yaml.safe_dump(column_map))
+    for name, t3 in (("dead", t3_dead), ("kelvin", t3_kelvin)):
+        (tmp_path / f"{name}.csv").write_text("t,x,dev_x,T3\n" + "\n".join(
+            f"{10.0 * k:g},{x[k]:.4f},{3.2 + 0.1 * x[k]:.4f},{t3[k]:.4f}" for k in range(rows)))
+    args = ["--columns", str(tmp_path / "map.yaml"), "--json"]
+    assert main(["check", str(tmp_path / "dead.csv"), *args, str(tmp_path / "dead.json")]) == 0
+    note = ("sensor T3: reads -180 degC, a physically absent value (dead) at file rows 42-61 "
+            "(20 of 60 rows) - left out of every model (its rows kept)")
+    assert note in capsys.readouterr().out
+    summary = json.loads((tmp_path / "dead.json").read_text())
+    assert summary["sensor_notes"] == [note] and note in summary["warnings"]
+    assert summary["sensors_kept"] == [] and summary["readings"] == rows
+    assert main(["check", str(tmp_path / "kelvin.csv"), *args,
+                 str(tmp_path / "kelvin.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "column T3 (temp.T3): values 293.1 … 294.1 declared °C look like K" in err
+    assert "\n" not in err and not (tmp_path / "kelvin.json").exists()
+
+
+def test_a_survey_s_rows_carry_their_file_row_numbers(tmp_path):
+    """Each row read keeps its number in the file (the header is row 1), through a clean
+    chunk and a dropped row alike: the sensors' notes name rows an editor shows."""
+    from mt_accuracy_ros.io.column_map import column_map_from_dict, read_mapped_csv
+
+    lines = [f"{k},{k * 1.5},{20 + 0.01 * k}" for k in range(30)]
+    lines[9] = "9,oops,20.09"                      # file row 11: a bad error cell
+    (tmp_path / "s.csv").write_text("x_mm,dev_um,T1\n" + "\n".join(lines) + "\n")
+    column_map = column_map_from_dict({"positions": {"X": "x_mm"}, "errors": {"x": "dev_um"},
+                                       "temperatures": {"T1": {"column": "T1", "unit": "degC"}},
+                                       "row_period_s": 1})
+    survey = read_mapped_csv(tmp_path / "s.csv", column_map)
+    assert list(survey.file_rows) == [r for r in range(2, 32) if r != 11]
+    clean = tmp_path / "clean.csv"
+    clean.write_text("x_mm,dev_um,T1\n" + "\n".join(f"{k},{k},{20 + 0.01 * k}"
+                                                    for k in range(30)) + "\n")
+    assert list(read_mapped_csv(clean, column_map).file_rows) == list(range(2, 32))
