@@ -147,3 +147,18 @@ def test_row_ranges_and_the_noise_rule():
     rng = np.random.default_rng(0)
     smooth = np.linspace(0, 5, 5000) + rng.normal(0, 0.02, 5000)
     assert noise_from_differences(smooth) == pytest.approx(0.02, rel=0.05)
+
+
+def test_a_fast_warm_up_of_one_sensor_alone_is_no_jump():
+    # A spindle sensor (0.03 K noise) rising 6 K with a time constant of 3 readings: +2.2 K
+    # in its first row, then +1.6, +1.2 K ... - far beyond 30 noises, but over several
+    # readings; the signal a thermal model needs, never a re-seated sensor.
+    rng = np.random.default_rng(41)
+    t = np.arange(ROWS)
+    spindle = 22 + 6 * (1 - np.exp(-np.clip(t - 3, 0, None) / 3)) + rng.normal(0, 0.03, ROWS)
+    assert spindle[4] - spindle[3] > 1.5
+    assert _judge(spindle).findings == []
+    # The same sensor re-seated at row 200 (a 3 K step between two readings) still is one.
+    spindle[200:] += 3.0
+    finding = _only(_judge(spindle))
+    assert finding.kind == "jumping" and finding.rows[0] == 201
