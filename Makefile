@@ -10,7 +10,7 @@ VENV   ?= .venv
 PY      = $(VENV)/bin/python
 # Two workers, each taking whole test files (module fixtures run once), the slowest
 # files first (test/conftest.py): the suite's wall time on 2 cores, idle or loaded.
-PYTEST_ARGS ?= -rs -n 2 --dist loadfile
+PYTEST_ARGS ?= -rs -n 2 --dist loadfile --no-loadscope-reorder
 
 DEPS_STAMP = $(VENV)/.deps-stamp
 MSGS_STAMP = $(VENV)/.msgs-stamp

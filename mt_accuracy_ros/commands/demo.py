@@ -47,11 +47,11 @@ def _prepare(out: Path, scenario_name: str) -> Path:
     return model
 
 
-def _set_parameter(node, target: str, name: str, value) -> tuple[bool, str]:
+def _set_parameter(node, target: str, name: str, value, executor=None) -> tuple[bool, str]:
     """Set a parameter of another node through its set_parameters service."""
     from .model_tools import set_remote_parameter
 
-    return set_remote_parameter(node, target, name, value)
+    return set_remote_parameter(node, target, name, value, executor=executor)
 
 
 #: The CNC's controller at rate 1: interpolation cycle, fixed input delay, staleness
@@ -116,7 +116,8 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     from mt_accuracy_msgs.msg import (ModelCheck, ModelVersion, ReferenceMeasurement,
                                       SystematicProfile, VolumetricCompensation)
 
-    from ..nodes._common import COMPENSATION_QOS, LATCHED_QOS, RESULT_QOS, stamp_to_nanoseconds
+    from ..nodes._common import (COMPENSATION_QOS, LATCHED_QOS, RESULT_QOS, node_executor,
+                                 stamp_to_nanoseconds)
     from .check_timing import check_timeliness, timeliness_line
     from .model_tools import set_remote_parameter
     from .processes import start_node
@@ -182,9 +183,11 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         quiet=True)
     rclpy.init()
     listener = rclpy.create_node("demo_user")
-    # Held by the global executor for the whole run: rclpy.spin_once(listener) would
-    # otherwise add and remove it at every call and rebuild the wait set each time.
-    rclpy.get_global_executor().add_node(listener)
+    # The user's own executor for the whole run: rclpy.spin_once(listener) would add and
+    # remove it at every call (the wait set rebuilt each time), and rclpy's global executor
+    # outlives a context - in a process that ran rclpy before (a test worker) it woke
+    # only on its timeout, and the lockstep machine went 7 times slower.
+    executor = node_executor(listener)
     user_progress = None
     if lockstep:
         from ..nodes._lockstep import ProgressReporter
@@ -298,7 +301,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
 
         ready_by = time.monotonic() + GRAPH_READY_TIMEOUT_S
         while not graph_ready() and time.monotonic() < ready_by:
-            rclpy.spin_once(listener, timeout_sec=0.05)
+            executor.spin_once(timeout_sec=0.05)
             report_progress()
         if not graph_ready():
             print(f"  WARNING the graph was not complete after {GRAPH_READY_TIMEOUT_S:.0f} s; "
@@ -307,7 +310,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         for publisher in ("/encoder_publisher", "/temperature_publisher"):
             # The same stamp twice changes nothing: asked again while unanswered.
             ok, reason = set_remote_parameter(listener, publisher, "start_stamp_ns", start_ns,
-                                              resend_after_s=2.0)
+                                              resend_after_s=2.0, executor=executor)
             if not ok:
                 raise RuntimeError(f"could not start {publisher}: {reason}")
 
@@ -322,7 +325,8 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                 # Everything the monitor names, in one decision (its joint fit).
                 effects = [score.name for score in latest.named]
                 before = max((int(m.version) for _, m in models), default=0)
-                ok, reason = _set_parameter(listener, "/model_monitor", "add_effects", effects)
+                ok, reason = _set_parameter(listener, "/model_monitor", "add_effects", effects,
+                                            executor)
                 actions.append({"time_s": checks[-1][0], "added": ", ".join(effects),
                                 "effects": effects, "accepted": ok, "reason": reason,
                                 "rmse_before_m": latest.rmse, "where": latest.localisation,
@@ -336,7 +340,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                     seen_by = time.monotonic() + 30.0
                     while max((int(m.version) for _, m in models), default=0) <= before and \
                             time.monotonic() < seen_by:
-                        rclpy.spin_once(listener, timeout_sec=0.05)
+                        executor.spin_once(timeout_sec=0.05)
                     user_progress.report(published=max((int(m.version) for _, m in models),
                                                        default=0))
             if latest is not None and user_progress is not None:
@@ -353,7 +357,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         # Lockstep has no pace to keep: bounded only so that a hung graph still ends.
         deadline = time.monotonic() + (1800.0 if lockstep else 90.0 / rate_factor + 60.0)
         while time.monotonic() < deadline and encoder.popen.poll() is None:
-            rclpy.spin_once(listener, timeout_sec=0.05)
+            executor.spin_once(timeout_sec=0.05)
             act()
         # Drain: a monitor that fell behind on a loaded host still judges every reading
         # before the graph stops, so how many checks the run gets does not depend on the
@@ -361,7 +365,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         settle = time.monotonic() + 2.0
         drain = time.monotonic() + 60.0
         while time.monotonic() < settle or (not monitor_done() and time.monotonic() < drain):
-            rclpy.spin_once(listener, timeout_sec=0.05)
+            executor.spin_once(timeout_sec=0.05)
             act()
     finally:
         # A node that died during the run (killed, crashed) is named: its absence explains
@@ -375,6 +379,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
             # The recorder may still be writing a backlog on a loaded host: time to close
             # its file rather than a kill that leaves it unreadable.
             process.stop(timeout_s=60.0 if process.name == "recorder" else 10.0)
+        executor.shutdown()
         listener.destroy_node()
         rclpy.try_shutdown()
     losses = delivery_losses(delivery)

@@ -11,20 +11,23 @@ exit status 2. ``show`` prints the live version from ``model``.
 from __future__ import annotations
 
 import argparse
+import math
 import time
 
 from ..core.errors import ParameterError
 
 
 def set_remote_parameter(node, target: str, name: str, value, timeout_s: float = 30.0,
-                         *, resend_after_s: float | None = None) -> tuple[bool, str]:
+                         *, resend_after_s: float | None = None,
+                         executor=None) -> tuple[bool, str]:
     """Set parameter ``name`` of node ``target`` through its set_parameters service.
 
     Returns (accepted, reason); (False, why) when the service is missing or silent.
     With ``resend_after_s``, a request still unanswered after that long is sent again
     (the first answer counts): a request sent before the server's reader matched this
     client is lost without a trace, which a node that has just started makes likely.
-    Only for settings whose repetition changes nothing.
+    Only for settings whose repetition changes nothing. ``executor``: the one that holds
+    ``node`` (a node kept by its own executor must be spun by it), else rclpy's global.
     """
     import rclpy
     from rcl_interfaces.srv import SetParameters
@@ -38,9 +41,12 @@ def set_remote_parameter(node, target: str, name: str, value, timeout_s: float =
             parameters=[Parameter(name, value=value).to_parameter_msg()])
         futures = [client.call_async(request)]
         deadline = time.monotonic() + timeout_s
-        resend_at = deadline if resend_after_s is None else time.monotonic() + resend_after_s
+        resend_at = math.inf if resend_after_s is None else time.monotonic() + resend_after_s
         while not any(f.done() for f in futures) and time.monotonic() < deadline:
-            rclpy.spin_once(node, timeout_sec=0.05)
+            if executor is None:
+                rclpy.spin_once(node, timeout_sec=0.05)
+            else:
+                executor.spin_once(timeout_sec=0.05)
             if time.monotonic() >= resend_at:
                 futures.append(client.call_async(request))
                 resend_at = time.monotonic() + resend_after_s
