@@ -20,8 +20,13 @@ def _domain_of_this_run() -> int:
 
 
 # Every process started by the tests inherits these: a domain of its own so that
-# two test runs (or a developer's demo) on one machine do not hear each other.
-os.environ.setdefault("ROS_DOMAIN_ID", str(_domain_of_this_run()))
+# two test runs (or a developer's demo) on one machine do not hear each other. A domain
+# the user set is kept; one this file chose in pytest's main process (which xdist's
+# workers inherit) is replaced by each worker's own.
+if "ROS_DOMAIN_ID" not in os.environ or os.environ.get("MT_ACCURACY_TEST_DOMAIN") == \
+        os.environ["ROS_DOMAIN_ID"]:
+    os.environ["ROS_DOMAIN_ID"] = os.environ["MT_ACCURACY_TEST_DOMAIN"] = \
+        str(_domain_of_this_run())
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 os.environ.setdefault("AMENT_PREFIX_PATH", sys.prefix)
 
