@@ -456,10 +456,11 @@ def test_recorder_killed_early_loses_at_most_the_last_second(rclpy_context, tmp_
     node.destroy_node()
     salvaged = [decode(m).data for m in recover(tmp_path / "bag" / "bag_0.mcap")]
     assert salvaged == [f"m{i:03d}" for i in range(100)]
-    # info says the bag is damaged and how to recover it - one line, exit 2.
+    # info says the bag was cut short (a killed recorder) and how to recover it - one line,
+    # exit 2.
     assert main(["info", str(tmp_path / "bag")]) == 2
     error = capsys.readouterr().err.strip()
-    assert "damaged or incomplete" in error and "mt-accuracy recover" in error
+    assert "is a truncated MCAP file" in error and "mt-accuracy recover" in error
     assert len(error.splitlines()) == 1
     assert main(["recover", str(tmp_path / "bag"), str(tmp_path / "saved")]) == 0
     info = bag_info(tmp_path / "saved")
