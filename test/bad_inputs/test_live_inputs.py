@@ -16,7 +16,7 @@ import time
 import pytest
 
 from mt_accuracy_ros.commands.processes import start_node
-from nodes.graph_helpers import set_parameter_again_until_answered, spin_until
+from nodes.graph_helpers import scale_batch, set_parameter_again_until_answered, spin_until
 
 #: (class, the input, what the node says on /diagnostics). "refused": the message is
 #: counted as refused with that reason; "announced": the node names the problem and
@@ -100,18 +100,7 @@ class Feed:
         return 10**9 + self.index * BATCH_SAMPLES * int(PERIOD_S * 1e9)
 
     def batch(self, first_index: int, stamp_ns: int, period: float = PERIOD_S):
-        from mt_accuracy_msgs.msg import ScaleBatch
-        from mt_accuracy_ros.io.fields import nanoseconds_to_stamp, pack_float64
-
-        message = ScaleBatch()
-        message.header.stamp = nanoseconds_to_stamp(stamp_ns)
-        message.first_sample_index = first_index
-        message.sample_period = period
-        message.channel_names = ["x1", "x2"]
-        message.positions = pack_float64([0.1] * (2 * BATCH_SAMPLES))
-        message.command_axes = ["x", "y", "z"]
-        message.command_positions = pack_float64([0.1, 0.2, -0.1] * BATCH_SAMPLES)
-        return message
+        return scale_batch(first_index, stamp_ns, period, BATCH_SAMPLES)
 
     def temperature(self, readings: dict[str, float], stamp_ns: int, values=None) -> None:
         from mt_accuracy_msgs.msg import TemperatureArray

@@ -57,3 +57,20 @@ def set_parameter_again_until_answered(node, target: str, name: str, value,
         return bool(result.successful), str(result.reason)
     finally:
         node.destroy_client(client)
+
+
+def scale_batch(first_index, stamp_ns, period, n=50):
+    """A ScaleBatch of two scale channels and the X, Y, Z command, ``n`` samples of
+    constant readings: input for the nodes' bad-input tests."""
+    from mt_accuracy_msgs.msg import ScaleBatch
+    from mt_accuracy_ros.io.fields import nanoseconds_to_stamp, pack_float64
+
+    message = ScaleBatch()
+    message.header.stamp = nanoseconds_to_stamp(stamp_ns)
+    message.first_sample_index = first_index
+    message.sample_period = period
+    message.channel_names = ["x1", "x2"]
+    message.positions = pack_float64([0.1] * (2 * n))
+    message.command_axes = ["x", "y", "z"]
+    message.command_positions = pack_float64([0.1, 0.2, -0.1] * n)
+    return message

@@ -8,6 +8,7 @@ import time
 
 import pytest
 
+from graph_helpers import scale_batch as _batch
 from graph_helpers import set_parameter_again_until_answered, spin_until
 from mt_accuracy_ros.commands.processes import start_node
 
@@ -21,21 +22,6 @@ BAD_MODELS = [
     "{machine: kidani_hmc, effects: {mine: {expression: 'k * x.real', parameters: [k]}}}\n",
     "{machine: kidani_hmc, effects: {mine: {expression: 'k * q', parameters: [k]}}}\n",
 ]
-
-
-def _batch(first_index, stamp_ns, period, n=50):
-    from mt_accuracy_msgs.msg import ScaleBatch
-    from mt_accuracy_ros.io.fields import nanoseconds_to_stamp, pack_float64
-
-    message = ScaleBatch()
-    message.header.stamp = nanoseconds_to_stamp(stamp_ns)
-    message.first_sample_index = first_index
-    message.sample_period = period
-    message.channel_names = ["x1", "x2"]
-    message.positions = pack_float64([0.1] * (2 * n))
-    message.command_axes = ["x", "y", "z"]
-    message.command_positions = pack_float64([0.1, 0.2, -0.1] * n)
-    return message
 
 
 def _refusals(diagnostics, stream):
