@@ -55,6 +55,10 @@ class RotaryTableTruth:
     positioning_rad: float = 0.0                     # E_z
     reversal_lost_motion_rad: float = 0.0
     reversal_tilt_rad: tuple[float, float] = (0.0, 0.0)
+    #: ISO 230-7 location errors: the line the table really turns about passes through
+    #: (EX0C, EY0C) and is tilted by (EA0C, EB0C); the ball is set on the table at c = 0.
+    line_offset_m: tuple[float, float] = (0.0, 0.0)
+    line_tilt_rad: tuple[float, float] = (0.0, 0.0)
 
 
 @dataclass
@@ -89,8 +93,13 @@ def _bar_reading(angle: float, plan: BallBarPlan, truth: RotaryTableTruth, bar_m
     tilt = np.array([truth.tilt_rad[0], truth.tilt_rad[1], truth.positioning_rad])
     if reversed_approach:
         tilt[:2] += truth.reversal_tilt_rad
-    ball_on_table = np.array([plan.radius_m, 0.0, plan.socket_height_m])
-    table_ball = (_rodrigues(tilt) @ (_about_z(angle - lost) @ ball_on_table)
+    ball_at_setup = np.array([plan.radius_m, 0.0, plan.socket_height_m])
+    # The turn about the actual line: through the offset point, along the tilted z.
+    through = np.array([truth.line_offset_m[0], truth.line_offset_m[1], 0.0])
+    direction = _rodrigues(np.array([*truth.line_tilt_rad, 0.0])) @ np.array([0.0, 0.0, 1.0])
+    turned = through + _rodrigues(direction * (angle - lost)) @ (ball_at_setup - through)
+    # Then Zhu's error motions, constant in the machine's frame (Zhu Fig. 5.1).
+    table_ball = (_rodrigues(tilt) @ turned
                   + np.array([truth.radial_m[0], truth.radial_m[1], truth.axial_m]))
     height = plan.socket_height_m + np.sqrt(bar_m ** 2 - plan.radius_m ** 2)
     spindle_ball = np.array([eccentricity[0], eccentricity[1], height])

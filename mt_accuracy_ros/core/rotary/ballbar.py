@@ -455,7 +455,12 @@ class BallBarCalibration:
                                 "significant": bool(j.significant)} for j in self.reversal],
             "scatter_m": self.scatter_m, "misfit": self.misfit,
             "implausible": self.implausible,
+            "axis_line": self.axis_line().as_dict(),
         }
+
+    def axis_line(self) -> AxisLineReading:
+        """The same fit read as ISO 230-7 location errors of the C axis line."""
+        return axis_line_reading(self)
 
     @property
     def scatter_m(self) -> float:
@@ -513,6 +518,7 @@ class BallBarCalibration:
         lines.append(f"  repeatability {self.short.repeatability_m * 1e6:.2f} / "
                      f"{self.long.repeatability_m * 1e6:.2f} um (short / long bar); the l2 fit "
                      f"leaves {self.scatter_m * 1e6:.2f} um RMS as a bar reading")
+        lines += self.axis_line().lines()
         for problem in (self.misfit, self.implausible):
             if problem:
                 lines.append(f"  {problem}")
@@ -635,3 +641,79 @@ def calibrate(short: BallBarRun, long: BallBarRun, *,
     return BallBarCalibration(short, long, observed, design, l2, linf,
                               float(singular[0] / singular[-1]), singles, jumps,
                               socket_change_m=socket_change_m, socket_u=socket, drift_u=drift)
+
+
+# ----------------------------------------------------- the ISO 230-7 reading
+@dataclass(frozen=True)
+class AxisLineReading:
+    """Zhu's fit read as location errors of the C axis line (ISO 230-7).
+
+    Zhu's model (eq. 5.2) moves the table by constant *error motions* after the ideal
+    turn; ISO 230-7 instead turns the table about its actual axis line, and the table
+    ball is where it was set at c = 0. To first order the two describe the same
+    readings with (derived in ``docs/rotary.md``):
+
+    * EA0C = E_x, EB0C = E_y: the line's tilts about x and y;
+    * the table ball's height offset at the set-up, D_z - R_x E_y: Zhu's D_z also holds
+      the rise R_x E_y that a line tilted by E_y gives the ball at c = 0, which the
+      line convention books as the ball's set-up, not the axis;
+    * per setup, EX0C - H_x and EY0C - H_y from the single-setup fit (eq. 5.13): the
+      line's offset from the spindle ball. They are the line's location errors only
+      when the spindle ball stood at the machine's nominal C centre (H = 0); the two
+      setups cancel them in the difference (eq. 5.16), so they carry the single-setup
+      fits' uncertainty, not the tilts' U.
+
+    Angles [rad], lengths [m]; ``*_u_k2`` expanded uncertainties (k = 2).
+    """
+
+    ea0c_rad: float
+    eb0c_rad: float
+    ea0c_u_k2: float
+    eb0c_u_k2: float
+    ball_height_offset_m: float
+    ball_height_offset_u_k2: float
+    line_offset_from_spindle_ball_m: dict[str, tuple[float, float]]
+
+    def as_dict(self) -> dict:
+        return {"convention": "ISO 230-7: the table turns about its actual axis line; "
+                              "the table ball set at c = 0",
+                "EA0C_rad": self.ea0c_rad, "EB0C_rad": self.eb0c_rad,
+                "EA0C_u_k2_rad": self.ea0c_u_k2, "EB0C_u_k2_rad": self.eb0c_u_k2,
+                "ball_height_offset_m": self.ball_height_offset_m,
+                "ball_height_offset_u_k2_m": self.ball_height_offset_u_k2,
+                "line_offset_from_spindle_ball_m": {
+                    run: list(xy) for run, xy in self.line_offset_from_spindle_ball_m.items()},
+                "assumption": "EX0C, EY0C equal the line's offset from the spindle ball only "
+                              "if the spindle ball stood at the machine's nominal C centre"}
+
+    def lines(self) -> list[str]:
+        """The reading in words, with what it assumes."""
+        offsets = "; ".join(f"{run} {x * 1e6:+.2f} / {y * 1e6:+.2f} um"
+                            for run, (x, y) in self.line_offset_from_spindle_ball_m.items())
+        return [f"  as ISO 230-7 location errors of the C line (the table turns about its "
+                f"actual line; the ball set at c = 0): EA0C {self.ea0c_rad * 1e6:+.2f} "
+                f"+- {self.ea0c_u_k2 * 1e6:.2f} urad, EB0C {self.eb0c_rad * 1e6:+.2f} "
+                f"+- {self.eb0c_u_k2 * 1e6:.2f} urad (k = 2); the ball's set-up height "
+                f"offset {self.ball_height_offset_m * 1e6:+.2f} "
+                f"+- {self.ball_height_offset_u_k2 * 1e6:.2f} um (D_z - R_x E_y)",
+                f"  EX0C, EY0C as the line's offset from the spindle ball (x / y): {offsets}"
+                " - the line's location errors if the spindle ball stood at the nominal C "
+                "centre, else its set-up eccentricity (the difference of the setups "
+                "cancels them, eq. 5.16)"]
+
+
+def axis_line_reading(calibration: BallBarCalibration) -> AxisLineReading:
+    """:class:`AxisLineReading` of a calibration (first order in the errors)."""
+    e_x, e_y, d_z = calibration.l2.parameters
+    r_x = calibration.short.setup.radius_m
+    u = (calibration.l2.uncertainties if calibration.l2.uncertainties is not None
+         else np.zeros(3))
+    height = d_z - r_x * e_y          # Zhu eq. 5.2 rewritten about the actual line
+    # The height's variance: D_z and E_y's are correlated through the design; the l2
+    # covariance is not kept, so the two are added in quadrature - a bound, not a guess.
+    height_u = float(np.hypot(u[2], r_x * u[1]))
+    offsets = {f.run: (float(f.radial_less_eccentricity_m[0]),
+                       float(f.radial_less_eccentricity_m[1]))
+               for f in calibration.single_setups}
+    return AxisLineReading(float(e_x), float(e_y), float(2 * u[0]), float(2 * u[1]),
+                           float(height), 2 * height_u, offsets)

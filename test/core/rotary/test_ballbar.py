@@ -181,3 +181,40 @@ def test_a_drift_read_at_the_closing_reading_is_in_u():
     bound = drifting.drift_u * np.sqrt(3)
     assert bound[0] >= 0.5 * moved[0] and bound[2] >= 0.5 * moved[2]
     assert drifting.l2.uncertainties[0] > steady.l2.uncertainties[0]
+
+
+@pytest.mark.parametrize("offset_um, tilt_urad", [((20.0, -12.0), (30.0, -25.0)),
+                                                   ((-15.0, 8.0), (-40.0, 10.0))])
+def test_a_table_turning_about_its_actual_line_reads_as_its_location_errors(offset_um, tilt_urad):
+    """ISO 230-7: the simulator turns the table about the real line (offset, tilted), the
+    ball set at c = 0, the spindle ball at the nominal centre. The ball bar's reading
+    gives EA0C, EB0C, the line's offset, and no set-up height offset; Zhu's own D_z holds
+    the rise R_x E_y that the line convention books to the ball's set-up."""
+    offset = tuple(v * 1e-6 for v in offset_um)
+    tilt = tuple(v * 1e-6 for v in tilt_urad)
+    truth = RotaryTableTruth(line_offset_m=offset, line_tilt_rad=tilt)
+    plan = BallBarPlan(eccentricity_m=(0.0, 0.0), noise_m=0.0)
+    result = calibrate(*_runs(ballbar_test(truth, plan)))
+    line = result.axis_line()
+    assert line.ea0c_rad == pytest.approx(tilt[0], abs=0.02e-6)
+    assert line.eb0c_rad == pytest.approx(tilt[1], abs=0.02e-6)
+    assert line.ball_height_offset_m == pytest.approx(0.0, abs=0.01e-6)
+    assert result.l2.parameters[2] == pytest.approx(SHORT.radius_m * tilt[1], abs=0.01e-6)
+    for run, (x, y) in line.line_offset_from_spindle_ball_m.items():
+        assert (x, y) == pytest.approx(offset, abs=0.05e-6), run
+    text = result.text()
+    assert "EA0C" in text and "nominal C centre" in text
+    assert result.as_dict()["axis_line"]["EB0C_rad"] == pytest.approx(tilt[1], abs=0.02e-6)
+
+
+def test_the_location_reading_of_zhus_error_motions_is_the_closed_form():
+    """Error motions of Table 5.2's size, no line error: EA0C = E_x, EB0C = E_y and the
+    ball's set-up height D_z - R_x E_y (the first-order map between the conventions)."""
+    truth = RotaryTableTruth(axial_m=2.68e-6, tilt_rad=(7.93 * ARCSEC, 7.38 * ARCSEC))
+    result = calibrate(*_runs(ballbar_test(truth, BallBarPlan(noise_m=0.0))))
+    e_x, e_y, d_z = result.l2.parameters
+    line = result.axis_line()
+    assert (line.ea0c_rad, line.eb0c_rad) == (e_x, e_y)
+    assert line.ball_height_offset_m == pytest.approx(d_z - SHORT.radius_m * e_y, rel=1e-12)
+    assert line.ball_height_offset_m == pytest.approx(2.68e-6 - SHORT.radius_m * 7.38 * ARCSEC,
+                                                      abs=0.02e-6)
