@@ -141,6 +141,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     if lockstep:
         rate_factor = 1.0   # the controller's real-time delays, in data time
     model = _prepare(out, scenario)
+    calibrated_machine = (model.parent / "machine_calibrated.yaml").resolve()
     five_axis = any(spec.is_rotary for spec in chosen.machine.axes.values())
     # The machine's clock starts once every node is up (below): started at a fixed
     # moment, a node still importing would meet a backlog of seconds of data, every
@@ -158,7 +159,12 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     recording = {"exclude_topics": ["/lockstep"]} if lockstep else {}
     nodes = [start_node("recorder", {"output": str(bag), "discovery_period_s": 0.2,
                                      **recording}, quiet=True),
-             start_node("yaw_estimator", {"baseline_after_s": 40.0, **path, **step}, quiet=True),
+             # The estimator reads the virtual machine's own strokes and scale distances:
+             # with another machine's its yaw (eq. 2.13, over the scales' distance D) and
+             # its profile's grid were another machine's, and the profile that replaced
+             # the calibration after the baseline held a constant beyond that grid.
+             start_node("yaw_estimator", {"machine": str(calibrated_machine),
+                                          "baseline_after_s": 40.0, **path, **step}, quiet=True),
              start_node("compensation_broadcaster", {"model": str(model), **path, **step},
                         quiet=True),
              # 300 readings = the whole run; a check every 30 readings (each names
