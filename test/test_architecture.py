@@ -77,8 +77,9 @@ def test_the_command_floor_is_one_room():
     top = sorted(p.name for p in PACKAGE.glob("*.py"))
     assert top == ["__init__.py", "allocator.py", "cli.py"]
     commands = sorted(p.stem for p in (PACKAGE / "commands").glob("*.py"))
-    assert commands == ["__init__", "check", "check_log", "check_timing", "demo", "fleet",
-                        "iso230", "model_tools", "processes", "rotary_tools", "topic_tools"]
+    assert commands == ["__init__", "bags", "check", "check_log", "check_result",
+                        "check_timing", "demo", "fleet", "iso230", "model_tools", "play",
+                        "processes", "record", "rotary_tools", "simulate", "topic_tools"]
     # Nodes run on real machines: none of them imports a command.
     assert _offending(_sources("nodes"), ("mt_accuracy_ros.commands", "mt_accuracy_ros.cli")) \
         == {}

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError, MtAccuracyError
+from .check_result import CheckResult, DataSource, ModelStep, RunFigures
 
 
 def error_figures(residual: np.ndarray, unit_scale: float = 1.0) -> dict:
@@ -250,13 +251,14 @@ def candidate_named(diagnosis, name: str, why: str, where: str):
 
 
 def check_observations(model, obs, add: list[str], auto: int, min_reduction: float,
-                       predict=None, blocks=None) -> dict:
+                       predict=None, blocks=None, *, kind: str, data: str) -> CheckResult:
     """The workbench loop on observations: diagnose, add what is asked or named, again.
 
     ``predict(model)`` -> (position (N, 3), orientation (N, 3)) predictions made
     elsewhere (a bag's profile history), or None for the model itself. ``--auto N``
     adds up to N of the effects the forward selection names (jointly fitted),
-    ``add`` the named ones first.
+    ``add`` the named ones first. ``kind`` and ``data`` name what was read (the caller
+    adds its :class:`~.check_result.DataSource`).
     """
     from ..core.workbench.diagnosis import add_effect, add_effects, diagnose, residuals
     from ..core.workbench.context_memo import ContextMemo
@@ -269,7 +271,8 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c.setdefault(sensor, float(values[0]))
 
-    steps, step_residuals = [], []
+    steps: list[ModelStep] = []
+    step_residuals = []
 
     def evaluate(current, first_look: bool = False):
         if predict is not None:
@@ -287,48 +290,40 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     first = diagnosis
     queue = list(add)
     while True:
-        steps.append({"model_version": model.version, "effects": sorted(model.effects),
-                      "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text()})
+        steps.append(ModelStep(model.version, sorted(model.effects), diagnosis.baseline_rmse,
+                               diagnosis.text()))
+        added_so_far = sum(len(s.added or []) for s in steps)
         if queue:
             chosen = [candidate_named(diagnosis, queue.pop(0), "add", "data")]
-        elif auto and diagnosis.selected and \
-                sum(len(s.get("added", [])) for s in steps) < auto:
-            chosen = diagnosis.selected[:auto - sum(len(s.get("added", [])) for s in steps)]
+        elif auto and diagnosis.selected and added_so_far < auto:
+            chosen = diagnosis.selected[:auto - added_so_far]
         else:
             break
         model = add_effects(model, chosen, obs) if len(chosen) > 1 else \
             add_effect(model, chosen[0], obs)
-        steps[-1]["added"] = [c.name for c in chosen]
-        steps[-1]["parameters"] = {c.name: c.parameters for c in chosen}
-        steps[-1]["parameter_uncertainties"] = {c.name: c.parameter_uncertainties
-                                                for c in chosen}
+        steps[-1].record_added(chosen)
         diagnosis = evaluate(model)
     # The model did not change after the last residual was taken.
     residual_before, residual = step_residuals[0], step_residuals[-1]
-    return {"readings": obs.n,
-            "figures_before_m": error_figures(residual_before),
-            "figures_after_m": error_figures(residual),
-            "baseline_rmse": first.baseline_rmse,
-            "baseline_cv_rmse": first.baseline_cv_rmse,
-            "ranking": [c.as_dict() for c in first.ranking[:30]],
-            "named": [c.as_dict() for c in first.selected],
-            "dropped": first.dropped,
-            "verdict": first.verdict(),
-            "localisation": first.localisation.as_dict() if first.localisation else {},
-            "added": [name for s in steps for name in s.get("added", [])],
-            "final_rmse": diagnosis.baseline_rmse, "steps": steps,
-            "band": obs.uncertainty_m, "final_diagnosis": diagnosis.text(),
-            "final_verdict": diagnosis.verdict(),
-            "final_localisation": diagnosis.localisation.as_dict()
-            if diagnosis.localisation else {},
-            "machine": model.machine.name,
-            "model_yaml": _model_yaml(model),
-            "_plot": {"time": obs.time_s, "positions": obs.positions,
-                      "residual_before": residual_before, "residual_after": residual,
-                      "temperatures": obs.temperatures, "measured": obs.measured_m,
-                      "mask": obs.measured_mask, "step_residuals": step_residuals,
-                      "velocities": obs.velocities, "directions": obs.directions,
-                      "model": model, "localisation": first.localisation}}
+    return CheckResult(
+        kind=kind, data=data, machine=model.machine.name, readings=obs.n,
+        band=obs.uncertainty_m, baseline_rmse=first.baseline_rmse,
+        baseline_cv_rmse=first.baseline_cv_rmse,
+        ranking=[c.as_dict() for c in first.ranking[:30]],
+        named=[c.as_dict() for c in first.selected], verdict=first.verdict(),
+        localisation=first.localisation.as_dict() if first.localisation else {},
+        added=[name for s in steps for name in s.added or []],
+        final_rmse=diagnosis.baseline_rmse, steps=steps, final_diagnosis=diagnosis.text(),
+        final_verdict=diagnosis.verdict(), model_yaml=_model_yaml(model),
+        figures_before_m=error_figures(residual_before), figures_after_m=error_figures(residual),
+        dropped=first.dropped,
+        final_localisation=diagnosis.localisation.as_dict() if diagnosis.localisation else {},
+        plot={"time": obs.time_s, "positions": obs.positions,
+              "residual_before": residual_before, "residual_after": residual,
+              "temperatures": obs.temperatures, "measured": obs.measured_m,
+              "mask": obs.measured_mask, "step_residuals": step_residuals,
+              "velocities": obs.velocities, "directions": obs.directions,
+              "model": model, "localisation": first.localisation})
 
 
 def _model_yaml(model) -> str:
@@ -340,7 +335,10 @@ def _model_yaml(model) -> str:
 
 
 def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: str,
-              min_reduction: float) -> dict:
+              min_reduction: float) -> CheckResult:
+    """A bag of this package's topics (``reference/tcp_error`` readings, temperatures,
+    ``systematic/<axis>`` profiles) against the model ``model_text`` (bundled name, path
+    or inline YAML), the profiles applied as the monitor applied them."""
     from ..core.compensation.error_model import resolve_model
 
     model = resolve_model(model_text)  # a bad model is refused before a long bag is read
@@ -348,16 +346,17 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
     refused: dict = {}
     result = check_observations(model, obs, add, auto, min_reduction,
                                 lambda current: predict_with_history(current, obs, stamps,
-                                                                     profiles, refused=refused))
-    if notes:
-        result.setdefault("warnings", []).extend(notes)
+                                                                     profiles, refused=refused),
+                                kind="bag", data=str(bag))
+    warnings = list(notes)
     if refused:
         (_, name), why = next(iter(refused.items()))
-        result.setdefault("warnings", []).append(
-            f"{len(refused)} of {len(profiles)} recorded profiles could not be applied and "
-            f"were left out of the predictions (the first, {name}: {why})")
-    return {"data": str(bag), "kind": "bag", "namespace": namespace,
-            "sensors_kept": sorted(obs.temperatures), **result}
+        warnings.append(f"{len(refused)} of {len(profiles)} recorded profiles could not be "
+                        f"applied and were left out of the predictions (the first, {name}: "
+                        f"{why})")
+    result.warnings = warnings or None
+    result.source = DataSource(namespace=namespace, sensors_kept=sorted(obs.temperatures))
+    return result
 
 
 def survey_model(survey, model_text: str | None, machine: str | None,
@@ -421,12 +420,16 @@ def refuse_rotary_without_machine(positions: dict, machine) -> None:
             "the map's machine:) - its chain says where the rotary axes are")
 
 
-def survey_targets(survey, column_map):
+def survey_targets(survey, column_map, machine):
     """The readings' target in the workpiece frame: the map's fixed ``target_point``,
-    per-row ``target.x/y/z`` columns, or None (the machining point)."""
+    per-row ``target.x/y/z`` columns, or None (the machining point). A survey gives its
+    sphere as a CNC program does, in work coordinates: from the work offset (the
+    machine's ``workpiece`` point), along the workpiece frame's axes."""
     if survey.targets:
-        return np.column_stack([survey.targets[c] for c in "xyz"])
-    return column_map.target_point_m
+        return np.column_stack([survey.targets[c] for c in "xyz"]) + machine.workpiece
+    if column_map.target_point_m is None:
+        return None
+    return column_map.target_point_m + machine.workpiece
 
 
 def setup_note(machine) -> str:
@@ -573,7 +576,8 @@ def outside_travel(machine, positions: dict, tolerance_m: float = 1e-6) -> str:
 
 
 def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[str],
-                     auto: int, min_reduction: float, machine: str | None = None) -> dict:
+                     auto: int, min_reduction: float, machine: str | None = None
+                     ) -> CheckResult:
     """A data logger's CSV of reference readings (column map) against a model (or a
     machine, or a generic Cartesian machine from the survey: :func:`survey_model`)."""
     from ..core.kinematics.machine import with_setup_pose
@@ -605,7 +609,7 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
                        directions=survey.directions, accelerations=survey.accelerations,
                        spindle_speed_rad_s=survey.spindle_speed_rad_s,
                        run_of_row=survey.run_of_row,
-                       work_point=survey_targets(survey, column_map))
+                       work_point=survey_targets(survey, column_map, model.machine))
     instrument_notes = [setup_note(model.machine)]
     if survey.direction_errors:
         instrument_notes.append(with_tool_direction(obs, survey.direction_errors,
@@ -619,31 +623,33 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
         blocks = run_blocks(survey.run_of_row, 5)
         if blocks is not None and blocks[-1] < 2:
             blocks = None      # two runs cannot cross-validate a selection
-    result = check_observations(model, obs, add, auto, min_reduction, blocks=blocks)
+    result = check_observations(model, obs, add, auto, min_reduction, blocks=blocks,
+                                kind="survey_csv", data=str(path))
     if survey.run_names is not None:
-        result["runs"] = [{"run": name, "rows": int(np.sum(survey.run_of_row == k))}
-                          for k, name in enumerate(survey.run_names)]
-        result["validation"] = "by whole runs" if blocks is not None else \
+        result.runs = [RunFigures(name, int(np.sum(survey.run_of_row == k)))
+                       for k, name in enumerate(survey.run_names)]
+        result.validation = "by whole runs" if blocks is not None else \
             "time blocks (fewer than three runs)"
+    # Printed and in the JSON's warnings (None: the JSON has none to say).
+    warnings = None
     if not model.machine.abbe_arms_known:
-        notes, refusal = arm_verdicts(result.get("named", []), column_map.tool_offset_m)
+        warnings, refusal = arm_verdicts(result.named, column_map.tool_offset_m)
         if refusal:
             raise InputDataError(f"{path}: {refusal}")
-        result.setdefault("warnings", []).extend(notes)
     if column_map.uncertainty_note():
-        # Said as the bag path says its default: printed and in the JSON's warnings.
-        result.setdefault("warnings", []).insert(0, column_map.uncertainty_note())
+        # Said as the bag path says its default.
+        warnings = [column_map.uncertainty_note(), *(warnings or [])]
     if sensor_notes:
-        # Printed and in the JSON's warnings (the bag's way), and apart as sensor_notes.
-        result.setdefault("warnings", []).extend(sensor_notes)
-        result["sensor_notes"] = sensor_notes
-    result["sensors_kept"] = sorted(survey.temperatures)
-    return {"data": str(path), "kind": "survey_csv", "rows_read": survey.rows_read,
-            "rows_dropped": survey.rows_dropped, "rows_note": survey.summary(Path(path).name),
-            "machine": model.machine.name,
-            "machine_note": "; ".join(n for n in [machine_note, *instrument_notes] if n),
-            "setup_pose_rad": dict(model.machine.setup_pose),
-            "travel_warning": warning, "namespace": "", **result}
+        # In the warnings (the bag's way), and apart as sensor_notes.
+        warnings = [*(warnings or []), *sensor_notes]
+    result.warnings = warnings
+    result.source = DataSource(
+        rows_read=survey.rows_read, rows_dropped=survey.rows_dropped,
+        rows_note=survey.summary(Path(path).name), namespace="",
+        machine_note="; ".join(n for n in [machine_note, *instrument_notes] if n),
+        setup_pose_rad=dict(model.machine.setup_pose), travel_warning=warning,
+        sensors_kept=sorted(survey.temperatures), sensor_notes=sensor_notes or None)
+    return result
 
 
 # ------------------------------------------------------------------ thermal log path
@@ -671,13 +677,223 @@ def _column_and_unit(flag: str, names: list[str], quantity: str, what: str,
 
 
 # ------------------------------------------------------------------ report
-def write_outputs(result: dict, json_path: str | None, report_path: str | None) -> None:
-    plot = result.pop("_plot")
+def write_outputs(result: CheckResult, json_path: str | None, report_path: str | None) -> None:
+    """The report (HTML beside its plots) and the JSON summary of ``result``, each when a
+    path is given; the JSON carries the report's content too (same sections, tables)."""
     if report_path:
         from ..report import write_check_report
 
-        # The JSON summary carries the report's content too (same sections, tables).
-        result["report"] = write_check_report(result, plot, Path(report_path)).as_dict()
+        result.report = write_check_report(result, Path(report_path)).as_dict()
     if json_path:
         Path(json_path).parent.mkdir(parents=True, exist_ok=True)
-        Path(json_path).write_text(json.dumps(result, indent=2, default=float))
+        Path(json_path).write_text(json.dumps(result.to_json(), indent=2, default=float))
+
+
+# ------------------------------------------------------------------ the command line
+#: What ``check`` reads: a bag, a thermal log (a CSV with --target) or a survey (a CSV
+#: with a column map), as the refusals name them.
+CHECK_DATA_KINDS = {"bag": "a bag", "log": "a thermal log (a CSV with --target)",
+                    "survey": "a survey (a CSV with a column map: --columns or --col)"}
+#: Each data-specific option of ``check`` (its argparse name), as typed, and the kinds of
+#: data whose reader takes it; given with any other it would be ignored, so it is refused.
+CHECK_OPTION_SCOPES = {
+    "model": ("--model", ("bag", "survey")), "namespace": ("--namespace", ("bag",)),
+    "machine": ("--machine", ("survey",)), "columns": ("--columns", ("survey",)),
+    "col": ("--col", ("survey",)), "uncertainty_um": ("--uncertainty-um", ("log", "survey")),
+    "row_period": ("--row-period", ("log", "survey")),
+    "time_column": ("--time-column", ("log",)), "target": ("--target", ("log",)),
+    "inputs": ("--inputs", ("log",)), "driver": ("--driver", ("log",)),
+    "term": ("--term", ("log",)), "component": ("--component", ("log",)),
+    "structure_length": ("--structure-length", ("log",)),
+    "train_fraction": ("--train-fraction", ("log",)), "run": ("--run", ("log",)),
+    "zeroed_runs": ("--zeroed-runs", ("log",))}
+#: Suffixes of table files; other text files are tables too, unless they are descriptions.
+TABLE_SUFFIXES = (".csv", ".tsv", ".txt", ".dat")
+DESCRIPTION_SUFFIXES = (".yaml", ".yml", ".json", ".xml", ".html")
+#: Defaults of the thermal log's options (None in the parser: given or not is known).
+LOG_TIME_COLUMN, LOG_TRAIN_FRACTION, LOG_COMPONENT = "time_s", 0.5, "z"
+
+
+def _is_table(path: Path) -> bool:
+    """Whether ``check`` reads ``path`` as a CSV table (by its suffix, or a text file that
+    is no description) rather than a bag."""
+    from ..core.inputs.file_kinds import MCAP_MAGIC, looks_like_text, read_head
+
+    suffix = path.suffix.lower()
+    if suffix in TABLE_SUFFIXES:
+        return True
+    if suffix in DESCRIPTION_SUFFIXES or not path.is_file():
+        return False
+    try:
+        head = read_head(path)
+    except OSError:
+        return False
+    return not head.startswith(MCAP_MAGIC) and looks_like_text(head)
+
+
+def data_kind(args) -> str:
+    """What ``check``'s DATA is: "bag", "log" or "survey" (:data:`CHECK_DATA_KINDS`)."""
+    if not _is_table(Path(args.data)):
+        return "bag"
+    return "survey" if args.columns or args.col else "log"
+
+
+def validate_check(args) -> None:
+    """Every option of ``check`` before any work: the options of the data's kind only, in
+    range, a thermal log's by its own rule, the outputs; a bag's files are MCAP."""
+    from ..core.errors import ParameterError
+    from ..core.inputs.options import in_range, not_applicable
+    from ..io.output_paths import Output, check_outputs
+
+    kind = data_kind(args)
+    if kind == "log" and not args.target:
+        raise ParameterError("a CSV needs --target COLUMN (a thermal log) or a column map "
+                             "(--columns FILE.yaml or --col ROLE=COLUMN[:UNIT]) for a "
+                             "reference survey")
+    for name, (flag, kinds) in CHECK_OPTION_SCOPES.items():
+        if kind not in kinds and getattr(args, name) not in (None, False, "", []):
+            raise not_applicable(flag, " or ".join(CHECK_DATA_KINDS[k] for k in kinds),
+                                 CHECK_DATA_KINDS[kind])
+    if kind == "log":
+        from .check_log import validate_log_options
+
+        # The thermal log's own rule (one implementation), before any row is read.
+        validate_log_options(args.auto, LOG_TRAIN_FRACTION if args.train_fraction is None
+                             else args.train_fraction)
+        if args.zeroed_runs and not args.run:
+            raise ParameterError("--zeroed-runs needs --run COLUMN (the instrument was zeroed "
+                                 "at each run's start)")
+    in_range("--auto", args.auto, low=0, what="an integer")
+    in_range("--min-reduction", args.min_reduction, low=0, high=1, high_open=True,
+             what="a fraction")
+    in_range("--uncertainty-um", args.uncertainty_um, low=0, low_open=True, unit="um, k = 2")
+    in_range("--row-period", args.row_period, low=0, low_open=True, unit="s")
+    in_range("--structure-length", args.structure_length, low=0, low_open=True, unit="m")
+    check_outputs([Output("--json", args.json), Output("--report", args.report)],
+                  [args.data, args.columns])
+    if kind == "bag" and Path(args.data).exists():
+        from ..io.bag_reader import mcap_files
+
+        mcap_files(args.data)       # a truncated or foreign bag: refused before the model
+
+
+def _column_map(args):
+    """The survey's column map from --columns and --col."""
+    import yaml
+
+    from ..io.column_map import ColumnMap, column_map_from_dict, parse_col_flags
+
+    column_map = ColumnMap()
+    if args.columns:
+        try:
+            text = Path(args.columns).read_text()
+            column_map = column_map_from_dict(yaml.safe_load(text), args.columns)
+        except (OSError, yaml.YAMLError) as exc:
+            raise InputDataError(f"column map {args.columns}: {exc}") from exc
+    column_map = parse_col_flags(args.col or [], column_map)
+    if args.uncertainty_um is not None:
+        column_map.uncertainty_m = args.uncertainty_um * 1e-6
+    if args.row_period is not None:
+        column_map.row_period_s = args.row_period
+    return column_map
+
+
+def check_data(args) -> CheckResult:
+    """``check``'s result of its DATA, by kind (the options checked by
+    :func:`validate_check`)."""
+    from . import check_log
+
+    data = Path(args.data)
+    kind = data_kind(args)
+    if kind == "survey":
+        return check_mapped_csv(data, _column_map(args), args.model, args.add or [], args.auto,
+                                args.min_reduction, machine=args.machine)
+    if kind == "log":
+        return check_log.check_csv(
+            data, args.target, args.time_column or LOG_TIME_COLUMN, args.inputs or ["*"],
+            args.driver or [], args.add or [], args.auto,
+            LOG_TRAIN_FRACTION if args.train_fraction is None else args.train_fraction,
+            args.min_reduction, args.term or [], row_period_s=args.row_period,
+            component=args.component or LOG_COMPONENT,
+            uncertainty_m=None if args.uncertainty_um is None else args.uncertainty_um * 1e-6,
+            structure_length_m=args.structure_length, run_column=args.run,
+            zeroed_runs=args.zeroed_runs)
+    return check_bag(data, args.model or "demo", args.add or [], args.auto,
+                     args.namespace or "", args.min_reduction)
+
+
+def check_command(args) -> int:
+    """Check the data, write the report and the JSON, print the result's lines."""
+    from .check_result import printed_lines
+
+    result = check_data(args)
+    write_outputs(result, args.json, args.report)
+    for line in printed_lines(result):
+        print(line)
+    return 0
+
+
+def add_parser(commands) -> None:
+    """``check`` on the subcommands ``commands``."""
+    check = commands.add_parser("check", help="model vs measurement: rank missing effects, add them")
+    check.add_argument("data", help="bag (this package's topics) or CSV file")
+    check.add_argument("--model", default=None,
+                       help="model: bundled name, path or inline YAML (default: 'demo' for a "
+                            "bag; for a survey, none - see --machine)")
+    check.add_argument("--machine", default=None,
+                       help="survey CSV: the machine it was taken on, a bundled name or a "
+                            "machine YAML (default: a generic Cartesian machine over the "
+                            "surveyed travel); readings outside its travel are warned about")
+    check.add_argument("--add", action="append", metavar="EFFECT", help="add this effect (repeat)")
+    check.add_argument("--auto", type=int, default=0, metavar="N",
+                       help="add up to N top significant candidates by themselves")
+    check.add_argument("--report", help="HTML report path")
+    check.add_argument("--json", help="JSON summary path")
+    check.add_argument("--namespace", default=None, help="bag: machine namespace in the bag "
+                       "(/mt1)")
+    check.add_argument("--min-reduction", type=float, default=0.05,
+                       help="smallest CV error reduction that counts")
+    check.add_argument("--columns", metavar="FILE.yaml",
+                       help="CSV survey: column map (which column is which axis, error, "
+                            "temperature, and its unit)")
+    check.add_argument("--col", action="append", metavar="ROLE=COLUMN[:UNIT]",
+                       help="CSV survey: one column of the map, e.g. pos.X=x_mm:mm, err.x=dev:um, "
+                            "temp.column=T3:degC, time=t:min, vel.X=f:mm/min, spindle=S:rpm")
+    check.add_argument("--uncertainty-um", type=float, default=None,
+                       help="CSV survey: the instrument's k = 2 uncertainty [um]")
+    check.add_argument("--row-period", type=float, default=None,
+                       help="CSV survey without a time column: seconds between rows")
+    _add_log_options(check)
+    check.set_defaults(handler=check_command, validate=validate_check)
+
+
+def _add_log_options(check) -> None:
+    """The thermal log's options of ``check``."""
+    check.add_argument("--time-column", default=None,
+                       help=f"CSV log: time column [s] (default {LOG_TIME_COLUMN})")
+    check.add_argument("--target", metavar="COLUMN[:UNIT]",
+                       help="CSV log: the measured displacement column (unit from the flag or "
+                            "the name's suffix, e.g. ch5_um)")
+    check.add_argument("--inputs", nargs="+", help="CSV log: temperature columns [degC] "
+                       "(names or patterns)")
+    check.add_argument("--driver", nargs="+", metavar="COLUMN[:UNIT]",
+                       help="CSV log: the spindle speed (rpm, rad/s, Hz), a heat source")
+    check.add_argument("--term", action="append",
+                       help="CSV log: effects the starting model holds (fitted first)")
+    check.add_argument("--component", default=None, choices=["x", "y", "z"],
+                       help="CSV log: the direction the target displacement is measured in "
+                            f"(default {LOG_COMPONENT})")
+    check.add_argument("--structure-length", type=float, default=None, metavar="METRES",
+                       help="CSV log: structure between the sensors and the tool (bounds a "
+                            "physical thermal gain; default 1 m)")
+    check.add_argument("--train-fraction", type=float, default=None,
+                       help="CSV log: fit on this leading fraction, judge on the rest (with "
+                            f"--run: at the run boundary nearest it; default "
+                            f"{LOG_TRAIN_FRACTION})")
+    check.add_argument("--run", metavar="COLUMN",
+                       help="CSV log of many runs: rows of one run share this column's value "
+                            "(time restarts or jumps between runs; lags restart each run; "
+                            "whole runs judge one another)")
+    check.add_argument("--zeroed-runs", action="store_true",
+                       help="CSV log with --run: the instrument was zeroed at each run's "
+                            "start (each run has its own zero; default: absolute readings)")

@@ -35,6 +35,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputDataError, ParameterError
+from .check_result import (CheckResult, ContestEntry, DataSource, ModelStep, NotAdded,
+                           RunFigures, ThermalLog)
 
 #: A candidate whose forward-CV error reduction is at least this is "a large gain":
 #: when it is not added, the output says which test refused it.
@@ -169,7 +171,7 @@ def per_run_figures(names: list[str], run_of_row, train, residuals: dict[str, np
 
 
 def large_gains_not_added(first, final, added: list[str], judged: set[str], auto: int,
-                          min_reduction: float, room: int) -> list[dict]:
+                          min_reduction: float, room: int) -> list[NotAdded]:
     """Each candidate of the first diagnosis with a CV gain of :data:`LARGE_GAIN` or more
     that was neither added nor judged already, with the test that refused it (its
     numbers), looked up where the ``final`` diagnosis stands; at most ``room``."""
@@ -197,8 +199,7 @@ def large_gains_not_added(first, final, added: list[str], judged: set[str], auto
                           f"after {', '.join(added)} it gains {100 * later.error_reduction:.0f} "
                           "% and was not judged (--auto used up, or candidates ranked before "
                           "it)")
-        out.append({"name": option.name, "cv_reduction": option.error_reduction,
-                    "test": reason})
+        out.append(NotAdded(option.name, option.error_reduction, reason))
     return out
 
 
@@ -545,12 +546,208 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     return LogData(table, obs, target_column, unit, 1.0 / target_scale, run_names, notes)
 
 
+@dataclasses.dataclass
+class _LogSearch:
+    """What a thermal log's search works on: every row and the training rows, the starting
+    model's residual frame on them, the component, and the last training block every
+    term must predict from the blocks before it (:func:`_validation_split`)."""
+
+    obs: object                 # every row (ThermalLogObservations)
+    train: np.ndarray           # (N,) bool: the rows the selection sees
+    training: object            # the training rows' observations
+    frame: object               # ResidualFrame of the starting model on the training rows
+    component: int
+    fit_rows: np.ndarray
+    judge_rows: np.ndarray
+    judged_what: str            # the last training block, in words
+    unit: str                   # the target's unit, and that unit per metre
+    to_unit: float
+    family_of: dict
+    diagnose: object            # model -> Diagnosis on the training rows
+
+    def term(self, candidate) -> tuple:
+        """(family, variant, setting) of a candidate."""
+        return (self.family_of[candidate.effect], candidate.variant, candidate.setting)
+
+    def validation(self, terms: list) -> float:
+        """RMS error on the last training block of ``terms`` fitted on the blocks before [m]."""
+        return validation_rmse(terms, self.frame, self.component, self.fit_rows,
+                               self.judge_rows, self.obs.zeroed_runs)
+
+    def step(self, model, diagnosis, validation: float) -> ModelStep:
+        """The step of ``model`` (its ``diagnosis`` on the training rows)."""
+        from ..core.workbench.thermal_log import held_out_rmse
+
+        return ModelStep(model.version, sorted(model.effects), diagnosis.baseline_rmse,
+                         diagnosis.text(), held_out_rmse=held_out_rmse(model, self.obs, self.train),
+                         cv_rmse=diagnosis.baseline_cv_rmse, validation_rmse=validation)
+
+
+@dataclasses.dataclass
+class _Progress:
+    """The step-by-step search as it stands: the model, its diagnosis and steps, the terms
+    accepted, and what was said and refused on the way."""
+
+    model: object
+    diagnosis: object
+    steps: list[ModelStep]
+    validation: float
+    first: object               # the starting model's diagnosis
+    accepted: list = dataclasses.field(default_factory=list)
+    accepted_terms: list = dataclasses.field(default_factory=list)
+    warnings: list[str] = dataclasses.field(default_factory=list)
+    not_added: list[NotAdded] = dataclasses.field(default_factory=list)
+    refusals: list[str] = dataclasses.field(default_factory=list)
+    refused_names: set = dataclasses.field(default_factory=set)
+
+
+def _judged_candidate(search: _LogSearch, progress: _Progress, min_reduction: float):
+    """(the first candidate that predicts the last training block better, its error there)
+    or (None, the error as it stands); each one judged worse is recorded as not added."""
+    from ..core.workbench.diagnosis import selection_refusal
+
+    # Those the block test confirms first, then - on a log whose runs differ so much that
+    # it confirms none - the rest that pass every other test.
+    usable = [o for o in progress.diagnosis.ranking if o.name not in progress.refused_names and
+              not selection_refusal(o, min_reduction, block_test=False)]
+    usable.sort(key=lambda o: bool(selection_refusal(o, min_reduction)))
+    before, unit, to_unit = progress.validation, search.unit, search.to_unit
+    for option in usable[:MAX_JUDGED]:
+        value = search.validation(progress.accepted_terms + [search.term(option)])
+        if value < before:
+            return option, value
+        progress.refused_names.add(option.name)
+        test = f"predicting {search.judged_what} from the training rows before them"
+        progress.not_added.append(NotAdded(option.name, option.error_reduction, test,
+                                           before=before, after=value))
+        progress.refusals.append(f"not added: {option.name} (CV {100 * option.error_reduction:.0f}"
+                                 f" % better) - {test}, its error would rise from "
+                                 f"{before * to_unit:.4g} to {value * to_unit:.4g} {unit}")
+    return None, before
+
+
+def _step_by_step(search: _LogSearch, start_model, add: list[str], auto: int,
+                  min_reduction: float) -> _Progress:
+    """The search from ``start_model``: the effects asked for (``add``) first, then up to
+    ``auto`` the selection judges; after each, every added term refitted jointly."""
+    from ..core.workbench.diagnosis import add_effect
+    from .check import candidate_named
+
+    diagnosis = search.diagnose(start_model)
+    validation = search.validation([])
+    progress = _Progress(start_model, diagnosis, [search.step(start_model, diagnosis,
+                                                              validation)], validation, diagnosis)
+    queue = list(add)
+    while True:
+        if queue:
+            candidate = candidate_named(progress.diagnosis, queue.pop(0), "add", "log")
+            after = search.validation(progress.accepted_terms + [search.term(candidate)])
+            if after > progress.validation:
+                progress.warnings.append(
+                    f"warning: {candidate.name} (asked for) raised the error on "
+                    f"{search.judged_what} from {progress.validation * search.to_unit:.4g} to "
+                    f"{after * search.to_unit:.4g} {search.unit}")
+        elif auto and len(progress.steps) - 1 < auto:
+            candidate, after = _judged_candidate(search, progress, min_reduction)
+            if candidate is None:
+                break
+        else:
+            break
+        progress.accepted_terms.append(search.term(candidate))
+        progress.accepted.append(candidate)
+        progress.validation = after
+        # Every added term refitted jointly on the training rows (a term fitted to the
+        # residual of the ones before it leaves their share of the shared signal wrong).
+        model = start_model
+        for refitted in joint_refit(progress.accepted, progress.accepted_terms, search.frame,
+                                    search.component, search.obs.zeroed_runs):
+            model = add_effect(model, refitted, search.training)
+        progress.model, progress.diagnosis = model, search.diagnose(model)
+        progress.steps[-1].record_added([candidate])
+        progress.steps.append(search.step(model, progress.diagnosis, after))
+    return progress
+
+
+def _contest(search: _LogSearch, progress: _Progress, first, start_model, blocks,
+             validation_blocks, rivals_too: bool, notes: list[str]
+             ) -> tuple[list[ContestEntry], dict[str, float]]:
+    """Whole models against one another, by the same forward validation over every
+    training block: the step-by-step model, and (``rivals_too``) each model a thermal
+    engineer fits in one go (least squares or ridge on every sensor, principal
+    components). A rival that wins becomes the model (``progress`` takes it, said in
+    ``notes``). Returns (the contest, best first; each model's pooled forward error [m],
+    the step-by-step model's first)."""
+    from ..core.workbench.diagnosis import add_effect
+    from ..core.workbench.thermal_log import held_out_rmse
+
+    c, zeroed = search.component, search.obs.zeroed_runs
+    per_block = {"step by step": forward_blocks(progress.accepted_terms, search.frame, c,
+                                                validation_blocks, zeroed)}
+    rivals = {}
+    for option in first.ranking if rivals_too else []:
+        # (A rival the step-by-step model consists of is that model: not run twice.)
+        if option.effect in WHOLE_MODELS and not option.refusal and \
+                option.name not in per_block and progress.accepted_terms != [search.term(option)]:
+            per_block[option.name] = forward_blocks([search.term(option)], search.frame, c,
+                                                    validation_blocks, zeroed)
+            rivals[option.name] = option
+    contest = {name: pooled_rmse(blocks_of) for name, blocks_of in per_block.items()}
+    winner = min(contest, key=lambda k: (contest[k], k != "step by step"))
+    # Each contestant's figure on the held-out rows, for the reader only: it is computed
+    # after the decision and decides nothing (how well forward validation chose).
+    held_out = {"step by step": progress.steps[-1].held_out_rmse}
+    rival_models = {}
+    for name, option in rivals.items():
+        (refitted,) = joint_refit([option], [search.term(option)], search.frame, c, zeroed)
+        rival_models[name] = (refitted, add_effect(start_model, refitted, search.training))
+        held_out[name] = held_out_rmse(rival_models[name][1], search.obs, search.train)
+    step_by_step = [name for s in progress.steps for name in s.added or []]
+    if winner != "step by step":
+        unit, to_unit = search.unit, search.to_unit
+        notes.append(f"{winner} predicts the training {'runs' if blocks is not None else 'rows'} "
+                     "forward better "
+                     f"({contest[winner] * to_unit:.4g} {unit}) than the step-by-step model "
+                     f"({contest['step by step'] * to_unit:.4g} {unit}): it is the model")
+        refitted, progress.model = rival_models[winner]
+        progress.steps = progress.steps[:1]
+        first_step = progress.steps[0]
+        first_step.added = [winner]
+        first_step.parameters = {winner: refitted.parameters}
+        first_step.parameter_uncertainties = {winner: refitted.parameter_uncertainties}
+        progress.diagnosis = search.diagnose(progress.model)
+        progress.steps.append(search.step(progress.model, progress.diagnosis,
+                                          search.validation([search.term(rivals[winner])])))
+    return [ContestEntry(name, step_by_step if name == "step by step" else [name],
+                         contest[name], per_block[name], held_out[name], name == winner)
+            for name in sorted(contest, key=contest.get)], contest
+
+
+def _sensor_weights(first, steps: list[ModelStep], added: list[str], temperatures
+                    ) -> tuple[dict, dict]:
+    """(the sensors a sensor model leans on: name -> share of its spread, whose weights
+    they are): the model's sensor model, else the all-sensor ridge candidate's."""
+    from ..core.effects.thermal import sensor_weights
+
+    ridge = [(name, step.parameters[name]) for step in steps for name in step.added or []
+             if name.startswith(("all_sensors_ridge", "sensor_least_squares"))] + \
+        [(c_.name, c_.parameters) for c_ in first.ranking if c_.effect == "all_sensors_ridge"]
+    if not ridge:
+        return {}, {}
+    carried = dict(sensor_weights(ridge[0][1], temperatures)[:6])
+    sensors = ridge[0][0].split(":", 1)[1].count("+") + 1
+    in_model = ridge[0][0] in added
+    return carried, {"name": ridge[0][0], "sensors": sensors, "in_model": in_model,
+                     "words": f"the {'model' if in_model else 'candidate'} "
+                              f"{ridge[0][0].split(':', 1)[0]} over {sensors} "
+                              f"sensor{'s' if sensors > 1 else ''}"}
+
+
 def check_csv(path: Path, target: str, time_column: str, inputs: list[str], drivers: list[str],
               add: list[str], auto: int, train_fraction: float, min_reduction: float,
               model_terms: list[str], row_period_s: float | None = None,
               component: str = "z", uncertainty_m: float | None = None,
               structure_length_m: float | None = None, run_column: str | None = None,
-              zeroed_runs: bool = False) -> dict:
+              zeroed_runs: bool = False) -> CheckResult:
     """A thermal log (one displacement column, temperature inputs, a spindle speed; one run
     or many) on the survey engine (:mod:`~mt_accuracy_ros.core.workbench.thermal_log`).
 
@@ -561,14 +758,10 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     docstring); everything is SI in the JSON (metres); printed lines speak the target
     column's unit.
     """
-    from ..core.effects.thermal import sensor_weights
-    from ..core.workbench.diagnosis import (add_effect, diagnose, residual_frame,
-                                            selection_refusal)
+    from ..core.workbench.diagnosis import add_effect, diagnose, residual_frame
     from ..core.workbench.log_runs import run_blocks, split_at_run
-    from ..core.workbench.thermal_log import (DEFAULT_STRUCTURE_LENGTH_M,
-                                              all_inputs_least_squares_residual,
-                                              held_out_residual, held_out_rmse, log_model)
-    from .check import _model_yaml, candidate_named, error_figures
+    from ..core.workbench.thermal_log import DEFAULT_STRUCTURE_LENGTH_M, log_model
+    from .check import candidate_named
 
     validate_log_options(auto, train_fraction)
     if zeroed_runs and not run_column:
@@ -576,8 +769,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                              "each run's start)")
     log = read_log(path, target, time_column, inputs, drivers, row_period_s, component,
                    uncertainty_m, run_column, zeroed_runs)
-    table, obs, run_names, notes = log.table, log.obs, log.run_names, log.notes
-    target_column, unit, to_unit = log.target_column, log.unit, log.to_unit
+    obs, run_names = log.obs, log.run_names
     runs = obs.run_of_row is not None
     if runs:
         train = split_at_run(obs.run_of_row, train_fraction)
@@ -589,7 +781,7 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         blocks = None
     empty = model = log_model(obs, structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
     if runs and blocks is None:
-        notes.append("one training run: forward validation cuts it into blocks of rows")
+        log.notes.append("one training run: forward validation cuts it into blocks of rows")
     folds = min(5, training.n // 4)
     if blocks is None and folds < 2:
         raise InputDataError(f"{training.n} training rows (--train-fraction {train_fraction:g} "
@@ -598,7 +790,6 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     structure = sorted(n for n, v in training.temperatures.items()
                        if np.ptp(v) > 1e-3)
     family_list = _log_families(training, structure, training.measured_m[:, c])
-    family_of = {f.name: f for f in family_list}
 
     def diagnosis_of(current):
         return diagnose(current, training, min_reduction=min_reduction, forward=True,
@@ -607,8 +798,6 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     for name in model_terms:   # the starting model's terms, fitted on the training rows
         model = add_effect(model, candidate_named(diagnosis_of(model), name, "start with",
                                                   "log"), training)
-    start_model = model
-    frame = residual_frame(start_model, training)
     fit_rows, judge_rows = _validation_split(training, blocks)
     validation_blocks = blocks if blocks is not None else \
         np.repeat(np.arange(MAX_BLOCKS), -(-training.n // MAX_BLOCKS))[:training.n]
@@ -616,200 +805,97 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                          key=run_names.index) if runs else []
     judged_what = (f"run{'s' if len(judged_runs) > 1 else ''} {', '.join(judged_runs)}"
                    if runs else f"the last {int(judge_rows.sum())} training rows")
-    diagnosis = diagnosis_of(model)
-    first = diagnosis
-    baseline = held_out_rmse(model, obs, train)
-    accepted_terms: list = []
-    accepted: list = []
-    validation = validation_rmse(accepted_terms, frame, c, fit_rows, judge_rows,
-                                 obs.zeroed_runs)
-    steps = [{"model_version": model.version, "effects": sorted(model.effects),
-              "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text(),
-              "held_out_rmse": baseline, "cv_rmse": diagnosis.baseline_cv_rmse,
-              "validation_rmse": validation}]
-    queue = list(add)
-    warnings, not_added, refused_names, refusals = [], [], set(), []
+    search = _LogSearch(obs, train, training, residual_frame(model, training), c, fit_rows,
+                        judge_rows, judged_what, log.unit, log.to_unit,
+                        {f.name: f for f in family_list}, diagnosis_of)
+    progress = _step_by_step(search, model, add, auto, min_reduction)
+    return _log_result(path, log, search, progress, model, empty, blocks, validation_blocks,
+                       auto, add, min_reduction)
 
-    def term_of(candidate):
-        return (family_of[candidate.effect], candidate.variant, candidate.setting)
 
-    while True:
-        if queue:
-            candidate = candidate_named(diagnosis, queue.pop(0), "add", "log")
-            after_validation = validation_rmse(accepted_terms + [term_of(candidate)], frame, c,
-                                               fit_rows, judge_rows, obs.zeroed_runs)
-            if after_validation > validation:
-                warnings.append(f"warning: {candidate.name} (asked for) raised the error on "
-                                f"{judged_what} from {validation * to_unit:.4g} to "
-                                f"{after_validation * to_unit:.4g} {unit}")
-        elif auto and len(steps) - 1 < auto:
-            candidate, after_validation = None, validation
-            # Those the block test confirms first, then - on a log whose runs differ so
-            # much that it confirms none - the rest that pass every other test.
-            usable = [o for o in diagnosis.ranking if o.name not in refused_names and
-                      not selection_refusal(o, min_reduction, block_test=False)]
-            usable.sort(key=lambda o: bool(selection_refusal(o, min_reduction)))
-            for option in usable[:MAX_JUDGED]:
-                value = validation_rmse(accepted_terms + [term_of(option)], frame, c, fit_rows,
-                                        judge_rows, obs.zeroed_runs)
-                if value < validation:
-                    candidate, after_validation = option, value
-                    break
-                refused_names.add(option.name)
-                not_added.append({"name": option.name, "cv_reduction": option.error_reduction,
-                                  "test": f"predicting {judged_what} from the training rows "
-                                          "before them",
-                                  "before": validation, "after": value})
-                refusals.append(f"not added: {option.name} (CV {100 * option.error_reduction:.0f}"
-                                f" % better) - predicting {judged_what} from the training rows "
-                                f"before them, its error would rise from "
-                                f"{validation * to_unit:.4g} to {value * to_unit:.4g} {unit}")
-            if candidate is None:
-                break
-        else:
-            break
-        accepted_terms.append(term_of(candidate))
-        accepted.append(candidate)
-        validation = after_validation
-        # Every added term refitted jointly on the training rows (a term fitted to the
-        # residual of the ones before it leaves their share of the shared signal wrong).
-        model = start_model
-        for refitted in joint_refit(accepted, accepted_terms, frame, c, obs.zeroed_runs):
-            model = add_effect(model, refitted, training)
-        diagnosis = diagnosis_of(model)
-        steps[-1]["added"] = [candidate.name]
-        steps[-1]["parameters"] = {candidate.name: candidate.parameters}
-        steps[-1]["parameter_uncertainties"] = {candidate.name:
-                                                candidate.parameter_uncertainties}
-        steps.append({"model_version": model.version, "effects": sorted(model.effects),
-                      "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text(),
-                      "held_out_rmse": held_out_rmse(model, obs, train),
-                      "cv_rmse": diagnosis.baseline_cv_rmse, "validation_rmse": validation})
-    # Whole models against one another, by the same forward validation over every
-    # training run: the step-by-step model, and each model a thermal engineer fits in one
-    # go (least squares or ridge on every sensor, principal components).
-    per_block = {"step by step": forward_blocks(accepted_terms, frame, c, validation_blocks,
-                                                obs.zeroed_runs)}
-    rivals = {}
-    if auto and not add:
-        for option in first.ranking:
-            # (A rival the step-by-step model consists of is that model: not run twice.)
-            if option.effect in WHOLE_MODELS and not option.refusal and \
-                    option.name not in per_block and accepted_terms != [term_of(option)]:
-                per_block[option.name] = forward_blocks([term_of(option)], frame, c,
-                                                        validation_blocks, obs.zeroed_runs)
-                rivals[option.name] = option
-    contest = {name: pooled_rmse(blocks_of) for name, blocks_of in per_block.items()}
-    winner = min(contest, key=lambda k: (contest[k], k != "step by step"))
-    # Each contestant's figure on the held-out rows, for the reader only: it is computed
-    # after the decision and decides nothing (how well forward validation chose).
-    contest_held_out = {"step by step": steps[-1]["held_out_rmse"]}
-    rival_models = {}
-    for name, option in rivals.items():
-        (refitted,) = joint_refit([option], [term_of(option)], frame, c, obs.zeroed_runs)
-        rival_models[name] = (refitted, add_effect(start_model, refitted, training))
-        contest_held_out[name] = held_out_rmse(rival_models[name][1], obs, train)
-    step_by_step = [name for s in steps for name in s.get("added", [])]
-    if winner != "step by step":
-        notes.append(f"{winner} predicts the training {'runs' if blocks is not None else 'rows'} "
-                     "forward better "
-                     f"({contest[winner] * to_unit:.4g} {unit}) than the step-by-step model "
-                     f"({contest['step by step'] * to_unit:.4g} {unit}): it is the model")
-        refitted, model = rival_models[winner]
-        steps = steps[:1]
-        steps[0]["added"] = [winner]
-        steps[0]["parameters"] = {winner: refitted.parameters}
-        steps[0]["parameter_uncertainties"] = {winner: refitted.parameter_uncertainties}
-        diagnosis = diagnosis_of(model)
-        steps.append({"model_version": model.version, "effects": sorted(model.effects),
-                      "rmse": diagnosis.baseline_rmse, "diagnosis": diagnosis.text(),
-                      "held_out_rmse": held_out_rmse(model, obs, train),
-                      "cv_rmse": diagnosis.baseline_cv_rmse,
-                      "validation_rmse": validation_rmse([term_of(rivals[winner])], frame, c,
-                                                         fit_rows, judge_rows,
-                                                         obs.zeroed_runs)})
-    added = [name for s in steps for name in s.get("added", [])]
+def _log_result(path: Path, log: LogData, search: _LogSearch, progress: _Progress, start_model,
+                empty, blocks, validation_blocks, auto: int, add: list[str],
+                min_reduction: float) -> CheckResult:
+    """The contest of whole models, the large gains not added, the held-out figures and
+    the result of a thermal log's check."""
+    from ..core.workbench.thermal_log import (all_inputs_least_squares_residual,
+                                              held_out_residual, held_out_rmse)
+    from .check import _model_yaml, error_figures
+
+    obs, train, first, to_unit, unit = search.obs, search.train, progress.first, log.to_unit, \
+        log.unit
+    notes, warnings, not_added, refusals = log.notes, progress.warnings, progress.not_added, \
+        progress.refusals
+    contest, forward = _contest(search, progress, first, start_model, blocks,
+                                validation_blocks, bool(auto and not add), notes)
+    steps, model = progress.steps, progress.model
+    added = [name for s in steps for name in s.added or []]
     # Every large CV gain not added, with the test that refused it and its numbers.
-    for entry in large_gains_not_added(first, diagnosis, added, {e["name"] for e in not_added},
-                                       auto, min_reduction, room=12 - len(not_added)):
+    for entry in large_gains_not_added(first, progress.diagnosis, added,
+                                       {e.name for e in not_added}, auto, min_reduction,
+                                       room=12 - len(not_added)):
         not_added.append(entry)
-        refusals.append(f"not added: {entry['name']} (CV {100 * entry['cv_reduction']:.0f} % "
-                        f"better) - {entry['test']}")
+        refusals.append(f"not added: {entry.name} (CV {100 * entry.cv_reduction:.0f} % "
+                        f"better) - {entry.test}")
     constant = held_out_rmse(empty, obs, train)
     judge = ~train
     before_residual = held_out_residual(start_model, obs, train)
     after_residual = held_out_residual(model, obs, train)
-    constant_residual = held_out_residual(empty, obs, train)
     squares_residual = all_inputs_least_squares_residual(obs, train)
     squares = float(np.sqrt(np.mean(squares_residual[judge] ** 2)))
-    final = steps[-1]["held_out_rmse"]
+    final = steps[-1].held_out_rmse
     if final > constant:
         warnings.append(f"warning: the model's held-out RMSE {final * to_unit:.4g} {unit} is "
                         f"worse than a constant's ({constant * to_unit:.4g} {unit})")
     if final > squares * (1.0 + 1e-9):
         warnings.append(f"warning: least squares on every input ({squares * to_unit:.4g} "
                         f"{unit}) beats the model ({final * to_unit:.4g} {unit}) held out")
-    ridge = [(name, step["parameters"][name]) for step in steps for name in step.get("added", [])
-             if name.startswith(("all_sensors_ridge", "sensor_least_squares"))] + \
-        [(c_.name, c_.parameters) for c_ in first.ranking if c_.effect == "all_sensors_ridge"]
-    carried = dict(sensor_weights(ridge[0][1], obs.temperatures)[:6]) if ridge else {}
-    # Whose weights these are: a sensor model in the model, or the ridge candidate.
-    carrier = {}
-    if ridge:
-        sensors = ridge[0][0].split(":", 1)[1].count("+") + 1
-        in_model = ridge[0][0] in added
-        carrier = {"name": ridge[0][0], "sensors": sensors, "in_model": in_model,
-                   "words": f"the {'model' if in_model else 'candidate'} "
-                            f"{ridge[0][0].split(':', 1)[0]} over {sensors} "
-                            f"sensor{'s' if sensors > 1 else ''}"}
-    result = {
-        "data": str(path), "kind": "thermal_log", "target": target_column,
-        "target_unit": unit, "target_unit_per_m": to_unit, "component": component, "rows": obs.n,
-        "rows_read": table.rows_read, "rows_dropped": table.rows_dropped,
-        "rows_note": table.summary(), "readings": obs.n,
-        "train_rows": int(train.sum()), "band": obs.uncertainty_m,
-        "machine": model.machine.name,
-        "validation": ("forward by whole runs: each block of runs predicted by a fit on the "
-                       "runs before it" if blocks is not None else
-                       "forward: each block predicted by a fit on the blocks before it"),
-        "decided_on": f"the training rows only; a term must also predict {judged_what} from "
-                      "the training rows before them",
-        "figures_before_held_out_m": error_figures(before_residual[judge]),
-        "figures_after_held_out_m": error_figures(after_residual[judge]),
-        "baseline_rmse": first.baseline_rmse, "baseline_cv_rmse": first.baseline_cv_rmse,
-        "held_out_baseline_rmse": baseline,
-        "ranking": [c_.as_dict() for c_ in first.ranking[:30]],
-        "named": [c_.as_dict() for c_ in first.selected],
-        "verdict": first.verdict(),
-        "localisation": first.localisation.as_dict() if first.localisation else {},
-        "added": added, "final_rmse": final, "steps": steps,
-        "final_diagnosis": diagnosis.text(), "final_verdict": diagnosis.verdict(),
-        "not_added": not_added, "not_added_lines": refusals,
-        "constant_held_out_rmse": constant, "warnings": warnings,
-        "notes": notes, "step_by_step_added": step_by_step,
-        "model_contest_forward_rmse": contest, "model_chosen": winner,
-        "model_contest": [{"name": name, "terms": step_by_step if name == "step by step"
-                           else [name], "forward_rmse": contest[name],
-                           "forward_blocks": per_block[name],
-                           "held_out_rmse": contest_held_out[name],
-                           "chosen": name == winner}
-                          for name in sorted(contest, key=contest.get)],
-        "judged_on": "held-out rows after the training rows, unseen by every decision",
-        "all_inputs_least_squares_held_out_rmse": squares,
-        "baselines_held_out_m": {"constant": constant, "least squares on every input": squares,
-                                 "model": final},
-        "sensors_carrying_weight": carried, "sensors_carrying_weight_of": carrier,
-        "model_yaml": _model_yaml(model),
-        "runs": None, "zeroed_runs": obs.zeroed_runs,
-        "_plot": {"time": obs.time_s, "target": obs.measured_m[:, c],
-                  "before": obs.measured_m[:, c] - before_residual,
-                  "after": obs.measured_m[:, c] - after_residual, "train": train,
-                  "unit_scale": to_unit, "unit": unit,
-                  "run_starts": None if obs.run_starts is None else obs.run_starts,
-                  "run_names": run_names}}
-    if runs:
-        result["runs"] = per_run_figures(run_names, obs.run_of_row, train, {
-            "constant_rmse": constant_residual, "least_squares_rmse": squares_residual,
-            "model_rmse": after_residual})
+    carried, carrier = _sensor_weights(first, steps, added, obs.temperatures)
+    chosen = next(entry for entry in contest if entry.chosen)
+    thermal = ThermalLog(
+        target=log.target_column, target_unit=unit, target_unit_per_m=to_unit,
+        component="xyz"[search.component], rows=obs.n, train_rows=int(train.sum()),
+        decided_on=f"the training rows only; a term must also predict {search.judged_what} "
+                   "from the training rows before them",
+        figures_before_held_out_m=error_figures(before_residual[judge]),
+        figures_after_held_out_m=error_figures(after_residual[judge]),
+        held_out_baseline_rmse=steps[0].held_out_rmse, not_added=not_added,
+        not_added_lines=refusals, constant_held_out_rmse=constant, notes=notes,
+        step_by_step_added=next(e.terms for e in contest if e.name == "step by step"),
+        model_contest_forward_rmse=forward,
+        model_chosen=chosen.name, model_contest=contest,
+        judged_on="held-out rows after the training rows, unseen by every decision",
+        all_inputs_least_squares_held_out_rmse=squares,
+        baselines_held_out_m={"constant": constant, "least squares on every input": squares,
+                              "model": final},
+        sensors_carrying_weight=carried, sensors_carrying_weight_of=carrier,
+        zeroed_runs=obs.zeroed_runs)
+    table, c = log.table, search.component
+    result = CheckResult(
+        kind="thermal_log", data=str(path), machine=model.machine.name, readings=obs.n,
+        band=obs.uncertainty_m, baseline_rmse=first.baseline_rmse,
+        baseline_cv_rmse=first.baseline_cv_rmse,
+        ranking=[c_.as_dict() for c_ in first.ranking[:30]],
+        named=[c_.as_dict() for c_ in first.selected], verdict=first.verdict(),
+        localisation=first.localisation.as_dict() if first.localisation else {},
+        added=added, final_rmse=final, steps=steps,
+        final_diagnosis=progress.diagnosis.text(), final_verdict=progress.diagnosis.verdict(),
+        model_yaml=_model_yaml(model),
+        source=DataSource(rows_read=table.rows_read, rows_dropped=table.rows_dropped,
+                          rows_note=table.summary()),
+        log=thermal, warnings=warnings,
+        validation=("forward by whole runs: each block of runs predicted by a fit on the "
+                    "runs before it" if blocks is not None else
+                    "forward: each block predicted by a fit on the blocks before it"),
+        plot={"time": obs.time_s, "target": obs.measured_m[:, c],
+              "before": obs.measured_m[:, c] - before_residual,
+              "after": obs.measured_m[:, c] - after_residual, "train": train,
+              "unit_scale": to_unit, "unit": unit,
+              "run_starts": None if obs.run_starts is None else obs.run_starts,
+              "run_names": log.run_names})
+    if obs.run_of_row is not None:
+        residuals = {"constant_rmse": held_out_residual(empty, obs, train),
+                     "least_squares_rmse": squares_residual, "model_rmse": after_residual}
+        result.runs = [RunFigures(**entry) for entry in
+                       per_run_figures(log.run_names, obs.run_of_row, train, residuals)]
     return result
-

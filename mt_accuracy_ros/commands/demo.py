@@ -1016,3 +1016,66 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: 
                             subtitle="The virtual machine tool through the live graph, recorded "
                                      "and judged against its reference instrument.",
                             extra_sections=[run])
+
+
+# ------------------------------------------------------------------ the command line
+#: The main job's scenario on each bundled machine.
+DEMO_SCENARIOS = {"kidani_hmc": "demo", "khan_chen_rpppr": "demo_5axis", "vmc": "demo_vmc",
+                  "trunnion_ac": "demo_trunnion"}
+#: Its default rate [sim s per wall s] (real time, on every machine).
+DEMO_RATE = 1.0
+#: Niceness a process may be given (Linux).
+NICENESS_RANGE = (-20, 19)
+
+
+def validate_demo(args) -> None:
+    """A positive rate (not in lockstep), a niceness Linux allows, the output directory."""
+    from ..core.inputs.options import in_range, not_applicable
+    from ..io.output_paths import Output, check_outputs
+
+    in_range("--rate", args.rate, low=0, low_open=True, unit="sim s per wall s")
+    if args.lockstep and args.rate is not None:
+        raise not_applicable("--rate", "a demo in real time", "--lockstep (it streams in "
+                             "data time, at the pace of the slowest node)")
+    in_range("--niceness", args.niceness, low=NICENESS_RANGE[0], high=NICENESS_RANGE[1],
+             what="an integer")
+    check_outputs([Output("--out", args.out, "directory")])
+
+
+def demo_command(args) -> int:
+    """Run the main job on the chosen machine (its demo scenario unless one is given)."""
+    rate = args.rate if args.rate is not None else DEMO_RATE
+    return run_demo(out_dir=args.out, rate_factor=rate,
+                    scenario=args.scenario or DEMO_SCENARIOS[args.machine],
+                    compensation_mode=args.compensation, path_niceness=args.niceness,
+                    lockstep=args.lockstep)
+
+
+def add_parser(commands) -> None:
+    """``demo`` on the subcommands ``commands``."""
+    demo = commands.add_parser("demo", help="run the main job on the virtual machine tool")
+    demo.add_argument("--out", default="demo_output", help="output directory")
+    demo.add_argument("--rate", type=float, default=None,
+                      help="sim seconds per wall second (the 90 s scenario takes 90/rate s; "
+                           "default 1: real time, 10 ms scale batches and a 20 ms controller "
+                           "delay; at rate r both are r times longer in data time)")
+    demo.add_argument("--scenario", default=None,
+                      help="bundled scenario or path (default: the machine's demo scenario)")
+    demo.add_argument("--machine", default="kidani_hmc", choices=sorted(DEMO_SCENARIOS),
+                      help="the virtual machine: the 3-axis HMC (scenario 'demo'), a 3-axis "
+                           "VMC with the work on X and Y tables (scenario 'demo_vmc'), Khan "
+                           "& Chen's 5-axis RPPPR grinder (scenario 'demo_5axis') or a 5-axis "
+                           "trunnion VMC (scenario 'demo_trunnion')")
+    demo.add_argument("--compensation", default="hybrid",
+                      choices=["hybrid", "realtime", "table", "off"],
+                      help="how the virtual CNC takes the compensation: tables + real-time "
+                           "offset (hybrid, default), real-time offset only, tables only, or off")
+    demo.add_argument("--niceness", type=int, default=-15,
+                      help="niceness of the compensation path's nodes (CNC, estimator, "
+                           "broadcaster; default -15: the CPU first when the host is loaded; "
+                           "0 = as started). Without the right to it they warn and run as is")
+    demo.add_argument("--lockstep", action="store_true",
+                      help="stream in data time: the machine sends each batch once every node "
+                           "of the loop has caught up, so the outcome is the same on any host "
+                           "(the tests run so); not with --rate")
+    demo.set_defaults(handler=demo_command, validate=validate_demo)

@@ -17,6 +17,7 @@ Dask is imported here only: the single-machine commands never need it.
 """
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import socket
@@ -37,7 +38,7 @@ def _one_line(exc: BaseException) -> str:
     return " ".join(str(text).split()) or type(exc).__name__
 
 
-def _check_dataset(dataset: dict, auto: int, min_reduction: float) -> dict:
+def _check_dataset(dataset: dict, auto: int, min_reduction: float):
     """``mt-accuracy check`` on one bag or survey (in a worker)."""
     from .check import check_bag, check_mapped_csv
 
@@ -60,20 +61,21 @@ def _check_dataset(dataset: dict, auto: int, min_reduction: float) -> dict:
                             machine=dataset["machine_file"])
 
 
-def _compact(result: dict) -> dict:
-    """What the fleet keeps of one check: figures [m] and the named effects."""
-    return {"readings": int(result["readings"]),
-            "rmse_m": float(result["baseline_rmse"]),
-            "final_rmse_m": float(result["final_rmse"]),
-            "band_m": float(result.get("band", 0.0) or 0.0),
-            "machine_model": result.get("machine", ""),
+def _compact(result) -> dict:
+    """What the fleet keeps of one check (a :class:`~.check_result.CheckResult`): figures
+    [m] and the named effects."""
+    return {"readings": int(result.readings),
+            "rmse_m": float(result.baseline_rmse),
+            "final_rmse_m": float(result.final_rmse),
+            "band_m": float(result.band or 0.0),
+            "machine_model": result.machine,
             "named": [{"name": n["name"], "effect": n["effect"],
                        "display": n.get("display", {}),
                        "error_reduction": float(n["error_reduction"])}
-                      for n in result.get("named", [])],
-            "added": list(result.get("added", [])),
-            "warnings": list(result.get("warnings", [])),
-            "localisation": (result.get("localisation") or {}).get("sentence", "")}
+                      for n in result.named],
+            "added": list(result.added),
+            "warnings": list(result.warnings or []),
+            "localisation": result.localisation.get("sentence", "")}
 
 
 def diagnose_day(task: dict) -> dict:
@@ -310,3 +312,64 @@ def write_fleet_outputs(summary: dict, json_path: str | None, report_path: str |
     if json_path:
         Path(json_path).parent.mkdir(parents=True, exist_ok=True)
         Path(json_path).write_text(json.dumps(summary, indent=2, default=float))
+
+
+# ------------------------------------------------------------------ the command line
+def validate_fleet(args: argparse.Namespace) -> None:
+    """--workers only for the local cluster; counts and fractions in range; the outputs."""
+    from ..core.inputs.options import in_range, not_applicable
+    from ..io.output_paths import Output, check_outputs
+
+    if args.scheduler and args.workers is not None:
+        raise not_applicable("--workers", "the local cluster", "--scheduler (its workers "
+                             "are the scheduler's)")
+    in_range("--workers", args.workers, low=1, what="an integer")
+    in_range("--auto", args.auto, low=0, what="an integer")
+    in_range("--min-reduction", args.min_reduction, low=0, high=1, high_open=True,
+             what="a fraction")
+    check_outputs([Output("--json", args.json), Output("--report", args.report)],
+                  [*args.inputs, args.columns])
+
+
+def fleet_command(args: argparse.Namespace) -> int:
+    """Diagnose the fleet, write its outputs and print its summary; exit 1 when no file
+    could be read at all (refused files are findings of the fleet, not a failure)."""
+    workers = args.workers if args.workers is not None else os.cpu_count() or 1
+    summary = run_fleet(args.inputs, model=args.model, columns=args.columns,
+                        scheduler=args.scheduler, workers=workers, auto=args.auto,
+                        min_reduction=args.min_reduction, progress=not args.quiet)
+    write_fleet_outputs(summary, args.json, args.report)
+    print_summary(summary)
+    if args.report:
+        print(f"report: {args.report}")
+    return 0 if summary["day_count"] else 1
+
+
+def add_parser(commands) -> None:
+    """``fleet`` on the subcommands ``commands``."""
+    fleet = commands.add_parser("fleet", help="diagnose many machines' bags and surveys on "
+                                "Dask: error over time, shared effects, drift ranked")
+    fleet.add_argument("inputs", nargs="+", metavar="INPUT",
+                       help="a directory (a folder per machine), a glob (the folder holding "
+                            "each match names its machine) or a manifest YAML (machines: "
+                            "{NAME: {data: [globs], model:, machine:, columns:}})")
+    fleet.add_argument("--scheduler", metavar="ADDRESS",
+                       help="an existing Dask scheduler (tcp://host:8786) whose workers have "
+                            "this package; default: a local cluster of --workers processes")
+    fleet.add_argument("--workers", type=int, default=None,
+                       help="worker processes of the local cluster (default: one per core; "
+                            "not with --scheduler)")
+    fleet.add_argument("--model", default=None,
+                       help="model of the machines that have none of their own (bags: "
+                            "default 'demo'; a folder's model.yaml or the manifest's model: "
+                            "wins)")
+    fleet.add_argument("--columns", metavar="FILE.yaml",
+                       help="column map of the surveys whose machine has none of its own")
+    fleet.add_argument("--auto", type=int, default=3, metavar="N",
+                       help="name up to N effects per machine-day (default 3)")
+    fleet.add_argument("--min-reduction", type=float, default=0.05,
+                       help="smallest CV error reduction that counts")
+    fleet.add_argument("--json", help="JSON summary path (every machine-day's result)")
+    fleet.add_argument("--report", help="HTML fleet report path")
+    fleet.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    fleet.set_defaults(handler=fleet_command, validate=validate_fleet)

@@ -8,6 +8,7 @@ prints them with a per-target table, and writes the JSON and the report section
 """
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 
@@ -111,3 +112,55 @@ def write_run_outputs(result: dict, json_path: str | None, report_path: str | No
     if json_path:
         Path(json_path).parent.mkdir(parents=True, exist_ok=True)
         Path(json_path).write_text(json.dumps(result, indent=2, default=float))
+
+
+# ------------------------------------------------------------------ the command line
+#: Expansion coefficients a material may have [um/m/K] (Invar ~1, steel 11.5, aluminium
+#: 23, polymers up to ~200); below :data:`EXPANSION_PER_K_LIKE` a value is one in 1/K.
+EXPANSION_LIMIT_UM_M_K = 300.0
+EXPANSION_PER_K_LIKE = 1e-3
+
+
+def validate_iso230_2(args: argparse.Namespace) -> None:
+    """An expansion coefficient in um/m/K (one in 1/K refused, naming it), an axis name
+    without spaces, the outputs."""
+    from ..core.errors import ParameterError
+    from ..core.inputs.options import in_range
+    from ..io.output_paths import Output, check_outputs
+
+    in_range("--expansion", args.expansion, low=-EXPANSION_LIMIT_UM_M_K,
+             high=EXPANSION_LIMIT_UM_M_K, unit="um/m/K")
+    if args.expansion is not None and 0 < abs(args.expansion) < EXPANSION_PER_K_LIKE:
+        raise ParameterError(f"--expansion must be in um/m/K (steel 11.5), got "
+                             f"{args.expansion:g}: that looks like 1/K (times 1e6: "
+                             f"{args.expansion * 1e6:g})")
+    if not args.axis.strip() or any(c.isspace() for c in args.axis):
+        raise ParameterError(f"--axis must be an axis name without spaces (X, Y, Z, A), got "
+                             f"{args.axis!r}")
+    check_outputs([Output("--json", args.json), Output("--report", args.report)], [args.run])
+
+
+def iso230_2_command(args: argparse.Namespace) -> int:
+    """Evaluate the run, print its figures, write its outputs."""
+    expansion = None if args.expansion is None else args.expansion * 1e-6
+    result = evaluate_run(Path(args.run), args.col or [], args.axis.upper(), expansion)
+    print_run(result)
+    write_run_outputs(result, args.json, args.report)
+    return 0
+
+
+def add_parser(commands) -> None:
+    """``iso230-2`` on the subcommands ``commands``."""
+    iso = commands.add_parser("iso230-2", help="ISO 230-2 figures of a laser interferometer's "
+                              "positioning runs (CSV)")
+    iso.add_argument("run", help="CSV: one reading per row, in the order measured")
+    iso.add_argument("--col", action="append", metavar="ROLE=COLUMN[:UNIT]",
+                     help="target, measured or deviation, direction, run, temperature "
+                          "(default: read off the header, e.g. target_mm, deviation_um)")
+    iso.add_argument("--axis", default="X", help="the axis' name in the outputs")
+    iso.add_argument("--expansion", type=float, default=None, metavar="UM_PER_M_K",
+                     help="the material's expansion coefficient [um/m/K] (steel 11.5): with "
+                          "a temperature column, deviations are referred to 20 degC")
+    iso.add_argument("--json", help="JSON summary path")
+    iso.add_argument("--report", help="HTML report path")
+    iso.set_defaults(handler=iso230_2_command, validate=validate_iso230_2)

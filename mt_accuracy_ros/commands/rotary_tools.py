@@ -40,7 +40,7 @@ def _report_dir(report: str) -> tuple[Path, str]:
     return path.parent, path.with_suffix("").name
 
 
-def _ballbar(args: argparse.Namespace) -> int:
+def ballbar_command(args: argparse.Namespace) -> int:
     from ..core.rotary.ballbar import ARCSEC, calibrate
     from ..io.rotary_csv import (BALLBAR_UNITS_NOTE, atomic_write_text, ballbar_csv_text,
                                  read_ballbar_csv)
@@ -82,7 +82,7 @@ def _ballbar(args: argparse.Namespace) -> int:
     return 0
 
 
-def _probe(args: argparse.Namespace) -> int:
+def probe_command(args: argparse.Namespace) -> int:
     from ..core.kinematics.machine import load_machine
     from ..core.rotary.probing import fit_sphere, identify_location_errors
     from ..io.rotary_csv import (atomic_write_text, probing_csv_text, probing_units_note,
@@ -142,7 +142,7 @@ def _probe(args: argparse.Namespace) -> int:
 MAX_TABLE_POINTS = 100_000
 
 
-def _export(args: argparse.Namespace) -> int:
+def export_command(args: argparse.Namespace) -> int:
     from ..core.compensation.cnc_export import (bilateral_tables, round_trip, write_bilateral_csv,
                                                write_isg_csv)
     from ..core.compensation.controller_tables import (CONTROLLERS, fanuc_pitch,
@@ -265,7 +265,81 @@ def _export(args: argparse.Namespace) -> int:
     return 0
 
 
+# ------------------------------------------------------------------ the options checked
+def _validate_seed_and_simulation_options(args: argparse.Namespace,
+                                          simulation_only: dict[str, str]) -> None:
+    """--simulate SEED >= 0, and the options only a simulation reads refused without it."""
+    from ..core.inputs.options import in_range, not_applicable
+
+    in_range("--simulate", args.simulate, low=0, what="an integer seed")
+    if args.simulate is None:
+        for name, flag in simulation_only.items():
+            if getattr(args, name) not in (None, False):
+                raise not_applicable(flag, "a simulated measurement (--simulate SEED)",
+                                     f"a measured file ({args.file})")
+
+
+def _file_outputs(args: argparse.Namespace) -> None:
+    """--json, --report and, with --simulate, FILE (written first) checked as outputs."""
+    from ..io.output_paths import Output, check_outputs
+
+    outputs = [Output("--json", args.json), Output("--report", args.report)]
+    if args.simulate is not None:
+        outputs.append(Output("FILE (written by --simulate)", args.file))
+    check_outputs(outputs, [] if args.simulate is not None else [args.file])
+
+
+def validate_ballbar(args: argparse.Namespace) -> None:
+    """The ball bar's geometry in range, simulation-only options only with --simulate."""
+    from ..core.inputs.options import in_range
+
+    in_range("--radius-mm", args.radius_mm, low=0, low_open=True, unit="mm")
+    in_range("--socket-height-mm", args.socket_height_mm, unit="mm")
+    in_range("--socket-change-um", args.socket_change_um, low=0, unit="um")
+    _validate_seed_and_simulation_options(args, {"scenario": "--scenario",
+                                                 "backlash": "--backlash"})
+    _file_outputs(args)
+
+
+def validate_probe(args: argparse.Namespace) -> None:
+    """The sphere and the tolerance in range, the seed, the outputs."""
+    from ..core.inputs.options import in_range
+
+    in_range("--sphere-radius-mm", args.sphere_radius_mm, low=0, low_open=True, unit="mm")
+    for axis, value in zip("XYZ", args.sphere_mm):
+        in_range(f"--sphere-mm ({axis})", value, unit="mm")
+    in_range("--tolerance-um", args.tolerance_um, low=0, low_open=True, unit="um")
+    _validate_seed_and_simulation_options(args, {})
+    _file_outputs(args)
+
+
+#: Options of ``export`` that one controller's tables read (argparse name: flag, controller).
+EXPORT_CONTROLLER_OPTIONS = {"unilateral": ("--unilateral", "twincat"),
+                             "fanuc_step_limit": ("--fanuc-step-limit", "fanuc")}
+
+
+def validate_export(args: argparse.Namespace) -> None:
+    """The tables' spacing, band and sizes in range; a controller's options only with it;
+    the outputs."""
+    from ..core.inputs.options import in_range, not_applicable
+    from ..io.output_paths import Output, check_outputs
+
+    in_range("--spacing-mm", args.spacing_mm, low=0, low_open=True, unit="mm")
+    in_range("--band-um", args.band_um, low=0, low_open=True, unit="um")
+    in_range("--max-points", args.max_points, low=2, what="an integer")
+    in_range("--detection-unit-um", args.detection_unit_um, low=0, low_open=True, unit="um")
+    in_range("--fanuc-step-limit", args.fanuc_step_limit, low=1, what="an integer")
+    for name, (flag, controller) in EXPORT_CONTROLLER_OPTIONS.items():
+        if getattr(args, name) not in (None, False) and args.controller != controller:
+            raise not_applicable(flag, f"--controller {controller}",
+                                 f"--controller {args.controller}" if args.controller
+                                 else "the generic tables (no --controller)")
+    check_outputs([Output("--out", args.out, "directory"), Output("--json", args.json),
+                   Output("--report", args.report)])
+
+
 def add_parser(commands) -> None:
+    """``ballbar``, ``probe`` and ``export`` on the subcommands ``commands``."""
     ballbar = commands.add_parser("ballbar", help="rotary-table calibration with a ball bar "
                                   "(two bars, Zhu ch. 5; l2 and l-infinity)")
     ballbar.add_argument("file", help="ball-bar CSV: bar_mm,repetition,angle_deg,change_um")
@@ -285,7 +359,7 @@ def add_parser(commands) -> None:
                          help="with --simulate: the table has a lost motion")
     ballbar.add_argument("--report", help="HTML report with polar plots")
     ballbar.add_argument("--json", help="JSON summary")
-    ballbar.set_defaults(handler=_ballbar)
+    ballbar.set_defaults(handler=ballbar_command, validate=validate_ballbar)
     probe = commands.add_parser("probe", help="rotary-axis location errors from a probed sphere")
     probe.add_argument("file", help="probing CSV: cycle, <axis>_mm|_deg, px_mm, py_mm, pz_mm")
     probe.add_argument("--machine", default="khan_chen_rpppr",
@@ -304,7 +378,7 @@ def add_parser(commands) -> None:
                        help="first write FILE from the virtual machine")
     probe.add_argument("--report", help="HTML report")
     probe.add_argument("--json", help="JSON summary")
-    probe.set_defaults(handler=_probe)
+    probe.set_defaults(handler=probe_command, validate=validate_probe)
     export = commands.add_parser("export", help="CNC compensation tables of a model "
                                  "(per-axis bilateral CSV, volumetric ISG-CSV style)")
     export.add_argument("model", help="error model: bundled name, YAML path")
@@ -337,4 +411,4 @@ def add_parser(commands) -> None:
     export.add_argument("--out", required=True, help="directory for the tables")
     export.add_argument("--report", help="HTML report")
     export.add_argument("--json", help="JSON summary")
-    export.set_defaults(handler=_export)
+    export.set_defaults(handler=export_command, validate=validate_export)

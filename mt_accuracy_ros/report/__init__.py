@@ -129,10 +129,12 @@ def pyplot():
     return plt
 
 
-def write_bag_report(path: Path, bag: Path, check_result: dict | None, *, title: str,
+def write_bag_report(path: Path, bag: Path, check_result=None, *, title: str,
                      subtitle: str = "", extra_sections: list[Section] = (),
                      namespace: str = "") -> Report:
-    """The full report of a bag (see :mod:`.sections`); returns the :class:`Report` written."""
+    """The full report of a bag (see :mod:`.sections`), with ``check_result`` (a
+    :class:`~mt_accuracy_ros.commands.check_result.CheckResult` of the bag, or None);
+    returns the :class:`Report` written."""
     from .bag_data import read_bag
     from .sections import bag_report_sections
 
@@ -145,27 +147,24 @@ def write_bag_report(path: Path, bag: Path, check_result: dict | None, *, title:
     return report
 
 
-def write_check_report(result: dict, plot: dict, path: Path) -> Report:
-    """``mt-accuracy check``'s report: a bag's full report, or a CSV table's."""
-    from .sections import csv_report_sections
+def write_check_report(result, path: Path) -> Report:
+    """``mt-accuracy check``'s report of ``result`` (a
+    :class:`~mt_accuracy_ros.commands.check_result.CheckResult`): a bag's full report, or
+    a CSV table's."""
+    from .sections import csv_report_sections, survey_report_sections
 
-    if result["kind"] == "bag":
-        return write_bag_report(path, Path(result["data"]), {**result, "_plot": plot},
-                                title="mt-accuracy check",
-                                subtitle=f"The model against the measurements of {result['data']}",
-                                namespace=result.get("namespace", ""))
+    if result.kind == "bag":
+        return write_bag_report(path, Path(result.data), result, title="mt-accuracy check",
+                                subtitle=f"The model against the measurements of {result.data}",
+                                namespace=result.source.namespace or "")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    if result["kind"] == "survey_csv":
-        from .sections import survey_report_sections
-
+    stem = path.with_suffix("").name
+    if result.kind == "survey_csv":
         report = Report("mt-accuracy check", f"The model against the reference survey "
-                        f"{result['data']}", survey_report_sections(
-                            result, plot, path.parent, path.with_suffix("").name))
-        render(report, path)
-        return report
-    report = Report("mt-accuracy check", f"Thermal model of {result['target']} from "
-                    f"{result['data']}", csv_report_sections(result, plot, path.parent,
-                                                             path.with_suffix("").name))
+                        f"{result.data}", survey_report_sections(result, path.parent, stem))
+    else:
+        report = Report("mt-accuracy check", f"Thermal model of {result.log.target} from "
+                        f"{result.data}", csv_report_sections(result, path.parent, stem))
     render(report, path)
     return report

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from ..commands.check_result import CheckResult, as_paragraph, readings_text, weights_sentence
 from ..core.effects.display import display_parameters
 from ..core.scales.repeatability import iso230_2, positioning_runs
 from ..core.workbench.statistics import format_with_uncertainty, rms_with_uncertainty
@@ -29,8 +30,9 @@ def _legend(ax) -> None:
 
 
 # ----------------------------------------------------------------------- the bag
-def bag_report_sections(data: BagData, check: dict | None, directory: Path, stem: str
+def bag_report_sections(data: BagData, check: CheckResult | None, directory: Path, stem: str
                         ) -> list[Section]:
+    """A bag's sections, with the workbench's ``check`` of it when there is one."""
     sections = [_source_section(data, check), _headline_section(data, check)]
     if data.references:
         sections.append(closed_loop_section(data, directory, stem))
@@ -49,7 +51,7 @@ def bag_report_sections(data: BagData, check: dict | None, directory: Path, stem
     return sections
 
 
-def _source_section(data: BagData, check: dict | None) -> Section:
+def _source_section(data: BagData, check: CheckResult | None) -> Section:
     from .. import __version__
 
     section = Section("Machine, data and instruments")
@@ -66,7 +68,7 @@ def _source_section(data: BagData, check: dict | None) -> Section:
         section.paragraphs.append(f"Machine: {model.get('machine', '?')}; model versions "
                                   f"recorded: {len(data.models)}.")
     elif check is not None:
-        section.paragraphs.append(f"Machine: {check.get('machine', '?')}.")
+        section.paragraphs.append(f"Machine: {check.machine or '?'}.")
     sensors = Table(["sensor", "what", "rate", "uncertainty / resolution"])
     if data.scales is not None:
         period = float(data.scales.sample_period)
@@ -147,7 +149,7 @@ def _measured_headline(data: BagData) -> tuple[Table, str] | None:
     return table, verdict
 
 
-def _headline_section(data: BagData | None, check: dict | None) -> Section:
+def _headline_section(data: BagData | None, check: CheckResult | None) -> Section:
     section = Section("Headline: TCP error per component")
     measured = _measured_headline(data)
     if measured is not None:
@@ -158,8 +160,8 @@ def _headline_section(data: BagData | None, check: dict | None) -> Section:
         if measured is None:
             section.paragraphs.append("No reference measurements: no TCP error to report.")
         return section
-    plot = check["_plot"]
-    mask, band = plot["mask"], check["band"]
+    plot = check.plot
+    mask, band = plot["mask"], check.band
     offline = "Offline (a second figure, not a measurement of the compensated machine): " \
         if measured is not None else ""
     table = Table(["state", "model version"] + [f"RMS e_{c}" for c in COMPONENTS],
@@ -170,21 +172,21 @@ def _headline_section(data: BagData | None, check: dict | None) -> Section:
                                                    axis=0)
     table.add("no model: the machine's error, mean removed", "-",
               *_component_figures(np.nan_to_num(measured_error), mask, band))
-    steps = check["steps"]
+    steps = check.steps
     for k, (step, residual) in enumerate(zip(steps, plot["step_residuals"])):
         label = "the model as given" if k == 0 else \
-            f"after adding {', '.join(steps[k - 1]['added'])}"
-        table.add(label, step["model_version"], *_component_figures(residual, mask, band))
+            f"after adding {', '.join(steps[k - 1].added)}"
+        table.add(label, step.model_version, *_component_figures(residual, mask, band))
     section.tables.append(table)
     section.paragraphs.append(
-        f"{check['readings']} reference readings; the instrument's band is ± "
+        f"{check.readings} reference readings; the instrument's band is ± "
         f"{band * UM:.2g} µm (k = 2). " + (
             "The offline table is the model's residual (reference minus model) at the same "
             "readings: what the model explains, not what the machine did."
             if measured is not None else
             "'Reference minus model' is the error that would remain if the model's correction "
             "were applied at the reference points."))
-    section.paragraphs.append(f"Offline diagnosis of the final model: {check['final_diagnosis']}.")
+    section.paragraphs.append(f"Offline diagnosis of the final model: {check.final_diagnosis}.")
     return section
 
 
@@ -291,11 +293,12 @@ def closed_loop_section(data: BagData, directory: Path, stem: str) -> Section:
     return section
 
 
-def _where_section(data: BagData | None, check: dict, directory: Path, stem: str) -> Section:
+def _where_section(data: BagData | None, check: CheckResult, directory: Path, stem: str
+                   ) -> Section:
     plt = pyplot()
-    plot = check["_plot"]
+    plot = check.plot
     residual, mask = plot["residual_after"], plot["mask"]
-    band = check["band"] * UM
+    band = check.band * UM
     offset = (data.references[0][0] - data.start_ns) / 1e9 if data is not None and \
         data.references else 0.0
     time = plot["time"] + offset
@@ -335,10 +338,10 @@ def _where_section(data: BagData | None, check: dict, directory: Path, stem: str
     return section
 
 
-def localisation_section(check: dict, directory: Path, stem: str) -> Section:
+def localisation_section(check: CheckResult, directory: Path, stem: str) -> Section:
     """Where the residual lives: variance shares per variable, the periodic peak, the verdict."""
     plt = pyplot()
-    where = check.get("localisation") or {}
+    where = check.localisation or {}
     section = Section("Where the residual lives")
     # Per component the variables that differ; temperatures that explain alike are one bar.
     shares = where.get("chart") or [{"label": s["variable"], "component": s["component"],
@@ -366,7 +369,7 @@ def localisation_section(check: dict, directory: Path, stem: str) -> Section:
         section.tables.append(peaks)
     section.paragraphs.append(
         f"Where it lives: {where.get('sentence') or 'nowhere in particular (no variable explains a tenth of it)'}.")
-    named = check.get("named", [])
+    named = check.named
     if named:
         table = Table(["effect named", "setting", "confidence", "share of the excess removed",
                        "parameters (± U, k = 2)", "physical reading"])
@@ -376,10 +379,10 @@ def localisation_section(check: dict, directory: Path, stem: str) -> Section:
                 for k, v in entry["setting"].items()),
                       f"{100 * entry['confidence']:.0f} %",
                       f"{100 * entry['share_of_excess']:.0f} %",
-                      "; ".join(f"{n} = {v}" for n, v in _displayed(entry).items()),
+                      readings_text(entry),
                       entry["explanation"], css_class="accepted")
         section.tables.append(table)
-    verdict = check.get("verdict")
+    verdict = check.verdict
     section.paragraphs.append(f"Verdict: {verdict}." if verdict else
                               "Verdict: what the named effects leave is within the "
                               "instrument's noise." if named else
@@ -387,31 +390,20 @@ def localisation_section(check: dict, directory: Path, stem: str) -> Section:
     return section
 
 
-def survey_report_sections(result: dict, plot: dict, directory: Path, stem: str
-                           ) -> list[Section]:
+def survey_report_sections(check: CheckResult, directory: Path, stem: str) -> list[Section]:
     """A reference survey read from a data logger's CSV (no bag): the same workbench story."""
-    check = {**result, "_plot": plot}
     source = Section("Machine, data and instruments", paragraphs=[
-        f"Data: {result['data']} ({result.get('rows_note', '')}); machine "
-        f"{result['machine']}; instrument band ± {result['band'] * UM:.2g} µm (k = 2)."])
+        f"Data: {check.data} ({check.source.rows_note or ''}); machine "
+        f"{check.machine}; instrument band ± {check.band * UM:.2g} µm (k = 2)."])
     headline = _headline_section(None, check)
     return [source, headline, _where_section(None, check, directory, stem),
             localisation_section(check, directory, stem), _evidence_section(check),
             _versions_section(check)]
 
 
-def _displayed(entry: dict) -> dict[str, str]:
-    """A candidate's parameters as read (value ± U, k = 2, in um/K, urad, ...)."""
-    if entry.get("display"):
-        return entry["display"]
-    return display_parameters(entry.get("effect", ""), entry.get("variant", ""),
-                              entry.get("parameters", {}),
-                              entry.get("parameter_uncertainties", {}))
-
-
-def _evidence_section(check: dict) -> Section:
+def _evidence_section(check: CheckResult) -> Section:
     section = Section("The effect found and its evidence")
-    baseline = check.get("baseline_cv_rmse", check["baseline_rmse"])
+    baseline = check.baseline_cv_rmse
     section.paragraphs.append(
         f"Every effect of the catalogue (geometric, rotary, thermal, motion, cross-axis and the "
         f"user's own) is fitted to the residual of the starting model and judged by "
@@ -425,9 +417,9 @@ def _evidence_section(check: dict) -> Section:
         "Confidence = 1 - that adjusted p-value.")
     table = Table(["candidate", "status", "CV error after [µm]", "reduction", "confidence",
                    "parameters (± U, k = 2)", "physical reading"])
-    for entry in check["ranking"][:12]:
+    for entry in check.ranking[:12]:
         accepted = entry["significant"]
-        parameters = "; ".join(f"{name} = {text}" for name, text in _displayed(entry).items())
+        parameters = readings_text(entry)
         refusal = entry.get("refusal", "")
         status = "accepted" if accepted else ("refused by physics" if refusal else "rejected")
         table.add(entry.get("name", entry["effect"]), status, entry["cv_rmse_after"] * UM,
@@ -439,12 +431,12 @@ def _evidence_section(check: dict) -> Section:
                   f"({status}{': ' + refusal if refusal else ''}) {entry['explanation']}",
                   css_class="accepted" if accepted else "rejected")
     section.tables.append(table)
-    added = [s for s in check["steps"] if "added" in s]
+    added = [s for s in check.steps if s.added is not None]
     for step in added:
-        for effect in step["added"]:
-            uncertainties = step.get("parameter_uncertainties", {}).get(effect, {})
+        for effect in step.added:
+            uncertainties = (step.parameter_uncertainties or {}).get(effect, {})
             family, _, variant = effect.partition(":")
-            shown = display_parameters(family, variant, step["parameters"][effect],
+            shown = display_parameters(family, variant, step.parameters[effect],
                                        uncertainties)
             section.paragraphs.append(
                 f"Added {effect}: " + ", ".join(f"{name} = {text}" for name, text in
@@ -475,11 +467,10 @@ def _recorded_versions_section(data: BagData) -> Section:
     return Section("Model versions", tables=[table])
 
 
-def _versions_section(check: dict) -> Section:
+def _versions_section(check: CheckResult) -> Section:
     table = Table(["model version", "effects", "residual RMS [µm]", "diagnosis"])
-    for step in check["steps"]:
-        table.add(step["model_version"], ", ".join(step["effects"]), step["rmse"] * UM,
-                  step["diagnosis"])
+    for step in check.steps:
+        table.add(step.model_version, ", ".join(step.effects), step.rmse * UM, step.diagnosis)
     return Section("Model versions", tables=[table])
 
 
@@ -688,18 +679,41 @@ def _table_section(data: BagData, directory: Path, stem: str) -> Section:
 
 
 # ----------------------------------------------------------------------- thermal logs
-def csv_report_sections(result: dict, plot: dict, directory: Path, stem: str) -> list[Section]:
+def csv_report_sections(check: CheckResult, directory: Path, stem: str) -> list[Section]:
     """A thermal log on the survey engine: the same sections as a survey's, the headline
     judged on the rows after training (in the target column's unit)."""
-    plt = pyplot()
+    log, plot = check.log, check.plot
     scale, unit = plot["unit_scale"], plot["unit"]
-    check = {**result, "_plot": plot}
     source = Section("Data", paragraphs=[
-        f"Data: {result['data']} - {result.get('rows_note', '')}.",
-        f"Target: {result['target']} (e_{result['component']}); the selection saw the first "
-        f"{result['train_rows']} rows ({result['validation']}); every model version is judged "
-        f"on the {result['rows'] - result['train_rows']} rows after them. Noise band ± "
-        f"{result['band'] * scale:.3g} {unit} (k = 2)."])
+        f"Data: {check.data} - {check.source.rows_note or ''}.",
+        f"Target: {log.target} (e_{log.component}); the selection saw the first "
+        f"{log.train_rows} rows ({check.validation}); every model version is judged "
+        f"on the {log.rows - log.train_rows} rows after them. Noise band ± "
+        f"{check.band * scale:.3g} {unit} (k = 2)."])
+    sections = [source, _log_headline(check, directory, stem),
+                localisation_section(check, directory, stem), _evidence_section(check),
+                _log_versions_section(check)]
+    if check.runs:
+        runs = Table(["run", "part", "rows", f"constant [{unit}]",
+                      f"least squares, every input [{unit}]", f"model [{unit}]"],
+                     caption="RMS error of each run; the held-out runs judge, unseen.")
+        for run in check.runs:
+            runs.add(run.run, run.part, run.rows, run.constant_rmse * scale,
+                     run.least_squares_rmse * scale, run.model_rmse * scale)
+        sections.append(Section("Runs", tables=[runs], paragraphs=[
+            f"{len(check.runs)} runs; "
+            + ("each zeroed at its start (its own zero); " if log.zeroed_runs else
+               "absolute readings across runs; ")
+            + "every lag restarts at its run's first reading, and time is counted from each "
+              "run's start."]))
+    return sections
+
+
+def _log_fit_figure(check: CheckResult, directory: Path, stem: str) -> Figure:
+    """Measured against the model before and after, and the residual, over the log."""
+    plt = pyplot()
+    plot = check.plot
+    scale, unit = plot["unit_scale"], plot["unit"]
     hours = (plot["time"] - plot["time"][0]) / 3600
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
     top.plot(hours, plot["target"] * scale, "k-", lw=0.8, label="measured")
@@ -717,73 +731,67 @@ def csv_report_sections(result: dict, plot: dict, directory: Path, stem: str) ->
                 label="residual before")
     bottom.plot(hours, (plot["target"] - plot["after"]) * scale, "r-", lw=0.8,
                 label="residual after")
-    top.set(ylabel=f"{result['target']} [{unit}]")
+    top.set(ylabel=f"{check.log.target} [{unit}]")
     bottom.set(xlabel="time since start [h]" if plot.get("run_starts") is None else
                "time, runs laid end to end [h]", ylabel=f"residual [{unit}]")
     _legend(top)
     _legend(bottom)
-    figure = save_figure(fig, directory, f"{stem}_fit",
-                         "Measured against the model before and after (top) and the residual "
-                         "(bottom); the selection saw the rows left of the dashed line, the "
-                         "rows right of it judge.")
-    headline = Section("Headline", figures=[figure], paragraphs=[
-        f"Held-out RMSE {result['held_out_baseline_rmse'] * scale:.4g} {unit} before, "
-        f"{result['final_rmse'] * scale:.4g} {unit} after adding "
-        f"{', '.join(result['added']) or 'nothing'} ({result['judged_on']}). A constant "
-        f"leaves {result['constant_held_out_rmse'] * scale:.4g} {unit}; least squares on "
-        f"every input {result['all_inputs_least_squares_held_out_rmse'] * scale:.4g} {unit}."])
+    return save_figure(fig, directory, f"{stem}_fit",
+                       "Measured against the model before and after (top) and the residual "
+                       "(bottom); the selection saw the rows left of the dashed line, the "
+                       "rows right of it judge.")
+
+
+def _log_headline(check: CheckResult, directory: Path, stem: str) -> Section:
+    """The held-out figures of a thermal log's model, its baselines and its warnings."""
+    log = check.log
+    scale, unit = check.plot["unit_scale"], check.plot["unit"]
+    headline = Section("Headline", figures=[_log_fit_figure(check, directory, stem)],
+                       paragraphs=[
+        f"Held-out RMSE {log.held_out_baseline_rmse * scale:.4g} {unit} before, "
+        f"{check.final_rmse * scale:.4g} {unit} after adding "
+        f"{', '.join(check.added) or 'nothing'} ({log.judged_on}). A constant "
+        f"leaves {log.constant_held_out_rmse * scale:.4g} {unit}; least squares on "
+        f"every input {log.all_inputs_least_squares_held_out_rmse * scale:.4g} {unit}."])
     baselines = Table(["on the held-out rows", f"RMSE [{unit}]"],
                       caption="The same rows, unseen by every decision.")
-    for name, value in result.get("baselines_held_out_m", {}).items():
+    for name, value in log.baselines_held_out_m.items():
         baselines.add(name, value * scale)
     headline.tables.append(baselines)
-    for line in result.get("warnings", []):
-        headline.paragraphs.append(line[0].upper() + line[1:] + ".")
-    if result.get("sensors_carrying_weight"):
-        whose = (result.get("sensors_carrying_weight_of") or {}).get("words",
-                                                                      "the sensor model")
-        headline.paragraphs.append(f"{whose[0].upper()}{whose[1:]} leans on " + ", ".join(
-            f"{sensor} ({100 * share:.0f} %)" for sensor, share in
-            result["sensors_carrying_weight"].items()) + " (share of its spread).")
+    headline.paragraphs += [as_paragraph(line) for line in check.warnings or []]
+    if weights_sentence(log):
+        headline.paragraphs.append(as_paragraph(weights_sentence(log)
+                                                + " (share of its spread)"))
+    return headline
+
+
+def _log_versions_section(check: CheckResult) -> Section:
+    """A thermal log's model versions, the large gains refused and the whole models'
+    contest."""
+    log = check.log
+    scale, unit = check.plot["unit_scale"], check.plot["unit"]
     versions = Table(["model version", "effects", f"held-out RMSE [{unit}]",
                       f"CV RMSE, training rows [{unit}]", "added"])
-    for step in result["steps"]:
-        versions.add(step["model_version"], ", ".join(step["effects"]) or "-",
-                     step["held_out_rmse"] * scale, step["cv_rmse"] * scale,
-                     ", ".join(step.get("added", [])))
+    for step in check.steps:
+        versions.add(step.model_version, ", ".join(step.effects) or "-",
+                     step.held_out_rmse * scale, step.cv_rmse * scale,
+                     ", ".join(step.added or []))
     refused = Table(["candidate", "CV gain", "refused by"],
                     caption="Candidates with a large CV gain that were not added, and why.")
-    for entry in result.get("not_added", []):
-        test = entry["test"]
-        if "before" in entry:
-            test += f": {entry['before'] * scale:.4g} -> {entry['after'] * scale:.4g} {unit}"
-        refused.add(entry["name"], f"{100 * entry['cv_reduction']:.0f} %", test)
+    for entry in log.not_added:
+        test = entry.test
+        if entry.before is not None:
+            test += f": {entry.before * scale:.4g} -> {entry.after * scale:.4g} {unit}"
+        refused.add(entry.name, f"{100 * entry.cv_reduction:.0f} %", test)
     contest = Table(["whole model", f"forward, training blocks [{unit}]",
                      f"each block [{unit}] (rows fitted)", f"held out [{unit}]", "chosen"],
                     caption="Whole models contested by forward validation over the training "
                             "blocks; the held-out column is computed after the decision and "
                             "decided nothing.")
-    for entry in result.get("model_contest", []):
-        contest.add(entry["name"], entry["forward_rmse"] * scale,
+    for entry in log.model_contest:
+        contest.add(entry.name, entry.forward_rmse * scale,
                     ", ".join(f"{b['rmse'] * scale:.3g} ({b['trained_rows']})"
-                              for b in entry["forward_blocks"]),
-                    entry["held_out_rmse"] * scale, "yes" if entry["chosen"] else "")
-    sections = [source, headline, localisation_section(check, directory, stem),
-                _evidence_section(check),
-                Section("Model versions", tables=[versions] +
-                        ([refused] if refused.rows else []) +
-                        ([contest] if len(contest.rows) > 1 else []))]
-    if result.get("runs"):
-        runs = Table(["run", "part", "rows", f"constant [{unit}]",
-                      f"least squares, every input [{unit}]", f"model [{unit}]"],
-                     caption="RMS error of each run; the held-out runs judge, unseen.")
-        for run in result["runs"]:
-            runs.add(run["run"], run["part"], run["rows"], run["constant_rmse"] * scale,
-                     run["least_squares_rmse"] * scale, run["model_rmse"] * scale)
-        sections.append(Section("Runs", tables=[runs], paragraphs=[
-            f"{len(result['runs'])} runs; "
-            + ("each zeroed at its start (its own zero); " if result.get("zeroed_runs") else
-               "absolute readings across runs; ")
-            + "every lag restarts at its run's first reading, and time is counted from each "
-              "run's start."]))
-    return sections
+                              for b in entry.forward_blocks),
+                    entry.held_out_rmse * scale, "yes" if entry.chosen else "")
+    return Section("Model versions", tables=[versions] + ([refused] if refused.rows else []) +
+                   ([contest] if len(contest.rows) > 1 else []))
