@@ -142,95 +142,125 @@ def probe_command(args: argparse.Namespace) -> int:
 MAX_TABLE_POINTS = 100_000
 
 
-def export_command(args: argparse.Namespace) -> int:
+def _controller_tables(args: argparse.Namespace, model, band: float, asked: float | None,
+                       max_points: int | None, controller: dict):
+    """(files' texts, notes, summary, spacing [m]) of the positioning tables a control
+    loads (``--controller``)."""
+    from ..core.compensation.controller_tables import (fanuc_pitch, isg_leadscrew_lists,
+                                                       linuxcnc_comp_files, siemens_eec,
+                                                       spacing_for, uncovered_effects)
+
+    texts, notes = {}, []
+    choice = spacing_for(model, band, asked_m=asked, max_points=max_points)
+    spacing = choice.spacing_m
+    if args.controller == "siemens":
+        text, shifts = siemens_eec(model, spacing)
+        texts["AX_EEC.INI"] = text
+        moved = {a: v for a, v in shifts.items() if abs(v) > 0}
+        if moved:
+            notes.append("the value at each reference point is zero (SINUMERIK's rule): "
+                         "shifted by " + ", ".join(f"{a} {v * 1e6:.3g} um"
+                                                   for a, v in moved.items()))
+    elif args.controller == "linuxcnc":
+        files, ini = linuxcnc_comp_files(model, spacing, file_type=args.comp_file_type)
+        texts.update(files)
+        notes.append("add to the INI file (a joint with COMP_FILE uses no BACKLASH): " +
+                     "; ".join(v.replace("\n", " ") for v in ini.values()))
+    elif args.controller == "twincat":
+        lists, _ = isg_leadscrew_lists(model, spacing, bilateral=not args.unilateral)
+        texts.update(lists)
+    else:
+        text, _ = fanuc_pitch(model, spacing, step_limit=int(
+            args.fanuc_step_limit or controller["step_limit"]),
+            detection_unit_m=args.detection_unit_um * 1e-6)
+        texts["PITCH_ERROR.TXT"] = text
+    uncovered = uncovered_effects(model)
+    if uncovered:
+        notes.append(f"positioning tables do not hold {', '.join(uncovered)}: the "
+                     "control's cross/volumetric compensation (volumetric_isg.csv) or the "
+                     "real-time offset carries them")
+    if choice.limited_by:
+        notes.append(choice.limited_by)
+    summary = {"controller": args.controller, "spacing_m": spacing,
+               "max_error_m": choice.max_error_m, "errors_m": choice.errors_m,
+               "periods_m": choice.periods_m, "limited_by": choice.limited_by,
+               "band_m": band}
+    return texts, notes, summary, spacing
+
+
+def _generic_tables(args: argparse.Namespace, model, band: float, asked: float | None):
+    """(files' texts, notes, summary, spacing [m], round trip) of the per-axis bilateral
+    tables and the volumetric ISG-CSV, every one computed before anything is written."""
     from ..core.compensation.cnc_export import (bilateral_tables, round_trip, write_bilateral_csv,
                                                write_isg_csv)
-    from ..core.compensation.controller_tables import (CONTROLLERS, fanuc_pitch,
-                                                       isg_leadscrew_lists,
-                                                       linuxcnc_comp_files,
-                                                       period_problems, periodic_periods,
-                                                       siemens_eec, spacing_for,
-                                                       table_points, uncovered_effects,
+    from ..core.compensation.controller_tables import (period_problems, periodic_periods,
                                                        volumetric_spacing)
-    from ..core.compensation.error_model import resolve_model
     from ..core.errors import ParameterError
+
+    notes = []
+    if asked is None:
+        spacing = volumetric_spacing(model, band)
+    else:
+        spacing = asked
+        short = period_problems(periodic_periods(model), spacing)
+        if short:
+            raise ParameterError(
+                f"spacing {args.spacing_mm:g} mm cannot hold this model: "
+                f"{'; '.join(short)}; a spacing that holds it: "
+                f"{volumetric_spacing(model, band) * 1e3:g} mm")
+    # Everything is computed before anything is written: a bad spacing writes nothing.
+    texts = {f"{axis}_bilateral.csv": write_bilateral_csv(table, model.machine.name)
+             for axis, table in bilateral_tables(model, spacing).items()}
+    texts["volumetric_isg.csv"] = write_isg_csv(model, spacing)
+    check = round_trip(model, spacing)
+    if check.tcp_max_error_m > band and asked is not None:
+        notes.append(f"warning: at {spacing * 1e3:g} mm the tables leave up to "
+                     f"{check.tcp_max_error_m * 1e6:.3g} um at the TCP, over the band "
+                     f"{args.band_um:g} um")
+    summary = {"files": list(texts), **check.as_dict(), "band_m": band}
+    return texts, notes, summary, spacing, check
+
+
+def _refuse_too_many_points(args: argparse.Namespace, machine, asked: float | None,
+                            max_points: int | None, controller: dict) -> None:
+    """A spacing asked for that needs more points than any table (or the control) holds."""
+    from ..core.compensation.controller_tables import table_points
+    from ..core.errors import ParameterError
+
+    if asked is None or asked <= 0:
+        return
+    linear = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
+    points = max(table_points(machine.axes[a].stroke, asked).size for a in linear)
+    if points > MAX_TABLE_POINTS:
+        raise ParameterError(f"spacing {args.spacing_mm:g} mm needs {points} points per "
+                             f"axis (about {points * 6 * 2 * 20 / 1e6:.0f} MB of bilateral "
+                             f"tables): refused above {MAX_TABLE_POINTS}")
+    if max_points and points > max_points:
+        raise ParameterError(f"spacing {args.spacing_mm:g} mm needs {points} points per "
+                             f"axis; {controller.get('name', 'the control')} holds "
+                             f"{max_points} (--max-points)")
+
+
+def export_command(args: argparse.Namespace) -> int:
+    """The model's CNC tables written to ``--out`` (a control's, or the generic bilateral
+    and volumetric ones read back and checked against the model), said line by line."""
+    from ..core.compensation.controller_tables import CONTROLLERS
+    from ..core.compensation.error_model import resolve_model
+    from ..core.compensation.user_tables import fitted_user_effects, table_axis
     from ..io.rotary_csv import atomic_write_text
 
     model = resolve_model(args.model)
     band = args.band_um * 1e-6
-    machine = model.machine
-    linear = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
     controller = CONTROLLERS.get(args.controller or "", {})
     max_points = args.max_points or controller.get("max_points")
     asked = None if args.spacing_mm is None else args.spacing_mm * 1e-3
-    if asked is not None and asked > 0:
-        points = max(table_points(machine.axes[a].stroke, asked).size for a in linear)
-        if points > MAX_TABLE_POINTS:
-            raise ParameterError(f"spacing {args.spacing_mm:g} mm needs {points} points per "
-                                 f"axis (about {points * 6 * 2 * 20 / 1e6:.0f} MB of bilateral "
-                                 f"tables): refused above {MAX_TABLE_POINTS}")
-        if max_points and points > max_points:
-            raise ParameterError(f"spacing {args.spacing_mm:g} mm needs {points} points per "
-                                 f"axis; {controller.get('name', 'the control')} holds "
-                                 f"{max_points} (--max-points)")
-    texts, notes = {}, []
+    _refuse_too_many_points(args, model.machine, asked, max_points, controller)
     if args.controller:
-        choice = spacing_for(model, band, asked_m=asked, max_points=max_points)
-        spacing = choice.spacing_m
-        if args.controller == "siemens":
-            text, shifts = siemens_eec(model, spacing)
-            texts["AX_EEC.INI"] = text
-            moved = {a: v for a, v in shifts.items() if abs(v) > 0}
-            if moved:
-                notes.append("the value at each reference point is zero (SINUMERIK's rule): "
-                             "shifted by " + ", ".join(f"{a} {v * 1e6:.3g} um"
-                                                       for a, v in moved.items()))
-        elif args.controller == "linuxcnc":
-            files, ini = linuxcnc_comp_files(model, spacing, file_type=args.comp_file_type)
-            texts.update(files)
-            notes.append("add to the INI file (a joint with COMP_FILE uses no BACKLASH): " +
-                         "; ".join(v.replace("\n", " ") for v in ini.values()))
-        elif args.controller == "twincat":
-            lists, _ = isg_leadscrew_lists(model, spacing, bilateral=not args.unilateral)
-            texts.update(lists)
-        else:
-            text, _ = fanuc_pitch(model, spacing, step_limit=int(
-                args.fanuc_step_limit or controller["step_limit"]),
-                detection_unit_m=args.detection_unit_um * 1e-6)
-            texts["PITCH_ERROR.TXT"] = text
-        uncovered = uncovered_effects(model)
-        if uncovered:
-            notes.append(f"positioning tables do not hold {', '.join(uncovered)}: the "
-                         "control's cross/volumetric compensation (volumetric_isg.csv) or the "
-                         "real-time offset carries them")
-        if choice.limited_by:
-            notes.append(choice.limited_by)
-        summary = {"controller": args.controller, "spacing_m": spacing,
-                   "max_error_m": choice.max_error_m, "errors_m": choice.errors_m,
-                   "periods_m": choice.periods_m, "limited_by": choice.limited_by,
-                   "band_m": band}
+        texts, notes, summary, spacing = _controller_tables(args, model, band, asked,
+                                                            max_points, controller)
         check = None
     else:
-        if asked is None:
-            spacing = volumetric_spacing(model, band)
-        else:
-            spacing = asked
-            short = period_problems(periodic_periods(model), spacing)
-            if short:
-                raise ParameterError(
-                    f"spacing {args.spacing_mm:g} mm cannot hold this model: "
-                    f"{'; '.join(short)}; a spacing that holds it: "
-                    f"{volumetric_spacing(model, band) * 1e3:g} mm")
-        # Everything is computed before anything is written: a bad spacing writes nothing.
-        texts = {f"{axis}_bilateral.csv": write_bilateral_csv(table, machine.name)
-                 for axis, table in bilateral_tables(model, spacing).items()}
-        texts["volumetric_isg.csv"] = write_isg_csv(model, spacing)
-        check = round_trip(model, spacing)
-        if check.tcp_max_error_m > band and asked is not None:
-            notes.append(f"warning: at {spacing * 1e3:g} mm the tables leave up to "
-                         f"{check.tcp_max_error_m * 1e6:.3g} um at the TCP, over the band "
-                         f"{args.band_um:g} um")
-        summary = {"files": list(texts), **check.as_dict(), "band_m": band}
+        texts, notes, summary, spacing, check = _generic_tables(args, model, band, asked)
     out = Path(args.out)
     for name, text in texts.items():
         atomic_write_text(out / name, text)
@@ -246,8 +276,6 @@ def export_command(args: argparse.Namespace) -> int:
               f"error between its points (band {args.band_um:g} um)")
     for note in notes:
         print(f"  {note}")
-    from ..core.compensation.user_tables import fitted_user_effects, table_axis
-
     for name, entry in fitted_user_effects(model).items():
         axis, why = table_axis(model, name, entry)
         print(f"  user effect {name}: " + (f"in the {axis} tables" if axis else why))
@@ -257,8 +285,6 @@ def export_command(args: argparse.Namespace) -> int:
         _finish([export_section(check, list(texts))], "mt-accuracy export",
                 f"CNC compensation tables of {args.model}", args.report, summary, args.json)
     elif args.json:
-        import json
-
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps({**summary, "files": list(texts),
                                                "notes": notes}, indent=2, default=float))
