@@ -835,7 +835,8 @@ def check_command(args) -> int:
 
 def add_parser(commands) -> None:
     """``check`` on the subcommands ``commands``."""
-    check = commands.add_parser("check", help="model vs measurement: rank missing effects, add them")
+    check = commands.add_parser("check", help="model vs measurement: rank missing effects, "
+                                "add them")
     check.add_argument("data", help="bag (this package's topics) or CSV file")
     check.add_argument("--model", default=None,
                        help="model: bundled name, path or inline YAML (default: 'demo' for a "

@@ -53,7 +53,8 @@ def play_command(args: argparse.Namespace) -> int:
 
 def add_parser(commands) -> None:
     """``play`` on the subcommands ``commands``."""
-    play = commands.add_parser("play", help="publish a bag's messages in recorded time, with /clock")
+    play = commands.add_parser("play", help="publish a bag's messages in recorded time, "
+                               "with /clock")
     play.add_argument("bag", help="bag directory or .mcap file")
     play.add_argument("--topics", nargs="+", help="topics to play (default all)")
     play.add_argument("-r", "--rate", type=float, default=1.0, help="speed factor")
