@@ -767,6 +767,11 @@ def validate_check(args) -> None:
     in_range("--min-reduction", args.min_reduction, low=0, high=1, high_open=True,
              what="a fraction")
     in_range("--uncertainty-um", args.uncertainty_um, low=0, low_open=True, unit="um, k = 2")
+    if args.uncertainty_um is not None:
+        from ..core.inputs.plausibility import check_plausible
+
+        check_plausible(np.array([args.uncertainty_um]), "uncertainty", "um", "--uncertainty-um",
+                        mend="the flag is in micrometres")
     in_range("--row-period", args.row_period, low=0, low_open=True, unit="s")
     in_range("--structure-length", args.structure_length, low=0, low_open=True, unit="m")
     check_outputs([Output("--json", args.json), Output("--report", args.report)],

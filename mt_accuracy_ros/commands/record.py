@@ -12,6 +12,12 @@ def validate_record(args: argparse.Namespace) -> None:
     in_range("--max-bag-size", args.max_bag_size, low=0, what="an integer", unit="bytes; 0: "
              "no split")
     in_range("--max-bag-duration", args.max_bag_duration, low=0, unit="s; 0: no split")
+    if args.output is None:
+        # Named here, so that the working directory is checked before anything starts.
+        from ..io.bag_writer import default_bag_name
+
+        args.output = default_bag_name()
+        print(f"mt-accuracy record: no -o/--output: recording to ./{args.output}")
     check_outputs([Output("-o/--output", args.output, "new directory")])
 
 

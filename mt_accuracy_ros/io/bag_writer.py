@@ -41,6 +41,14 @@ from .msg_definitions import schema_text, type_hash
 INFINITE_DURATION = {"sec": 2147483647, "nsec": 4294967295}
 
 
+def default_bag_name() -> str:
+    """The bag directory a recording without a name gets: ``rosbag2_<date>-<time>``, as
+    ``ros2 bag record`` names it, in the working directory."""
+    from datetime import datetime
+
+    return datetime.now().strftime("rosbag2_%Y_%m_%d-%H_%M_%S")
+
+
 def qos_dict(*, reliability: str = "reliable", durability: str = "volatile",
              history: str = "keep_last", depth: int = 10) -> dict:
     """One offered QoS profile in the form rosbag2 (bag version 9) writes."""

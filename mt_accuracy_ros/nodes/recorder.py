@@ -16,14 +16,13 @@ SIGINT/SIGTERM close the bag completely (summary, statistics,
 from __future__ import annotations
 
 import sys
-from datetime import datetime
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 
 from ..core.errors import BagError
-from ..io.bag_writer import BagWriter
+from ..io.bag_writer import BagWriter, default_bag_name
 from ._common import (float_descriptor, int_descriptor, plain_descriptor, run_node,
                       signals_held)
 from ._raw_topics import RawTopicFollower
@@ -58,8 +57,7 @@ class Recorder(Node):
             "How often to look for new topics [s]", 0.05, 60.0))
         self.add_on_set_parameters_callback(self._validate)
 
-        output = str(self.get_parameter("output").value) or \
-            datetime.now().strftime("rosbag2_%Y_%m_%d-%H_%M_%S")
+        output = str(self.get_parameter("output").value) or default_bag_name()
         compression = str(self.get_parameter("compression").value)
         if compression not in ("zstd", "none"):
             raise BagError(f"compression must be 'zstd' or 'none', got {compression!r}")

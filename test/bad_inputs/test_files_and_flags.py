@@ -8,6 +8,7 @@ the command line and the outputs it names) and run through the real command line
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -56,6 +57,9 @@ CLASSES = [
     ("train_fraction_out_of_range", "check of a thermal log with --train-fraction 2",
      "refused: --train-fraction 2.0: between 0.2 and 0.9 (the rows after it judge the "
      "model)"),
+    ("uncertainty_flag_in_nanometres", "check of a thermal log with --uncertainty-um 5000 "
+     "(meant as nanometres)", "refused: --uncertainty-um: value 5000 declared µm looks like "
+     "nm (plausible uncertainty: 1 nm … 1 mm); the flag is in micrometres"),
     ("log_flag_with_a_survey", "check of a survey (a column map) with --train-fraction, "
      "which only a thermal log reads",
      "refused: --train-fraction applies to a thermal log (a CSV with --target), not to a "
@@ -199,6 +203,9 @@ def _build(name: str, tmp_path: Path) -> list[str]:
         "train_fraction_out_of_range": lambda: ["check", log(), "--target", "e_um",
                                                 "--train-fraction", "2", "--json",
                                                 str(json_path)],
+        "uncertainty_flag_in_nanometres": lambda: ["check", log(), "--target", "e_um",
+                                                   "--uncertainty-um", "5000", "--json",
+                                                   str(json_path)],
         "log_flag_with_a_survey": lambda: ["check", log(), "--col", "pos.X=time_s:mm",
                                            "--col", "err.x=e_um:um", "--train-fraction",
                                            "0.6", "--json", str(json_path)],
@@ -309,3 +316,21 @@ def test_a_model_saved_as_utf16_by_a_windows_editor_is_read(tmp_path):
     path.write_bytes(text.encode("utf-16-le"))
     with pytest.raises(ParameterError, match="UTF-16 without a byte-order mark"):
         read_description(path, "model", ParameterError)
+
+
+def test_record_without_a_name_checks_its_default_bag_before_starting(tmp_path, monkeypatch,
+                                                                      capsys):
+    """No -o: the bag's default name in the working directory is chosen and checked by the
+    command, before any node starts (here it is taken), and said when it is used."""
+    import mt_accuracy_ros.io.bag_writer as bag_writer
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(bag_writer, "default_bag_name", lambda: "rosbag2_taken")
+    (tmp_path / "rosbag2_taken").mkdir()
+    assert main(["record"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == ("mt-accuracy record: -o/--output rosbag2_taken already exists; give a new "
+                   "directory (a bag is never overwritten)")
+    monkeypatch.undo()          # the real name: ros2 bag record's rosbag2_<date>-<time>
+    assert re.fullmatch(r"rosbag2_\d{4}_\d\d_\d\d-\d\d_\d\d_\d\d",
+                        bag_writer.default_bag_name())

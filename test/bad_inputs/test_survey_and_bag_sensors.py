@@ -56,16 +56,17 @@ CLASSES = [
     ("bag_sensor_dead",
      "a bag whose /temperatures sensor T3 reads -180 degC in every message",
      "announced: sensor T3: reads -180 degC, a physically absent value (dead) at readings "
-     "1-80 (80 of 80 rows) - left out of every model; readings numbered 1.. in stamp order"),
+     "1-80 (80 of 80 readings) - left out of every model; readings numbered 1.. in stamp "
+     "order"),
     ("bag_sensor_stuck",
      "a bag whose /temperatures sensor T3 reads 21.5 degC in every message while T1 and T2 "
      "warm up",
      "announced: sensor T3: stuck at 21.5 degC while the others move at readings 1-80 "
-     "(80 of 80 rows) - left out of every model (its rows kept)"),
+     "(80 of 80 readings) - left out of every model (its readings kept)"),
     ("bag_sensor_dropout",
      "a bag whose /temperatures sensor T3 gives NaN in the messages of readings 11-12",
-     "announced: sensor T3: no reading at readings 11-12 (2 of 80 rows) - those rows left "
-     "out; 2 reference readings with a bad sensor reading left out"),
+     "announced: sensor T3: no reading at readings 11-12 (2 of 80 readings) - those "
+     "readings left out; 2 reference readings with a bad sensor reading left out"),
 ]
 
 
@@ -214,13 +215,13 @@ NOTES = {
         "be told)"],
     "bag_sensor_dead": [
         "sensor T3: reads -180 degC, a physically absent value (dead) at readings 1-80 "
-        "(80 of 80 rows) - left out of every model (its rows kept)",
+        "(80 of 80 readings) - left out of every model (its readings kept)",
         "numbered 1.. in stamp order; reading 1 at stamp 1700000000000000000 ns"],
     "bag_sensor_stuck": [
         "sensor T3: stuck at 21.5 degC while the others move at readings 1-80 (80 of 80 "
-        "rows) - left out of every model (its rows kept)"],
+        "readings) - left out of every model (its readings kept)"],
     "bag_sensor_dropout": [
-        "sensor T3: no reading at readings 11-12 (2 of 80 rows) - those rows left out",
+        "sensor T3: no reading at readings 11-12 (2 of 80 readings) - those readings left out",
         "2 reference readings with a bad sensor reading left out"],
 }
 

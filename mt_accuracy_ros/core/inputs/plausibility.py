@@ -201,7 +201,7 @@ def likely_unit(values: np.ndarray, quantity: str, declared_unit: str = "") -> s
 
 
 #: How a message writes a unit (the map and the flags take the plain spelling).
-_SHOWN_UNIT = {"um": "µm", "urad": "µrad", "degC": "°C", "degF": "°F"}
+_SHOWN_UNIT = {"um": "µm", "urad": "µrad", "degC": "°C", "degF": "°F", "in": "in (inches)"}
 
 
 def shown_unit(unit: str) -> str:

@@ -394,8 +394,9 @@ def _judge_one(name: str, values: NDArray[np.float64], others: list[NDArray[np.f
     leave_out = leave_out or bool(jumps)
     where = (f" (run{'s' if len(mostly_bad_runs) > 1 else ''} {', '.join(mostly_bad_runs)})"
              if mostly_bad_runs else "")
-    action = "left out of every model (its rows kept)" if leave_out else \
-        "those rows left out"
+    unit_s = f"{row_label.split()[-1]}s"            # "rows" of a file, "readings" of a bag
+    action = f"left out of every model (its {unit_s} kept)" if leave_out else \
+        f"those {unit_s} left out"
     findings = []
     for kind, mask in bad_kinds:
         if not mask.any():
@@ -403,11 +404,12 @@ def _judge_one(name: str, values: NDArray[np.float64], others: list[NDArray[np.f
         count = int(mask.sum())
         if kind == "dropout" and leave_out and count == int(bad.sum()):
             # The wording a dead thermocouple's gaps have always had.
-            text = (f"sensor {name}: no reading in {count} of {values.size} rows{where} - "
+            text = (f"sensor {name}: no reading in {count} of {values.size} {unit_s}{where} - "
                     f"dead, {action}")
         else:
-            text = (f"sensor {name}: {_describe(kind, values, mask, bool(others), workshop_c)} at {row_label}s "
-                    f"{row_ranges(rows[mask])} ({count} of {values.size} rows){where} - "
+            text = (f"sensor {name}: {_describe(kind, values, mask, bool(others), workshop_c)} "
+                    f"at {row_label}s {row_ranges(rows[mask])} ({count} of {values.size} "
+                    f"{unit_s}){where} - "
                     f"{action}")
         findings.append(SensorFinding(name, kind, tuple(int(r) for r in rows[mask]), text,
                                       leave_out))
