@@ -41,17 +41,45 @@ def _prepare(out: Path, scenario_name: str) -> Path:
     if scenario.work_offset:
         # The reference instrument is zeroed at the work offset, where the part is touched
         # off: the model's position errors are referred to it (the compensation never
-        # moves the datum).
+        # moves the datum). What the calibration knows there is said with it.
         start["datum"] = dict(scenario.work_offset)
+        start["datum_uncertainty_m"] = [float(v) for v in _datum_uncertainty(
+            calibration, scenario.work_offset)]
     model.write_text(yaml.safe_dump(start, sort_keys=False))
     return model
 
 
-def _set_parameter(node, target: str, name: str, value, executor=None) -> tuple[bool, str]:
+#: The calibration's stated uncertainties (k = 2) beyond the laser's: a linear table
+#: point's set-up and averaging (0.1 um) and a ball-bar squareness (1 urad).
+CALIBRATION_LINEAR_FLOOR_M = 0.1e-6
+CALIBRATION_SQUARENESS_RAD = 1.0e-6
+
+
+def _datum_uncertainty(calibration: dict, datum: dict) -> list[float]:
+    """(3,) [m] U (k = 2) of the calibrated model's error at the datum: the laser's
+    stated accuracies (XM60, Kidani Table 3.3: 0.5 ppm of the travel from the axis' low
+    end, (0.5 + 0.1 M) urad at M = 1 m) at each table there, carried to the tool."""
+    from ..core.compensation.datum import calibration_uncertainty_at
+    from ..core.kinematics.machine import machine_from_dict
+    from ..sim.instruments import xm60_angular_accuracy_rad, xm60_linear_accuracy_m
+
+    machine = machine_from_dict(calibration, "the calibration")
+
+    def table(name: str, position: float) -> float:
+        if name[1] in "ABC":
+            return float(xm60_angular_accuracy_rad(0.0, 1.0))
+        low = machine.axes[name[2]].stroke[0]
+        return float(xm60_linear_accuracy_m(position - low)) + CALIBRATION_LINEAR_FLOOR_M
+
+    return calibration_uncertainty_at(machine, datum, table, CALIBRATION_SQUARENESS_RAD).tolist()
+
+
+def _set_parameter(node, target: str, name: str, value, executor=None,
+                   timeout_s: float = 30.0) -> tuple[bool, str]:
     """Set a parameter of another node through its set_parameters service."""
     from .model_tools import set_remote_parameter
 
-    return set_remote_parameter(node, target, name, value, executor=executor)
+    return set_remote_parameter(node, target, name, value, timeout_s, executor=executor)
 
 
 #: The CNC's controller at rate 1: interpolation cycle, fixed input delay, staleness
@@ -70,6 +98,9 @@ GRAPH_READY_TIMEOUT_S = 60.0
 START_LEAD_S = 1.0
 #: Data time [s] after which the scripted user acts on the first check naming effects.
 USER_LOOKS_AFTER_S = 30.0
+#: Wall seconds a lockstep run's user waits for the monitor to answer its request (a
+#: bound for a hung graph only: the machine waits for the user meanwhile).
+LOCKSTEP_ANSWER_S = 600.0
 #: Niceness of the compensation path's nodes (CNC, estimator, broadcaster): the CPU
 #: first while the monitor searches or the host is loaded (nodes/_priority.py).
 PATH_NICENESS = -15
@@ -331,8 +362,11 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                 # Everything the monitor names, in one decision (its joint fit).
                 effects = [score.name for score in latest.named]
                 before = max((int(m.version) for _, m in models), default=0)
+                # The monitor fits and gates them before it answers (seconds of CPU on
+                # five axes): a lockstep run has no pace to keep, so the user waits as
+                # long as a slow host needs - the outcome must not depend on it.
                 ok, reason = _set_parameter(listener, "/model_monitor", "add_effects", effects,
-                                            executor)
+                                            executor, LOCKSTEP_ANSWER_S if lockstep else 30.0)
                 actions.append({"time_s": checks[-1][0], "added": ", ".join(effects),
                                 "effects": effects, "accepted": ok, "reason": reason,
                                 "rmse_before_m": latest.rmse, "where": latest.localisation,

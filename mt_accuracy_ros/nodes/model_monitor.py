@@ -336,6 +336,10 @@ class ModelMonitor(Node):
         by_name = {c.name: c for c in refit.candidates}
         changes = ", ".join(c.text(by_name[c.effect].effect, by_name[c.effect].variant)
                             for c in moved)
+        if refit.datum is not None:
+            corrected = ", ".join(f"{v * 1e6:+.2f}" for v in refit.datum.new)
+            changes = ", ".join(c for c in (changes, f"the model's error at the datum "
+                                                     f"corrected by ({corrected}) um") if c)
         reason = (f"refitted {', '.join(refit.names)} on {refit.readings} readings ({who})"
                   + (f": {changes}" if changes else ""))
         # The worker's verdict holds for the model it refitted: the live version. (Profiles

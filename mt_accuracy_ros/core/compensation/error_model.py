@@ -112,6 +112,28 @@ def _checked_parameter(where: str, value, default, machine: MachineDescription):
     return _finite(where, value)
 
 
+def checked_datum_vector(key: str, value, datum: dict, *, non_negative: bool = False
+                         ) -> NDArray[np.float64]:
+    """The model's error at its datum, corrected or uncertain: three finite values [m]
+    (x, y, z), each within 1 mm (a calibration's at one pose; beyond that it is no
+    calibration's), and - when not zero - only with a datum."""
+    if isinstance(value, (str, bytes, dict)):
+        value = None
+    try:
+        out = np.array(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        out = np.zeros(0)
+    if out.shape != (3,) or not np.all(np.isfinite(out)) or np.any(np.abs(out) > 1e-3) or \
+            (non_negative and np.any(out < 0)):
+        kind = "finite non-negative" if non_negative else "finite"
+        raise ParameterError(f"{key}: expected three {kind} values within 1 mm, in m "
+                             f"(x, y, z), got {value!r}")
+    if np.any(out) and not datum:
+        raise ParameterError(f"{key} is about the model's error at its datum: give the datum "
+                             "(the pose the instrument was zeroed at) too")
+    return out
+
+
 def _datum_point(work_point) -> NDArray[np.float64] | None:
     """The target the instrument was zeroed on at the datum: its one fixed target, or the
     machining point (None) when the readings' points differ (several instruments)."""
@@ -141,11 +163,25 @@ class ErrorModel:
     #: zeroed and the part touched off; empty: the model's errors are absolute.
     #: With a datum, the TCP position error is referred to it (:meth:`tcp_error`).
     datum: dict[str, float] = field(default_factory=dict)
+    #: (3,) [m] expanded (k = 2) uncertainty of the model's error at the datum: what its
+    #: calibration knows there (:func:`.datum.calibration_uncertainty_at`); None: not
+    #: stated, the model's error at the datum is taken as exact.
+    datum_uncertainty_m: NDArray[np.float64] | None = None
+    #: (3,) [m] the machine's error at the datum beyond what the model computes there: the
+    #: calibration's error at that one pose, as the readings of an instrument zeroed there
+    #: measured it (:func:`..workbench.refit.refit_effects`, within
+    #: :attr:`datum_uncertainty_m`). Zero until measured.
+    datum_correction_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self) -> None:
         for name in list(self.effects):
             self.effects[name] = self._validated(name, self.effects[name])
         self.datum = checked_datum(self.datum, self.machine)
+        self.datum_uncertainty_m = None if self.datum_uncertainty_m is None else \
+            checked_datum_vector("datum_uncertainty_m", self.datum_uncertainty_m, self.datum,
+                                 non_negative=True)
+        self.datum_correction_m = checked_datum_vector("datum_correction_m",
+                                                       self.datum_correction_m, self.datum)
         self._kinematics = KinematicModel(self.machine)
         self._lag_states: dict = {}
         self._datum_cache: dict = {}
@@ -177,20 +213,25 @@ class ErrorModel:
         effects[name] = parameters or {}
         return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),
                           dict(self.profiles), self.version + 1, self.machine_source,
-                          dict(self.profile_offsets), datum=dict(self.datum))
+                          dict(self.profile_offsets), datum=dict(self.datum),
+                          datum_uncertainty_m=self.datum_uncertainty_m,
+                          datum_correction_m=self.datum_correction_m.copy())
 
     def with_machine(self, machine: MachineDescription) -> "ErrorModel":
         """The same model on ``machine`` (e.g. its description with a survey's set-up pose)."""
         return ErrorModel(machine, copy.deepcopy(self.effects),
                           dict(self.reference_temperatures_c), dict(self.profiles),
                           self.version, self.machine_source, dict(self.profile_offsets),
-                          datum=dict(self.datum))
+                          datum=dict(self.datum), datum_uncertainty_m=self.datum_uncertainty_m,
+                          datum_correction_m=self.datum_correction_m.copy())
 
     def without_effect(self, name: str) -> "ErrorModel":
         effects = {k: v for k, v in self.effects.items() if k != name}
         return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),
                           dict(self.profiles), self.version + 1, self.machine_source,
-                          dict(self.profile_offsets), datum=dict(self.datum))
+                          dict(self.profile_offsets), datum=dict(self.datum),
+                          datum_uncertainty_m=self.datum_uncertainty_m,
+                          datum_correction_m=self.datum_correction_m.copy())
 
     def set_profile(self, error_name: str, positions_m: ArrayLike, values: ArrayLike) -> None:
         """Use a measured profile (e.g. the kNN systematic yaw ECY) as that motion error."""
@@ -324,7 +365,9 @@ class ErrorModel:
         """(3,) the model's TCP error at the :attr:`datum` [m] in the conditions the
         instrument was zeroed in: every temperature at its reference (no rise), the
         axes at rest, the live profiles as they are; at the instrument's fixed target
-        ``work_point`` when it has one (else the machining point). Zero without a datum."""
+        ``work_point`` when it has one (else the machining point); plus
+        :attr:`datum_correction_m`, what readings showed the calibration missed there.
+        Zero without a datum."""
         if not self.datum:
             return np.zeros(3)
         sensors = {**{k: float(np.ravel(np.asarray(v, dtype=np.float64))[0])
@@ -347,7 +390,7 @@ class ErrorModel:
             if len(self._datum_cache) > 8:
                 self._datum_cache.clear()
             self._datum_cache[key] = position[0]
-        return self._datum_cache[key]
+        return self._datum_cache[key] + self.datum_correction_m
 
     def tcp_error(self, positions: dict[str, ArrayLike], temperatures: dict | None = None,
                   velocities: dict[str, ArrayLike] | None = None,
@@ -375,7 +418,8 @@ class ErrorModel:
         With a :attr:`datum` (and ``referred``), the position error is the error
         relative to the datum's as the instrument was zeroed there: e(q) - e(datum) at
         the reference temperatures, at rest (:meth:`datum_error`). A compensation then
-        never moves the part's datum, and every constant of a fitted effect (which a fit
+        never moves the part's datum (but by a :attr:`datum_correction_m`: what the
+        calibration missed there), and every constant of a fitted effect (which a fit
         against a zeroed instrument cannot know) is referred to the instrument's zero.
         The orientation stays absolute: a touch-off does not take out a tilt.
         """
@@ -674,6 +718,10 @@ def model_to_dict(model: ErrorModel) -> dict:
            "reference_temperatures_c": dict(model.reference_temperatures_c)}
     if model.datum:
         out["datum"] = dict(model.datum)
+    if model.datum_uncertainty_m is not None:
+        out["datum_uncertainty_m"] = [float(v) for v in model.datum_uncertainty_m]
+    if np.any(model.datum_correction_m):
+        out["datum_correction_m"] = [float(v) for v in model.datum_correction_m]
     return out
 
 
@@ -723,7 +771,9 @@ def model_from_dict(data: dict, source: str = "<dict>", base_dir: Path | None = 
         model = ErrorModel(load_machine(machine_source), effects,
                            {str(k): float(v) for k, v in
                             (data.get("reference_temperatures_c") or {}).items()},
-                           machine_source=machine_source, datum=data.get("datum") or {})
+                           machine_source=machine_source, datum=data.get("datum") or {},
+                           datum_uncertainty_m=data.get("datum_uncertainty_m"),
+                           datum_correction_m=data.get("datum_correction_m", np.zeros(3)))
     except (ParameterError, MachineDescriptionError) as exc:
         raise ParameterError(f"{source}: {exc}") from exc
     model.version = version

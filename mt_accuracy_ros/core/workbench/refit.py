@@ -21,6 +21,16 @@ old and new value) but not asked: a drift coefficient within its uncertainty of
 the truth can still leave a micrometre when extrapolated over a warm-up, and the
 held-out error is what the machine feels.
 
+**What the live fit could not tell from zero is held.** A coefficient whose value
+lies within its stated expanded uncertainty (|value| < 2 u) was not identified by
+the fit that made it; a refit keeps it as it is, unless the readings show it now:
+the refit with it free predicts the held-out readings better than the refit that
+holds it (the same block test at ``alpha``, by ``min_reduction``). On the few poses
+of an early record collinear parameters take up each other's error - the trunnion's
+refit after 44 s gave the column drift an x gain of -0.35 um/K and the A line tilts
+of -1.9 and -1.4 urad that the truth lacks (each "3 sigma", every one from the
+others' and the calibration's error), which the compensation then extrapolated.
+
 Where the instrument measured the tool's direction too, both quantities are
 judged together, in the selection's noise-scaled rows (:func:`.diagnosis.residual_frame`).
 
@@ -34,6 +44,19 @@ coefficient is then pinned by how far the machine has moved from its datum,
 not only by how the error varies during the record - which is what a
 compensation at the machine needs (a slope 0.3 um/K off leaves 0.8 um of
 absolute error at 2.8 K, a spread of only 0.2 um about the mean).
+
+**The model's own error at the datum.** What the model computes at the datum
+comes from its calibrated tables at that one pose, known only to the
+calibration's uncertainty (a few tenths of a micrometre for a laser calibration,
+:func:`..compensation.datum.calibration_uncertainty_at`). What they miss there is
+one constant in every absolute reading, which no effect holds: taken as exact,
+a refit over a warm-up puts it into the drift's gain (the VMC's main job: by 2.0
+-> 2.4 um/K, bx 1.0 -> 0.64 um/K for a calibration 0.5 um off at the datum), and
+the compensation extrapolates it. Where the model states that uncertainty
+(``datum_uncertainty_m``), the refit fits the constant with the effects within it
+(a Gaussian prior, :class:`DatumCorrection`): free where the warm-up tells it
+apart from a gain, the datum's word where it cannot (a warm plateau). A version
+made from it carries it (``datum_correction_m``).
 """
 from __future__ import annotations
 
@@ -48,7 +71,7 @@ from ..effects import family_named
 from ..errors import InsufficientDataError, ParameterError
 from .diagnosis import Candidate, Observations, add_effect, residual_frame
 from .selection import (Selector, Term, penalise, penalised_fit, penalty_of,
-                        solve_normal)
+                        ridge_standard_errors, solve_normal)
 
 #: A coefficient is said to have moved when |new - old| exceeds this many combined
 #: standard uncertainties.
@@ -87,6 +110,89 @@ class ParameterChange:
 
 
 @dataclass
+class DatumCorrection:
+    """The model's error at its datum as the readings show it (SI; (3,) each).
+
+    An instrument zeroed at the datum reads e(q) - e(datum). The model refers its error
+    to what it computes at the datum: its calibrated tables there, known only to the
+    calibration's uncertainty (a laser calibration: a few tenths of a micrometre at one
+    pose). What they miss there is one constant in every reading, which no effect
+    holds; refitted without it, it goes into whichever effect follows the readings'
+    order - a drift's gain over a warm-up, extrapolated beyond it. It is fitted with
+    the effects, within the uncertainty the model states (a Gaussian prior): free where
+    the readings tell it apart, the datum's word where they cannot (a warm plateau)."""
+
+    old: NDArray[np.float64]
+    new: NDArray[np.float64]
+    #: Standard uncertainty of ``new`` (k = 1).
+    uncertainty: NDArray[np.float64]
+    #: The model's stated uncertainty of its error at the datum (k = 2): the prior.
+    stated: NDArray[np.float64]
+
+    def text(self) -> str:
+        values = ", ".join(f"{v * 1e6:+.2f}" for v in self.new)
+        within = ", ".join(f"{v * 1e6:.2f}" for v in self.stated)
+        return (f"the model's error at the datum corrected by ({values}) ± "
+                f"{2.0 * float(np.max(self.uncertainty)) * 1e6:.2f} um (what its calibration "
+                f"missed there, stated to ({within}) um: a constant in every reading)")
+
+    def as_dict(self) -> dict:
+        return {"old_m": self.old.tolist(), "new_m": self.new.tolist(),
+                "uncertainty_m": self.uncertainty.tolist(),
+                "stated_uncertainty_k2_m": self.stated.tolist()}
+
+
+def _datum_prior(model: ErrorModel, noise_sigma: float
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    """The datum correction's prior on the first three columns (the position offsets),
+    in the fit's units: (precision (3,), mean (3,)) of the *change* of the readings'
+    constant, for a total correction ~ N(0, (U/2)^2) per component, U the model's
+    stated uncertainty at the datum; the readings' noise ``noise_sigma`` [m] sets the
+    scale. None when the model states none (its error at the datum taken as exact)."""
+    if model.datum_uncertainty_m is None:
+        return None
+    sigma = np.maximum(np.asarray(model.datum_uncertainty_m, dtype=np.float64) / 2.0, 1e-12)
+    precision = (max(noise_sigma, 1e-12) / sigma) ** 2
+    # The change c of the constant moves the correction to old - c: c ~ N(old, sigma^2).
+    return precision, np.asarray(model.datum_correction_m, dtype=np.float64)
+
+
+def _normal_equations(x: NDArray[np.float64], y: NDArray[np.float64],
+                      penalties: list[tuple[int, int, float]], prior=None):
+    """(X'X, the penalised X'X with the prior's precision, the right side)."""
+    gram = x.T @ x
+    penalised = gram
+    for start, stop, strength in penalties:
+        penalised = penalise(penalised, start, stop, strength)
+    right = x.T @ y
+    if prior is not None:
+        precision, mean = prior
+        index = np.arange(precision.size)
+        penalised = np.array(penalised, copy=True)
+        penalised[index, index] += precision
+        right = right.copy()
+        right[index] += precision * mean
+    return gram, penalised, right
+
+
+def prior_fit(x: NDArray[np.float64], y: NDArray[np.float64],
+              penalties: list[tuple[int, int, float]], prior=None
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Least squares y ~ x (minimum norm) with the ridge ``penalties`` (as
+    :func:`.selection.penalised_fit`) and a Gaussian ``prior`` ((precision (P,), mean
+    (P,)) on the first P columns, in y's units): (coefficients, standard errors - the
+    sandwich where anything is penalised)."""
+    if prior is None:
+        coefficients, standard, _ = penalised_fit(x, y, penalties)
+        return coefficients, standard
+    gram, penalised, right = _normal_equations(x, y, penalties, prior)
+    coefficients = solve_normal(penalised, right)
+    residual = y - x @ coefficients
+    sigma2 = float(residual @ residual) / max(1, y.size - x.shape[1])
+    return coefficients, ridge_standard_errors(gram, penalised, sigma2)
+
+
+@dataclass
 class Refit:
     """The refit of a model's fitted effects and whether it is worth a version."""
 
@@ -116,6 +222,13 @@ class Refit:
     #: beside the refit, so that the node making it live need not (seconds of CPU on a
     #: five-axis machine, which would hold its executor and delay the next check).
     gate_problem: str | None = None
+    #: The datum correction fitted with the effects (absolute refits of a model that
+    #: states its uncertainty at the datum), else None.
+    datum: DatumCorrection | None = None
+    #: Parameters the live fit could not tell from zero, held as they are (these readings
+    #: do not show them, held out), and those the readings now show (released).
+    held: list[str] = field(default_factory=list)
+    released: list[str] = field(default_factory=list)
 
     @property
     def reduction(self) -> float:
@@ -136,6 +249,8 @@ class Refit:
         new = model
         for candidate in self.candidates:
             new = add_effect(new, candidate, obs)
+        if self.datum is not None:
+            new.datum_correction_m = self.datum.new.copy()
         new.version = model.version + 1
         return new
 
@@ -154,6 +269,13 @@ class Refit:
             text += "; moved most: " + ", ".join(
                 change.text(by_name[change.effect].effect, by_name[change.effect].variant)
                 for change in sorted(moved, key=lambda c: -c.z)[:3])
+        if self.held:
+            text += (f"; held as fitted (not told from zero then, not shown held out now): "
+                     f"{', '.join(self.held)}")
+        if self.released:
+            text += f"; {', '.join(self.released)} refitted too (the readings now show them)"
+        if self.datum is not None:
+            text += f"; {self.datum.text()}"
         if self.refusal:
             return f"{text}; refused by physics: {self.refusal}"
         if not self.recommended:
@@ -169,6 +291,8 @@ class Refit:
                 "reduction": self.reduction, "p_value": self.p_value,
                 "recommended": self.recommended,
                 "refusal": self.refusal, "sentence": self.sentence(),
+                "datum_correction": self.datum.as_dict() if self.datum is not None else None,
+                "held": list(self.held), "released": list(self.released),
                 "changes": [{"effect": c.effect, "parameter": c.parameter, "old": c.old,
                              "new": c.new, "old_uncertainty": c.old_uncertainty,
                              "new_uncertainty": c.new_uncertainty, "z": c.z}
@@ -224,20 +348,97 @@ def _datum_design(model: ErrorModel, base: ErrorModel, name: str, names: list[st
 
 
 def blocked_cv_errors(x: NDArray[np.float64], y: NDArray[np.float64],
-                      fold_of_row: NDArray[np.intp], penalties: list[tuple[int, int, float]]
-                      ) -> NDArray[np.float64]:
+                      fold_of_row: NDArray[np.intp], penalties: list[tuple[int, int, float]],
+                      prior=None) -> NDArray[np.float64]:
     """Out-of-fold errors (R,) of y ~ x: each fold predicted by a fit on the others
-    (``penalties``: ridge (start, stop, strength) of column ranges, as the fit used)."""
+    (``penalties``: ridge (start, stop, strength) of column ranges, and ``prior``, as
+    the fit used: see :func:`prior_fit`)."""
     errors = np.empty_like(y)
     for fold in np.unique(fold_of_row):
         held = fold_of_row == fold
         train = ~held
-        gram = x[train].T @ x[train]
-        for start, stop, strength in penalties:
-            gram = penalise(gram, start, stop, strength)
-        coefficients = solve_normal(gram, x[train].T @ y[train])
+        _, penalised, right = _normal_equations(x[train], y[train], penalties, prior)
+        coefficients = solve_normal(penalised, right)
         errors[held] = y[held] - x[held] @ coefficients
     return errors
+
+
+def held_parameters(model: ErrorModel, name: str, parameter_names: list[str]
+                    ) -> NDArray[np.bool_]:
+    """(P,) which parameters of effect ``name`` its live fit could not tell from zero:
+    |value| below twice its stated standard uncertainty (within its U, k = 2). A refit
+    holds them as they are unless the readings show them (:func:`refit_effects`)."""
+    entry = model.effects[name]
+    values = entry.get("coefficients") or {}
+    uncertainties = entry.get("uncertainties") or {}
+    return np.array([abs(float(values.get(p, 0.0))) < 2.0 * float(uncertainties.get(p, 0.0))
+                     for p in parameter_names], dtype=bool)
+
+
+@dataclass
+class _Fit:
+    """One joint fit of the change: its design, the change, its standard errors and the
+    time-blocked held-out errors."""
+
+    x: NDArray[np.float64]
+    penalties: list[tuple[int, int, float]]
+    change: NDArray[np.float64]
+    standard: NDArray[np.float64]
+    errors: NDArray[np.float64]
+
+
+def _joint_fit(leading: list, blocks: list, terms: list, live_y: NDArray[np.float64],
+               fold_of_row: NDArray[np.intp], prior, held: list | None = None) -> _Fit:
+    """The change of every refitted coefficient (and the leading offsets) fitted to the
+    live residual; ``held`` ((P,) bool per block): those columns kept out (no change)."""
+    if held is not None:
+        blocks = [np.where(mask[None, :], 0.0, block) for block, mask in zip(blocks, held)]
+    x = np.column_stack(leading + blocks)
+    penalties, start = [], sum(b.shape[1] for b in leading)
+    for (term, setting), block in zip(terms, blocks):
+        penalties.append((start, start + block.shape[1], penalty_of(term, setting)))
+        start += block.shape[1]
+    change, standard = prior_fit(x, live_y, penalties, prior)
+    return _Fit(x, penalties, change, standard,
+                blocked_cv_errors(x, live_y, fold_of_row, penalties, prior))
+
+
+def _design_blocks(model: ErrorModel, base: ErrorModel, names: list[str], terms: list,
+                   selector: Selector, absolute: bool) -> list[NDArray[np.float64]]:
+    """Each refitted effect's design on the selector's rows, referred to the datum like
+    the model's error when ``absolute`` (the direction stays absolute)."""
+    component = selector.component_of_row
+    position_rows = component < 3
+    blocks = []
+    for name, (term, setting) in zip(names, terms):
+        block = selector.design_rows(term, setting)
+        if absolute:
+            at_datum = _datum_design(model, base, name,
+                                     term.family.parameter_names(term.variant, setting))
+            referred = block - np.where(position_rows[:, None],
+                                        at_datum[np.minimum(component, 2)], 0.0)
+            # A parameter that only moves the part rigidly (a pure offset) is nothing
+            # once referred: its column is rounding noise, not a direction to fit.
+            vanished = np.linalg.norm(referred, axis=0) <= \
+                1e-9 * np.maximum(np.linalg.norm(block, axis=0), 1e-300)
+            block = np.where(vanished[None, :], 0.0, referred)
+        blocks.append(block)
+    return blocks
+
+
+def _checked_request(model: ErrorModel, obs: Observations, names: list[str] | None,
+                     folds: int) -> list[str]:
+    available = refittable_effects(model)
+    names = list(available if names is None else names)
+    wrong = [n for n in names if n not in available]
+    if wrong:
+        raise ParameterError(f"cannot refit {', '.join(wrong)}: not a fitted catalogue effect "
+                             f"of the model (those are: {', '.join(available) or 'none'})")
+    if not names:
+        raise ParameterError("the model holds no fitted catalogue effect to refit")
+    if obs.n < 4 * folds:
+        raise InsufficientDataError(f"{obs.n} reference readings; need >= {4 * folds}")
+    return names
 
 
 def refit_effects(model: ErrorModel, obs: Observations, names: list[str] | None = None, *,
@@ -258,108 +459,117 @@ def refit_effects(model: ErrorModel, obs: Observations, names: list[str] | None 
     ParameterError : a name that is not a fitted catalogue effect of the model.
     InsufficientDataError : fewer than 4 * folds readings.
     """
-    available = refittable_effects(model)
-    names = list(available if names is None else names)
-    wrong = [n for n in names if n not in available]
-    if wrong:
-        raise ParameterError(f"cannot refit {', '.join(wrong)}: not a fitted catalogue effect "
-                             f"of the model (those are: {', '.join(available) or 'none'})")
-    if not names:
-        raise ParameterError("the model holds no fitted catalogue effect to refit")
-    if obs.n < 4 * folds:
-        raise InsufficientDataError(f"{obs.n} reference readings; need >= {4 * folds}")
+    names = _checked_request(model, obs, names, folds)
     absolute = bool(model.datum)
     base = _model_without(model, names)
-    base_obs = _without_contribution(model, base, obs)
-    frame = residual_frame(base, base_obs, absolute=absolute)
+    frame = residual_frame(base, _without_contribution(model, base, obs), absolute=absolute)
     live_frame = residual_frame(model, obs, absolute=absolute)
-    noise_sigma = obs.uncertainty_m / 2.0
     # The readings as they would be without the effects: the designs, and the residual
     # physics judges each refitted effect against (what it explains).
-    selector = Selector(frame.ctx, frame.residual, frame.mask, noise_sigma, folds=folds)
+    selector = Selector(frame.ctx, frame.residual, frame.mask, obs.uncertainty_m / 2.0,
+                        folds=folds)
     terms = []
     for name in names:
         entry = model.effects[name]
         setting = dict(entry.get("setting") or {})
         terms.append((Term(family_named(entry["family"]), str(entry.get("variant", "")),
                            [setting]), setting))
-    component = selector.component_of_row
-    position_rows = component < 3
-    blocks = []
-    for name, (term, setting) in zip(names, terms):
-        block = selector.design_rows(term, setting)
-        if absolute:
-            # Referred to the datum like the model's error (the direction stays absolute).
-            at_datum = _datum_design(model, base, name,
-                                     term.family.parameter_names(term.variant, setting))
-            referred = block - np.where(position_rows[:, None],
-                                        at_datum[np.minimum(component, 2)], 0.0)
-            # A parameter that only moves the part rigidly (a pure offset) is nothing
-            # once referred: its column is rounding noise, not a direction to fit.
-            vanished = np.linalg.norm(referred, axis=0) <= \
-                1e-9 * np.maximum(np.linalg.norm(block, axis=0), 1e-300)
-            block = np.where(vanished[None, :], 0.0, referred)
-        blocks.append(block)
-    # Zeroed at the datum: no free offset; otherwise the instrument's zero per component.
-    leading = [] if absolute else [selector.offsets]
-    x = np.column_stack(leading + blocks)
-    penalties, start = [], sum(b.shape[1] for b in leading)
-    for (term, setting), block in zip(terms, blocks):
-        penalties.append((start, start + block.shape[1], penalty_of(term, setting)))
-        start += block.shape[1]
+    parameter_names = [term.family.parameter_names(term.variant, setting)
+                       for term, setting in terms]
+    blocks = _design_blocks(model, base, names, terms, selector, absolute)
     # The change of the coefficients is fitted to the live model's residual: the live
     # prediction stays exact and only the change is linear; a combination these
     # readings cannot see (minimum norm: no change) keeps its old value.
     live_y = live_frame.residual.ravel()[selector.rows]
-    old_values = [np.array([float((model.effects[name].get("coefficients") or {}).get(p, 0.0))
-                            for p in term.family.parameter_names(term.variant, setting)])
-                  for name, (term, setting) in zip(names, terms)]
-    change, standard, _ = penalised_fit(x, live_y, penalties)
-    coefficients, standard_errors, start = [], [], penalties[0][0]
-    for block, old in zip(blocks, old_values):
-        coefficients.append(old + change[start:start + block.shape[1]])
-        standard_errors.append(standard[start:start + block.shape[1]])
-        start += block.shape[1]
-    refit_errors = blocked_cv_errors(x, live_y, selector.fold_of_row, penalties)
-    live_errors = live_y.copy() if absolute else \
-        blocked_cv_errors(selector.offsets, live_y, selector.fold_of_row, [])
     per_sample = lambda e: np.bincount(selector.sample_of_row, weights=e * e,  # noqa: E731
                                        minlength=selector.n)
+    # Zeroed at the datum: no free offset - but the model's own error at the datum is
+    # known only to its calibration's uncertainty, where it states it: a constant per
+    # position component within that (a Gaussian prior), the datum correction.
+    # Otherwise the instrument's zero per component, free.
+    prior = _datum_prior(model, obs.uncertainty_m / 2.0) if absolute else None
+    leading = [selector.offsets] if not absolute or prior is not None else []
+    # What the live fit could not tell from zero stays as it is, unless the readings show
+    # it now: the refit with it free predicts the held-out readings better than without
+    # (the block test at alpha, by min_reduction). On a few poses of a warm-up, the
+    # collinear (a drift's gain, a line's tilts) take up each other's error.
+    held = [held_parameters(model, name, p) for name, p in zip(names, parameter_names)]
+    fit = _joint_fit(leading, blocks, terms, live_y, selector.fold_of_row, prior)
+    held_names, released = [], []
+    if any(mask.any() for mask in held):
+        holding = _joint_fit(leading, blocks, terms, live_y, selector.fold_of_row, prior, held)
+        named = [f"{name}: " + ", ".join(p for p, h in zip(ps, mask) if h)
+                 for name, ps, mask in zip(names, parameter_names, held) if mask.any()]
+        gain = 1.0 - _rms(fit.errors) / _rms(holding.errors) if _rms(holding.errors) > 0 \
+            else 0.0
+        if gain >= min_reduction and selector.held_out_p_value(
+                per_sample(holding.errors), per_sample(fit.errors)) < alpha:
+            released = named
+        else:
+            fit, held_names = holding, named
+    refit_errors = fit.errors
+    live_errors = live_y.copy() if absolute else \
+        blocked_cv_errors(selector.offsets, live_y, selector.fold_of_row, [])
     p_value = selector.held_out_p_value(per_sample(live_errors), per_sample(refit_errors))
-
-    def rms(errors, rows=slice(None)) -> float:
-        picked = errors[rows]
-        return float(np.sqrt(np.mean(picked ** 2))) if picked.size else 0.0
-
+    position_rows = selector.component_of_row < 3
     direction_cv = None
     if frame.lever:
-        direction_rows = ~position_rows
-        direction_cv = (rms(live_errors, direction_rows) / frame.lever,
-                        rms(refit_errors, direction_rows) / frame.lever)
+        direction_cv = (_rms(live_errors[~position_rows]) / frame.lever,
+                        _rms(refit_errors[~position_rows]) / frame.lever)
+    datum = None
+    if prior is not None:
+        # The readings' constant beyond every effect's: the model's error at the datum
+        # is that much less than it held (its referred prediction rises by it).
+        old_correction = np.asarray(model.datum_correction_m, dtype=np.float64)
+        datum = DatumCorrection(old_correction, old_correction - fit.change[:3],
+                                fit.standard[:3],
+                                np.asarray(model.datum_uncertainty_m, dtype=np.float64))
+    candidates, changes, refusals = _refitted(model, selector, names, terms, parameter_names,
+                                              fit, sum(b.shape[1] for b in leading),
+                                              held if held_names else None, _rms(refit_errors))
+    return Refit(names, candidates, obs.n, absolute, _rms(live_errors), _rms(refit_errors),
+                 (_rms(live_errors[position_rows]), _rms(refit_errors[position_rows])),
+                 direction_cv, changes, "; ".join(refusals), p_value, min_reduction, alpha,
+                 moved_sigma, datum=datum, held=held_names, released=released or [])
+
+
+def _rms(errors: NDArray[np.float64]) -> float:
+    return float(np.sqrt(np.mean(errors ** 2))) if errors.size else 0.0
+
+
+def _refitted(model: ErrorModel, selector: Selector, names: list[str], terms: list,
+              parameter_names: list, fit: _Fit, start: int, held: list | None,
+              cv_rmse: float) -> tuple[list[Candidate], list[ParameterChange], list[str]]:
+    """The refitted effects as candidates, each coefficient's change, physics' refusals.
+    A held coefficient keeps its value and its stated uncertainty."""
     candidates, changes, refusals = [], [], []
-    for name, (term, setting), values, errors in zip(names, terms, coefficients,
-                                                      standard_errors):
+    for k, (name, (term, setting), parameters) in enumerate(zip(names, terms,
+                                                                parameter_names)):
         entry = model.effects[name]
-        parameter_names = term.family.parameter_names(term.variant, setting)
+        old = entry.get("coefficients") or {}
+        old_u = entry.get("uncertainties") or {}
+        width = len(parameters)
+        old_values = np.array([float(old.get(p, 0.0)) for p in parameters])
+        values = old_values + fit.change[start:start + width]
+        errors = np.array(fit.standard[start:start + width], dtype=np.float64)
+        if held is not None:
+            errors = np.where(held[k], [float(old_u.get(p, 0.0)) for p in parameters], errors)
+        start += width
         refusal = selector.physics_refusal(term, setting, values)
         if refusal:
             refusals.append(f"{name}: {refusal}")
-        old = entry.get("coefficients") or {}
-        old_u = entry.get("uncertainties") or {}
-        for parameter, value, error in zip(parameter_names, values, errors):
+        for parameter, value, error in zip(parameters, values, errors):
             changes.append(ParameterChange(name, parameter, float(old.get(parameter, 0.0)),
                                            float(value), float(old_u.get(parameter, 0.0)),
                                            float(error)))
         candidates.append(Candidate(
-            term.family.name, dict(zip(parameter_names, map(float, values))),
-            rms(refit_errors), 0.0, True, term.family.explanation(term.variant, setting),
-            term.variant, dict(zip(parameter_names, map(float, errors))), setting,
-            group=term.family.group, refusal=refusal))
-    return Refit(names, candidates, obs.n, absolute, rms(live_errors), rms(refit_errors),
-                 (rms(live_errors, position_rows), rms(refit_errors, position_rows)),
-                 direction_cv, changes, "; ".join(refusals), p_value, min_reduction, alpha,
-                 moved_sigma)
+            term.family.name, dict(zip(parameters, map(float, values))), cv_rmse, 0.0, True,
+            term.family.explanation(term.variant, setting), term.variant,
+            dict(zip(parameters, map(float, errors))), setting, group=term.family.group,
+            refusal=refusal))
+    return candidates, changes, refusals
 
 
-__all__ = ["MOVED_SIGMA", "REFIT_ALPHA", "ParameterChange", "Refit", "blocked_cv_errors",
-           "refit_effects", "refittable_effects"]
+__all__ = ["MOVED_SIGMA", "REFIT_ALPHA", "DatumCorrection", "ParameterChange", "Refit",
+           "blocked_cv_errors", "held_parameters", "prior_fit", "refit_effects",
+           "refittable_effects"]
