@@ -26,12 +26,27 @@ from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 
 from ..core.errors import BagError
-from ..io.bag_reader import message_class, read_messages, topics
+from ..io.bag_reader import bag_info, message_class, read_messages, topics
 from ..io.playback import PlaybackClock, playback_policies
 from ._common import (MATCH_SETTLE_S, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, plain_descriptor, refuse)
 
 #: What ``use_sim_time`` subscribers use for /clock.
+#: The played topics' publisher history [messages]: the topic's message count within
+#: these bounds (a reliable late reader loses nothing of a bag up to the upper one).
+MIN_PLAYBACK_DEPTH = 1000
+MAX_PLAYBACK_DEPTH = 20000
+
+
+def _message_counts(bag: str) -> dict[str, int]:
+    """Topic -> message count from the bag's summaries ({} for a bag without them: a
+    truncated file, whose topics then get the lower depth)."""
+    try:
+        return {name: int(t["count"]) for name, t in bag_info(bag)["topics"].items()}
+    except BagError:
+        return {}
+
+
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
                        durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
 
@@ -69,6 +84,7 @@ class BagPlayer(Node):
             raise BagError("parameter 'bag' is required (a bag directory or .mcap file)")
         wanted = [t for t in self.get_parameter("topics").value if t]
         available = topics(self.bag)
+        counts = _message_counts(self.bag)
         self._topic_publishers: dict = {}
         self._skipped: set[str] = set()
         for name, info in sorted(available.items()):
@@ -85,8 +101,12 @@ class BagPlayer(Node):
                 self._skipped.add(name)
                 continue
             reliability, durability = playback_policies(info.offered_qos)
+            # A history as deep as the topic's messages (bounded): a reliable subscriber
+            # that falls behind a fast replay gets every message instead of the writer
+            # overwriting those it has not acknowledged yet.
+            depth = int(min(max(MIN_PLAYBACK_DEPTH, counts.get(name, 0)), MAX_PLAYBACK_DEPTH))
             qos = QoSProfile(
-                depth=1000, history=HistoryPolicy.KEEP_LAST,
+                depth=depth, history=HistoryPolicy.KEEP_LAST,
                 reliability=ReliabilityPolicy.RELIABLE if reliability == "reliable"
                 else ReliabilityPolicy.BEST_EFFORT,
                 durability=DurabilityPolicy.TRANSIENT_LOCAL if durability == "transient_local"
