@@ -440,8 +440,9 @@ def setup_note(machine) -> str:
     pose = ", ".join(f"{a} = {np.degrees(machine.setup_angle(a)):g} deg" for a in rotary)
     given = "the column map's or the machine's setup_pose" if machine.setup_pose else \
         "no setup_pose given: every rotary axis at 0"
+    notes = "".join(f"; {note}" for note in machine.setup_notes)
     return (f"set-up pose {pose} ({given}): the rotary axes turn about their actual lines "
-            "from there, so their zero-angle errors are taken out by the set-up")
+            f"from there, so their zero-angle errors are taken out by the set-up{notes}")
 
 
 def with_tool_direction(obs, direction_errors: dict, machine) -> str:

@@ -18,7 +18,9 @@ A **column map** (YAML, or ``--col ROLE=COLUMN[:UNIT]`` flags) says::
                                                            #   beside the map, or a bundled name)
     setup_pose: {A: {value: 0, unit: deg}, C: {value: 0, unit: deg}}   # where the work
                                                            #   (sphere, part) was set up
-    target_point: {value: [50, 0, 20], unit: mm}           # a fixed sphere, workpiece frame;
+    target_point: {value: [50, 0, 20], unit: mm}           # a fixed sphere, work coordinates
+                                                           #   (from the work offset, as a
+                                                           #   CNC program gives it);
     # or per row (several spheres): {columns: {x: sx, y: sy, z: sz}, unit: mm}
     direction_errors: {x: {column: dux, unit: urad}, ...}  # the tool direction's change
                                                            #   (a two-sphere R-test)
@@ -103,8 +105,9 @@ class ColumnMap:
     machine: str | None = None
     #: Where the work was set up (``setup_pose:``), rotary axis -> command [rad].
     setup_pose: dict[str, float] = field(default_factory=dict)
-    #: A fixed target on the workpiece side, workpiece frame (3,) [m] (``target_point:``
-    #: with ``value``); per-row targets are the roles ``target.x/y/z``.
+    #: A fixed target on the workpiece side (3,) [m], in work coordinates: from the work
+    #: offset (the machine's ``workpiece`` point) along the workpiece frame's axes
+    #: (``target_point:`` with ``value``); per-row targets are the roles ``target.x/y/z``.
     target_point_m: np.ndarray | None = None
 
     @property

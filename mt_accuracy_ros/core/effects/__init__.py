@@ -6,7 +6,8 @@ Families by group (each a small class with its physics in the docstring):
   every linear axis, smooth and periodic; squareness of each axis pair;
   cross-axis twist; Abbe offset;
 * rotary (:mod:`.geometric`): position-dependent errors and location errors of
-  rotary axes (Khan & Chen);
+  rotary axes (Khan & Chen); (:mod:`.setup_location`) the machine's error where the
+  work or the tool was located at the set-up, turning with them;
 * thermal (:mod:`.thermal`): drift, lag, gradient, heat sources,
   position-dependent expansion, thermal squareness (Zhu ch. 3-4);
 * motion (:mod:`.motion`): reversal, servo lag, acceleration per axis;
@@ -26,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError
-from . import geometric, log_models, motion, thermal
+from . import geometric, log_models, motion, setup_location, thermal
 from .base import Context, EffectFamily, along, per_component
 from .user import ENTRY_POINT_GROUP, UserExpression, load_plugins, user_declaration
 
@@ -37,8 +38,8 @@ __all__ = ["Context", "EffectFamily", "ENTRY_POINT_GROUP", "UserExpression", "al
 
 
 def builtin_families() -> list[EffectFamily]:
-    return geometric.families() + thermal.families() + motion.families() + \
-        log_models.families()
+    return geometric.families() + setup_location.families() + thermal.families() + \
+        motion.families() + log_models.families()
 
 
 _PLUGINS: list[EffectFamily] | None = None

@@ -128,6 +128,25 @@ class Context:
                 self._jacobians[error_name] = sign * np.ascontiguousarray(sensitivity)
         return self._jacobians[error_name]
 
+    def located(self, error_name: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(position (N, 3) [m per unit], orientation (N, 3) [rad per unit]) of a rotary
+        axis' location error ``error_name`` as an instrument located at the set-up reads
+        it: the body turning about its actual line, the target (and a head's tool) located
+        by a translation at the set-up pose
+        (:meth:`~..kinematics.chain.KinematicModel.located_sensitivities`). Computed for
+        the axis' four line errors at once."""
+        key = "located:" + error_name
+        if key not in self._jacobians:
+            axis = error_name[3]
+            along_axis = "XYZ"["ABC".index(axis)]
+            names = [f"E{c}0{axis}" for c in "XYZABC" if c not in (along_axis, axis)]
+            positions = {a: self.variables.positions[a] for a in self.machine.axis_order}
+            found = self.kinematics.located_sensitivities(positions, names,
+                                                          work_point=self.work_point)
+            for name, pair in found.items():
+                self._jacobians["located:" + name] = pair
+        return self._jacobians[key]
+
     def arm_jacobian(self, error_name: str) -> NDArray[np.float64]:
         """d e_TCP / d (rotation ``error_name`` times an extra arm of 1 m along the tool
         axis), (N, 3) [m per rad m]: ``sign (R[:, :, c] x t)`` for a rotation component c,

@@ -381,23 +381,130 @@ class RotaryLocation(EffectFamily):
             names += offsets + tilts
         return names
 
+    def settings(self, ctx, variant):
+        # The location errors these poses cannot part are folded into those they move
+        # the readings as (one setting: which, and by how much).
+        setting = {"inseparable": inseparable_location_errors(ctx, self._names(variant))}
+        # A variant none of whose errors these poses see is no candidate.
+        return [setting] if self.parameter_names(variant, setting) else []
+
     def parameter_names(self, variant, setting):
-        return self._names(variant)
+        folded = parse_inseparable(setting.get("inseparable", ""))
+        return [name for name in self._names(variant) if name not in folded]
 
     def design(self, ctx, variant, setting):
-        return np.stack([ctx.jacobian(name) for name in self._names(variant)], axis=2)
+        # As an instrument located at the set-up reads them (Context.located).
+        return np.stack([ctx.located(name)[0] for name in self.parameter_names(variant,
+                                                                                setting)],
+                        axis=2)
 
     def orientation_design(self, ctx, variant, setting):
-        return np.stack([ctx.orientation_jacobian(name) for name in self._names(variant)],
+        return np.stack([ctx.located(name)[1] for name in self.parameter_names(variant,
+                                                                                setting)],
                         axis=2)
 
     def explanation(self, variant, setting):
         which = f"the {variant} axis is" if len(variant) == 1 else \
             f"the {' and '.join(variant)} axes are"
-        return (f"{which} not where the model puts it: centre line offset or tilted "
-                f"({', '.join(self._names(variant))}; ISO 230-7 location errors, the body "
-                "turning about the actual line from the set-up pose; Khan & Chen "
-                "position-independent errors)")
+        text = (f"{which} not where the model puts it: centre line offset or tilted "
+                f"({', '.join(self.parameter_names(variant, setting))}; ISO 230-7 location "
+                "errors, the body turning about the actual line, the target located at the "
+                "set-up pose; Khan & Chen position-independent errors)")
+        folded = inseparable_sentence(setting.get("inseparable", ""))
+        return f"{text}; {folded}" if folded else text
+
+    def describe_setting(self, setting):
+        return inseparable_sentence(setting.get("inseparable", "")) or "every line error seen"
+
+
+#: A location error whose column keeps less than this fraction of its norm once the
+#: columns kept before it (and the offsets) are taken out is not parted from them: its
+#: parameter would be known this many times worse than if it were.
+INSEPARABLE_FRACTION = 1e-4
+
+
+def inseparable_location_errors(ctx: Context, names: list[str]) -> str:
+    """Which of a rotary axis' location errors ``names`` the readings cannot part, as the
+    setting string ``"EB0C=EX0C*-0.093;EX0B="``: EB0C moves them as -0.093 m/rad of EX0C
+    (EX0C then stands for EX0C - 0.093 m/rad x EB0C); EX0B moves nothing here.
+
+    The columns are taken in order (the line's offsets before its tilts: the centre a
+    calibration measures first), each against the offsets (an instrument's own zero, on
+    the position rows) and the columns kept before it; one that keeps less than
+    :data:`INSEPARABLE_FRACTION` of its norm is folded into them (least squares).
+    """
+    columns = []
+    for name in names:
+        position, turn = ctx.located(name)
+        if ctx.width == 6:      # the direction as the instrument saw it (Context)
+            position = np.concatenate([position, ctx._direction_rows(turn[:, :, None])[:, :, 0]],
+                                      axis=1)
+        columns.append(position)
+    flat = []
+    for column in columns:
+        column = column.copy()
+        column[:, :3] -= column[:, :3].mean(axis=0)      # the offsets take the mean out
+        flat.append(column.ravel())
+    kept: list[int] = []
+    parts = []
+    # The axes that turned first: a line error of one that stood still is read as the
+    # line of one that turned (a B offset at a fixed B moves the C table's line).
+    for i in sorted(range(len(names)), key=lambda k: not ctx.moves(names[k][3])):
+        column = flat[i]
+        norm = float(np.linalg.norm(column))
+        if norm == 0.0:
+            parts.append(f"{names[i]}=")
+            continue
+        if kept:
+            basis = np.column_stack([flat[k] for k in kept])
+            weights, *_ = np.linalg.lstsq(basis, column, rcond=None)
+            rest = float(np.linalg.norm(column - basis @ weights))
+            if rest < INSEPARABLE_FRACTION * norm:
+                terms = "&".join(f"{names[k]}*{w:.6e}" for k, w in zip(kept, weights)
+                                 if abs(w) * float(np.linalg.norm(flat[k])) > 1e-6 * norm)
+                parts.append(f"{names[i]}={terms}")
+                continue
+        kept.append(i)
+    return ";".join(parts)
+
+
+def parse_inseparable(text: str) -> dict[str, dict[str, float]]:
+    """The setting string of :func:`inseparable_location_errors` as {folded: {kept: ratio}}
+    (ratio in the kept parameter's unit per the folded one's; {} for one that moves
+    nothing)."""
+    out: dict[str, dict[str, float]] = {}
+    for part in filter(None, str(text).split(";")):
+        name, _, terms = part.partition("=")
+        out[name] = {kept: float(ratio) for kept, ratio in
+                     (term.split("*") for term in filter(None, terms.split("&")))}
+    return out
+
+
+def inseparable_sentence(text: str) -> str:
+    """The folds of a setting string in words ("" when there are none)."""
+    folded = parse_inseparable(text)
+    if not folded:
+        return ""
+    unseen = [name for name, into in folded.items() if not into]
+    said = []
+    for name, into in folded.items():
+        if into:
+            moves = " + ".join(f"{ratio:.4g} {_ratio_unit(name, kept)} x {kept}"
+                               for kept, ratio in into.items())
+            stands = "; ".join(f"{kept} stands for {kept} + {ratio:.4g} "
+                               f"{_ratio_unit(name, kept)} x {name}"
+                               for kept, ratio in into.items())
+            said.append(f"{name} moves these readings as {moves} would, which these poses "
+                        f"cannot part: {stands}")
+    if unseen:
+        said.append(f"{', '.join(unseen)} move(s) nothing on these poses (not seen)")
+    return "; ".join(said)
+
+
+def _ratio_unit(folded: str, kept: str) -> str:
+    """The unit of a fold's ratio: kept's unit per folded's (m/rad, rad/m, m/m, rad/rad)."""
+    unit = {True: "m", False: "rad"}
+    return f"{unit[kept[1] in 'XYZ']}/{unit[folded[1] in 'XYZ']}"
 
 
 class CrossAxis(EffectFamily):

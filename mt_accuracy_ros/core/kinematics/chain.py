@@ -51,7 +51,7 @@ Everything is vectorised over N configurations: positions are dicts of arrays.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -435,6 +435,72 @@ class KinematicModel:
                     frames[name_of(component, axis)] = (sign, frame_rot, lever)
         return frames
 
+    def located_sensitivities(self, positions: Positions, names: list[str],
+                              work_point: NDArray | None = None
+                              ) -> dict[str, tuple[NDArray, NDArray]]:
+        """What an instrument located at the set-up reads of unit location errors.
+
+        A sphere (an R-test's, a probed one) is located at the set-up pose by a
+        translation of the workpiece frame - a sphere has no orientation to find - and,
+        when the head carries rotary axes, the tool by a translation of the tool frame
+        (ISO 10791-6). A rotary body turns about its actual line by its command (ISO
+        230-7, ``L R(q) L^-1``: no set-up in the turn), so a unit error moving the
+        target by s(q) (position, bed frame) and the tool's direction by du(q) reads
+
+            s(q) - R_S(q) R_S(q_s)^T s(q_s),   du(q) - R_S(q) R_S(q_s)^T du(q_s)
+
+        with R_S the nominal rotation of the located side's end frame (the tool's for an
+        error of a head that carries rotary axes, else the workpiece's). For the last
+        axis of a side this is :meth:`error_frames`' ``R_p (I - R(q - q_s))``; for an outer
+        axis whose inner axes leave their set-up, and for the tool's direction, it is not
+        (the set-up moved the target, not the body: the body's tilt at the set-up stays).
+
+        Parameters
+        ----------
+        positions : axis -> (N,) commands [m, rad]
+        names : location error names (``EX0C``, ``EA0B`` ...)
+        work_point : (3,) or (N, 3) [m], optional
+            The target, workpiece frame (default: the machining point of each reading,
+            located where it is at the set-up).
+
+        Returns
+        -------
+        name -> (position (N, 3) [m per unit], orientation (N, 3) [rad per unit]): the
+        orientation is the body's turn less the located change's turn across the tool
+        axis, u x R_S R_S(q_s)^T du(q_s) (what an instrument sees is its part across u).
+        The linear axes keep the readings' commands at the set-up (they do not turn a
+        side's frame; an arm they lengthen downstream of a rotary axis is neglected).
+        """
+        q, n = self._positions(positions, False)
+        raw = KinematicModel(replace(self.machine, setup_pose={}))
+        setup = {a: np.full(n, self.machine.setup_angle(a)) if self.machine.axes[a].is_rotary
+                 else q[a] for a in self.machine.axis_order}
+        point = self._machining_point(q) if work_point is None else \
+            self._work_point(q, n, work_point)
+        frames = raw.error_frames(q, work_point=point)
+        at_setup = raw.error_frames(setup, work_point=point)
+        turned = {}
+        for side in ("tool", "workpiece"):
+            now = raw.branch(side, q, errors=False, check_stroke=False)[:, :3, :3]
+            then = raw.branch(side, setup, errors=False, check_stroke=False)[:, :3, :3]
+            turned[side] = now @ np.swapaxes(then, 1, 2)
+        tool_axis, tool_axis_setup = raw.tool_axis(q), raw.tool_axis(setup)
+        head = any(self.machine.axes[a].is_rotary for a in self.machine.tool_branch)
+        out = {}
+        for name in names:
+            axis = name[3]
+            side = "tool" if head and axis in self.machine.tool_branch else "workpiece"
+            moved = _unit_motion(frames[name], name)
+            moved_then = _unit_motion(at_setup[name], name)
+            position = moved[0] - np.einsum("nij,nj->ni", turned[side], moved_then[0])
+            # The direction's change at the set-up, located with the side: its turn across
+            # the tool axis comes off the body's own turn (kept whole: at a set-up where the
+            # line errors move nothing, the chain's).
+            located = np.einsum("nij,nj->ni", turned[side],
+                                np.cross(moved_then[1], tool_axis_setup))
+            out[name] = (position, moved[1] - np.cross(tool_axis, located))
+        return out
+
     def _turn_from_setup(self, axis: str, q: NDArray) -> NDArray:
         """(N, 4, 4) the nominal turn of rotary ``axis`` from its set-up command to ``q``."""
         spec = self.machine.axes[axis]
@@ -583,6 +649,17 @@ class KinematicModel:
             considered += [location_error_name(c, axis) for c in spec.location_errors]
         potential += ["machine coordinate system: " + n for n in ("EA0M", "EB0M", "EC0M")]
         return {"potential": potential, "considered": considered}
+
+
+def _unit_motion(frame: tuple[float, NDArray, NDArray], name: str) -> tuple[NDArray, NDArray]:
+    """(position (N, 3), orientation (N, 3)) a unit error ``name`` gives through its
+    :meth:`KinematicModel.error_frames` entry (sign, R, lever)."""
+    sign, rotation, lever = frame
+    component = COMPONENTS.index(name[1])
+    if component < 3:
+        return sign * rotation[:, :, component], np.zeros_like(lever)
+    turn = sign * rotation[:, :, component - 3]
+    return np.cross(turn, lever), turn
 
 
 def volumetric_map(model: KinematicModel, positions: Positions, *, chunk: int = 100_000,

@@ -100,6 +100,9 @@ class MachineDescription:
     #: location errors (ISO 230-7) turn the body about the actual axis line *from this
     #: pose*: at it the body is where the set-up found it (:mod:`.chain`).
     setup_pose: dict[str, float] = field(default_factory=dict)
+    #: What reading the set-up pose assumed, one sentence each (an angle of a continuous
+    #: axis taken modulo a full turn: :func:`setup_angle_in_stroke`).
+    setup_notes: tuple[str, ...] = ()
 
     def setup_angle(self, axis: str) -> float:
         """The set-up command of rotary ``axis`` [rad] (0 when the set-up pose omits it)."""
@@ -212,6 +215,7 @@ def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
         axes[letter] = Axis(name=letter, stroke=(float(stroke[0]), float(stroke[1])),
                             offset=offset, sign=sign, motion_errors=motion,
                             location_errors=location)
+    setup_notes: list[str] = []
     return MachineDescription(
         name=str(data["name"]), chain=str(data["chain"]), workpiece_branch=workpiece_branch,
         tool_branch=tool_branch, axes=axes, tool=_vector(data["tool"], f"{source}: tool"),
@@ -221,7 +225,9 @@ def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
         structure_length_m=_positive_or_none(data.get("structure_length_m"),
                                              f"{source}: structure_length_m"),
         cnc=_cnc_section(data.get("cnc"), f"{source}: cnc"),
-        setup_pose=read_setup_pose(data.get("setup_pose"), axes, f"{source}: setup_pose"))
+        setup_pose=read_setup_pose(data.get("setup_pose"), axes, f"{source}: setup_pose",
+                                   setup_notes),
+        setup_notes=tuple(setup_notes))
 
 
 #: Angle units a rotary stroke or a set-up angle may be given in (to rad).
@@ -280,11 +286,13 @@ def angle_with_unit(value, where: str, error: type[Exception],
     return float(angle) * units[unit]
 
 
-def read_setup_pose(spec, axes: dict[str, "Axis"], where: str) -> dict[str, float]:
+def read_setup_pose(spec, axes: dict[str, "Axis"], where: str,
+                    notes: list[str] | None = None) -> dict[str, float]:
     """Rotary axis -> set-up command [rad] from ``{A: {value: -90, unit: deg}, ...}``.
 
     Every angle carries its unit; an axis the machine lacks, a linear axis, or a bare
-    number is refused in one line saying how to write it.
+    number is refused in one line saying how to write it. ``notes`` collects what was
+    assumed (an angle of a continuous axis taken modulo a full turn).
     """
     if spec is None:
         return {}
@@ -300,14 +308,39 @@ def read_setup_pose(spec, axes: dict[str, "Axis"], where: str) -> dict[str, floa
                 f"{where}.{axis}: not a rotary axis of this machine (rotary: "
                 f"{', '.join(rotary) or 'none'})")
         angle = angle_with_unit(value, f"{where}.{axis}", MachineDescriptionError)
-        unit = str(value["unit"])
-        low, high = axes[axis].stroke
-        if not (np.isfinite(angle) and low - 1e-9 <= angle <= high + 1e-9):
-            raise MachineDescriptionError(
-                f"{where}.{axis}: {value['value']} {unit} is outside the stroke "
-                f"[{np.degrees(low):g}, {np.degrees(high):g}] deg")
-        pose[axis] = angle
+        pose[axis] = setup_angle_in_stroke(axes[axis], angle, f"{where}.{axis}", notes)
     return pose
+
+
+#: A rotary stroke at least this long turns a full turn: its angles are modulo 360 deg.
+FULL_TURN = 2.0 * np.pi - 1e-9
+
+
+def setup_angle_in_stroke(axis: "Axis", angle: float, where: str,
+                          notes: list[str] | None = None) -> float:
+    """A set-up angle [rad] of rotary ``axis`` as a command within its stroke.
+
+    An axis whose stroke spans a full turn (a C table, 0..360 deg) is continuous: an
+    angle and the same angle plus whole turns are one orientation, so -45 deg is taken
+    as 315 deg, and ``notes`` gets the sentence that says so. Anything else outside the
+    stroke is refused in one line.
+    """
+    low, high = axis.stroke
+    if not np.isfinite(angle):
+        raise MachineDescriptionError(f"{where}: not a finite angle")
+    if high - low >= FULL_TURN and not low - 1e-9 <= angle <= high + 1e-9:
+        turns = np.floor((angle - low) / (2.0 * np.pi))
+        given, angle = angle, float(angle - turns * 2.0 * np.pi)   # low <= angle < low + 2 pi
+        if notes is not None:
+            notes.append(f"{where}: {np.degrees(given):g} deg taken as "
+                         f"{np.degrees(angle):g} deg ({axis.name} turns a full turn, "
+                         f"stroke [{np.degrees(low):g}, {np.degrees(high):g}] deg: its "
+                         "angles are modulo 360 deg)")
+    if not low - 1e-9 <= angle <= high + 1e-9:
+        raise MachineDescriptionError(
+            f"{where}: {np.degrees(angle):g} deg is outside the stroke "
+            f"[{np.degrees(low):g}, {np.degrees(high):g}] deg")
+    return float(angle)
 
 
 #: Keys of a machine's ``cnc:`` section and what each holds (SI units).
@@ -420,17 +453,16 @@ def with_setup_pose(machine: MachineDescription, pose: dict[str, float],
     if not pose:
         return machine
     rotary = [a for a in machine.axis_order if machine.axes[a].is_rotary]
+    pose, notes = dict(pose), list(machine.setup_notes)
     for axis, angle in pose.items():
         if axis not in rotary:
             raise MachineDescriptionError(
                 f"{source}: {axis} is not a rotary axis of {machine.name} (rotary: "
                 f"{', '.join(rotary) or 'none'})")
-        low, high = machine.axes[axis].stroke
-        if not (np.isfinite(angle) and low - 1e-9 <= angle <= high + 1e-9):
-            raise MachineDescriptionError(
-                f"{source}.{axis}: {np.degrees(angle):g} deg is outside {machine.name}'s stroke "
-                f"[{np.degrees(low):g}, {np.degrees(high):g}] deg")
-    return replace(machine, setup_pose={**machine.setup_pose, **pose})
+        pose[axis] = setup_angle_in_stroke(machine.axes[axis], angle,
+                                           f"{source}.{axis} ({machine.name})", notes)
+    return replace(machine, setup_pose={**machine.setup_pose, **pose},
+                   setup_notes=tuple(notes))
 
 
 def checked_datum(datum, machine: MachineDescription) -> dict[str, float]:
