@@ -22,6 +22,19 @@ Scoring, per trial (every identifiable effect of the truth):
 * a zero-angle error the poses can see (an outer axis' zero: a located sphere sees it as
   the tilt of the axis it carries) is right as that tilt;
 * a squareness is right when a squareness of its plane is named;
+* what the poses cannot part is said, and scored as said: a rotary location error the
+  named effect folds into another (``setting.inseparable``, "EB0C=EX0C*-0.417": EX0C
+  stands for EX0C - 0.417 m/rad x EB0C) is right when every parameter it folds into
+  carries the truth's sum within 30 % or 3 U; an effect the output states the readings
+  cannot part from a named one (``inseparable``: the other's name and its own fit of the
+  same contribution) is right when that statement would be right as a named effect -
+  the truth among the stated pair, with its value;
+* a ``setup_location`` (the machine's error where the work or tool was located, turning
+  with it) is right beside a truth that has such an error there: a linear-axis error
+  (tilt, squareness) on that side - on the tool side only when the head carries rotary
+  axes, else located into the work; a rotary location error whose named value holds
+  such an error too (the output stating the set-up location inseparable from it) is
+  right without its value being judged - the survey cannot give the split;
 * anything else named is an extra; a null trial is right when nothing is named.
 
 A trial is **right** when every identifiable effect is right and nothing extra is named.
@@ -82,7 +95,46 @@ def carried_rotary(chain: str, axis: str) -> str:
     return next((a for a in after if a in "ABC"), "")
 
 
-def matches(effect: dict, named: dict, chain: str = "") -> str:
+def folds_of(named: dict) -> dict[str, dict[str, float]]:
+    """A rotary_location's folds, {folded: {kept: ratio}} (see the module docstring)."""
+    out = {}
+    text = (named.get("setting") or {}).get("inseparable", "")
+    for part in filter(None, str(text).split(";")):
+        name, _, terms = part.partition("=")
+        out[name] = {k: float(r) for k, r in (t.split("*") for t in filter(None, terms.split("&")))}
+    return out
+
+
+def folded_value(effect: dict, named: dict, truths: dict[str, float]) -> str:
+    """"value"/"wrong value" for a truth location error the named effect folded, "" if not."""
+    into = folds_of(named).get(effect["iso_name"])
+    if not into:
+        return ""
+    folds = folds_of(named)
+    for kept in into:
+        # What the kept parameter stands for: its own truth plus each folded one's share.
+        expected = truths.get(kept, 0.0) + sum(ratio * truths.get(name, 0.0)
+                                               for name, onto in folds.items()
+                                               for k, ratio in onto.items() if k == kept)
+        value = named["parameters"].get(kept)
+        spread = 3.0 * named.get("parameter_uncertainties", {}).get(kept, 0.0)
+        if value is None or value * expected <= 0 or \
+                abs(value - expected) > max(0.3 * abs(expected), spread):
+            return "wrong value"
+    return "value"
+
+
+def located_companion(effect: dict, named: dict, truth: dict) -> str:
+    """Why a named setup_location accounts for part of the truth ("" when it does not)."""
+    if named["effect"] != "setup_location" or effect["kind"] not in ("table_tilt",
+                                                                     "squareness"):
+        return ""
+    head = truth["conventions"].get("tool_located", False)
+    side = effect["side"] if (effect["side"] == "work" or head) else "work"
+    return "located at the set-up" if named["variant"] == side else ""
+
+
+def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = None) -> str:
     """Why ``named`` accounts for the truth ``effect`` ("" when it does not)."""
     family, variant = named["effect"], named["variant"]
     iso, kind = effect["iso_name"], effect["kind"]
@@ -100,7 +152,8 @@ def matches(effect: dict, named: dict, chain: str = "") -> str:
             return ""
         value = named["parameters"].get(iso)
         if value is None:
-            return ""
+            return folded_value(effect, named, truths or {}) if family == "rotary_location" \
+                else ""
         truth = effect["value_si"]
         spread = 3.0 * named.get("parameter_uncertainties", {}).get(iso, 0.0)
         if value * truth > 0 and abs(value - truth) <= max(0.3 * abs(truth), spread):
@@ -133,15 +186,42 @@ def score(truth: dict, result: dict | None) -> dict:
     named = result.get("named", [])
     names = [n["name"] for n in named]
     wanted = [e for e in truth["effects"] if e["identifiable"]]
+    truths = {e["iso_name"]: e["value_si"] for e in truth["effects"]
+              if e["kind"] in ("location_offset", "location_tilt")}
     used, problems = set(), []
+
+    def accounts(effect, entry):
+        why = matches(effect, entry, truth.get("chain", ""), truths)
+        if why and why != "wrong value":
+            return why
+        # What the output says the readings cannot part from it, scored as if named.
+        stated = [matches(effect, {"effect": alt["name"].split(":")[0],
+                                   "variant": alt["name"].partition(":")[2],
+                                   "parameters": alt["parameters"]},
+                          truth.get("chain", ""), truths)
+                  for alt in entry.get("inseparable", [])]
+        said = next((f"stated inseparable ({w})" for w in stated if w and w != "wrong value"),
+                    why)
+        if said == "wrong value" and any(
+                located_companion(other, {"effect": alt["name"].split(":")[0],
+                                          "variant": alt["name"].partition(":")[2]}, truth)
+                for alt in entry.get("inseparable", []) for other in wanted):
+            # Its value holds the set-up's located error too, which the output says these
+            # poses cannot part from it and the truth put there: no value to judge.
+            return "stated inseparable from the located set-up"
+        return said
+
     for effect in wanted:
-        how = [(i, matches(effect, n, truth.get("chain", ""))) for i, n in enumerate(named)]
+        how = [(i, accounts(effect, n)) for i, n in enumerate(named)]
         good = [i for i, why in how if why and why != "wrong value"]
         if not good:
             wrong = [named[i]["name"] for i, why in how if why == "wrong value"]
             problems.append(f"{effect['iso_name']} " + (f"wrong value in {wrong[0]}" if wrong
                                                         else "not named"))
         used.update(good)
+    # A located set-up error beside a truth that put an error there is no extra.
+    used.update(i for i, n in enumerate(named) if i not in used and
+                any(located_companion(e, n, truth) for e in wanted))
     extras = [names[i] for i in range(len(named)) if i not in used]
     if extras:
         problems.append("extra: " + ", ".join(extras))

@@ -38,6 +38,7 @@ from .context_memo import ContextMemo
 from .localisation import Localisation, LocalisationMemo, localise
 from .distributions import chi2_sf
 from .selection import Selector, Term
+from .separability import alternatives, sentence
 from ..effects.variables import Variables, run_starts_of
 
 AXES3 = "XYZ"
@@ -243,6 +244,9 @@ class Candidate:
     refusal: str = ""
     #: The held-out block test's p-value, adjusted for every candidate tried (max-T).
     adjusted_p: float = 1.0
+    #: Candidates the readings cannot part it from, each with its own fit of what this
+    #: one explains: [{"name", "parameters", "reason"}] (:mod:`.separability`).
+    inseparable: list = field(default_factory=list)
 
     @property
     def name(self) -> str:
@@ -263,7 +267,9 @@ class Candidate:
                 "share_of_excess": self.share_of_excess, "explanation": self.explanation,
                 "parameters": self.parameters,
                 "parameter_uncertainties": self.parameter_uncertainties,
-                "refusal": self.refusal, "adjusted_p": self.adjusted_p}
+                "refusal": self.refusal, "adjusted_p": self.adjusted_p,
+                # Only where the readings cannot part it from another candidate.
+                **({"inseparable": self.inseparable} if self.inseparable else {})}
 
 
 @dataclass
@@ -496,6 +502,7 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     selected = [_candidate(s.added, explain, True) for s in steps if s.added is not None]
     for candidate, step in zip(selected, [s for s in steps if s.added is not None]):
         candidate.cv_rmse_after = step.added.cv_rmse
+    say_inseparable(selector, [s.added for s in steps if s.added is not None], selected, terms)
     position_mask = obs.measured_mask
     in_sample = float(np.sqrt(np.mean(position_residual[position_mask] ** 2))) \
         if position_mask.any() else 0.0
@@ -544,6 +551,20 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
                      ranking, selected, localisation, unexplained, above, noise_sigma,
                      float(final_cv), localisation_after, direction_rmse, unexplained_direction,
                      dropped=dropped)
+
+
+def say_inseparable(selector: Selector, added: list, selected: list[Candidate],
+                    terms: list[Term]) -> None:
+    """Each named candidate with what the readings cannot part it from (in place: its
+    ``inseparable`` list, and a sentence ending its explanation)."""
+    if not added:
+        return
+    found = alternatives(selector, [(s.term, s.setting) for s in added],
+                         [s.coefficients for s in added], terms)
+    for candidate, alike in zip(selected, found):
+        candidate.inseparable = alike
+        if alike:
+            candidate.explanation += "; " + sentence(candidate.name, alike)
 
 
 @dataclass

@@ -1,0 +1,119 @@
+"""What the surveyed poses cannot part: a named effect and another that moves them alike.
+
+A rotary axis' line offset, the machine's error where the sphere was located at the
+set-up (:mod:`..effects.setup_location`), a tilt of a line and a squareness can move an
+instrument's target along the same circles on the poses a survey took: a single sweep
+of one rotary axis, one sphere, a tool whose tip sits on the turning axis. The selection
+then names one of them (the simplest, Occam), and the readings would be fitted as well by
+the other. This module says so: for each named effect of these families, every other
+candidate of them that reproduces its fitted contribution - with the other named effects
+and the offsets free - to within what the readings can tell,
+
+    || (I - P) X_k b_k ||^2  <=  CHI2_ONE * sigma^2           (the fits' sums of squares
+                                                              differ by less: k = 2),
+
+P the projection on the offsets, the other named effects and the alternative's columns,
+X_k b_k the named effect's fitted contribution at the readings, sigma the instrument's
+noise (k = 1). The alternative's own coefficients are given (its least-squares fit of
+that contribution), so a reader - or a proof - can read the other explanation's values.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .selection import Selector, Term
+
+#: The families whose effects move a located target along the rotary axes' circles.
+FAMILIES = ("rotary_location", "setup_location", "squareness")
+#: Two fits whose residual sums of squares differ by less than this many noise variances
+#: cannot be told apart (chi-square with one degree of freedom at 95 %: 3.84; k = 2).
+CHI2_ONE = 4.0
+
+_WHY = {
+    frozenset({"rotary_location", "setup_location"}):
+        "a target (or tool) located at the set-up with the machine's error there turns "
+        "with the rotary axes as their lines' offsets do",
+    frozenset({"rotary_location", "squareness"}):
+        "on these poses a tilt or offset of a rotary line and an axis pair out of square "
+        "move the target along the same circle",
+    frozenset({"setup_location", "squareness"}):
+        "on these poses the set-up's located error and an axis pair out of square move "
+        "the target alike",
+    frozenset({"rotary_location"}):
+        "on these poses the lines of different rotary axes move the target alike",
+}
+
+
+def _same_lines(named: Term, other: Term) -> bool:
+    """``other`` holds ``named``'s parameters (rotary_location:C in rotary_location:BC)."""
+    return named.family.name == other.family.name == "rotary_location" and \
+        (set(named.variant) <= set(other.variant) or set(other.variant) <= set(named.variant))
+
+
+def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
+                 coefficients: list[NDArray[np.float64]], terms: list[Term]
+                 ) -> list[list[dict]]:
+    """For each selected term, the candidates the readings cannot part from it.
+
+    Parameters
+    ----------
+    selector : the selection that named ``selected`` (its rows, offsets and noise)
+    selected : (term, setting) of each named effect, in order
+    coefficients : each named effect's joint-fit coefficients
+    terms : the candidates the selection considered
+
+    Returns
+    -------
+    Per selected term, a list of ``{"name", "parameters" (SI, the alternative's fit of
+    the named contribution), "reason"}``; empty for terms outside :data:`FAMILIES`.
+    """
+    blocks = [selector.design_rows(t, s) for t, s in selected]
+    limit = CHI2_ONE * selector.noise_sigma ** 2
+    out: list[list[dict]] = []
+    for k, ((term, setting), block) in enumerate(zip(selected, blocks)):
+        found: list[dict] = []
+        contribution = block @ np.asarray(coefficients[k], dtype=np.float64)
+        others = [selector.offsets] + [b for i, b in enumerate(blocks) if i != k]
+        base = np.column_stack(others)
+        if term.family.name in FAMILIES and float(contribution @ contribution) > limit:
+            for other in terms:
+                # A squareness's other reference is the same squareness (ISO 230-1).
+                if other.family.name not in FAMILIES or other.name == term.name or \
+                        _same_lines(term, other) or \
+                        other.family.name == term.family.name == "squareness":
+                    continue
+                found += _reproduces(selector, base, contribution, term, other, limit)
+        out.append(found)
+    return out
+
+
+def _reproduces(selector: Selector, base: NDArray[np.float64], contribution: NDArray[np.float64],
+                term: Term, other: Term, limit: float) -> list[dict]:
+    """[the statement] when ``other`` (with ``base``) fits ``contribution`` within ``limit``."""
+    setting = other.settings[0] if len(other.settings) == 1 else None
+    if setting is None:
+        return []
+    columns = selector.design_rows(other, setting)
+    if not np.any(columns):
+        return []
+    x = np.column_stack([base, columns])
+    solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
+    rest = contribution - x @ solution
+    if float(rest @ rest) > limit:
+        return []
+    own = solution[base.shape[1]:]
+    names = other.family.parameter_names(other.variant, setting)
+    why = _WHY.get(frozenset({term.family.name, other.family.name}),
+                   "these poses cannot part them")
+    return [{"name": other.name, "parameters": dict(zip(names, map(float, own))),
+             "reason": why}]
+
+
+def sentence(name: str, found: list[dict]) -> str:
+    """One sentence naming what the poses cannot part ``name`` from ("" for none)."""
+    if not found:
+        return ""
+    listed = "; ".join(f"{f['name']} ({f['reason']})" for f in found)
+    return (f"these poses cannot part {name} from {listed}: the readings are fitted as "
+            "well either way")

@@ -1,0 +1,135 @@
+"""What the surveyed poses cannot part is said, with the other explanation's own values.
+
+The readings come from ``studies.convention_surveys`` (rigid bodies written from the
+physics alone: each rotary body turns about its actual line, the sphere and a head's tool
+located at the set-up by a translation), on machines described here to both codes.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mt_accuracy_ros.core.compensation.error_model import ErrorModel
+from mt_accuracy_ros.core.effects import family_named
+from mt_accuracy_ros.core.effects.base import Context
+from mt_accuracy_ros.core.effects.variables import Variables
+from mt_accuracy_ros.core.kinematics.machine import machine_from_dict, with_setup_pose
+from mt_accuracy_ros.core.workbench.diagnosis import Observations, diagnose
+from studies import convention_surveys as cs
+
+SPHERE = np.array([0.06, -0.04, 0.05])      # the R-test's sphere, workpiece frame [m]
+NOISE = 0.3e-6                              # the instrument's noise, k = 1 [m]
+
+
+def _machines(work, tool, tool_vec, setup_deg, strokes_deg):
+    """(the generator's machine, the package's description) of one geometry."""
+    axes = {}
+    for ax in work + tool:
+        if ax["rotary"]:
+            low, high = strokes_deg[ax["name"]]
+            ax["stroke"] = (math.radians(low), math.radians(high))
+            axes[ax["name"]] = {"stroke": {"value": [low, high], "unit": "deg"}}
+        else:
+            axes[ax["name"]] = {"stroke": [-0.6, 0.9]}
+        axes[ax["name"]].update(offset=ax["offset"].tolist(), sign=ax["sign"])
+    setup = {n: math.radians(v) for n, v in setup_deg.items()}
+    generator = {"topology": "given", "work": work, "tool": tool,
+                 "tool_vec": np.asarray(tool_vec, float), "work_vec": np.zeros(3),
+                 "setup": setup}
+    chain = "[w " + " ".join([a["name"] for a in work][::-1] + ["b"] +
+                             [a["name"] for a in tool]) + " t]"
+    described = machine_from_dict({"name": "given", "chain": chain, "tool": list(tool_vec),
+                                   "workpiece": [0, 0, 0], "axes": axes})
+    return generator, with_setup_pose(described, setup)
+
+
+def _survey(generator, described, poses, effects, seed=0):
+    """Observations of one sphere followed with RTCP over ``poses`` (rotary commands), the
+    first at the set-up pose, where the sphere was located."""
+    poses = [dict(generator["setup"])] + list(poses)
+    rows = {"q": [cs.solve_linear(generator, p, SPHERE) for p in poses],
+            "target": np.tile(SPHERE, (len(poses), 1)), "group": [0] * len(poses),
+            "setup": {0: 0}, "tool_setup": 0}
+    errors, _ = cs.located_errors(generator, cs.errs_from_effects(effects), rows)
+    n = len(poses)
+    positions = {a: np.array([q[a] for q in rows["q"]]) for a in described.axis_order}
+    measured = errors + np.random.default_rng(seed).normal(0.0, NOISE, (n, 3))
+    return Observations(positions, measured, np.ones((n, 3), bool), np.arange(n, dtype=float),
+                        {}, {}, 2 * NOISE, work_point=SPHERE)
+
+
+def _effect(name, axis, value, kind="location_offset"):
+    return {"iso_name": name, "kind": kind, "axis": axis, "value_si": value}
+
+
+def _trunnion_bc(setup_deg):
+    work = [cs._ax("Y", 1, [0, 0, 0.1]), cs._ax("X", -1, [0, 0, 0.25]),
+            cs._ax("B", 1, [0.01, 0, -0.08]), cs._ax("C", 1, [0, 0, 0])]
+    return _machines(work, [cs._ax("Z", 1, [0, 0, 0.6])], [0, 0, -0.14], setup_deg,
+                     {"B": (-120, 120), "C": (-180, 180)})
+
+
+def test_a_line_offset_on_a_sweep_of_its_axis_is_said_inseparable_from_the_set_up():
+    """A sphere located at B = -90 deg, B swept alone: B's line offset and an error the
+    set-up located into the sphere turn with B alike - named once, the other said."""
+    generator, described = _trunnion_bc({"B": -90, "C": 45})
+    poses = [{"B": math.radians(b), "C": math.radians(45)} for b in np.arange(-90, 91, 5)]
+    poses = poses * 6
+    obs = _survey(generator, described, poses, [_effect("EX0B", "B", 15e-6)])
+    diagnosis = diagnose(ErrorModel(described), obs)
+    named = diagnosis.selected[0]
+    assert named.name == "rotary_location:B", diagnosis.text()
+    assert abs(named.parameters["EX0B"] - 15e-6) < 1e-6
+    alike = {a["name"]: a for a in named.inseparable}
+    assert "setup_location:work" in alike, named.inseparable
+    # Its own values: a vector located at the set-up that turns with the work.
+    located = alike["setup_location:work"]["parameters"]
+    assert math.hypot(located["v_x"], located["v_z"]) == pytest.approx(15e-6, rel=0.05)
+    assert "cannot part rotary_location:B from setup_location:work" in named.explanation
+    assert "turns with the rotary axes as their lines' offsets do" in named.explanation
+
+
+def test_on_a_grid_a_c_centre_is_not_said_inseparable_from_the_set_up():
+    """With B and C both turning, a C centre offset turns with C alone, a located error
+    with both: the readings part them and nothing is said."""
+    generator, described = _trunnion_bc({"B": 0, "C": 0})
+    poses = [{"B": math.radians(b), "C": math.radians(c)}
+             for b in np.arange(-90, 91, 15) for c in np.arange(-180, 180, 30)]
+    obs = _survey(generator, described, poses, [_effect("EX0C", "C", -12e-6)])
+    diagnosis = diagnose(ErrorModel(described), obs)
+    named = diagnosis.selected[0]
+    assert named.name == "rotary_location:C", diagnosis.text()
+    assert abs(named.parameters["EX0C"] + 12e-6) < 1e-6
+    assert named.inseparable == []
+
+
+def test_a_tool_side_c_with_its_tip_on_the_axis_folds_the_tilt_into_the_offset():
+    """A swivel head's C swept alone, the tool tip on C's line: a tilt of the line moves
+    the tip as an offset 0.42 m times the tilt would - the fit keeps the offset and says
+    what it stands for."""
+    work = [cs._ax("Y", -1, [0, 0, 0.1]), cs._ax("X", 1, [0, 0, 0.05])]
+    tool = [cs._ax("Z", 1, [0, 0, 0.6]), cs._ax("C", 1, [0, 0, -0.2]),
+            cs._ax("B", 1, [0, 0, -0.127])]
+    generator, described = _machines(work, tool, [0, 0, -0.093], {"C": 0, "B": 0},
+                                     {"C": (-180, 180), "B": (-110, 110)})
+    poses = [{"C": math.radians(c), "B": 0.0} for c in np.arange(-180, 180, 10)] * 8
+    obs = _survey(generator, described, poses, [_effect("EB0C", "C", -50e-6,
+                                                         "location_tilt")])
+    ctx = Context(described, Variables(obs.positions), work_point=SPHERE)
+    family = family_named("rotary_location")
+    setting = family.settings(ctx, "C")[0]
+    assert family.parameter_names("C", setting) == ["EX0C", "EY0C"]
+    lever = 0.2 + 0.127 + 0.093                       # the tilt's arm down to the tip [m]
+    folds = dict(part.split("=") for part in setting["inseparable"].split(";"))
+    assert folds["EB0C"].split("*")[0] == "EX0C"
+    assert abs(abs(float(folds["EB0C"].split("*")[1])) - lever) < 1e-9
+    assert "cannot part" in family.explanation("C", setting)
+    diagnosis = diagnose(ErrorModel(described), obs)
+    named = diagnosis.selected[0]
+    assert named.name == "rotary_location:C", diagnosis.text()
+    ratio = float(folds["EB0C"].split("*")[1])
+    # EX0C stands for EX0C + ratio x EB0C: here the tilt's share alone.
+    assert named.parameters["EX0C"] == pytest.approx(ratio * -50e-6, rel=0.03)
+    assert "EB0C" not in named.parameters
