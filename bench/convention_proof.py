@@ -29,6 +29,11 @@ Scoring, per trial (every identifiable effect of the truth):
   cannot part from a named one (``inseparable``: the other's name and its own fit of the
   same contribution) is right when that statement would be right as a named effect -
   the truth among the stated pair, with its value;
+* a table tilt's constant part - its mean over the stroke, which the catalogue's
+  zero-mean shapes leave out - turns one body against the other: named as the lines of
+  rotary axes tilted about the same direction it is right when each is within 30 % or
+  3 U of it (the sign kept for an axis on the tilted carriage's side, turned for one on
+  the other);
 * a ``setup_location`` (the machine's error where the work or tool was located, turning
   with it) is right beside a truth that has such an error there: a linear-axis error
   (tilt, squareness) on that side - on the tool side only when the head carries rotary
@@ -54,6 +59,15 @@ from pathlib import Path
 from studies.convention_surveys import generate
 
 ROTATION_AXIS = {"A": "X", "B": "Y", "C": "Z"}
+
+
+def linear_strokes(path: Path) -> dict[str, tuple[float, float]]:
+    """The linear axes' strokes [m] a trial's machine file gives (bare lists, SI)."""
+    import yaml
+
+    axes = (yaml.safe_load(path.read_text()) or {}).get("axes", {}) if path.exists() else {}
+    return {name: tuple(map(float, spec["stroke"])) for name, spec in axes.items()
+            if name in "XYZ" and isinstance(spec.get("stroke"), list)}
 
 
 def run_check(folder: Path) -> tuple[dict | None, str, float]:
@@ -134,7 +148,43 @@ def located_companion(effect: dict, named: dict, truth: dict) -> str:
     return "located at the set-up" if named["variant"] == side else ""
 
 
-def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = None) -> str:
+def mean_tilt(effect: dict, strokes: dict) -> float:
+    """A tilt's mean over its axis' stroke [rad]: what the catalogue's zero-mean shapes
+    leave out (eps = c0 + c1 q + c2 q^2, averaged over [a, b]); 0 without the stroke."""
+    if effect["axis"] not in strokes:
+        return 0.0
+    a, b = strokes[effect["axis"]]
+    c0, c1, c2 = effect["value_si"]
+    return c0 + c1 * (a + b) / 2.0 + c2 * (a * a + a * b + b * b) / 3.0
+
+
+def turned_line(effect: dict, named: dict, chain: str, strokes: dict) -> str:
+    """A tilt's constant part named as a rotary axis' line tilted about the same direction:
+    the same turn of one body against the other (its sign kept for an axis on the tilted
+    carriage's side, turned for one on the other side). "" when it is not."""
+    if named["effect"] != "rotary_location" or not chain or not strokes:
+        return ""
+    mean = mean_tilt(effect, strokes)
+    letters = chain.strip("[]").split()
+    bed = letters.index("b")
+    work_side = set(letters[1:bed])
+    component = effect["iso_name"][1]
+    judged = []
+    for axis in named["variant"]:
+        name = f"E{component}0{axis}"
+        value = named["parameters"].get(name)
+        if value is None or component == axis or not mean:
+            continue
+        # Every line the named effect tilts about that direction turns with it.
+        expected = mean if (axis in work_side) == (effect["axis"] in work_side) else -mean
+        spread = 3.0 * named.get("parameter_uncertainties", {}).get(name, 0.0)
+        judged.append(value * expected > 0 and
+                      abs(value - expected) <= max(0.3 * abs(expected), spread))
+    return "constant part as a line's tilt" if judged and all(judged) else ""
+
+
+def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = None,
+            strokes: dict | None = None) -> str:
     """Why ``named`` accounts for the truth ``effect`` ("" when it does not)."""
     family, variant = named["effect"], named["variant"]
     iso, kind = effect["iso_name"], effect["kind"]
@@ -169,6 +219,9 @@ def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = No
         if constant and family == "squareness" and axis in plane_of(variant) and \
                 plane_of(variant) == plane_of(iso):
             return "constant part"
+        turned = turned_line(effect, named, chain, strokes)
+        if turned:
+            return turned
         # A pivot away from the carriage's origin adds p x eps(q): a straightness of the
         # axis, or - for the tilt's linear part - a slope (a squareness along the axis).
         pivoted = effect.get("pivot_m") and any(effect["pivot_m"])
@@ -190,15 +243,17 @@ def score(truth: dict, result: dict | None) -> dict:
               if e["kind"] in ("location_offset", "location_tilt")}
     used, problems = set(), []
 
+    strokes = truth.get("strokes_m", {})
+
     def accounts(effect, entry):
-        why = matches(effect, entry, truth.get("chain", ""), truths)
+        why = matches(effect, entry, truth.get("chain", ""), truths, strokes)
         if why and why != "wrong value":
             return why
         # What the output says the readings cannot part from it, scored as if named.
         stated = [matches(effect, {"effect": alt["name"].split(":")[0],
                                    "variant": alt["name"].partition(":")[2],
                                    "parameters": alt["parameters"]},
-                          truth.get("chain", ""), truths)
+                          truth.get("chain", ""), truths, strokes)
                   for alt in entry.get("inseparable", [])]
         said = next((f"stated inseparable ({w})" for w in stated if w and w != "wrong value"),
                     why)
@@ -246,6 +301,7 @@ def main(argv: list[str] | None = None) -> int:
         for i, entry in enumerate(index["trials"]):
             folder = root / entry["folder"]
             truth = json.loads((folder / "truth.json").read_text())
+            truth["strokes_m"] = linear_strokes(folder / "machine.yaml")
             result, printed, seconds = run_check(folder)
             verdict = score(truth, result)
             truth_names = [e["iso_name"] + ("" if e["identifiable"] else " (unidentifiable)")

@@ -9,26 +9,31 @@ the other. This module says so: for each named effect of these families, every o
 candidate of them that reproduces its fitted contribution - with the other named effects
 and the offsets free - to within what the readings can tell,
 
-    || (I - P) X_k b_k ||^2  <=  CHI2_ONE * sigma^2           (the fits' sums of squares
-                                                              differ by less: k = 2),
+    || (I - P) X_k b_k ||^2  <=  chi2_0.95(p_k) sigma^2    (the fits' sums of squares
+                                                          differ by less)
 
 P the projection on the offsets, the other named effects and the alternative's columns,
 X_k b_k the named effect's fitted contribution at the readings, sigma the instrument's
-noise (k = 1). The alternative's own coefficients are given (its least-squares fit of
-that contribution), so a reader - or a proof - can read the other explanation's values.
+noise (k = 1), and the bound the 95 % quantile of chi-square with as many degrees of
+freedom as the named effect has parameters (its fit took that much of the noise, which no
+alternative need reproduce). Only a contribution the other named effects do not already
+reproduce is judged (what is left of it beyond that bound). The alternative's own
+coefficients are given (its least-squares fit of that contribution), so a reader - or a
+proof - can read the other explanation's values.
 """
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .distributions import chi2_sf
 from .selection import Selector, Term
 
 #: The families whose effects move a located target along the rotary axes' circles.
 FAMILIES = ("rotary_location", "setup_location", "squareness")
-#: Two fits whose residual sums of squares differ by less than this many noise variances
-#: cannot be told apart (chi-square with one degree of freedom at 95 %: 3.84; k = 2).
-CHI2_ONE = 4.0
+#: The probability below which a difference of the fits' sums of squares would be
+#: chance: above the bound it is not (chi-square, 95 %).
+LEVEL = 0.95
 
 _WHY = {
     frozenset({"rotary_location", "setup_location"}):
@@ -43,6 +48,16 @@ _WHY = {
     frozenset({"rotary_location"}):
         "on these poses the lines of different rotary axes move the target alike",
 }
+
+
+def chi2_quantile(level: float, dof: int) -> float:
+    """x with P(chi-square(dof) <= x) = ``level``, by bisection on the survival function
+    (to 1e-9 relative; scipy.stats is not imported for one number)."""
+    low, high = 0.0, float(dof) + 10.0 * np.sqrt(2.0 * dof) + 10.0
+    while high - low > 1e-9 * high:
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if chi2_sf(middle, dof) > 1.0 - level else (low, middle)
+    return 0.5 * (low + high)
 
 
 def _same_lines(named: Term, other: Term) -> bool:
@@ -69,14 +84,16 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
     the named contribution), "reason"}``; empty for terms outside :data:`FAMILIES`.
     """
     blocks = [selector.design_rows(t, s) for t, s in selected]
-    limit = CHI2_ONE * selector.noise_sigma ** 2
     out: list[list[dict]] = []
     for k, ((term, setting), block) in enumerate(zip(selected, blocks)):
         found: list[dict] = []
+        limit = chi2_quantile(LEVEL, max(1, block.shape[1])) * selector.noise_sigma ** 2
         contribution = block @ np.asarray(coefficients[k], dtype=np.float64)
         others = [selector.offsets] + [b for i, b in enumerate(blocks) if i != k]
         base = np.column_stack(others)
-        if term.family.name in FAMILIES and float(contribution @ contribution) > limit:
+        own, *_ = np.linalg.lstsq(base, contribution, rcond=None)
+        unique = contribution - base @ own
+        if term.family.name in FAMILIES and float(unique @ unique) > limit:
             for other in terms:
                 # A squareness's other reference is the same squareness (ISO 230-1).
                 if other.family.name not in FAMILIES or other.name == term.name or \

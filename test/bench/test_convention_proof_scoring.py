@@ -1,0 +1,73 @@
+"""The convention proof scores what the output says it cannot part as said.
+
+A stated inseparable pair is right only when the truth is among it, with its value; a
+fold is right when the parameter it folds into carries the sum it stands for; a table
+tilt's constant part named as a rotary line's tilt only within 30 % of it.
+"""
+from __future__ import annotations
+
+from bench.convention_proof import score
+
+CHAIN = "[w X Y b Z C B t]"
+
+
+def _truth(*effects, head=True):
+    return {"chain": CHAIN, "conventions": {"tool_located": head}, "effects": list(effects),
+            "strokes_m": {"X": (-0.3, 0.3), "Y": (-0.11, 0.31), "Z": (0.37, 0.91)}}
+
+
+def _location(name, value, axis):
+    return {"iso_name": name, "kind": "location_offset" if name[1] in "XYZ" else
+            "location_tilt", "axis": axis, "side": "tool", "value_si": value,
+            "identifiable": True}
+
+
+def _named(name, parameters, setting=None, inseparable=None):
+    family, _, variant = name.partition(":")
+    out = {"name": name, "effect": family, "variant": variant, "parameters": parameters,
+           "parameter_uncertainties": {k: 0.0 for k in parameters}, "setting": setting or {}}
+    if inseparable is not None:
+        out["inseparable"] = inseparable
+    return out
+
+
+def test_a_stated_pair_is_right_only_with_the_truth_among_it_and_its_value():
+    truth = _truth(_location("EZ0B", 33e-6, "B"))
+    said = [{"name": "rotary_location:CB", "parameters": {"EZ0B": 33.3e-6, "EX0C": 0.0},
+             "reason": "..."}]
+    named = _named("setup_location:tool", {"v_x": 0.0, "v_y": 0.0, "v_z": 33.3e-6},
+                   inseparable=said)
+    assert score(truth, {"named": [named]})["right"]
+    # The same statement with another value: the pair holds the truth, its value does not.
+    said[0]["parameters"]["EZ0B"] = 10e-6
+    assert not score(truth, {"named": [named]})["right"]
+    # Said inseparable from something that is not the truth: not named.
+    other = _named("setup_location:tool", {"v_x": 0.0, "v_y": 0.0, "v_z": 33.3e-6},
+                   inseparable=[{"name": "squareness:EB0Z", "parameters": {"angle_rad": 1e-5},
+                                 "reason": "..."}])
+    verdict = score(truth, {"named": [other]})
+    assert not verdict["right"] and "EZ0B not named" in verdict["why"]
+
+
+def test_a_fold_is_right_when_its_parameter_carries_the_sum_it_stands_for():
+    truth = _truth(_location("EB0C", -51.3e-6, "C"), _location("EY0C", 24.0e-6, "C"))
+    setting = {"inseparable": "EA0C=EY0C*4.17e-01;EB0C=EX0C*-4.17e-01"}
+    # EX0C stands for EX0C - 0.417 m/rad x EB0C = +21.4 um; EY0C for EY0C + 0.417 EA0C.
+    right = _named("rotary_location:C", {"EX0C": 21.4e-6, "EY0C": 24.0e-6}, setting)
+    assert score(truth, {"named": [right]})["right"]
+    wrong = _named("rotary_location:C", {"EX0C": 5e-6, "EY0C": 24.0e-6}, setting)
+    verdict = score(truth, {"named": [wrong]})
+    assert not verdict["right"] and "EB0C wrong value" in verdict["why"]
+
+
+def test_a_tilts_constant_part_as_a_rotary_lines_tilt_within_thirty_percent():
+    # The Y table's pitch about y, 1.52e-4 rad/m x Y over [-0.11, 0.31] m: 15.2 urad on
+    # average, which turns the work against the head's C line (the other side: -15.2).
+    tilt = {"iso_name": "EBY", "kind": "table_tilt", "axis": "Y", "side": "work",
+            "value_si": [0.0, 1.52e-4, 0.0], "constant_part_si": 0.0,
+            "pivot_m": [0.0, 0.0, 0.0], "identifiable": True}
+    angular = _named("angular:EBY", {"P1": 32e-6})
+    for value, right in ((-15.9e-6, True), (-9e-6, False), (15.9e-6, False)):
+        line = _named("rotary_location:C", {"EX0C": -7e-6, "EY0C": 0.0, "EA0C": 0.0,
+                                            "EB0C": value})
+        assert score(_truth(tilt), {"named": [angular, line]})["right"] is right, value
