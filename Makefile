@@ -1,6 +1,6 @@
 # Two commands do all the set-up on a fresh machine:
 #   make demo   - the main job (virtual machine tool -> real nodes -> summary)
-#   make test   - the whole test suite
+#   make test   - ruff, then the whole test suite
 # Both create or refresh .venv, install the pinned wheels, build msg_defs/ into
 # the mt_accuracy_msgs interface package and install this package. A second run
 # with nothing changed only checks stamps.
@@ -48,7 +48,9 @@ $(PKG_STAMP): $(MSGS_STAMP) setup.py setup.cfg package.xml $(PKG_SOURCES)
 	rm -rf build/lib build/bdist* mt_accuracy_ros.egg-info
 	touch $@
 
+# The linter first (ruff.toml: pyflakes and pycodestyle, lines up to 100), then the suite.
 test: setup
+	$(VENV)/bin/ruff check .
 	$(PY) -m pytest test $(PYTEST_ARGS)
 
 # The suite must pass on any fresh machine, idle or loaded (issue 17).

@@ -274,9 +274,14 @@ def score(truth: dict, result: dict | None) -> dict:
             problems.append(f"{effect['iso_name']} " + (f"wrong value in {wrong[0]}" if wrong
                                                         else "not named"))
         used.update(good)
-    # A located set-up error beside a truth that put an error there is no extra.
+    # A located set-up error beside a truth that put an error there is no extra, nor is
+    # an effect the output says it cannot part from one.
+    def as_named(alt):
+        return {"effect": alt["name"].split(":")[0], "variant": alt["name"].partition(":")[2]}
+
     used.update(i for i, n in enumerate(named) if i not in used and
-                any(located_companion(e, n, truth) for e in wanted))
+                any(located_companion(e, entry, truth) for e in wanted
+                    for entry in [n] + [as_named(a) for a in n.get("inseparable", [])]))
     extras = [names[i] for i in range(len(named)) if i not in used]
     if extras:
         problems.append("extra: " + ", ".join(extras))

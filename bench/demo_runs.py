@@ -99,7 +99,8 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"run {k + 1}/{args.runs}: exit {result['code']}, end state "
                       + "/".join(f"{v:.2f}" for v in result["end_um"])
                       + " um (mean " + "/".join(f"{v:+.2f}" for v in result["end_mean_um"])
-                      + f"), refits: {result['refits']}, stale {result['stale']}{result['stale_window']}, lost {result['lost']}, "
+                      + f"), refits: {result['refits']}, "
+                      + f"stale {result['stale']}{result['stale_window']}, lost {result['lost']}, "
                       + (f"checks late {result['checks']['late']} of {result['checks']['checks']} "
                          f"(max {result['checks']['latency_max_s']:.1f} s), "
                          if result["checks"] else "")
@@ -123,7 +124,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"| {k} | {r['code']} | {r['added']} | "
               + " / ".join(f"{v:.2f}" for v in r["end_um"]) + " | "
               + " / ".join(f"{v:+.2f}" for v in r["end_mean_um"])
-              + f" | {r['refits']} | {'yes' if r['within'] else 'no'} | {r['rolled_back']} | {r['applied']} / "
+              + f" | {r['refits']} | {'yes' if r['within'] else 'no'} | {r['rolled_back']}"
+              + f" | {r['applied']} / "
               f"{r['stale']}{r['stale_window']} / {r['lost']} | {r['p99_ms']:.0f} | "
               + (f"{r['checks']['late']} / {r['checks']['checks']}: "
                  + ", ".join(f"{v:.1f}" for v in r["checks"]["latency_s"])

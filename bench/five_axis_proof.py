@@ -81,7 +81,8 @@ def main(argv: list[str] | None = None) -> int:
             row = {"seed": seed, "nothing_wrong": seed < 0, "direction": with_direction,
                    **trial(errors, 1000 + abs(seed), with_direction)}
             rows.append(row)
-            print(f"[{number}/{len(plan)}] seed {seed:3d} {'tip+direction' if with_direction else 'tip only     '}"
+            measured = 'tip+direction' if with_direction else 'tip only     '
+            print(f"[{number}/{len(plan)}] seed {seed:3d} {measured}"
                   f" named {', '.join(row['named']) or '-'}; held out: tip "
                   f"{row['position_after_um']} um, direction {row['direction_after_urad']} urad",
                   file=sys.stderr, flush=True)

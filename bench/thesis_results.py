@@ -83,10 +83,12 @@ def main() -> int:
     figure_a(a), figure_b(b), figure_c(c), figure_d(d)
     out = {"test_seeds": {
         "a_inside_of_11": a.count_inside, "b_removed": b.removed_fraction,
-        "c_removed": c.removed_fraction, "c_true_change_um": float(np.abs(c.tcp_change_true_m).max() * 1e6),
+        "c_removed": c.removed_fraction,
+        "c_true_change_um": float(np.abs(c.tcp_change_true_m).max() * 1e6),
         "c_residual_um": float(np.abs(c.residual_m).max() * 1e6),
         "d_k": d.k, "d_cv_rmse_urad": d.cv_rmse_rad * 1e6,
-        "d_new_rmse_urad": d.new_data_rmse_rad * 1e6, "d_relative_difference": d.relative_difference}}
+        "d_new_rmse_urad": d.new_data_rmse_rad * 1e6,
+        "d_relative_difference": d.relative_difference}}
     sweep = {"a_inside_of_11": [], "c_removed": [], "d_relative_difference": []}
     for seed in tqdm(range(100, 100 + args.seeds), desc="seed sweep"):
         sweep["a_inside_of_11"].append(thesis.yaw_vs_laser(seed).count_inside)
@@ -94,7 +96,8 @@ def main() -> int:
         sweep["d_relative_difference"].append(thesis.knn_cv_vs_new_data(seed).relative_difference)
     out["sweep"] = {k: {"min": float(np.min(v)), "median": float(np.median(v)),
                         "max": float(np.max(v))} for k, v in sweep.items()}
-    out["sweep"]["d_share_within_1.4%"] = float(np.mean(np.array(sweep["d_relative_difference"]) <= 0.014))
+    out["sweep"]["d_share_within_1.4%"] = float(
+        np.mean(np.array(sweep["d_relative_difference"]) <= 0.014))
     out["sweep"]["a_share_ge_10"] = float(np.mean(np.array(sweep["a_inside_of_11"]) >= 10))
     out["sweep"]["c_share_ge_86%"] = float(np.mean(np.array(sweep["c_removed"]) >= 0.86))
     print(json.dumps(out, indent=2))

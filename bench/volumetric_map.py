@@ -56,7 +56,8 @@ def per_point(model: KinematicModel, positions: dict, n: int) -> np.ndarray:
                         else translation(*(np.eye(3)[spec.direction] * q)))
                 loc = np.array([spec.location_errors.get(c, 0.0) for c in "XYZABC"])
                 err = np.array([float(spec.motion_errors[c](q)) for c in "XYZABC"])
-                act = act @ translation(*parent) @ error_htm_exact(loc) @ move @ error_htm_exact(err)
+                act = (act @ translation(*parent) @ error_htm_exact(loc) @ move
+                       @ error_htm_exact(err))
                 nom = nom @ translation(*parent) @ move
                 parent = spec.offset
             point = np.append(parent + end, 1.0)

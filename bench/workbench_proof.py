@@ -27,7 +27,8 @@ def main() -> int:
         for scale in (0.3, 1.0, 3.0):
             runs = [results[(effect, s, scale)] for s in seeds]
             rows[f"{effect} x{scale:g}"] = {
-                "effect_rmse_um_median": float(np.median([r.truth_rmse_before for r in runs]) * 1e6),
+                "effect_rmse_um_median":
+                    float(np.median([r.truth_rmse_before for r in runs]) * 1e6),
                 "named_first": sum(r.ranked_first for r in runs), "of": len(runs),
                 "wrong_effect_named": sum(r.false_alarm for r in runs),
                 "removed_median": float(np.median([r.removed if r.found else 0.0 for r in runs])),
@@ -53,7 +54,8 @@ def main() -> int:
         for scale in (0.3, 1.0, 3.0):
             runs = [yaw_trial((effect,), s, scale) for s in tqdm(seeds, desc=f"{effect} x{scale}")]
             yaw_rows[f"{effect} x{scale:g}"] = {
-                "effect_rmse_urad_median": float(np.median([r.truth_rmse_before for r in runs]) * 1e6),
+                "effect_rmse_urad_median":
+                    float(np.median([r.truth_rmse_before for r in runs]) * 1e6),
                 "named_first": sum(r.ranked_first for r in runs), "of": len(runs),
                 "wrong_effect_named": sum(r.false_alarm for r in runs),
                 "removed_median": float(np.median([r.removed for r in runs])),

@@ -308,7 +308,7 @@ def _tilt(layout: Layout, axes: tuple[str, ...], rng: np.random.Generator, magni
           side: str) -> tuple[Errors, set[str]]:
     """A smooth tilt of one of ``axes`` about a random direction whose effect at the tool
     changes with another axis' position, about ``magnitude_m`` through the longest arm."""
-    arm = 0.5 * max(h - l for l, h in layout.travel.values()) + abs(layout.tool_z_m)
+    arm = 0.5 * max(hi - lo for lo, hi in layout.travel.values()) + abs(layout.tool_z_m)
     pairs = [(a, r) for a in axes for r in "XYZ"]
     for k in (rng.permutation(len(pairs)) if pairs else []):
         axis, turn = pairs[k]

@@ -479,7 +479,8 @@ def judge_identifiable(machine, rows, effect, with_dir):
     for q, g in zip(rows["q"], rows["group"]):
         poses.setdefault(g, set()).add(tuple(round(v, 9) for v in q.values()))
     if axis in ROTARY and len({round(q[axis], 9) for q in rows["q"]}) == 1:
-        why = f"{axis} never leaves its setup angle: the error is a fixed displacement absorbed by locating"
+        why = (f"{axis} never leaves its setup angle: the error is a fixed displacement "
+               "absorbed by locating")
     elif effect["kind"] == "zero":
         why = ("a zero-angle error turns the work (or tool) rigidly about the axis line; the "
                "translation located at the setup pose absorbs it at each target")
@@ -567,7 +568,8 @@ def build_machine_yaml(trial, rng):
     for ax in m["work"] + m["tool"]:
         lo, hi = ax["stroke"]
         if ax["rotary"] and u["stroke"] == "deg":
-            stroke = {"value": [_num(math.degrees(lo), 9), _num(math.degrees(hi), 9)], "unit": "deg"}
+            stroke = {"value": [_num(math.degrees(lo), 9), _num(math.degrees(hi), 9)],
+                      "unit": "deg"}
         else:
             stroke = [_num(lo), _num(hi)]
         entry = {"stroke": stroke, "sign": ax["sign"], "offset": ax["offset"].tolist()}

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mt_accuracy_ros.core.compensation.error_model import ErrorModel, model_from_dict
+from mt_accuracy_ros.core.compensation.error_model import ErrorModel
 from mt_accuracy_ros.core.kinematics.machine import machine_from_dict
 from mt_accuracy_ros.core.workbench.diagnosis import Observations, add_effect, diagnose
 from mt_accuracy_ros.sim.instruments import calibrate_machine
@@ -163,7 +163,8 @@ def yaw_survey(hidden: dict[str, dict], seed: int, stops: int = 12,
                noise_seed: int | None = None):
     """Y stops every 40 mm (Fig. 3.15), back and forth, for ~4 min; readings at the stops
     and on the fly; the laser's yaw (XM60 accuracy) as the reference."""
-    from mt_accuracy_ros.core.scales.dual_scale import scale_expansion, thermocouple_positions, yaw_from_scales
+    from mt_accuracy_ros.core.scales.dual_scale import (scale_expansion, thermocouple_positions,
+                                                        yaw_from_scales)
     from mt_accuracy_ros.core.workbench.diagnosis import YawObservations
     from mt_accuracy_ros.sim.instruments import xm60_angular_accuracy_rad
 
@@ -217,7 +218,8 @@ def yaw_trial(hidden_names: tuple[str, ...], seed: int, scale: float = 1.0) -> T
     # run, other noise); its linear difference is the calibrated slope.
     installation = yaw_survey({}, seed, noise_seed=seed + 10_000)
     difference = installation.scale_yaw - installation.reference_yaw
-    basis = np.column_stack([np.ones_like(difference), installation.travel_m / installation.distance_m])
+    basis = np.column_stack([np.ones_like(difference),
+                             installation.travel_m / installation.distance_m])
     slope = float(np.linalg.lstsq(basis, difference, rcond=None)[0][1])
     included: dict[str, float] = {"installation_slope": slope}
     steps = [error(included)]

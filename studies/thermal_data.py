@@ -107,7 +107,8 @@ def study(record: ThermalRecord, *, train_fraction: float = 0.5,
     end = min(end, split)
     rise = temps[start:end] - temps[start]
     sensor = int(np.argmax(np.abs(rise[-1])))
-    fit = fit_time_constants(record.time_s[start:end] - record.time_s[start], temps[start:end, sensor])
+    fit = fit_time_constants(record.time_s[start:end] - record.time_s[start],
+                             temps[start:end, sensor])
     lags = lag_features(record.time_s, speed, fit.time_constants_s)
     results: dict[str, dict[str, float]] = {m: {} for m in
                                             ("mean", "all16", "all16_ridge", "selected", "lag",

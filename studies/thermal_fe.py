@@ -20,8 +20,8 @@ from itertools import combinations
 import numpy as np
 
 from mt_accuracy_ros.core.thermal.sensor_placement import gauss_points
-from mt_accuracy_ros.core.thermal.fem import (ALUMINIUM, ThermalFEModel, ThermalModes, place_sensors, rod_model,
-                          thermal_modes)
+from mt_accuracy_ros.core.thermal.fem import (ALUMINIUM, ThermalFEModel, ThermalModes,
+                                              place_sensors, rod_model, thermal_modes)
 from mt_accuracy_ros.core.thermal.regression import fit_linear
 
 #: Nine candidate sensor positions along the element (Zhu Fig. 3.1: positions 1-9), at the

@@ -114,7 +114,8 @@ def warmup_compensation(seed: int | None = None, hours_step: float = 2.0) -> War
         span = slice(max(0, centre - window), min(q.size, centre + window))
         t_index = min(int(round(hour * 3600 * scenario.temperature_rate_hz)),
                       result.temperature_time_s.size - 1)
-        rise = {i: np.array([result.temperature_rise(n)[t_index] for n in names[i]]) for i in (1, 2)}
+        rise = {i: np.array([result.temperature_rise(n)[t_index] for n in names[i]])
+                for i in (1, 2)}
         rises[h] = [rise[1].mean(), rise[2].mean()]
         for p, stop in enumerate(stops):
             near = np.flatnonzero(np.abs(q[span] - stop) < 1e-3) + span.start

@@ -47,7 +47,8 @@ def test_csv_path_on_real_fl_thermal_improves_held_out_error(data_dir, tmp_path,
     assert weights and 0.99 * sum(weights.values()) <= 1.0 and all(
         name.endswith("_C") for name in weights)
     out = capsys.readouterr().out
-    assert "final held-out RMSE 4.518 um" in out and "the candidate all_sensors_ridge over 16 sensors leans on:" in out
+    assert "final held-out RMSE 4.518 um" in out
+    assert "the candidate all_sensors_ridge over 16 sensors leans on:" in out
     assert "warning: thermal_gradient:t2_C-t3_C (asked for) raised the error on the last 926 " \
         "training rows from 6.951 to 9.33 um" in out
     html = (tmp_path / "r.html").read_text()
@@ -86,7 +87,7 @@ def test_bag_path_finds_the_hidden_effect(tmp_path, hidden):
     from mt_accuracy_ros.commands.check import check_bag
     from mt_accuracy_ros.io.bag_writer import BagWriter
     from mt_accuracy_ros.io.fields import nanoseconds_to_stamp, pack_float64
-    from studies.hidden_effects import HIDDEN, calibrated_model, survey
+    from studies.hidden_effects import HIDDEN, survey
 
     result, obs, truth = survey({hidden: HIDDEN[hidden](1)}, 7)
     base, _, _ = survey({}, 7, points=2)
@@ -112,7 +113,8 @@ def test_bag_path_finds_the_hidden_effect(tmp_path, hidden):
             message.command_positions = [float(obs.positions[a][i]) for a in "XYZ"]
             message.command_velocities = [float(obs.velocities[a][i]) for a in "XYZ"]
             message.command_directions = [int(obs.directions[a][i]) for a in "XYZ"]
-            message.error.x, message.error.y, message.error.z = (float(v) for v in obs.measured_m[i])
+            message.error.x, message.error.y, message.error.z = (float(v)
+                                                                 for v in obs.measured_m[i])
             message.measured = [True, True, True]
             message.uncertainty = 1e-6
             bag.write("/reference/tcp_error", serialize_message(message), stamp)

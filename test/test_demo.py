@@ -8,12 +8,12 @@ import numpy as np
 
 import pytest
 
+from mt_accuracy_ros.commands.demo import delivery_losses
+
 #: Corrections stamped in the run's last compensation delay and batch (20 + 10 ms at
 #: 100 Hz): their time to apply (stamp + delay, at the controller's cycle) falls at or after
 #: the machine's last sample, so they may never apply (8998-9000 of 9000 in every run).
 LATE_AT_THE_END = 3
-
-from mt_accuracy_ros.commands.demo import delivery_losses
 
 
 def test_delivery_losses_are_plain_sentences():

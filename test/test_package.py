@@ -16,7 +16,8 @@ from conftest import REPO_ROOT
 def _setup_entry_points() -> dict[str, str]:
     tree = ast.parse((REPO_ROOT / "setup.py").read_text())
     for node in ast.walk(tree):
-        if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "NODE_ENTRY_POINTS":
+        if (isinstance(node, ast.Assign)
+                and getattr(node.targets[0], "id", "") == "NODE_ENTRY_POINTS"):
             return ast.literal_eval(node.value)
     raise AssertionError("setup.py has no NODE_ENTRY_POINTS table")
 
@@ -79,7 +80,8 @@ def test_core_imports_without_ros():
             "for m in pkgutil.walk_packages(c.__path__, 'mt_accuracy_ros.core.'):\n"
             "    importlib.import_module(m.name)\n"
             "import mt_accuracy_ros.sim\n"
-            "bad = [m for m in sys.modules if m.startswith(('rclpy', 'rosidl', 'mt_accuracy_msgs'))]\n"
+            "bad = [m for m in sys.modules\n"
+            "       if m.startswith(('rclpy', 'rosidl', 'mt_accuracy_msgs'))]\n"
             "assert not bad, bad\n")
     subprocess.run([sys.executable, "-c", code], check=True, cwd=REPO_ROOT)
 
@@ -87,7 +89,8 @@ def test_core_imports_without_ros():
 def test_interface_package_imports_in_a_clean_environment():
     # No AMENT_PREFIX_PATH, no LD_LIBRARY_PATH: the venv alone must suffice.
     env = {"PATH": "/usr/bin:/bin", "HOME": "/tmp"}
-    code = "from mt_accuracy_msgs.msg import ScaleBatch, ModelCheck; print(ScaleBatch().sample_period)"
+    code = ("from mt_accuracy_msgs.msg import ScaleBatch, ModelCheck; "
+            "print(ScaleBatch().sample_period)")
     result = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                             cwd="/")
     assert result.returncode == 0, result.stderr

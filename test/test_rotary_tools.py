@@ -51,7 +51,7 @@ def test_ballbar_file_errors_are_one_line(tmp_path, capsys):
                                                                   str(tmp_path / "nan.csv")])
     assert "cannot reach" in _one_line_error(capsys, ["ballbar", str(tmp_path / "ok.csv"),
                                                       "--radius-mm", "95"])
-    (tmp_path / "one.csv").write_text("\n".join(l for l in lines if not l.startswith("217"))
+    (tmp_path / "one.csv").write_text("\n".join(row for row in lines if not row.startswith("217"))
                                       + "\n")
     assert "needs a short and a long bar" in _one_line_error(
         capsys, ["ballbar", str(tmp_path / "one.csv")])

@@ -128,7 +128,8 @@ def test_the_tilts_of_one_stack_are_judged_with_one_tool():
     from mt_accuracy_ros.commands.check import one_tool_for_the_stack
 
     agree = one_tool_for_the_stack([("EAX", 0.101, 0.002), ("EBY", 0.098, 0.003)])
-    assert len(agree) == 1 and "agree on one tool" in agree[0] and "at 100.1 mm" in agree[0]  # weighted by 1/sigma^2
+    # weighted by 1/sigma^2
+    assert len(agree) == 1 and "agree on one tool" in agree[0] and "at 100.1 mm" in agree[0]
     differ = one_tool_for_the_stack([("EAX", 0.101, 0.002), ("EBY", -0.396, 0.003)])
     assert len(differ) == 1 and differ[0].startswith("warning: the tilts of one stack")
     assert one_tool_for_the_stack([("EAX", 0.1, 0.002)]) == []

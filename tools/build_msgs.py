@@ -67,7 +67,8 @@ def main() -> int:
 
     for tool in ("cmake", "cc"):
         if shutil.which(tool) is None:
-            raise SystemExit(f"build_msgs: '{tool}' not found on PATH; it is needed to build msg_defs/")
+            raise SystemExit(f"build_msgs: '{tool}' not found on PATH; "
+                             "it is needed to build msg_defs/")
 
     started = time.monotonic()
     if BUILD.exists():
@@ -92,7 +93,8 @@ def main() -> int:
     if not importable():
         raise SystemExit("build_msgs: installed, but 'import mt_accuracy_msgs.msg' still fails")
     STAMP.write_text(wanted)
-    print(f"mt_accuracy_msgs built and installed into {PREFIX} in {time.monotonic() - started:.1f} s")
+    print(f"mt_accuracy_msgs built and installed into {PREFIX} "
+          f"in {time.monotonic() - started:.1f} s")
     return 0
 
 

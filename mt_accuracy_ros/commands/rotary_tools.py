@@ -264,8 +264,8 @@ def export_command(args: argparse.Namespace) -> int:
     out = Path(args.out)
     for name, text in texts.items():
         atomic_write_text(out / name, text)
-    print(f"wrote {', '.join(texts)} to {out} (spacing {spacing * 1e3:g} mm"
-          f"{'' if asked is not None else ', chosen for a band of ' + format(args.band_um, 'g') + ' um'})")
+    chosen = "" if asked is not None else f", chosen for a band of {args.band_um:g} um"
+    print(f"wrote {', '.join(texts)} to {out} (spacing {spacing * 1e3:g} mm{chosen})")
     if check is not None:
         print(f"  round trip: tables read back and applied differ from the model by at most "
               f"{check.tcp_max_error_m * 1e6:.3f} um at the TCP (RMS "

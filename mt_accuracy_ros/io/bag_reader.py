@@ -281,8 +281,9 @@ def bag_info(path: str | Path) -> dict:
                     entry["count"] += stats.channel_message_counts.get(channel_id, 0)
                 total += stats.message_count
                 if stats.message_count:
-                    first = stats.message_start_time if first is None else min(first, stats.message_start_time)
-                    last = stats.message_end_time if last is None else max(last, stats.message_end_time)
+                    start, end = stats.message_start_time, stats.message_end_time
+                    first = start if first is None else min(first, start)
+                    last = end if last is None else max(last, end)
         except DAMAGED_FILE as exc:
             raise BagError(f"{f}: damaged MCAP file ({exc}); `mt-accuracy recover {f} "
                            "NEW_BAG` saves the complete chunks before the damage") from exc
@@ -380,7 +381,8 @@ def topics(path: str | Path) -> dict[str, TopicInfo]:
         if summary is not None:
             for channel in summary.channels.values():
                 schema = summary.schemas.get(channel.schema_id)
-                found.setdefault(channel.topic, _channel_info(channel, schema.name if schema else ""))
+                found.setdefault(channel.topic,
+                                 _channel_info(channel, schema.name if schema else ""))
             continue
         schemas: dict[int, str] = {}
         channels = 0

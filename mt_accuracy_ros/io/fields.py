@@ -6,6 +6,8 @@ of them imports another's layer. Needs the ROS message runtime only when a
 """
 from __future__ import annotations
 
+import array
+
 
 def nanoseconds_to_stamp(nanoseconds: int):
     """``builtin_interfaces/Time`` for an integer number of nanoseconds."""
@@ -25,8 +27,6 @@ def pack_float64(values) -> "array.array":
     Assigning an ``array.array('d')`` skips rosidl's per-element type checks,
     which dominate at 20 kHz x 6 channels.
     """
-    import array
-
     import numpy as np
 
     packed = array.array("d")

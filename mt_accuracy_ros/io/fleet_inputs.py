@@ -150,7 +150,8 @@ def _from_manifest(path: Path) -> list[Dataset]:
         unknown = set(entry) - MACHINE_KEYS
         if unknown:
             raise InputDataError(f"fleet manifest {path}: machine {name!r}: unknown key "
-                                 f"{sorted(unknown)[0]!r} (known: {', '.join(sorted(MACHINE_KEYS))})")
+                                 f"{sorted(unknown)[0]!r} "
+                                 f"(known: {', '.join(sorted(MACHINE_KEYS))})")
         patterns = entry.get("data")
         patterns = [patterns] if isinstance(patterns, str) else patterns
         if not patterns or not all(isinstance(p, str) for p in patterns):

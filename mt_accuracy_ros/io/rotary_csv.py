@@ -119,8 +119,9 @@ def read_ballbar_csv(path, radius_m: float, socket_height_m: float = 0.0
                 missing = [a for a in angle_sets[first] if round(a, 6) not in have]
                 raise InputDataError(
                     f"{path}: the {bar:g} mm bar's repetition {rep} indexes other positions than "
-                    f"repetition {first}" + (f" (no reading at {', '.join(f'{a:g}' for a in missing[:5])}"
-                                             " deg)" if missing else ""))
+                    f"repetition {first}"
+                    + (f" (no reading at {', '.join(f'{a:g}' for a in missing[:5])}"
+                       " deg)" if missing else ""))
         readings = np.array([[c for _, c in repetitions[rep]] for rep in sorted(repetitions)])
         out.append(BallBarRun(BallBarSetup(bar / 1e3, radius_m, socket_height_m),
                               np.radians(angle_sets[first]), readings * 1e-6,

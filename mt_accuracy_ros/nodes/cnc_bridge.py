@@ -28,8 +28,8 @@ from mt_accuracy_msgs.msg import ScaleBatch, TemperatureArray, VolumetricCompens
 
 from ..core.errors import InputDataError
 from ..io.cnc import connect, load_node_map
-from ._common import (CONTROL_QOS, SENSOR_QOS, float_descriptor, nanoseconds_to_stamp,
-                      pack_float64, plain_descriptor, run_node, stamp_to_nanoseconds)
+from ._common import (CONTROL_QOS, SENSOR_QOS, float_descriptor, pack_float64,
+                      plain_descriptor, run_node, stamp_to_nanoseconds)
 from ._health import DeliveryHealth
 from ._priority import declare_niceness
 

@@ -110,7 +110,8 @@ def render(report: Report, path: Path) -> Path:
 
 
 def save_figure(fig, directory: Path, name: str, caption: str) -> Figure:
-    """Save a matplotlib figure as ``directory/name.png`` (legends outside the axes) and close it."""
+    """Save a matplotlib figure as ``directory/name.png`` (legends outside the axes) and close
+    it."""
     import matplotlib.pyplot as plt
 
     target = Path(directory) / f"{name}.png"

@@ -17,7 +17,8 @@ def ballbar_sections(calibration, directory: Path, stem: str) -> list[Section]:
     closed = np.append(angles, angles[:1]) if not np.isclose(
         abs(angles[-1] - angles[0]), 2 * np.pi) else angles
     data = Section("Ball bar: the readings (Zhu Fig. 5.12)", [
-        f"{angles.size} table positions per run; bars {calibration.short.setup.bar_length_m * 1e3:.3f}"
+        f"{angles.size} table positions per run; bars "
+        f"{calibration.short.setup.bar_length_m * 1e3:.3f}"
         f" and {calibration.long.setup.bar_length_m * 1e3:.3f} mm, table ball at R_x = "
         f"{calibration.short.setup.radius_m * 1e3:.3f} mm (bar angles "
         f"{np.degrees(calibration.short.setup.bar_angle_rad):.2f} and "
@@ -50,7 +51,8 @@ def ballbar_sections(calibration, directory: Path, stem: str) -> list[Section]:
     u = calibration.l2.uncertainties
     estimates = Section("Ball bar: the table's tilt and axial errors (Zhu Tables 5.2, 5.3)", [
         f"Least squares: E_x {calibration.l2.parameters[0] / ARCSEC:.2f} +- {2 * u[0] / ARCSEC:.2f}"
-        f" arcsec, E_y {calibration.l2.parameters[1] / ARCSEC:.2f} +- {2 * u[1] / ARCSEC:.2f} arcsec,"
+        f" arcsec, E_y {calibration.l2.parameters[1] / ARCSEC:.2f}"
+        f" +- {2 * u[1] / ARCSEC:.2f} arcsec,"
         f" D_z {calibration.l2.parameters[2] * 1e6:.2f} +- {2 * u[2] * 1e6:.2f} um (k = 2, from "
         f"the residuals). cond(J) = {calibration.condition_number:.1f} (eq. 5.20). "
         "D_x, D_y cancel with the eccentricity they are coupled to, and E_z is not seen by a "

@@ -302,8 +302,8 @@ def _where_section(data: BagData | None, check: CheckResult, directory: Path, st
     offset = (data.references[0][0] - data.start_ns) / 1e9 if data is not None and \
         data.references else 0.0
     time = plot["time"] + offset
-    variables = [(f"{axis} position [mm]", values * 1e3) for axis, values in plot["positions"].items()
-                 if np.ptp(values) > 0]
+    variables = [(f"{axis} position [mm]", values * 1e3)
+                 for axis, values in plot["positions"].items() if np.ptp(values) > 0]
     rising = sorted(plot["temperatures"], key=lambda s: -np.ptp(plot["temperatures"][s]))[:2]
     variables += [(f"{s} rise [K]", plot["temperatures"][s] - plot["temperatures"][s][0])
                   for s in rising]
@@ -368,7 +368,8 @@ def localisation_section(check: CheckResult, directory: Path, stem: str) -> Sect
     if where.get("peaks"):
         section.tables.append(peaks)
     section.paragraphs.append(
-        f"Where it lives: {where.get('sentence') or 'nowhere in particular (no variable explains a tenth of it)'}.")
+        "Where it lives: "
+        f"{where.get('sentence') or 'nowhere in particular (no variable explains a tenth of it)'}.")
     named = check.named
     if named:
         table = Table(["effect named", "setting", "confidence", "share of the excess removed",
@@ -411,7 +412,8 @@ def _evidence_section(check: CheckResult) -> Section:
         f"inside each fold; without any candidate the cross-validated error is "
         f"{baseline * UM:.3g} µm. The best is accepted when, on readings its fit did not see, "
         "it removes error in block after block (a t-test on the components it moves, its "
-        "p-value adjusted for every candidate tried by Westfall-Young max-T), cuts the error by the minimum reduction, removes at least a "
+        "p-value adjusted for every candidate tried by Westfall-Young max-T), cuts the error "
+        "by the minimum reduction, removes at least a "
         "quarter of what stands above the instrument's noise, and carries a parameter above 3 "
         "standard errors; then the search repeats with it in the model. "
         "Confidence = 1 - that adjusted p-value.")

@@ -111,7 +111,8 @@ EFFECTS: dict[str, EffectSpec] = {spec.name: spec for spec in [
     EffectSpec(
         "rotary_runout", "An eccentric bearing or encoder disc of one rotary axis: a radial "
         "error motion and an angular positioning error, each once per revolution.",
-        "E_radial(theta) = r (cos(theta + phi), sin(theta + phi));  E_RR(theta) = p sin(theta + phi)",
+        "E_radial(theta) = r (cos(theta + phi), sin(theta + phi));  "
+        "E_RR(theta) = p sin(theta + phi)",
         "ISO 230-7 (error motions of axes of rotation); Zhu section 5.2", "tcp",
         {"axis": ("A", "rotary axis"), "radial_m": (8e-6, "m, radius of the radial error motion"),
          "positioning_rad": (20e-6, "rad, amplitude of the angular positioning error"),
@@ -119,7 +120,8 @@ EFFECTS: dict[str, EffectSpec] = {spec.name: spec for spec in [
     EffectSpec(
         "reversal", "Backlash in the drive: the axis lags by b/2 against the direction of "
         "motion (semi-closed loop; the scales see it).", "q = c - sign(v) b / 2",
-        "ISO 230-2 reversal value B", "both", {"backlash_m": (6e-6, "m"), "axes": (["X", "Y", "Z"], "axes")}),
+        "ISO 230-2 reversal value B", "both",
+        {"backlash_m": (6e-6, "m"), "axes": (["X", "Y", "Z"], "axes")}),
     EffectSpec(
         "table_tilt", "The table (an axis that carries the workpiece) pitches, yaws or "
         "rolls as it travels: its guideway is not straight, or it sags under the part. "

@@ -113,8 +113,6 @@ def calibrate_machine(result: SimulationResult, *, step_m: float = 0.02, seed: i
     as a machine-description mapping (``machine_from_dict``) with error tables -
     what a machine carries from its installation calibration.
     """
-    import copy
-
     from ..core.kinematics.machine import COMPONENTS
 
     scenario = result.scenario

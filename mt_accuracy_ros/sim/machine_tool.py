@@ -145,7 +145,8 @@ class SimulationResult:
         if scenario.ever_enabled("position_dependent_thermal"):
             params = scenario.parameters("position_dependent_thermal")
             axis = params["axis"]
-            growth = (float(params["alpha_per_k"]) * (positions[axis] - float(params["reference_m"]))
+            growth = (float(params["alpha_per_k"])
+                      * (positions[axis] - float(params["reference_m"]))
                       * self.thermal_at("bed", indices)
                       * self.mask("position_dependent_thermal", indices))
             errors.add("motion", axis, c(axis), growth, n)

@@ -120,7 +120,8 @@ def ballbar_test(truth: RotaryTableTruth, plan: BallBarPlan | None = None, *,
         readings = np.empty((plan.repetitions, angles.size))
         for r in range(plan.repetitions):
             for i, angle in enumerate(angles):
-                readings[r, i] = _bar_reading(angle, plan, truth, bar, ecc, reversed_approach=i == 0)
+                readings[r, i] = _bar_reading(angle, plan, truth, bar, ecc,
+                                              reversed_approach=i == 0)
         out[which] = readings + rng.normal(0.0, plan.noise_m, readings.shape)
     return BallBarData(np.asarray(plan.angles_deg, float), out["short"], out["long"], plan)
 

@@ -5,7 +5,6 @@ import os
 import subprocess
 import sys
 import textwrap
-import time
 from pathlib import Path
 
 import numpy as np
@@ -81,7 +80,8 @@ def test_independent_reader_sees_the_same_bag(tmp_path):
                 qos = connection.ext.offered_qos_profiles
                 assert qos and qos[0].reliability.name.lower() == "best_effort"
                 assert qos[0].depth == 5
-        got = [(c.topic, t, store.deserialize_cdr(raw, c.msgtype)) for c, t, raw in reader.messages()]
+        got = [(c.topic, t, store.deserialize_cdr(raw, c.msgtype))
+               for c, t, raw in reader.messages()]
         assert reader.message_count == len(written)
     scales = [w for w in written if w[0] == "/mt1/scales"]
     ours = [g for g in got if g[0] == "/mt1/scales"]
@@ -169,7 +169,8 @@ def test_info_command_prints_like_ros2_bag_info(data_dir, capsys):
     assert main(["info", str(data_dir / "rosbag2_samples" / "talker")]) == 0
     out = capsys.readouterr().out
     assert "Messages:       20" in out
-    assert "Topic: /topic | Type: std_msgs/msg/String | Count: 10 | Serialization Format: cdr" in out
+    assert ("Topic: /topic | Type: std_msgs/msg/String | Count: 10 | "
+            "Serialization Format: cdr") in out
     assert main(["info", str(data_dir / "no_such_bag")]) == 2
 
 
@@ -189,7 +190,8 @@ def test_a_bag_recorded_with_an_older_type_version_still_decodes(tmp_path):
     from rosbags.typesys.msg import get_types_from_msg
 
     old = "std_msgs/Header header\nstring instrument\nfloat64[] command_positions\n"
-    schema = old + "=" * 80 + "\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n" \
+    schema = old + "=" * 80 \
+        + "\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n" \
         + "=" * 80 + "\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
     store = get_typestore(Stores.ROS2_JAZZY)
     store.register(get_types_from_msg(old, "mt_accuracy_msgs/msg/ReferenceMeasurement"))

@@ -43,7 +43,8 @@ def test_bad_rate_is_refused(rate):
 
 
 @pytest.mark.parametrize("offered, expected", [
-    ([{"reliability": "reliable", "durability": "transient_local"}], ("reliable", "transient_local")),
+    ([{"reliability": "reliable", "durability": "transient_local"}],
+     ("reliable", "transient_local")),
     ([{"reliability": "reliable"}, {"reliability": "best_effort"}], ("best_effort", "volatile")),
     # rosbag2 bags before version 9 store rmw enums: 1 reliable / transient local.
     ([{"reliability": 1, "durability": 1}], ("reliable", "transient_local")),

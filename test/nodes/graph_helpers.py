@@ -52,7 +52,8 @@ def set_parameter_again_until_answered(node, target: str, name: str, value,
 
     client = node.create_client(SetParameters, f"{target}/set_parameters")
     try:
-        request = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
+        request = SetParameters.Request(
+            parameters=[Parameter(name, value=value).to_parameter_msg()])
         result = call_service(node, client, request, timeout_s=timeout_s).results[0]
         return bool(result.successful), str(result.reason)
     finally:

@@ -34,7 +34,8 @@ temperature_rate_hz: 2
 program: {type: back_and_forth, axes: [X, Y], feed_m_per_min: 12}
 effects:
   geometric: {enabled: false}
-  structural_thermal_drift: {time_constant_s: 8, rise_k: 4.0, beta_m_per_k: [2.0e-6, 5.0e-6, -3.0e-6]}
+  structural_thermal_drift: {time_constant_s: 8, rise_k: 4.0,
+                             beta_m_per_k: [2.0e-6, 5.0e-6, -3.0e-6]}
 """
 
 
@@ -89,7 +90,8 @@ def test_tables_bring_the_geometric_error_within_the_band(rclpy_context, tmp_pat
     broadcaster = start_node("compensation_broadcaster", {"model": str(model),
                                                           "follow_model_topic": False},
                              quiet=True)
-    machine = start_node("encoder_publisher", {"batch_period_s": 0.05, "scenario": str(scenario_path),
+    machine = start_node("encoder_publisher", {"batch_period_s": 0.05,
+                                               "scenario": str(scenario_path),
                                                "compensation_input": "table",
                                                "rate_factor": 4.0, "min_subscribers": 1},
                          quiet=True)
@@ -136,7 +138,8 @@ def test_realtime_offset_removes_a_thermal_drift_and_reports_its_latency(rclpy_c
                              quiet=True)
     temperatures = start_node("temperature_publisher", {**common, "min_subscribers": 1},
                               quiet=True)
-    machine = start_node("encoder_publisher", {**common, "batch_period_s": 0.05, "compensation_input": "realtime",
+    machine = start_node("encoder_publisher", {**common, "batch_period_s": 0.05,
+                                               "compensation_input": "realtime",
                                                "max_compensation_age_s": 2.0,
                                                "compensation_delay_s": 0.02,
                                                "min_subscribers": 2}, quiet=True)
@@ -191,7 +194,8 @@ def test_the_cnc_refuses_bad_compensation_and_keeps_the_last_valid(rclpy_context
     node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 100)
     tables = node.create_publisher(CompensationTable, "compensation_table", TABLE_QOS)
     offsets = node.create_publisher(VolumetricCompensation, "compensation", COMPENSATION_QOS)
-    machine = start_node("encoder_publisher", {"batch_period_s": 0.05, "scenario": str(scenario_path),
+    machine = start_node("encoder_publisher", {"batch_period_s": 0.05,
+                                               "scenario": str(scenario_path),
                                                "compensation_input": "hybrid",
                                                "rate_factor": 2.0},
                          quiet=True)

@@ -6,7 +6,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import pytest
 import yaml
 
 from graph_helpers import call_service, spin_for, spin_until
@@ -54,7 +53,8 @@ def test_graph_topics_types_and_refused_parameters(rclpy_context, tmp_path):
         "/systematic/y": "mt_accuracy_msgs/msg/SystematicProfile",
         "/compensation": "mt_accuracy_msgs/msg/VolumetricCompensation",
         "/compensation_table": "mt_accuracy_msgs/msg/CompensationTable",
-        "/model_check": "mt_accuracy_msgs/msg/ModelCheck", "/model": "mt_accuracy_msgs/msg/ModelVersion",
+        "/model_check": "mt_accuracy_msgs/msg/ModelCheck",
+        "/model": "mt_accuracy_msgs/msg/ModelVersion",
         "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"}
     try:
         def discovered():

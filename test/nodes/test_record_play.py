@@ -161,7 +161,8 @@ def _chatter_bag(path: Path, n: int = 11, with_unknown_type: bool = True) -> Non
             writer.start(profile="ros2", library="test")
             schema = writer.register_schema("fake_msgs/msg/Nothing", "ros2msg", b"int32 a")
             channel = writer.register_channel("/fake", "cdr", schema)
-            writer.add_message(channel, log_time=10**18, publish_time=10**18, data=b"\0\1\0\0\0\0\0\0")
+            writer.add_message(channel, log_time=10**18, publish_time=10**18,
+                               data=b"\0\1\0\0\0\0\0\0")
             writer.finish()
 
 

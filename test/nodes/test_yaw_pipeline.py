@@ -1,7 +1,6 @@
 """The smallest real end-to-end path: encoder publisher -> yaw estimator, two processes."""
 from __future__ import annotations
 
-import time
 
 import numpy as np
 

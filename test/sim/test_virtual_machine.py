@@ -56,8 +56,8 @@ def test_effect_list_is_complete_and_documented():
     ("machine: kidani_hmc\nsample_rate_hz: 50000\n", "line 2: sample_rate_hz"),
     ("machine: kidani_hmc\nprogram:\n  type: back_and_forth\n  axes: [X]\n  end_m: 0.5\n",
      "line 5: end_m = 0.5 m is outside the X stroke"),
-    ("machine: kidani_hmc\neffects:\n  timing_skew: {skew: 1}\n", "line 3: effect timing_skew has no "
-     "parameter 'skew'"),
+    ("machine: kidani_hmc\neffects:\n  timing_skew: {skew: 1}\n",
+     "line 3: effect timing_skew has no parameter 'skew'"),
     ("machine: kidani_hmc\nduration_s: 10\nevents:\n  - {time_s: 20, enable: reversal}\n",
      "line 4: event at 20 s is after the end"),
     ("machine: kidani_hmc\nprogram: {type: teleport}\n", "line 2: unknown program 'teleport'"),
@@ -89,11 +89,12 @@ def test_scale_thermal_expansion_signature():
     t_index = np.minimum(np.searchsorted(result.temperature_time_s, result.time_s[idx]),
                          result.temperature_time_s.size - 1)
     sensors = result.thermocouple_positions_m["y1"]
+    names = result.temperature_names
     expected = []
     for j, i in zip(t_index, idx):
         rises = [np.interp(result.time_s[i], result.temperature_time_s,
-                           result.temperatures_true_c[:, result.temperature_names.index(f"y{s}_s{m}")]
-                           - result.temperatures_true_c[0, result.temperature_names.index(f"y{s}_s{m}")])
+                           result.temperatures_true_c[:, names.index(f"y{s}_s{m}")]
+                           - result.temperatures_true_c[0, names.index(f"y{s}_s{m}")])
                  for s in (1, 2) for m in range(sensors.size)]
         r1, r2 = np.array(rises[:sensors.size]), np.array(rises[sensors.size:])
         fine = np.linspace(0, high - low, 2001)
@@ -173,7 +174,8 @@ def test_squareness_is_linear_in_the_other_axis():
 
 def test_spindle_growth_is_a_first_order_response():
     spindle = "spindle: {speed_rpm: 15000, max_rpm: 15000, intervals_s: [[0, 100]]}\n"
-    on, idx, diff = _tcp_difference("{spindle_thermal_growth: {time_constant_s: 10, growth_m: 2e-5}}",
+    on, idx, diff = _tcp_difference("{spindle_thermal_growth: "
+                                    "{time_constant_s: 10, growth_m: 2e-5}}",
                                     duration=40, extra=spindle)
     t = on.time_s[idx]
     expected = 2e-5 * (1 - np.exp(-t / 10))  # exact at the 1 Hz thermal steps, linear between
@@ -242,7 +244,8 @@ def test_runs_at_20_khz_with_six_heads():
 def test_five_axis_grinder_runs_diagonals(program, moving):
     from mt_accuracy_ros.sim.scenario import scenario_from_yaml as parse
 
-    result = simulate(parse("machine: khan_chen_rpppr\nseed: 1\nduration_s: 8\nsample_rate_hz: 200\n"
+    result = simulate(parse("machine: khan_chen_rpppr\nseed: 1\nduration_s: 8\n"
+                            "sample_rate_hz: 200\n"
                             f"program: {program}\neffects: {{squareness: true}}\n"))
     assert result.scale_readings.shape[1] == 6  # X, Y, Z pairs at the default distance
     for axis in "XYZ":

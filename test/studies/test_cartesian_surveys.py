@@ -104,7 +104,7 @@ def test_without_the_tool_offset_a_table_tilt_is_named_once_with_the_arm_the_dat
     assert code == 0
     named = [entry["name"] for entry in json.loads((tmp_path / "s.json").read_text())["named"]]
     assert named == sorted(fair) and named[0].startswith("angular_arm:"), (named, fair)
-    line = next(l for l in out.splitlines() if l.startswith(named[0] + ": the tilt acts"))
+    line = next(t for t in out.splitlines() if t.startswith(named[0] + ": the tilt acts"))
     arm, half_width = (float(v) for v in re.search(r"([-+][\d.]+) ± ([\d.]+) mm", line).groups())
     assert abs(arm - (-120.0)) <= max(half_width, 5.0), line
 

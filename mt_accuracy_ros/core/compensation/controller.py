@@ -262,8 +262,9 @@ class TableCompensation:
         axis = str(axis).upper()
         spec = self.machine.axes.get(axis)
         if spec is None or spec.is_rotary:
+            linear = (a for a in self.machine.axis_order if not self.machine.axes[a].is_rotary)
             return self._refuse(f"unknown axis: table for axis {axis!r}; the machine's linear "
-                                f"axes are {', '.join(a for a in self.machine.axis_order if not self.machine.axes[a].is_rotary)}")
+                                f"axes are {', '.join(linear)}")
         if version < self.version:
             return self._refuse(f"old model: table of version {version} after version "
                                 f"{self.version}")

@@ -137,7 +137,7 @@ def volumetric_spacing(model: ErrorModel, band_m: float) -> float:
     from .cnc_export import round_trip
 
     periods = periodic_periods(model)
-    shortest = min((h - l for l, h in (model.machine.axes[a].stroke
+    shortest = min((hi - lo for lo, hi in (model.machine.axes[a].stroke
                                         for a in linear_axes(model))), default=1.0)
     for spacing in NICE_SPACINGS_M:
         if spacing > shortest or period_problems(periods, spacing):

@@ -6,19 +6,21 @@ the parameters the model believes. The same names are the workbench's
 candidate library, so "adding the missing effect" means adding its name and
 parameters here. Effects a model can hold:
 
-==============================  =============================================  ===========================
-effect                          parameters (model form)                        enters as
-==============================  =============================================  ===========================
-``geometric``                   measured profiles (``set_profile``), e.g. ECY  motion errors (Kidani 2.12)
-``squareness``                  ``errors_rad: {EC0Y: ...}``                    location errors
-``structural_thermal_drift``    ``beta_m_per_k: [bx, by, bz]``, ``sensor``     TCP offset beta dT (Zhu 3.12)
-``position_dependent_thermal``  ``axis``, ``alpha_per_k``, ``sensor``,         positioning alpha (q - q0) dT
-                                ``reference_m``                                (Zhu 3.13)
-``spindle_thermal_growth``      ``m_per_k``, ``sensor``, ``direction``          TCP offset along the tool
-``abbe_offset``                 ``offset_m: [x, y, z]``                        eps x offset
-``reversal``                    ``backlash_m``, ``axes``                       -sign(v) b/2 per axis
-``servo_lag``                   ``lag_s``, ``axes``                            -v tau per axis
-==============================  =============================================  ===========================
+==============================  ========================================  ==========================
+effect                          parameters (model form)                   enters as
+==============================  ========================================  ==========================
+``geometric``                   measured profiles (``set_profile``),      motion errors
+                                e.g. ECY                                  (Kidani eq. 2.12)
+``squareness``                  ``errors_rad: {EC0Y: ...}``               location errors
+``structural_thermal_drift``    ``beta_m_per_k: [bx, by, bz]``,           TCP offset beta dT
+                                ``sensor``                                (Zhu eq. 3.12)
+``position_dependent_thermal``  ``axis``, ``alpha_per_k``, ``sensor``,    positioning alpha (q - q0)
+                                ``reference_m``                           dT (Zhu eq. 3.13)
+``spindle_thermal_growth``      ``m_per_k``, ``sensor``, ``direction``    TCP offset along the tool
+``abbe_offset``                 ``offset_m: [x, y, z]``                   eps x offset
+``reversal``                    ``backlash_m``, ``axes``                  -sign(v) b/2 per axis
+``servo_lag``                   ``lag_s``, ``axes``                       -v tau per axis
+==============================  ========================================  ==========================
 
 Beyond these, a model holds any effect of the open catalogue
 (:mod:`mt_accuracy_ros.core.effects`) the workbench fitted - an entry
@@ -282,7 +284,7 @@ class ErrorModel:
         Where the machine carries a calibrated table of this error (the
         installation calibration), the dual-scale profile says only how the
         error has *changed*: its own zero and the two scales' graduation errors
-        (a false yaw (g2 - g1)/D, eq. 2.13) are static and cancel in the
+        (a false yaw (g2 - g1)/D, Kidani eq. 2.13) are static and cancel in the
         difference against the estimator's baseline. The model then uses
         E(x) = E_calibrated(x) + delta E(x), i.e. the command compensation
         p2 = p1 - delta e (Kidani eqs. 3.14-3.16); before a baseline exists the

@@ -24,7 +24,8 @@ import numpy as np
 
 from ..kinematics.error_functions import ErrorFunction
 from ..errors import MachineDescriptionError
-from ..kinematics.machine import COMPONENTS, Axis, MachineDescription, location_error_name, motion_error_name
+from ..kinematics.machine import (COMPONENTS, Axis, MachineDescription, location_error_name,
+                                  motion_error_name)
 
 HEADER = "# mt_accuracy_ros compensation table v1"
 

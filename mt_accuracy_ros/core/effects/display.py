@@ -29,7 +29,8 @@ _KIND_OF_FAMILY = {**{f: "length" for f in _LENGTH_FAMILIES},
                    **{f: "gain_k" for f in _THERMAL_GAIN_FAMILIES},
                    "angular": "angle", "angular_periodic": "angle", "squareness": "angle",
                    "position_dependent_thermal": "expansion", "thermal_squareness": "angle_k",
-                   "reversal": "length", "setup_location": "length", "servo_lag": "time", "acceleration": "per_acceleration",
+                   "reversal": "length", "setup_location": "length", "servo_lag": "time",
+                   "acceleration": "per_acceleration",
                    # a twist's coefficient multiplies normalised positions: a length
                    "cross_axis": "length", "abbe_offset": "lever",
                    # a principal component's score is standardised: its gain is a length

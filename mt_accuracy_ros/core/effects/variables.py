@@ -82,7 +82,6 @@ def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
     dt = np.diff(t)
     if np.any(dt < 0):
         raise InputDataError("lag: the readings' times must not decrease")
-    decay = np.exp(-dt / tau_s)
     with np.errstate(divide="ignore", invalid="ignore"):
         slope_tau = np.where(dt > 0, np.diff(u) / np.where(dt > 0, dt, 1.0), 0.0) * tau_s
     start = u[0] if initial is None else float(initial)

@@ -17,8 +17,9 @@ zero) act as
 with q_s the set-up command (``MachineDescription.setup_pose``, default 0): the
 body is where the set-up found it at q_s and turns about the actual line from
 there, so an offset d of a C line moves the work by (I - R_C) d, a tilt by the
-tilt times the radius, and the zero error is taken out by the set-up. The tool branch (Khan & Chen's M loop) carries
-the tool vector t, the workpiece branch (N loop) the workpiece point w, and the
+tilt times the radius, and the zero error is taken out by the set-up. The tool
+branch (Khan & Chen's M loop) carries the tool vector t, the workpiece branch (N
+loop) the workpiece point w, and the
 TCP error is
 
     e = (P_t - P_w)_actual - (P_t - P_w)_nominal          (Kidani eq. 2.10, K&C eq. 17)

@@ -65,7 +65,8 @@ def rotation_matrix_first_order(ex: ArrayLike, ey: ArrayLike, ez: ArrayLike) -> 
 
 
 def error_htm_exact(errors: ArrayLike) -> NDArray:
-    """D_X(dx) D_Y(dy) D_Z(dz) D_A(ex) D_B(ey) D_C(ez) for ``errors[..., :] = (dx, dy, dz, ex, ey, ez)``."""
+    """D_X(dx) D_Y(dy) D_Z(dz) D_A(ex) D_B(ey) D_C(ez) for
+    ``errors[..., :] = (dx, dy, dz, ex, ey, ez)``."""
     e = np.asarray(errors, dtype=np.float64)
     out = identity(e.shape[:-1])
     out[..., :3, :3] = rotation_matrix_xyz(e[..., 3], e[..., 4], e[..., 5])

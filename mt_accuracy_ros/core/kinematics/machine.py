@@ -113,7 +113,8 @@ class MachineDescription:
         return self.workpiece_branch + self.tool_branch
 
     def check_positions(self, positions: dict[str, np.ndarray], tolerance: float = 1e-9) -> None:
-        """Raise :class:`MachineDescriptionError` for unknown axes or positions outside the stroke."""
+        """Raise :class:`MachineDescriptionError` for unknown axes or positions outside the
+        stroke."""
         for name, values in positions.items():
             if name not in self.axes:
                 raise MachineDescriptionError(f"unknown axis {name!r}; this machine has "
@@ -137,7 +138,8 @@ def parse_chain(chain: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
     ``"[w Z b X Y t]"`` -> ``(("Z",), ("X", "Y"))``.
     """
     if not isinstance(chain, str):
-        raise MachineDescriptionError(f"chain: expected a string like '[w Z b X Y t]', got {chain!r}")
+        raise MachineDescriptionError(
+            f"chain: expected a string like '[w Z b X Y t]', got {chain!r}")
     match = _CHAIN.match(chain.strip())
     if not match:
         raise MachineDescriptionError(
@@ -197,7 +199,8 @@ def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
             if not re.fullmatch(rf"E[{COMPONENTS}]{letter}", str(name)):
                 raise MachineDescriptionError(
                     f"{where}.errors.{name}: not an error of axis {letter} "
-                    f"(expected one of {', '.join(motion_error_name(c, letter) for c in COMPONENTS)})")
+                    "(expected one of "
+                    f"{', '.join(motion_error_name(c, letter) for c in COMPONENTS)})")
         for component in COMPONENTS:
             name = motion_error_name(component, letter)
             motion[component] = parse_error_function(errors_spec.get(name, 0.0),
@@ -221,7 +224,8 @@ def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
         tool_branch=tool_branch, axes=axes, tool=_vector(data["tool"], f"{source}: tool"),
         workpiece=_vector(data["workpiece"], f"{source}: workpiece"),
         description=str(data.get("description", "")),
-        scale_distance_m={str(k): float(v) for k, v in (data.get("scale_distance_m") or {}).items()},
+        scale_distance_m={str(k): float(v)
+                          for k, v in (data.get("scale_distance_m") or {}).items()},
         structure_length_m=_positive_or_none(data.get("structure_length_m"),
                                              f"{source}: structure_length_m"),
         cnc=_cnc_section(data.get("cnc"), f"{source}: cnc"),
@@ -378,14 +382,16 @@ def _cnc_section(spec, where: str) -> dict:
         raise MachineDescriptionError(f"{where}: expected a mapping of {', '.join(CNC_KEYS)}")
     unknown = set(spec) - set(CNC_KEYS)
     if unknown:
-        raise MachineDescriptionError(f"{where}: unknown key(s) {', '.join(sorted(map(str, unknown)))};"
+        raise MachineDescriptionError(f"{where}: unknown key(s) "
+                                      f"{', '.join(sorted(map(str, unknown)))};"
                                       f" known: {', '.join(CNC_KEYS)}")
     out: dict = {}
     for key, value in spec.items():
         if key == "max_correction_m" and isinstance(value, dict):
             if not value or set(value) - set("XYZ"):
                 raise MachineDescriptionError(f"{where}.{key}: per component X, Y, Z")
-            out[key] = {str(a): _positive_or_none(v, f"{where}.{key}.{a}") for a, v in value.items()}
+            out[key] = {str(a): _positive_or_none(v, f"{where}.{key}.{a}")
+                        for a, v in value.items()}
         else:
             out[key] = _positive_or_none(value, f"{where}.{key}")
     return out

@@ -440,12 +440,15 @@ class BallBarCalibration:
 
     def as_dict(self) -> dict:
         return {
-            "short_bar_m": self.short.setup.bar_length_m, "long_bar_m": self.long.setup.bar_length_m,
-            "radius_m": self.short.setup.radius_m, "socket_height_m": self.short.setup.socket_height_m,
+            "short_bar_m": self.short.setup.bar_length_m,
+            "long_bar_m": self.long.setup.bar_length_m,
+            "radius_m": self.short.setup.radius_m,
+            "socket_height_m": self.short.setup.socket_height_m,
             "bar_angles_deg": [float(np.degrees(self.short.setup.bar_angle_rad)),
                                float(np.degrees(self.long.setup.bar_angle_rad))],
             "positions": int(self.angles_rad.size),
-            "repetitions": [int(self.short.readings_m.shape[0]), int(self.long.readings_m.shape[0])],
+            "repetitions": [int(self.short.readings_m.shape[0]),
+                            int(self.long.readings_m.shape[0])],
             "repeatability_m": [self.short.repeatability_m, self.long.repeatability_m],
             "condition_number": self.condition_number,
             "l2": self.l2.as_dict(), "linf": self.linf.as_dict(),
@@ -511,7 +514,8 @@ class BallBarCalibration:
             p = fit.parameters
             spread = (f" (U, k=2: {2 * u[0] / ARCSEC:.2f}\", {2 * u[1] / ARCSEC:.2f}\", "
                       f"{2 * u[2] * 1e6:.2f} um)" if fit.uncertainties is not None else "")
-            lines.append(f"  {fit.method:>4}: E_x {p[0] / ARCSEC:7.2f}\"  E_y {p[1] / ARCSEC:7.2f}\""
+            lines.append(f"  {fit.method:>4}: E_x {p[0] / ARCSEC:7.2f}\""
+                         f"  E_y {p[1] / ARCSEC:7.2f}\""
                          f"  D_z {p[2] * 1e6:6.2f} um{spread}; residual max "
                          f"{fit.max_abs * 1e6:.3f} mm^2, range {fit.range * 1e6:.3f} mm^2, "
                          f"RMS {fit.rms * 1e6:.3f} mm^2")
@@ -529,7 +533,8 @@ class BallBarCalibration:
         if self.socket_u is not None and self.socket_change_m > 0:
             lines.append(f"  in U: the table ball re-seating by up to "
                          f"{self.socket_change_m * 1e6:.2g} um between the setups (two setups "
-                         f"cannot show it) - E_x, E_y +-{self.socket_u[0] * np.sqrt(3) / ARCSEC:.2f}\"")
+                         "cannot show it) - E_x, E_y "
+                         f"+-{self.socket_u[0] * np.sqrt(3) / ARCSEC:.2f}\"")
         if self.drift_u is not None and np.any(self.drift_u > 0):
             lines.append(f"  in U: a drift over each run as large as its closing-reading jump "
                          f"- E_x {self.drift_u[0] * np.sqrt(3) / ARCSEC:.2f}\", "

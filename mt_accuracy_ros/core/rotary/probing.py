@@ -207,7 +207,8 @@ class LocationIdentification:
     def text(self) -> str:
         lines = [f"probing: {self.measured_m.shape[0]} cycles; dispersion "
                  f"{self.dispersion_before_m * 1e6:.1f} um before, "
-                 f"{self.dispersion_after_m * 1e6:.1f} um after (RMS {self.rms_after_m * 1e6:.2f} um)",
+                 f"{self.dispersion_after_m * 1e6:.1f} um after "
+                 f"(RMS {self.rms_after_m * 1e6:.2f} um)",
                  "  repeatability of repeated cycles " +
                  (f"{self.repeatability_m * 1e6:.2f} um" if self.repeatability_m else
                   "unknown (no cycle repeated)") +

@@ -46,7 +46,7 @@ class DeteriorationReport:
     def flagged_ranges(self) -> list[tuple[float, float]]:
         """Contiguous position ranges where the change exceeds the tolerance."""
         ranges: list[tuple[float, float]] = []
-        start = None
+        start = previous = None
         for position, flag in zip(self.positions, self.flagged):
             if flag and start is None:
                 start = position

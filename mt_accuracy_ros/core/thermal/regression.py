@@ -181,7 +181,8 @@ class TimeConstantFit:
 
     def __call__(self, time_s: ArrayLike) -> NDArray[np.float64]:
         t = np.asarray(time_s, dtype=np.float64)[:, None]
-        return self.offset + (self.amplitudes * (1 - np.exp(-t / self.time_constants_s))).sum(axis=1)
+        rises = self.amplitudes * (1 - np.exp(-t / self.time_constants_s))  # Zhu eq. 3.17
+        return self.offset + rises.sum(axis=1)
 
 
 def fit_time_constants(time_s: ArrayLike, temperature: ArrayLike, n_modes: int = 3,

@@ -49,5 +49,6 @@ def test_malformed_machines_raise_only_package_errors(data):
 
 
 def test_a_good_model_still_loads():
-    model = model_from_dict({"machine": "kidani_hmc", "version": 3, "effects": {"squareness": True}})
+    model = model_from_dict({"machine": "kidani_hmc", "version": 3,
+                             "effects": {"squareness": True}})
     assert model.version == 3 and "squareness" in model.effects

@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mt_accuracy_ros.core.compensation.tables import (machine_with_table, read_csv, table_from_machine,
-                                             write_csv)
+from mt_accuracy_ros.core.compensation.tables import (machine_with_table, read_csv,
+                                                      table_from_machine, write_csv)
 from mt_accuracy_ros.core.errors import MachineDescriptionError
 from mt_accuracy_ros.core.kinematics.chain import KinematicModel
 from mt_accuracy_ros.core.kinematics.machine import machine_from_dict

@@ -167,7 +167,8 @@ def _per_point_reference(model, positions, overrides, work_point=None):
                 q = positions[a][i]
                 move = (rotation("xyz"[spec.direction], q) if spec.is_rotary else
                         translation(*(np.eye(3)[spec.direction] * q)))
-                errs = np.array([overrides.motion.get(f"E{c}{a}", np.zeros(n))[i] for c in "XYZABC"])
+                errs = np.array([overrides.motion.get(f"E{c}{a}", np.zeros(n))[i]
+                                 for c in "XYZABC"])
                 act = act @ translation(*parent) @ move @ error_htm_exact(errs)
                 nom = nom @ translation(*parent) @ move
                 parent = spec.offset
@@ -272,7 +273,8 @@ class TestKhanChenValidation:
         pos = self.positions(grinder, X=0.3, Y=0.2, Z=0.1, A=0.7, B=-0.4)
         out = grinder.tcp_error(pos)
         assert np.all(out["position"] == 0) and np.all(np.abs(out["orientation"]) < 1e-15)
-        np.testing.assert_allclose(grinder.branch("tool", pos), grinder.branch("tool", pos, errors=False))
+        np.testing.assert_allclose(grinder.branch("tool", pos),
+                                   grinder.branch("tool", pos, errors=False))
 
     def test_pure_displacement_gives_the_same_displacement(self, grinder):
         pos = self.positions(grinder, Y=0.2)
@@ -357,7 +359,8 @@ def test_rotary_correction_reduces_orientation_error(grinder):
     (lambda d: d.pop("tool"), "tool"),
     (lambda d: d["axes"]["X"].update(errors={"EXX": float("nan")}), "axes.X.errors.EXX"),
     (lambda d: d["axes"]["X"].update(errors={"EXY": 1e-6}), "axes.X.errors.EXY"),
-    (lambda d: d["axes"]["X"].update(errors={"ECX": {"table": {"positions": [0, 0], "values": [0, 1]}}}),
+    (lambda d: d["axes"]["X"].update(
+        errors={"ECX": {"table": {"positions": [0, 0], "values": [0, 1]}}}),
      "ECX"),
     (lambda d: d["axes"].update(W={"stroke": [0, 1], "offset": [0, 0, 0]}), "axes.W"),
 ])

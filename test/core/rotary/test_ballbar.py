@@ -106,10 +106,10 @@ def test_a_rotary_backlash_is_the_jump_at_zero_degrees():
 
 
 @pytest.mark.parametrize("change, message", [
-    (lambda s, l, a: (s, l[:, :-1], a[:-1]), "no reading at 360.0 deg"),
-    (lambda s, l, a: (np.where(np.arange(s.shape[1]) == 4, np.nan, s), l, a),
+    (lambda s, long_, a: (s, long_[:, :-1], a[:-1]), "no reading at 360.0 deg"),
+    (lambda s, long_, a: (np.where(np.arange(s.shape[1]) == 4, np.nan, s), long_, a),
      "not a number"),
-    (lambda s, l, a: (s * 1e3, l, a), "wrong units"),
+    (lambda s, long_, a: (s * 1e3, long_, a), "wrong units"),
 ])
 def test_bad_runs_are_one_line_errors(change, message):
     data = ballbar_test(TRUTH, seed=0)

@@ -4,7 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mt_accuracy_ros.core.scales.dual_scale import yaw_from_scales
+from mt_accuracy_ros.core.scales.dual_scale import (SQ57_EXPANSION_PER_K, YawCorrections,
+                                                    corrected_yaw, parallelism_yaw_error,
+                                                    scale_expansion, thermal_yaw_error,
+                                                    timing_yaw_error, yaw_from_scales)
 from mt_accuracy_ros.core.errors import InputDataError, ParameterError
 
 
@@ -28,10 +31,6 @@ def test_bad_input_raises_a_named_error(bad, error):
     with pytest.raises(error):
         yaw_from_scales(**bad)
 
-
-from mt_accuracy_ros.core.scales.dual_scale import (SQ57_EXPANSION_PER_K, YawCorrections, corrected_yaw,
-                                             parallelism_yaw_error, scale_expansion,
-                                             thermal_yaw_error, timing_yaw_error)
 
 
 def test_initial_tilt_cancels_against_the_zero_reference():
@@ -80,7 +79,8 @@ def test_thermal_term_is_relative_expansion_over_distance():
 def test_parallelism_and_timing_terms():
     np.testing.assert_allclose(parallelism_yaw_error([0.39], 0.61e-3, 0.24),
                                [(0.39 / np.cos(0.61e-3) - 0.39) / 0.24])
-    np.testing.assert_allclose(timing_yaw_error([1.0, -1.0], 5e-9, 0.24), [5e-9 / 0.24, -5e-9 / 0.24])
+    np.testing.assert_allclose(timing_yaw_error([1.0, -1.0], 5e-9, 0.24),
+                               [5e-9 / 0.24, -5e-9 / 0.24])
 
 
 def test_corrected_yaw_removes_each_switched_on_term_and_only_those():

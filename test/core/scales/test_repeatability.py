@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from mt_accuracy_ros.core.errors import InputDataError, InsufficientDataError
-from mt_accuracy_ros.core.scales.repeatability import group_by_position, iso230_2, systematic_and_random
+from mt_accuracy_ros.core.scales.repeatability import (group_by_position, iso230_2,
+                                                       systematic_and_random)
 
 
 def test_mean_and_sample_sigma_per_position():

@@ -4,10 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mt_accuracy_ros.core.scales.uncertainty import (KIDANI_MAX_FEED_M_PER_S, KIDANI_PARALLELISM_RAD,
-                                              KIDANI_SKEW_S, parallelism_error_at_stroke,
-                                              tcp_uncertainty_from_yaw, timing_error_per_distance,
-                                              tolerable_scale_uncertainty, yaw_uncertainty)
+from mt_accuracy_ros.core.scales.uncertainty import (KIDANI_MAX_FEED_M_PER_S,
+                                                     KIDANI_PARALLELISM_RAD, KIDANI_SKEW_S,
+                                                     parallelism_error_at_stroke,
+                                                     tcp_uncertainty_from_yaw,
+                                                     timing_error_per_distance,
+                                                     tolerable_scale_uncertainty, yaw_uncertainty)
 
 # Kidani Table 3.1: scale distances and strokes of X, Y, Z [m].
 DISTANCE = {"x": 0.24, "y": 0.60, "z": 0.87}

@@ -33,7 +33,8 @@ def test_modes_are_c_orthonormal_and_diagonalise_k():
     model = beam_model(n_elements=10, n_layers=3)
     modes = thermal_modes(model)
     phi = modes.shapes
-    np.testing.assert_allclose(phi.T @ model.capacity @ phi, np.eye(phi.shape[1]), atol=1e-10)  # 3.6
+    np.testing.assert_allclose(phi.T @ model.capacity @ phi, np.eye(phi.shape[1]),
+                               atol=1e-10)  # Zhu eq. 3.6
     np.testing.assert_allclose(phi.T @ model.conductivity @ phi, np.diag(modes.eigenvalues),
                                atol=1e-9 * modes.eigenvalues.max())  # 3.7
 

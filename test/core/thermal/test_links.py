@@ -40,5 +40,6 @@ def test_thermal_link_in_the_chain_moves_the_tcp_by_its_twist():
     linear = model.tcp_error_linear(pos, overrides=ErrorOverrides(thermal={"X": twist}))
     np.testing.assert_allclose(linear["position"][0], expected, atol=1e-16)
     # The bed under the workpiece table expanding moves the work, so e has the opposite sign.
-    bed = model.tcp_error(pos, overrides=ErrorOverrides(thermal={"bed_work": [0, 0, 20e-6, 0, 0, 0]}))
+    bed = model.tcp_error(pos, overrides=ErrorOverrides(
+        thermal={"bed_work": [0, 0, 20e-6, 0, 0, 0]}))
     np.testing.assert_allclose(bed["position"][0], [0, 0, -20e-6], atol=1e-15)

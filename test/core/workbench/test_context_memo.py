@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from mt_accuracy_ros.core.compensation.error_model import ErrorModel
-from mt_accuracy_ros.core.effects import Context
 from mt_accuracy_ros.core.effects.variables import Variables
 from mt_accuracy_ros.core.kinematics.machine import generic_cartesian
 from mt_accuracy_ros.core.workbench import selection

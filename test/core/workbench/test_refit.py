@@ -124,7 +124,8 @@ def test_blocked_cv_errors_equal_a_loop_of_fits():
     for fold in range(5):
         train = folds != fold
         beta, *_ = np.linalg.lstsq(x[train], y[train], rcond=None)
-        np.testing.assert_allclose(errors[folds == fold], y[folds == fold] - x[folds == fold] @ beta,
+        held = folds == fold
+        np.testing.assert_allclose(errors[held], y[held] - x[held] @ beta,
                                    rtol=1e-10, atol=1e-12)
 
 
