@@ -105,7 +105,7 @@ def observations_from_bag(bag: Path, namespace: str = "", kinematics=None):
                                        np.sign(obs.velocities[a][k])
                                        for k, r in enumerate(readings)], dtype=float)
                           for i, a in enumerate(axes)}
-    # An R-test's tool direction: a second measured quantity (issue 30).
+    # An R-test's tool direction: a second measured quantity, fitted beside the tip.
     note = obs.set_directions([machine_direction_error(r[1]) for r in readings],
                               [getattr(r[1], "orientation_uncertainty", 0.0) for r in readings])
     notes += [note] if note else []

@@ -1,4 +1,4 @@
-"""``mt-accuracy ballbar|probe|export``: rotary-axis calibration and CNC tables (issue 20).
+"""``mt-accuracy ballbar|probe|export``: rotary-axis calibration and CNC tables.
 
 * ``ballbar FILE --radius-mm R`` - Zhu ch. 5 two-setup calibration of a rotary
   table; ``--simulate`` first writes FILE from the virtual table (Table 5.2-size

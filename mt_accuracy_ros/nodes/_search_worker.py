@@ -161,8 +161,8 @@ def search_pool():
 
 def thread_fallback(name: str, what: str, consequence: str, error: Exception):
     """A one-thread executor standing in for a worker process that could not start, with
-    ``fallback_reason``: said, not silent (issue 39) - the node puts it on /diagnostics
-    as a WARN."""
+    ``fallback_reason``: said, not silent, so that a search that ran slower than planned is
+    explained - the node puts it on /diagnostics as a WARN."""
     from concurrent.futures import ThreadPoolExecutor
 
     pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=name)

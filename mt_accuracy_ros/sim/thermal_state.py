@@ -44,7 +44,8 @@ DRIVE_END_SHARE = 0.5
 
 
 class ScaleTemperatureField:
-    """Temperature rise along a scale over time from the thermal FE model (issue 5).
+    """Temperature rise along a scale over time from the thermal FE model (so the scales'
+    expansion follows the heat the axis makes, not an assumed uniform rise).
 
     A 1-D FE model of the scale body (:func:`~mt_accuracy_ros.core.thermal.fem.rod_model`,
     Zhu eq. 3.1) solved by its thermal modes (eqs. 3.2-3.10), heated by the axis'

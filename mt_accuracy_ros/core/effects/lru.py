@@ -2,7 +2,7 @@
 
 The selection keeps designs and sensitivities in it, a context the columns several
 candidates share, a set of readings its lagged signals: each is cheap to make again
-beside the page faults of holding too much (docs/benchmarks.md, issue 41).
+beside the page faults of holding too much (docs/benchmarks.md).
 """
 from __future__ import annotations
 

@@ -123,8 +123,8 @@ def default_rotary_parameters(machine: MachineDescription) -> list[str]:
         others = [i for i in range(3) if i != own]
         names += [location_error_name(LETTERS[i], axis) for i in others]
         names += [location_error_name("ABC"[i], axis) for i in others]
-    # Zero-angle errors last: a sphere off an axis' line sees its own (issue 30: asked for
-    # by name, EB0B came back 27.9 +- 3.2 urad with 30 true); observable_parameters keeps
+    # Zero-angle errors last: a sphere off an axis' line sees its own (asked for by name,
+    # EB0B came back 27.9 +- 3.2 urad with 30 true); observable_parameters keeps
     # one only where the setup separates it from the rest.
     for axis in machine.axis_order:
         if machine.axes[axis].is_rotary:

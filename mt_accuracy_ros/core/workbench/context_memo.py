@@ -1,4 +1,5 @@
-"""One context for every look at the same readings (issue 41).
+"""One context for every look at the same readings: its designs are built once, not once
+per look.
 
 ``check --auto`` looks at a survey twice: once with the model as given, once with the
 named effects added. Both looks see the same readings through the same nominal chain,

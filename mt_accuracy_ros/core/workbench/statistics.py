@@ -20,7 +20,7 @@ from ..validation import finite_array
 #: Bootstrap resamples: enough for a 2-digit uncertainty.
 RESAMPLES = 400
 #: The k = 2 uncertainty taken for readings that state none (0): one documented default
-#: per quantity, and whatever uses it says so (issue 39: no silent default).
+#: per quantity, and whatever uses it says so (a default is never silent).
 DEFAULT_POSITION_UNCERTAINTY_M = 1e-6
 DEFAULT_DIRECTION_UNCERTAINTY_RAD = 2e-6
 
