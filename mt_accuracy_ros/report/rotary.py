@@ -24,7 +24,7 @@ def ballbar_sections(calibration, directory: Path, stem: str) -> list[Section]:
         f"{np.degrees(calibration.short.setup.bar_angle_rad):.2f} and "
         f"{np.degrees(calibration.long.setup.bar_angle_rad):.2f} deg to the table axis). "
         "The polar plots show the bar's length change around a reference circle: an offset "
-        "circle is the setup's eccentricity, which the two-setup method cancels (eq. 5.16)."])
+        "circle is the setup's eccentricity, which the two-setup method cancels (Zhu eq. 5.16)."])
     fig, axes = plt.subplots(1, 2, subplot_kw={"projection": "polar"}, figsize=(9, 4.2))
     for ax, run in zip(axes, (calibration.short, calibration.long)):
         readings_um = run.readings_m * 1e6
@@ -41,7 +41,7 @@ def ballbar_sections(calibration, directory: Path, stem: str) -> list[Section]:
     table = Table(["method", "E_x [arcsec]", "E_y [arcsec]", "D_z [um]", "max |e| [mm^2]",
                    "range e [mm^2]", "RMS e [mm^2]"],
                   caption="Tables 5.2 and 5.3: the estimates and their residuals e_i "
-                          "(eq. 5.16, in mm^2 as Zhu gives them). l-infinity minimises the "
+                          "(Zhu eq. 5.16, in mm^2 as Zhu gives them). l-infinity minimises the "
                           "largest residual, l2 the RMS.")
     for fit in (calibration.l2, calibration.linf):
         p = fit.parameters
@@ -54,7 +54,7 @@ def ballbar_sections(calibration, directory: Path, stem: str) -> list[Section]:
         f" arcsec, E_y {calibration.l2.parameters[1] / ARCSEC:.2f}"
         f" +- {2 * u[1] / ARCSEC:.2f} arcsec,"
         f" D_z {calibration.l2.parameters[2] * 1e6:.2f} +- {2 * u[2] * 1e6:.2f} um (k = 2, from "
-        f"the residuals). cond(J) = {calibration.condition_number:.1f} (eq. 5.20). "
+        f"the residuals). cond(J) = {calibration.condition_number:.1f} (Zhu eq. 5.20). "
         "D_x, D_y cancel with the eccentricity they are coupled to, and E_z is not seen by a "
         "ball bar; their combination per setup is listed below.",
         "Repeatability of the readings (pooled standard deviation of the repetitions): "
@@ -62,7 +62,7 @@ def ballbar_sections(calibration, directory: Path, stem: str) -> list[Section]:
                     for r in (calibration.short, calibration.long)) + "."],
         tables=[table])
     lumped = Table(["run", "D_x - H_x [um]", "D_y - H_y [um]"],
-                   caption="Radial error less the eccentricity, per setup (eq. 5.13).")
+                   caption="Radial error less the eccentricity, per setup (Zhu eq. 5.13).")
     for fit in calibration.single_setups:
         lumped.add(fit.run, fit.radial_less_eccentricity_m[0] * 1e6,
                    fit.radial_less_eccentricity_m[1] * 1e6)
@@ -77,7 +77,7 @@ def ballbar_sections(calibration, directory: Path, stem: str) -> list[Section]:
         ax.set_yticklabels([])
     axes[0].legend(loc="upper left", bbox_to_anchor=(1.0, 1.15), fontsize=8)
     residual = Section("Ball bar: what the estimates leave (Zhu Fig. 5.13)", [
-        "Residuals of eq. 5.16 with each estimate. A jump between 0 and 360 deg - the same "
+        "Residuals of Zhu eq. 5.16 with each estimate. A jump between 0 and 360 deg - the same "
         "table angle, reached from opposite directions - is the rotary axis's lost motion "
         "(backlash)."])
     residual.figures.append(save_figure(fig, directory, f"{stem}_ballbar_residuals",

@@ -15,8 +15,8 @@ scale pair (distance D, Kidani Table 3.1):
       x2 = q + D/2 E + g2(u) - dL2(u, t) + u (1/cos delta - 1) + v dt + n2
 
   with g_i each scale's graduation error (a fraction of the SQ57 accuracy
-  (1.5 + 1.5 L) um, Table 3.2), dL_i the thermal expansion (eq. 3.17),
-  delta the parallelism (eq. 3.5), dt the head timing skew (eq. 2.20), n_i
+  (1.5 + 1.5 L) um, Table 3.2), dL_i the thermal expansion (Kidani eq. 3.17),
+  delta the parallelism (Kidani eq. 3.5), dt the head timing skew (Kidani eq. 2.20), n_i
   white noise; then quantised to the 10 nm resolution;
 * thermocouples every 110 mm on each scale and on the structure, with noise
   and 0.01 K resolution;

@@ -9,7 +9,7 @@
 
       tau dh/dt = K u(t) - h    ->  h_n = a h_{n-1} + (1 - a) K u_{n-1},  a = exp(-dt/tau)
 
-  (Zhu eq. 3.9, tau = 1/lambda, eq. 3.3), exact for a piecewise-constant
+  (Zhu eq. 3.9, tau = 1/lambda, Zhu eq. 3.3), exact for a piecewise-constant
   input, run with ``scipy.signal.lfilter``.
 """
 from __future__ import annotations
@@ -48,7 +48,7 @@ class ScaleTemperatureField:
     expansion follows the heat the axis makes, not an assumed uniform rise).
 
     A 1-D FE model of the scale body (:func:`~mt_accuracy_ros.core.thermal.fem.rod_model`,
-    Zhu eq. 3.1) solved by its thermal modes (eqs. 3.2-3.10), heated by the axis'
+    Zhu eq. 3.1) solved by its thermal modes (Zhu eqs. 3.2-3.10), heated by the axis'
     motion - ``DRIVE_END_SHARE`` at the drive end (s = 0), the rest spread along
     the stroke. The mode shapes are the model's; the time axis is scaled so that
     the slowest mode has the scenario's ``time_constant_s``, and the field is

@@ -10,7 +10,7 @@ tool or a controller adapter applies it the same way:
   combines the components through its own kinematic chain (the machine's
   nominal description), so angular errors reach the TCP with their Abbe arms
   (Kidani eqs. 2.10-2.12). The correction is minus that error, added to the
-  command: Kidani's command compensation p2 = p1 - delta e (eq. 3.16).
+  command: Kidani's command compensation p2 = p1 - delta e (Kidani eq. 3.16).
 * **a real-time offset** (:class:`RealtimeOffset`) - the latest correction
   streamed by the compensation broadcaster, taken by the controller at its
   interpolation cycle. Each correction is computed for the command at its
@@ -351,7 +351,7 @@ class TableCompensation:
         return self._kinematics.tcp_error(q, overrides=overrides, check_stroke=False)["position"]
 
     def correction(self, positions: dict[str, ArrayLike]) -> NDArray[np.float64]:
-        """Value to add to the command (N, 3) [m]: minus the tables' TCP error (eq. 3.16)."""
+        """Value to add to the command (N, 3) [m]: minus the tables' TCP error (Kidani eq. 3.16)."""
         if not self.tables and not self.squareness:
             n = np.atleast_1d(np.asarray(next(iter(positions.values())))).size
             return np.zeros((n, 3))

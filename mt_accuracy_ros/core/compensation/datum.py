@@ -80,7 +80,7 @@ def calibration_uncertainty_at(machine: MachineDescription, datum: dict[str, flo
                 sensitivity = sign * rotation[0, :, index]                    # R d
             else:
                 sensitivity = sign * np.cross(rotation[0, :, index - 3], lever[0])  # (R eps) x r
-            variance += (sensitivity * expanded / 2.0) ** 2        # GUM (JCGM 100) eq. 10
+            variance += (sensitivity * expanded / 2.0) ** 2        # GUM, JCGM 100 eq. 10
     return 2.0 * np.sqrt(variance)
 
 

@@ -18,7 +18,7 @@
 
 * **Squareness** of the three axis pairs: location errors E_C0Y, E_B0Z, E_A0Z
   (Khan & Chen's eps_xy, eps_zx, eps_zy), one candidate each.
-* **Rotary axes** (Khan & Chen section 3, eqs. 9-16): position-dependent errors
+* **Rotary axes** (Khan & Chen eqs. 9-16, section 3): position-dependent errors
   E_XA ... E_CA of a rotary axis as Fourier series in its angle (harmonics 2-4;
   the first is the location errors'),
   and the axis' location errors (offsets of its centre line perpendicular to it,

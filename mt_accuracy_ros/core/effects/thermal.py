@@ -7,7 +7,7 @@ reading unless the model says otherwise).
   rise, e = beta dT, per direction (Zhu eq. 3.12, the "sensor term").
 * ``thermal_lag`` - the same through a first-order lag of time constant tau:
   the structure follows its sensor late (Zhu's modal time constants,
-  eqs. 3.9-3.10 and the fit of eq. 3.17); tau searched 5 min - 2.7 h.
+  Zhu eqs. 3.9-3.10 and the fit of Zhu eq. 3.17); tau searched 5 min - 2.7 h.
 * ``thermal_gradient`` - the difference of two sensors: a gradient bends a
   link (deflection and slope, Zhu Table 4.2).
 * ``heat_source`` - growth driven by an operating input through a lag: spindle
@@ -237,7 +237,7 @@ class ThermalSquareness(EffectFamily):
     group = "thermal"
     complexity = 3
     summary = "a squareness that changes with a temperature or a temperature difference"
-    reference = "Zhu ch. 4 (thermal link HTMs, eq. 4.2): a link's slope as a location error"
+    reference = "Zhu eq. 4.2 (ch. 4, thermal link HTMs): a link's slope as a location error"
 
     def variants(self, ctx):
         from .geometric import Squareness

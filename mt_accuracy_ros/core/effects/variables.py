@@ -20,7 +20,7 @@ name                meaning                                             unit
 
 First-order lags (a structure's temperature or growth following its heat
 source with a time constant tau, Zhu eqs. 3.9-3.10 and the modal time
-constants of eq. 3.17) are computed by :func:`first_order_lag`, exactly for
+constants of Zhu eq. 3.17) are computed by :func:`first_order_lag`, exactly for
 an input that is piecewise linear between readings. A lag of a temperature
 starts in steady state (equal to its input at the first reading) - not from
 zero, which would add a start-up ramp of the whole temperature; a lag of an

@@ -22,12 +22,12 @@ branch (Khan & Chen's M loop) carries the tool vector t, the workpiece branch (N
 loop) the workpiece point w, and the
 TCP error is
 
-    e = (P_t - P_w)_actual - (P_t - P_w)_nominal          (Kidani eq. 2.10, K&C eq. 17)
+    e = (P_t - P_w)_actual - (P_t - P_w)_nominal          (Kidani eq. 2.10, Khan & Chen eq. 17)
 
 in the bed (reference) frame.
 
-**The machining point.** Kidani (eqs. 2.9-2.10) takes w as "the target position
-on the work surface", the machining point; Khan & Chen (eq. 17) relate the
+**The machining point.** Kidani eqs. 2.9-2.10 take w as "the target position
+on the work surface", the machining point; Khan & Chen eq. 17 relates the
 cutter contact point to the workpiece. So by default w is, for every
 configuration, the nominal tool point expressed in the workpiece frame
 (:meth:`KinematicModel.machining_point`): the material the tool is cutting, and
@@ -187,7 +187,7 @@ class KinematicModel:
         pos = np.zeros((n, 3))
 
         def apply_error(twist):
-            # The error HTM D_X D_Y D_Z D_A D_B D_C (or eq. 2.7) as (R_e, d).
+            # The error HTM D_X D_Y D_Z D_A D_B D_C (or Kidani eq. 2.7) as (R_e, d).
             nonlocal rot, pos
             pos = pos + np.einsum("nij,nj->ni", rot, twist[:, :3])
             rot = rot @ rotation_of(twist[:, 3], twist[:, 4], twist[:, 5])
@@ -247,7 +247,7 @@ class KinematicModel:
 
         The workpiece frame is the one the description's ``workpiece`` is given
         in (the last workpiece axis' frame moved by its ``offset``; the bed for a
-        machine whose workpiece branch is empty). This is Kidani's w of eqs.
+        machine whose workpiece branch is empty). This is the w of Kidani eqs.
         2.9-2.10 ("the target position on the work surface"): the material the
         tool is cutting in this configuration.
         """

@@ -33,7 +33,8 @@ def translation(dx: ArrayLike = 0.0, dy: ArrayLike = 0.0, dz: ArrayLike = 0.0) -
 
 
 def rotation(axis: str, angle: ArrayLike) -> NDArray:
-    """D_A, D_B or D_C: rotation by ``angle`` [rad] about x, y or z (Table 2.1; eqs. 4-6)."""
+    """D_A, D_B or D_C: rotation by ``angle`` [rad] about x, y or z (Kidani Table 2.1;
+    Khan & Chen eqs. 4-6)."""
     angle = np.asarray(angle, dtype=np.float64)
     c, s = np.cos(angle), np.sin(angle)
     out = identity(angle.shape)
@@ -108,7 +109,7 @@ def rotation_vector(rotation_3x3: ArrayLike) -> NDArray:
 def thermal_link_htm(expansion_m: ArrayLike = 0.0, deflection_m: ArrayLike = 0.0,
                      slope_rad: ArrayLike = 0.0, *, length_axis: str = "x",
                      deflection_axis: str = "y") -> NDArray:
-    """HTM of a thermally deformed link (Zhu section 4.2, eq. 4.2, Table 4.2).
+    """HTM of a thermally deformed link (Zhu eq. 4.2, section 4.2, Table 4.2).
 
     The link's end moves by ``expansion_m`` along its length axis and by
     ``deflection_m`` along the deflection axis, and turns by ``slope_rad`` about

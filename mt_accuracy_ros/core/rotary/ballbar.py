@@ -2,21 +2,21 @@
 
 Setup (Zhu Fig. 5.2): one ball (A) sits in a socket on the rotary table (a C
 axis about z) at radius ``R_x`` and height ``R_z`` above the table centre O
-(eq. 5.3); the other (B) is held by the spindle above O at height ``H``
-(eq. 5.6), so that the bar stands at its nominal length L. The table indexes
+(Zhu eq. 5.3); the other (B) is held by the spindle above O at height ``H``
+(Zhu eq. 5.6), so that the bar stands at its nominal length L. The table indexes
 through angles c; the bar reads its length change Delta_1 = |L^E| - |L|
-(eq. 5.10).
+(Zhu eq. 5.10).
 
 Forward model
 -------------
-The table's actual motion is the ideal rotation (eq. 5.1) preceded by its six
-error components D_x, D_y, D_z, E_x, E_y, E_z (eq. 5.2, Fig. 5.1). Two
+The table's actual motion is the ideal rotation (Zhu eq. 5.1) preceded by its six
+error components D_x, D_y, D_z, E_x, E_y, E_z (Zhu eq. 5.2, Fig. 5.1). Two
 formulations are given and cross-checked in the tests:
 
 * :func:`length_change` - exact: the HTM product with exact rotations, the bar
-  vector (eqs. 5.4-5.9) and its norm;
+  vector (Zhu eqs. 5.4-5.9) and its norm;
 * :func:`squared_length_change` - Zhu's first-order closed form of
-  Delta_2' = |L^E'|^2 - |L|^2 with the setup's eccentricity H_x, H_y (eq. 5.13).
+  Delta_2' = |L^E'|^2 - |L|^2 with the setup's eccentricity H_x, H_y (Zhu eq. 5.13).
 
 A reading converts exactly to the squared change:
 Delta_2' = (L + Delta_1)^2 - L^2 = 2 L Delta_1 + Delta_1^2.
@@ -24,16 +24,16 @@ Delta_2' = (L + Delta_1)^2 - L^2 = 2 L Delta_1 + Delta_1^2.
 Two setups cancel the eccentricity
 ----------------------------------
 With a short (L1) and a long (L2) bar sharing the table socket (Zhu Fig. 5.3),
-subtracting eq. 5.15 from eq. 5.14 leaves (eq. 5.16)
+subtracting Zhu eq. 5.15 from Zhu eq. 5.14 leaves (Zhu eq. 5.16)
 
     Delta_2'(L1) - Delta_2'(L2) = 2 R_x (H2 - H1) sin(c) E_x
                                   - 2 R_x (H2 - H1) cos(c) E_y + 2 (H2 - H1) D_z
 
-linear in (E_x, E_y, D_z) with the design J of eq. 5.19 (condition number
-eq. 5.20). The radial errors D_x, D_y cancel with the eccentricity they are
+linear in (E_x, E_y, D_z) with the design J of Zhu eq. 5.19 (condition number
+Zhu eq. 5.20). The radial errors D_x, D_y cancel with the eccentricity they are
 coupled to (a reversal would be needed to separate them); E_z is not seen by
 a ball bar at all. :func:`calibrate` estimates the three by the l2 norm (least
-squares, eq. 5.17) and by the l-infinity norm (minimax, eq. 5.18, solved as a
+squares, Zhu eq. 5.17) and by the l-infinity norm (minimax, Zhu eq. 5.18, solved as a
 linear programme) and compares them as Zhu's Table 5.3 does.
 
 Units: metres, radians; angles in the data may be given in degrees where the
@@ -91,7 +91,7 @@ class BallBarSetup:
 
     @property
     def spindle_height_m(self) -> float:
-        """H, height of the spindle ball B above O that makes |L| = L (eqs. 5.6, 5.8)."""
+        """H, height of the spindle ball B above O that makes |L| = L (Zhu eqs. 5.6, 5.8)."""
         return self.socket_height_m + float(np.sqrt(self.bar_length_m ** 2 - self.radius_m ** 2))
 
     @property
@@ -122,10 +122,10 @@ def _angles(angles_rad: ArrayLike) -> NDArray[np.float64]:
 
 def length_change(angles_rad: ArrayLike, setup: BallBarSetup, errors: RotaryAxisErrors,
                   eccentricity_m: tuple[float, float] = (0.0, 0.0)) -> NDArray[np.float64]:
-    """Delta_1 = |L^E'| - L at each angle, exactly (eqs. 5.2-5.10, 5.12).
+    """Delta_1 = |L^E'| - L at each angle, exactly (Zhu eqs. 5.2-5.10, 5.12).
 
     The actual table HTM is Trans(D) Rot(E_x, E_y, E_z) Rot_z(c) with exact
-    rotations; B sits at (H_x, H_y, H) (eq. 5.12).
+    rotations; B sits at (H_x, H_y, H) (Zhu eq. 5.12).
 
     Returns
     -------
@@ -145,7 +145,7 @@ def length_change(angles_rad: ArrayLike, setup: BallBarSetup, errors: RotaryAxis
 def squared_length_change(angles_rad: ArrayLike, setup: BallBarSetup, errors: RotaryAxisErrors,
                           eccentricity_m: tuple[float, float] = (0.0, 0.0)
                           ) -> NDArray[np.float64]:
-    """Delta_2' = |L^E'|^2 - |L|^2, Zhu's first-order closed form (eq. 5.13) [m^2]."""
+    """Delta_2' = |L^E'|^2 - |L|^2, Zhu's first-order closed form (Zhu eq. 5.13) [m^2]."""
     c = _angles(angles_rad)
     r_x, r_z, h = setup.radius_m, setup.socket_height_m, setup.spindle_height_m
     h_x, h_y = eccentricity_m
@@ -165,7 +165,7 @@ def squared_change_from_reading(length_change_m: ArrayLike, bar_length_m: float
 
 def difference_design(angles_rad: ArrayLike, short: BallBarSetup, long: BallBarSetup
                       ) -> NDArray[np.float64]:
-    """J of eq. 5.19: columns for (E_x, E_y, D_z), shape (n, 3) [m^2/rad, m^2/rad, m]."""
+    """J of Zhu eq. 5.19: columns for (E_x, E_y, D_z), shape (n, 3) [m^2/rad, m^2/rad, m]."""
     c = _angles(angles_rad)
     _check_pair(short, long)
     dh = long.spindle_height_m - short.spindle_height_m
@@ -183,7 +183,7 @@ def _check_pair(short: BallBarSetup, long: BallBarSetup) -> None:
                              f"{short.socket_height_m * 1e3:.3f}/"
                              f"{long.socket_height_m * 1e3:.3f} mm")
     if abs(long.bar_length_m - short.bar_length_m) < 1e-3:
-        raise ParameterError("ball bar: the two bars must differ in length (eq. 5.16 divides "
+        raise ParameterError("ball bar: the two bars must differ in length (Zhu eq. 5.16 divides "
                              "by H2 - H1); got "
                              f"{short.bar_length_m * 1e3:.3f} and {long.bar_length_m * 1e3:.3f} mm")
 
@@ -235,7 +235,7 @@ def _column_scale(design: NDArray) -> NDArray:
 
 
 def fit_l2(design: NDArray, observed: NDArray) -> NormFit:
-    """Least squares (l2 norm, eq. 5.17) with the parameters' covariance."""
+    """Least squares (l2 norm, Zhu eq. 5.17) with the parameters' covariance."""
     n, p = design.shape
     if n <= p:
         raise CalibrationError(f"ball bar: {n} readings cannot fix {p} parameters")
@@ -250,7 +250,7 @@ def fit_l2(design: NDArray, observed: NDArray) -> NormFit:
 
 
 def fit_linf(design: NDArray, observed: NDArray) -> NormFit:
-    """Minimax (l-infinity norm, eq. 5.18) as a linear programme.
+    """Minimax (l-infinity norm, Zhu eq. 5.18) as a linear programme.
 
     minimise t  subject to  -t <= y_i - J_i p <= t; solved by HiGHS on columns
     and observations scaled to order one.
@@ -384,7 +384,7 @@ def _match_angles(short: BallBarRun, long: BallBarRun) -> None:
 # ------------------------------------------------------------------ calibration
 @dataclass(frozen=True)
 class SingleSetupFit:
-    """Eq. 5.13 fitted to one setup: Delta_2' = a sin c + b cos c + k.
+    """Zhu eq. 5.13 fitted to one setup: Delta_2' = a sin c + b cos c + k.
 
     The coupled sums cannot be separated with one setup: a = -2 R_x H E_x +
     2 R_x (D_y - H_y), b = 2 R_x H E_y + 2 R_x (D_x - H_x). With the tilts known
@@ -422,10 +422,10 @@ class BallBarCalibration:
     short: BallBarRun
     long: BallBarRun
     observed: NDArray[np.float64]           # (n,) Delta_2'(L1) - Delta_2'(L2) [m^2]
-    design: NDArray[np.float64]             # (n, 3), eq. 5.19
+    design: NDArray[np.float64]             # (n, 3), Zhu eq. 5.19
     l2: NormFit
     linf: NormFit
-    condition_number: float                 # eq. 5.20
+    condition_number: float                 # Zhu eq. 5.20
     single_setups: list[SingleSetupFit] = field(default_factory=list)
     reversal: list[ReversalJump] = field(default_factory=list)
     #: The unseen socket change allowed for, and what it and the runs' drift add to the
@@ -528,7 +528,7 @@ class BallBarCalibration:
                 lines.append(f"  {problem}")
         if self.condition_number > ILL_CONDITIONED:
             lines.append(f"  warning: a badly conditioned design (cond(J) "
-                         f"{self.condition_number:.3g}, eq. 5.20; a full turn gives about 20): "
+                         f"{self.condition_number:.3g}, Zhu eq. 5.20; a full turn gives about 20): "
                          "the arc or the bar lengths barely separate E_x, E_y and D_z")
         if self.socket_u is not None and self.socket_change_m > 0:
             lines.append(f"  in U: the table ball re-seating by up to "
@@ -578,7 +578,7 @@ def reversal_jump(run_name: str, angles_rad: NDArray, residuals: NDArray) -> Rev
                         _robust_sigma(residuals[1:-1]))
 
 
-#: cond(J) (eq. 5.20) above which the design is called badly conditioned: a full turn
+#: cond(J) (Zhu eq. 5.20) above which the design is called badly conditioned: a full turn
 #: with Zhu's bars gives about 20.
 ILL_CONDITIONED = 100.0
 
@@ -589,12 +589,12 @@ SOCKET_CHANGE_M = 1e-6
 
 def calibrate(short: BallBarRun, long: BallBarRun, *,
               socket_change_m: float = SOCKET_CHANGE_M) -> BallBarCalibration:
-    """E_x, E_y, D_z from a short- and a long-bar run (eqs. 5.14-5.19), l2 and l-infinity.
+    """E_x, E_y, D_z from a short- and a long-bar run (Zhu eqs. 5.14-5.19), l2 and l-infinity.
 
     The l2 uncertainties also carry two effects the fit itself cannot see:
 
     * a **change of the table ball's position** (eccentricity H) between the setups by up
-      to ``socket_change_m``: it enters the difference (eq. 5.19) as 2 R_x dH (sin, cos)
+      to ``socket_change_m``: it enters the difference (Zhu eq. 5.19) as 2 R_x dH (sin, cos)
       c - the tilts' own columns over the spindle-height difference - so it shifts E_x,
       E_y by dH / dh, and the two single-setup fits agree whatever dH is (four harmonic
       coefficients, four unknowns): only a third setup would show it. Taken as a
@@ -611,7 +611,7 @@ def calibrate(short: BallBarRun, long: BallBarRun, *,
     InputDataError
         Runs that index different positions.
     CalibrationError
-        A singular design (eq. 5.20).
+        A singular design (Zhu eq. 5.20).
     """
     _check_pair(short.setup, long.setup)
     _match_angles(short, long)
@@ -624,7 +624,7 @@ def calibrate(short: BallBarRun, long: BallBarRun, *,
     singular = np.linalg.svd(design, compute_uv=False)
     if singular[-1] <= singular[0] * 1e-12:
         raise CalibrationError("ball bar: the positions do not separate E_x, E_y and D_z "
-                               "(singular design, eq. 5.20); index the table over a wider arc")
+                               "(singular design, Zhu eq. 5.20); index the table over a wider arc")
     l2 = fit_l2(design, observed)
     linf = fit_linf(design, observed)
     singles = [_single_setup(run, l2.parameters[:2]) for run in (short, long)]
@@ -653,7 +653,7 @@ def calibrate(short: BallBarRun, long: BallBarRun, *,
 class AxisLineReading:
     """Zhu's fit read as location errors of the C axis line (ISO 230-7).
 
-    Zhu's model (eq. 5.2) moves the table by constant *error motions* after the ideal
+    Zhu's model (Zhu eq. 5.2) moves the table by constant *error motions* after the ideal
     turn; ISO 230-7 instead turns the table about its actual axis line, and the table
     ball is where it was set at c = 0. To first order the two describe the same
     readings with (derived in ``docs/rotary.md``):
@@ -662,10 +662,10 @@ class AxisLineReading:
     * the table ball's height offset at the set-up, D_z - R_x E_y: Zhu's D_z also holds
       the rise R_x E_y that a line tilted by E_y gives the ball at c = 0, which the
       line convention books as the ball's set-up, not the axis;
-    * per setup, EX0C - H_x and EY0C - H_y from the single-setup fit (eq. 5.13): the
+    * per setup, EX0C - H_x and EY0C - H_y from the single-setup fit (Zhu eq. 5.13): the
       line's offset from the spindle ball. They are the line's location errors only
       when the spindle ball stood at the machine's nominal C centre (H = 0); the two
-      setups cancel them in the difference (eq. 5.16), so they carry the single-setup
+      setups cancel them in the difference (Zhu eq. 5.16), so they carry the single-setup
       fits' uncertainty, not the tilts' U.
 
     Angles [rad], lengths [m]; ``*_u_k2`` expanded uncertainties (k = 2).
@@ -704,7 +704,7 @@ class AxisLineReading:
                 f"  EX0C, EY0C as the line's offset from the spindle ball (x / y): {offsets}"
                 " - the line's location errors if the spindle ball stood at the nominal C "
                 "centre, else its set-up eccentricity (the difference of the setups "
-                "cancels them, eq. 5.16)"]
+                "cancels them, Zhu eq. 5.16)"]
 
 
 def axis_line_reading(calibration: BallBarCalibration) -> AxisLineReading:

@@ -191,11 +191,11 @@ class YawCorrections:
     Attributes
     ----------
     thermal : bool
-        Relative thermal expansion of the two scales (eq. 3.17).
+        Relative thermal expansion of the two scales (Kidani eq. 3.17).
     parallelism : bool
-        Parallelism error of the pair (eq. 3.5); needs ``parallelism_rad``.
+        Parallelism error of the pair (Kidani eq. 3.5); needs ``parallelism_rad``.
     timing : bool
-        Sampling-time misalignment (eq. 2.20); needs ``skew_s``.
+        Sampling-time misalignment (Kidani eq. 2.20); needs ``skew_s``.
     parallelism_rad : float
         Known parallelism error delta [rad].
     skew_s : float

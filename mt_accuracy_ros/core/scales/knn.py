@@ -121,7 +121,7 @@ def knn_predict(positions: ArrayLike, values: ArrayLike, queries: ArrayLike, k: 
     k : int
         Number of neighbours, 1 <= k <= m.
     return_sigma : bool
-        Also return the sample standard deviation (eq. 2.23, ddof = 1) of the
+        Also return the sample standard deviation (Kidani eq. 2.23, ddof = 1) of the
         k neighbour values - the random error at each query; NaN when k = 1.
 
     Returns
@@ -243,7 +243,7 @@ class CrossValidationResult:
     rmse_by_k : ndarray, shape (k_lim,)
         Mean fold RMSE for each k.
     fold_rmse : ndarray, shape (n_folds, k_lim)
-        RMSE(k) of every fold (eq. 4.11).
+        RMSE(k) of every fold (Kidani eq. 4.11).
     folds : ndarray of int, shape (N,)
         Fold number of every input sample.
     """
@@ -281,10 +281,10 @@ def cross_validate_k(positions: ArrayLike, values: ArrayLike, k_lim: int = 100,
     """Choose k by K-fold cross-validation over k = 1 ... k_lim (Kidani 4.2.2.1).
 
     Each fold is held out once; the other folds are the training set; the kNN
-    mean (eq. 4.10) at each held-out position is compared with its value,
-    giving RMSE(k) per fold (eq. 4.11).
+    mean (Kidani eq. 4.10) at each held-out position is compared with its value,
+    giving RMSE(k) per fold (Kidani eq. 4.11).
 
-    Eq. 4.12 as printed takes the square root of the mean of the K RMSEs, which
+    Kidani eq. 4.12 as printed takes the square root of the mean of the K RMSEs, which
     is not an RMSE (its unit is the square root of the value's unit). This
     implementation uses the **plain mean of the K fold RMSEs**, the reading the
     surrounding text describes ("take the average of the K RMSE(k)s") and the

@@ -1,8 +1,8 @@
 """Systematic and random error at repeated positions; ISO 230-2 evaluation.
 
 Kidani section 2.4.1: with m repeated measurements E_ir at position i, the
-systematic error is their mean (eq. 2.22) and the random error their sample
-standard deviation (eq. 2.23). ISO 230-2 judges bidirectional positioning
+systematic error is their mean (Kidani eq. 2.22) and the random error their sample
+standard deviation (Kidani eq. 2.23). ISO 230-2 judges bidirectional positioning
 runs of a reference instrument (laser interferometer) by the same statistics
 per direction of approach.
 """
@@ -18,7 +18,7 @@ from ..validation import finite_array, same_length
 
 
 def systematic_and_random(errors: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Mean (eq. 2.22) and sample standard deviation (eq. 2.23) per position.
+    """Mean (Kidani eq. 2.22) and sample standard deviation (Kidani eq. 2.23) per position.
 
     Parameters
     ----------
@@ -32,13 +32,14 @@ def systematic_and_random(errors: ArrayLike) -> tuple[NDArray[np.float64], NDArr
     e = finite_array(errors, "errors", ndim=2)
     if e.shape[1] < 2:
         raise InsufficientDataError(
-            f"random error (eq. 2.23) needs >= 2 repetitions per position, got {e.shape[1]}")
+            f"random error (Kidani eq. 2.23) needs >= 2 repetitions per position, got {e.shape[1]}")
     return e.mean(axis=1), e.std(axis=1, ddof=1)
 
 
 def group_by_position(positions: ArrayLike, values: ArrayLike,
                       tolerance_m: float = 1e-6) -> tuple[NDArray, NDArray, NDArray, NDArray]:
-    """Eqs. 2.22/2.23 for data recorded at (nearly) repeated positions, e.g. stop-and-measure.
+    """Kidani eqs. 2.22/2.23 for data recorded at (nearly) repeated positions, e.g.
+    stop-and-measure.
 
     Positions within ``tolerance_m`` of the previous one (after sorting) form one
     group. Returns ``(group_position, systematic, random, count)``; ``random`` is

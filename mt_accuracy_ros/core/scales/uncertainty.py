@@ -12,7 +12,7 @@ parallelism of the pair        L / cos(0.61e-3) - L        1 / D
 timing misalignment            0.005 um                    1 / D
 =============================  ==========================  ===========
 
-and combines them by eq. 3.10, ``u = sqrt(sum u_i^2)``, with u_i = sensitivity
+and combines them by Kidani eq. 3.10, ``u = sqrt(sum u_i^2)``, with u_i = sensitivity
 x sigma_i. The encoder term dominates, so 2u ~= (1.5 + 1.5 L) / D um/m, the
 table's last row.
 """
@@ -72,7 +72,7 @@ class YawUncertainty:
 
     @property
     def combined(self) -> NDArray[np.float64]:
-        """u of eq. 3.10 [rad]."""
+        """u of Kidani eq. 3.10 [rad]."""
         return np.sqrt(self.encoder ** 2 + self.noise ** 2 + self.parallelism ** 2
                        + self.timing ** 2)
 
@@ -84,7 +84,7 @@ class YawUncertainty:
 
 def yaw_uncertainty(travel_m: ArrayLike, scale_distance_m: float,
                     spec: ScaleSpec = ScaleSpec()) -> YawUncertainty:
-    """Uncertainty budget of dual-scale yaw (Kidani Table 3.4, eq. 3.10).
+    """Uncertainty budget of dual-scale yaw (Kidani eq. 3.10, Table 3.4).
 
     Parameters
     ----------
@@ -119,7 +119,7 @@ def timing_error_per_distance(feed_m_per_s: float, skew_s: float,
 
 def parallelism_error_at_stroke(stroke_m: float, parallelism_rad: float,
                                 scale_distance_m: float) -> float:
-    """Yaw error of eq. 3.5 at the end of the stroke [rad]."""
+    """Yaw error of Kidani eq. 3.5 at the end of the stroke [rad]."""
     stroke = positive(stroke_m, "stroke_m")
     return (stroke / np.cos(parallelism_rad) - stroke) / positive(scale_distance_m,
                                                                    "scale_distance_m")
@@ -140,12 +140,12 @@ def tcp_uncertainty_from_yaw(sigma_yaw_bx: float, sigma_yaw_bz: float,
                              sigma_yaw_cy: float) -> NDArray[np.float64]:
     """TCP uncertainty vector from the yaw uncertainties of the three axes (Kidani eq. 2.15).
 
-    The L_* constants of eq. 2.14 are exact, so the uncertainties add in
+    The L_* constants of Kidani eq. 2.14 are exact, so the uncertainties add in
     quadrature per component::
 
         sigma_e = [sqrt(s_BX^2 + s_BZ^2 + s_CY^2), s_CY, sqrt(s_BX^2 + s_BZ^2)]
 
-    (Units as given: eq. 2.15 treats the lever arms as folded into the sigmas.)
+    (Units as given: Kidani eq. 2.15 treats the lever arms as folded into the sigmas.)
     """
     bx, bz, cy = (float(v) for v in (sigma_yaw_bx, sigma_yaw_bz, sigma_yaw_cy))
     return np.array([np.sqrt(bx ** 2 + bz ** 2 + cy ** 2), cy, np.sqrt(bx ** 2 + bz ** 2)])

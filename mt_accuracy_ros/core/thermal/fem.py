@@ -5,7 +5,7 @@ The semi-discrete heat equation (Zhu eq. 3.1), temperatures as rises over ambien
     C dT/dt + K T = Q(t)
 
 with C the heat capacity matrix and K the conductivity matrix plus the
-convection to ambient. Its generalised eigenproblem (eq. 3.2)
+convection to ambient. Its generalised eigenproblem (Zhu eq. 3.2)
 
     K Phi = C Phi Lambda,     Phi^T C Phi = I (3.6),  Phi^T K Phi = Lambda (3.7)
 
@@ -260,21 +260,21 @@ def beam_model(length_m: float = ZHU_LENGTH_M, area_m2: float = ZHU_AREA_M2,
 
 @dataclass
 class ThermalModes:
-    """Eigen-solution of eq. 3.2: lambda (m,) [1/s], tau (m,) [s], shapes Phi (n, m)."""
+    """Eigen-solution of Zhu eq. 3.2: lambda (m,) [1/s], tau (m,) [s], shapes Phi (n, m)."""
 
     eigenvalues: NDArray[np.float64]
     shapes: NDArray[np.float64]
 
     @property
     def time_constants_s(self) -> NDArray[np.float64]:
-        return 1.0 / self.eigenvalues  # eq. 3.3
+        return 1.0 / self.eigenvalues  # Zhu eq. 3.3
 
     def modal_load(self, heat: ArrayLike) -> NDArray[np.float64]:
-        """xi = Phi^T Q (eq. 3.8); ``heat`` (..., n) -> (..., m)."""
+        """xi = Phi^T Q (Zhu eq. 3.8); ``heat`` (..., n) -> (..., m)."""
         return np.asarray(heat, dtype=np.float64) @ self.shapes
 
     def weights(self, heat: ArrayLike) -> NDArray[np.float64]:
-        """w_i = |xi_i tau_i| for a step heat input (eq. 3.11)."""
+        """w_i = |xi_i tau_i| for a step heat input (Zhu eq. 3.11)."""
         return np.abs(self.modal_load(heat) * self.time_constants_s)
 
     def dominant(self, heat: ArrayLike, share: float = 0.9) -> NDArray[np.int64]:
@@ -287,7 +287,7 @@ class ThermalModes:
 
     def step_response(self, heat: ArrayLike, times_s: ArrayLike,
                       modes: ArrayLike | None = None) -> NDArray[np.float64]:
-        """T(t) (len(t), n) for a constant ``heat`` from t = 0 (eqs. 3.4, 3.10)."""
+        """T(t) (len(t), n) for a constant ``heat`` from t = 0 (Zhu eqs. 3.4, 3.10)."""
         t = np.asarray(times_s, dtype=np.float64)[:, None]
         selected = np.arange(self.eigenvalues.size) if modes is None else np.asarray(modes)
         xi = self.modal_load(heat)[selected]
@@ -299,7 +299,7 @@ class ThermalModes:
                  modes: ArrayLike | None = None) -> NDArray[np.float64]:
         """T at the end of each step for piecewise-constant Q (steps, n) - exact per mode.
 
-        theta_i(t + dt) = theta_i e^{-dt/tau_i} + xi_i tau_i (1 - e^{-dt/tau_i}) (eq. 3.9).
+        theta_i(t + dt) = theta_i e^{-dt/tau_i} + xi_i tau_i (1 - e^{-dt/tau_i}) (Zhu eq. 3.9).
         """
         q = np.atleast_2d(np.asarray(heat_history, dtype=np.float64))
         selected = np.arange(self.eigenvalues.size) if modes is None else np.asarray(modes)
@@ -315,7 +315,7 @@ class ThermalModes:
 
 
 def thermal_modes(model: ThermalFEModel, n_modes: int | None = None) -> ThermalModes:
-    """Solve eq. 3.2: dense ``eigh`` for small models, sparse shift-invert for large.
+    """Solve Zhu eq. 3.2: dense ``eigh`` for small models, sparse shift-invert for large.
 
     ``n_modes`` None: all (dense). With sparse matrices or ``n_modes`` given for a
     model above 400 nodes, ARPACK ``eigsh`` (sigma = 0) finds the slowest modes.
@@ -329,7 +329,7 @@ def thermal_modes(model: ThermalFEModel, n_modes: int | None = None) -> ThermalM
             M=scipy.sparse.csc_matrix(capacity), sigma=0.0, which="LM")
         order = np.argsort(values)
         values, vectors = values[order], vectors[:, order]
-        # Normalise Phi^T C Phi = I (eq. 3.6) explicitly: ARPACK's scaling is not guaranteed.
+        # Normalise Phi^T C Phi = I (Zhu eq. 3.6) explicitly: ARPACK's scaling is not guaranteed.
         norms = np.sqrt(np.einsum("ij,ij->j", vectors, capacity @ vectors))
         vectors = vectors / norms
     else:
@@ -348,7 +348,7 @@ def thermal_modes(model: ThermalFEModel, n_modes: int | None = None) -> ThermalM
 
 def integrate_directly(model: ThermalFEModel, heat_history: ArrayLike, dt_s: float,
                        substeps: int = 20) -> NDArray[np.float64]:
-    """Eq. 3.1 by Crank-Nicolson time stepping (independent of the modal solution).
+    """Zhu eq. 3.1 by Crank-Nicolson time stepping (independent of the modal solution).
 
     Returns T at the end of each of the ``steps`` (steps, n); Q piecewise constant.
     """

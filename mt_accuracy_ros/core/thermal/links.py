@@ -1,4 +1,4 @@
-"""Thermal links of the kinematic chain (Zhu chapter 4, eq. 4.2, Table 4.2).
+"""Thermal links of the kinematic chain (Zhu eq. 4.2, chapter 4, Table 4.2).
 
 A link (a column, a spindle head, a bed segment) deforms with its own
 temperatures: its end moves by the expansion epsilon along the link, by the
@@ -79,7 +79,7 @@ def fit_link(name: str, sensors: list[str], temperatures: dict[str, ArrayLike],
              expansion_m: ArrayLike | None = None, deflection_m: ArrayLike | None = None,
              slope_rad: ArrayLike | None = None, *, length_axis: str = "z",
              deflection_axis: str = "y", ridge: float = 0.0) -> ThermalLink:
-    """Fit a link's epsilon / delta / theta models (eq. 3.12 with intercept) from records."""
+    """Fit a link's epsilon / delta / theta models (Zhu eq. 3.12 with intercept) from records."""
     link = ThermalLink(name, list(sensors), length_axis, deflection_axis)
     x = link._columns(temperatures)
     for key, target in (("expansion", expansion_m), ("deflection", deflection_m),

@@ -3,7 +3,7 @@
 * position independent, E(t) = sum_i beta_i T_i(t)                       (3.12)
 * position dependent, E(x, t) = sum_i [beta_0i + beta_1i P(x) + ...] T_i(t)  (3.13)
 * lag terms: first-order responses h_tau(t) of a heat input (spindle speed),
-  tau h' = u - h, the modal coordinates of eq. 3.9, as extra regressors;
+  tau h' = u - h, the modal coordinates of Zhu eq. 3.9, as extra regressors;
 * the three-mode time-constant fit of a temperature record (3.17).
 
 Least squares (3.15) is solved on centred and scaled columns (QR via
@@ -187,7 +187,7 @@ class TimeConstantFit:
 
 def fit_time_constants(time_s: ArrayLike, temperature: ArrayLike, n_modes: int = 3,
                        initial_s: ArrayLike | None = None) -> TimeConstantFit:
-    """Fit eq. 3.17 to a step-response temperature record (log-tau parametrisation).
+    """Fit Zhu eq. 3.17 to a step-response temperature record (log-tau parametrisation).
 
     Sorted slowest first, like Zhu's tau_1 = 363.6, tau_2 = 61.7, tau_3 = 27.0 min.
     """

@@ -1,21 +1,21 @@
 """Temperature sensor placement by Gaussian integration (Krulewich 1996).
 
-A thermal deflection is the integral of the temperature field (eq. 1),
+A thermal deflection is the integral of the temperature field (Krulewich eq. 1),
 dx = alpha int_0^L T(x) dx, approximated by a weighted sum of point
-temperatures (eqs. 2-3). If T is a polynomial of order k (eq. 4), matching
-the moments (eqs. 6-9) gives
+temperatures (Krulewich eqs. 2-3). If T is a polynomial of order k (Krulewich eq. 4), matching
+the moments (Krulewich eqs. 6-9) gives
 
-    sum_i w_i x_i^j = L^(j+1) / (j+1),  j = 0 ... k          (eq. 9)
+    sum_i w_i x_i^j = L^(j+1) / (j+1),  j = 0 ... k          (Krulewich eq. 9)
 
-which n = (k+1)/2 points satisfy exactly (eq. 8): the Gauss-Legendre nodes
-and weights mapped to [0, L]. (Eq. 10 as printed reads sum w_i = L/2; the
-j = 0 case of eq. 9 is sum w_i = L, which is what is implemented.)
+which n = (k+1)/2 points satisfy exactly (Krulewich eq. 8): the Gauss-Legendre nodes
+and weights mapped to [0, L]. (Krulewich eq. 10 as printed reads sum w_i = L/2; the
+j = 0 case of Krulewich eq. 9 is sum w_i = L, which is what is implemented.)
 
-Position-dependent errors (eqs. 13-18): the sensors are fixed, n = k + 1
-(eq. 13), and the weights become polynomials of the axis position x,
+Position-dependent errors (Krulewich eqs. 13-18): the sensors are fixed, n = k + 1
+(Krulewich eq. 13), and the weights become polynomials of the axis position x,
 solving sum_i w_i(x) x_i^j = x^(j+1)/(j+1) for j = 0 ... k.
 
-Multi-dimensional fields (eqs. 19-23): a complete order-p polynomial in d
+Multi-dimensional fields (Krulewich eqs. 19-23): a complete order-p polynomial in d
 dimensions has m = (p+d)!/(p! d!) terms; a position-independent error needs
 n >= m/(d+1) free sensors, a position-dependent one n >= m/d.
 """
@@ -49,7 +49,7 @@ def gauss_points(order: int, length_m: float) -> tuple[NDArray[np.float64], NDAr
 
 def moment_residuals(positions: ArrayLike, weights: ArrayLike, order: int,
                      length_m: float) -> NDArray[np.float64]:
-    """sum_i w_i x_i^j - L^(j+1)/(j+1) for j = 0 ... k (eq. 9); zero when exact."""
+    """sum_i w_i x_i^j - L^(j+1)/(j+1) for j = 0 ... k (Krulewich eq. 9); zero when exact."""
     x = np.asarray(positions, dtype=np.float64)
     w = np.asarray(weights, dtype=np.float64)
     j = np.arange(int(order) + 1)
@@ -89,7 +89,7 @@ def polynomial_terms(order: int, dimensions: int) -> int:
 
 
 def sensors_needed(order: int, dimensions: int, position_dependent: bool = False) -> int:
-    """n >= m/(d+1) (eq. 22) or, position dependent, n >= m/d (eq. 23)."""
+    """n >= m/(d+1) (Krulewich eq. 22) or, position dependent, n >= m/d (Krulewich eq. 23)."""
     m = polynomial_terms(order, dimensions)
     d = int(dimensions)
     return int(ceil(m / d)) if position_dependent else int(ceil(m / (d + 1)))

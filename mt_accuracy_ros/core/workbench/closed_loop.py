@@ -2,7 +2,7 @@
 
 A reference instrument measuring a compensated machine reads
 ``measured = e_machine + c_applied`` (the CNC added ``c_applied`` to the
-command; Kidani's p2 = p1 - delta e, eq. 3.16, makes ``c_applied = -e_model``).
+command; Kidani's p2 = p1 - delta e, Kidani eq. 3.16, makes ``c_applied = -e_model``).
 The controller knows ``c_applied``, so at every reading both are known:
 
 * the machine's error **without** compensation, ``measured - c_applied``;
