@@ -92,17 +92,39 @@ def error_trend(day_numbers, rmse_m) -> Trend:
 
 
 def rank_by_drift(trends: dict[str, Trend]) -> list[str]:
-    """Machine names, the drifting ones first, each group by falling slope."""
+    """Machine names, the drifting ones first, each group by falling slope.
+
+    Parameters
+    ----------
+    trends : dict of str to Trend
+        Each machine's trend (:func:`error_trend`); slopes in m/day.
+
+    Returns
+    -------
+    list of str, len(trends)
+        The machines' names in that order (ties by name).
+    """
     return sorted(trends, key=lambda name: (not trends[name].drifting,
                                             -trends[name].slope_m_per_day, name))
 
 
 def common_effects(named_by_machine: dict[str, list[str]], least: int = 2
                    ) -> list[tuple[str, list[str]]]:
-    """Effects named on at least ``least`` machines: (effect, machines), most shared first.
+    """Effects named on at least ``least`` machines, most shared first.
 
-    ``named_by_machine``: machine -> the names of the effects named on any of its days
-    (repeats are counted once per machine)."""
+    Parameters
+    ----------
+    named_by_machine : dict of str to list of str
+        Machine -> the names of the effects named on any of its days (repeats are
+        counted once per machine).
+    least : int
+        The fewest machines an effect must be named on to be listed.
+
+    Returns
+    -------
+    list of (str, list of str)
+        (effect, the machines it was named on, sorted), by falling count, then name.
+    """
     machines = defaultdict(set)
     for machine, names in named_by_machine.items():
         for name in names:

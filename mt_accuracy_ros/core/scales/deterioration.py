@@ -1,10 +1,10 @@
 """Deterioration detection and command compensation (Kidani sections 2.1 and 3.3.2).
 
 The systematic error measured now, e_N, is compared with the master data e_1
-kept from when the machine was accurate: de = e_N - e_1 (eq. 2.1). Where
+kept from when the machine was accurate: de = e_N - e_1 (Kidani eq. 2.1). Where
 |de| >= de_TOL the accuracy has changed and the command p1 is modified to
-p2 = p1 - de (eq. 2.2). For yaw of the Y axis with the tool offset d in X the
-TCP change is de_y = dE_CY * d (eqs. 3.11-3.16).
+p2 = p1 - de (Kidani eq. 2.2). For yaw of the Y axis with the tool offset d in X the
+TCP change is de_y = dE_CY * d (Kidani eqs. 3.11-3.16).
 """
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ class DeteriorationReport:
     Attributes
     ----------
     positions : ndarray, shape (n,)
-    change : ndarray, shape (n,)      de = current - baseline (eq. 2.1 / 3.11)
+    change : ndarray, shape (n,)      de = current - baseline (Kidani eq. 2.1 / 3.11)
     flagged : ndarray of bool, shape (n,)   |de| >= tolerance
     tolerance : float
     """
@@ -86,7 +86,22 @@ def detect_deterioration(positions: ArrayLike, baseline: ArrayLike, current: Arr
 
 
 def resample_profile(positions: ArrayLike, values: ArrayLike, at: ArrayLike) -> NDArray[np.float64]:
-    """Linear interpolation of a profile at other positions (flat beyond its ends)."""
+    """Linear interpolation of a profile at other positions (flat beyond its ends).
+
+    Parameters
+    ----------
+    positions : array_like, shape (n,)
+        The profile's positions, strictly ascending [m].
+    values : array_like, shape (n,)
+        The profile's values there (any unit; returned in the same).
+    at : array_like, shape (m,)
+        Positions to evaluate the profile at [m].
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        The profile at ``at``, in the unit of ``values``.
+    """
     x = finite_array(positions, "positions", ndim=1)
     y = finite_array(values, "values", ndim=1)
     same_length("positions", x, "values", y)
@@ -104,6 +119,11 @@ def compensated_command(command_m: ArrayLike, error_change_m: ArrayLike) -> NDAr
         Commands p1 [m].
     error_change_m : array_like, same shape
         TCP error change de at each command [m].
+
+    Returns
+    -------
+    ndarray, the shape of ``command_m``
+        Modified commands p2 [m].
     """
     p1 = finite_array(command_m, "command_m")
     de = finite_array(error_change_m, "error_change_m")
@@ -113,9 +133,22 @@ def compensated_command(command_m: ArrayLike, error_change_m: ArrayLike) -> NDAr
 
 
 def tcp_change_from_yaw(yaw_change_rad: ArrayLike, tool_offset_m: float) -> NDArray[np.float64]:
-    """TCP change of the yaw-only model, de_y = dE_CY * d (Kidani eqs. 3.13-3.16)."""
+    """TCP change of the yaw-only model, de_y = dE_CY * d (Kidani eqs. 3.13-3.16).
+
+    Parameters
+    ----------
+    yaw_change_rad : array_like, shape (n,)
+        Yaw change dE_CY at each position [rad].
+    tool_offset_m : float
+        Abbe offset d of the tool from the axis' line [m].
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        TCP change de_y [m].
+    """
     change = finite_array(yaw_change_rad, "yaw_change_rad", ndim=1)
     offset = float(tool_offset_m)
     if not np.isfinite(offset):
         raise ParameterError(f"tool_offset_m must be finite, got {tool_offset_m!r}")
-    return change * offset
+    return change * offset  # Kidani eq. 3.14
