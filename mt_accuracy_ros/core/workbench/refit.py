@@ -21,15 +21,17 @@ old and new value) but not asked: a drift coefficient within its uncertainty of
 the truth can still leave a micrometre when extrapolated over a warm-up, and the
 held-out error is what the machine feels.
 
-**What the live fit could not tell from zero is held.** A coefficient whose value
-lies within its stated expanded uncertainty (|value| < 2 u) was not identified by
-the fit that made it; a refit keeps it as it is, unless the readings show it now:
-the refit with it free predicts the held-out readings better than the refit that
-holds it (the same block test at ``alpha``, by ``min_reduction``). On the few poses
-of an early record collinear parameters take up each other's error - the trunnion's
-refit after 44 s gave the column drift an x gain of -0.35 um/K and the A line tilts
-of -1.9 and -1.4 urad that the truth lacks (each "3 sigma", every one from the
-others' and the calibration's error), which the compensation then extrapolated.
+**What the live fit could not tell from zero is taken as zero.** A coefficient
+whose value lies within its stated expanded uncertainty (|value| < 2 u) was not
+identified by the fit that made it (an error parameter's nominal is zero, as in a
+kinematic calibration's identification); a refit takes it as zero and fits the
+others without it, unless the readings show it now: the refit with it free predicts
+the held-out readings better than the refit without it (the same block test at
+``alpha``, by ``min_reduction``). On the few poses of an early record collinear
+parameters take up each other's error - the trunnion's refit after 44 s gave the
+column drift an x gain of -0.35 um/K and the A line tilts of -1.9 and -1.4 urad that
+the truth lacks (each "3 sigma", every one from the others' and the calibration's
+error), which the compensation then extrapolated.
 
 Where the instrument measured the tool's direction too, both quantities are
 judged together, in the selection's noise-scaled rows (:func:`.diagnosis.residual_frame`).
@@ -225,8 +227,8 @@ class Refit:
     #: The datum correction fitted with the effects (absolute refits of a model that
     #: states its uncertainty at the datum), else None.
     datum: DatumCorrection | None = None
-    #: Parameters the live fit could not tell from zero, held as they are (these readings
-    #: do not show them, held out), and those the readings now show (released).
+    #: Parameters the live fit could not tell from zero, taken as zero (these readings do
+    #: not show them, held out), and those the readings now show (refitted too).
     held: list[str] = field(default_factory=list)
     released: list[str] = field(default_factory=list)
 
@@ -270,8 +272,8 @@ class Refit:
                 change.text(by_name[change.effect].effect, by_name[change.effect].variant)
                 for change in sorted(moved, key=lambda c: -c.z)[:3])
         if self.held:
-            text += (f"; held as fitted (not told from zero then, not shown held out now): "
-                     f"{', '.join(self.held)}")
+            text += (f"; taken as zero (not told from zero when fitted, not shown held out "
+                     f"now): {', '.join(self.held)}")
         if self.released:
             text += f"; {', '.join(self.released)} refitted too (the readings now show them)"
         if self.datum is not None:
@@ -367,7 +369,7 @@ def held_parameters(model: ErrorModel, name: str, parameter_names: list[str]
                     ) -> NDArray[np.bool_]:
     """(P,) which parameters of effect ``name`` its live fit could not tell from zero:
     |value| below twice its stated standard uncertainty (within its U, k = 2). A refit
-    holds them as they are unless the readings show them (:func:`refit_effects`)."""
+    takes them as zero unless the readings show them (:func:`refit_effects`)."""
     entry = model.effects[name]
     values = entry.get("coefficients") or {}
     uncertainties = entry.get("uncertainties") or {}
@@ -388,10 +390,17 @@ class _Fit:
 
 
 def _joint_fit(leading: list, blocks: list, terms: list, live_y: NDArray[np.float64],
-               fold_of_row: NDArray[np.intp], prior, held: list | None = None) -> _Fit:
+               fold_of_row: NDArray[np.intp], prior, held: list | None = None,
+               old_values: list | None = None) -> _Fit:
     """The change of every refitted coefficient (and the leading offsets) fitted to the
-    live residual; ``held`` ((P,) bool per block): those columns kept out (no change)."""
+    live residual; ``held`` ((P,) bool per block): those taken as zero (their change is
+    minus their ``old_values``; the others fitted to what that leaves)."""
+    fixed = np.zeros(0)
     if held is not None:
+        fixed = np.concatenate([np.zeros(sum(b.shape[1] for b in leading))] + [
+            np.where(mask, -np.asarray(old, dtype=np.float64), 0.0)
+            for mask, old in zip(held, old_values)])
+        live_y = live_y - np.column_stack(leading + blocks) @ fixed
         blocks = [np.where(mask[None, :], 0.0, block) for block, mask in zip(blocks, held)]
     x = np.column_stack(leading + blocks)
     penalties, start = [], sum(b.shape[1] for b in leading)
@@ -399,6 +408,8 @@ def _joint_fit(leading: list, blocks: list, terms: list, live_y: NDArray[np.floa
         penalties.append((start, start + block.shape[1], penalty_of(term, setting)))
         start += block.shape[1]
     change, standard = prior_fit(x, live_y, penalties, prior)
+    if fixed.size:
+        change = change + fixed
     return _Fit(x, penalties, change, standard,
                 blocked_cv_errors(x, live_y, fold_of_row, penalties, prior))
 
@@ -489,7 +500,7 @@ def refit_effects(model: ErrorModel, obs: Observations, names: list[str] | None 
     # Otherwise the instrument's zero per component, free.
     prior = _datum_prior(model, obs.uncertainty_m / 2.0) if absolute else None
     leading = [selector.offsets] if not absolute or prior is not None else []
-    # What the live fit could not tell from zero stays as it is, unless the readings show
+    # What the live fit could not tell from zero is taken as zero, unless the readings show
     # it now: the refit with it free predicts the held-out readings better than without
     # (the block test at alpha, by min_reduction). On a few poses of a warm-up, the
     # collinear (a drift's gain, a line's tilts) take up each other's error.
@@ -497,7 +508,10 @@ def refit_effects(model: ErrorModel, obs: Observations, names: list[str] | None 
     fit = _joint_fit(leading, blocks, terms, live_y, selector.fold_of_row, prior)
     held_names, released = [], []
     if any(mask.any() for mask in held):
-        holding = _joint_fit(leading, blocks, terms, live_y, selector.fold_of_row, prior, held)
+        old_values = [[float((model.effects[name].get("coefficients") or {}).get(p, 0.0))
+                       for p in ps] for name, ps in zip(names, parameter_names)]
+        holding = _joint_fit(leading, blocks, terms, live_y, selector.fold_of_row, prior, held,
+                             old_values)
         named = [f"{name}: " + ", ".join(p for p, h in zip(ps, mask) if h)
                  for name, ps, mask in zip(names, parameter_names, held) if mask.any()]
         gain = 1.0 - _rms(fit.errors) / _rms(holding.errors) if _rms(holding.errors) > 0 \
@@ -541,7 +555,8 @@ def _refitted(model: ErrorModel, selector: Selector, names: list[str], terms: li
               parameter_names: list, fit: _Fit, start: int, held: list | None,
               cv_rmse: float) -> tuple[list[Candidate], list[ParameterChange], list[str]]:
     """The refitted effects as candidates, each coefficient's change, physics' refusals.
-    A held coefficient keeps its value and its stated uncertainty."""
+    A coefficient taken as zero keeps its stated uncertainty (the bound the readings
+    left it within)."""
     candidates, changes, refusals = [], [], []
     for k, (name, (term, setting), parameters) in enumerate(zip(names, terms,
                                                                 parameter_names)):
