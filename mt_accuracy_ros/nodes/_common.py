@@ -94,17 +94,29 @@ def accept() -> SetParametersResult:
 
 
 
-def node_executor(node):
-    """A single-threaded executor holding ``node`` for good.
+def node_executor(node, *, events: bool = False):
+    """An executor holding ``node`` for good: rclpy's C++ ``EventsExecutor`` with
+    ``events``, else a single-threaded one.
 
     ``rclpy.spin_once(node)`` adds the node to the global executor and removes it
     again on every call, so the executor rebuilds its wait set each time: measured
     in a lockstep main job, that rebuilding was 40 % of the virtual machine's CPU.
-    Loops that spin a node repeatedly keep one of these instead.
+    Loops that spin a node repeatedly keep one of these instead. Even kept, the
+    single-threaded executor rebuilds its wait set in Python at every wake-up: 0.43 ms
+    of CPU per message received one at a time, against 0.18 ms in the events executor
+    (``python -m bench.executor_cost``, docs/benchmarks.md) - most of the CPU of the
+    nodes that take a message per scale batch. The events executor (rclpy's
+    experimental one) is taken by the nodes whose tests pass with it (:func:`run_node`'s
+    ``events``); the recorder is not one of them (its ``spin_once`` raised SystemError).
     """
-    from rclpy.executors import SingleThreadedExecutor
+    if events:
+        from rclpy.experimental.events_executor import EventsExecutor
 
-    executor = SingleThreadedExecutor(context=node.context)
+        executor = EventsExecutor(context=node.context)
+    else:
+        from rclpy.executors import SingleThreadedExecutor
+
+        executor = SingleThreadedExecutor(context=node.context)
     executor.add_node(node)
     return executor
 
@@ -141,13 +153,17 @@ def signals_held():
 
 
 def run_node(node_class, args: list[str] | None, *, until_finished: bool = False,
-             on_exit=None) -> int:
+             on_exit=None, events: bool = False) -> int:
     """The Jazzy main-loop idiom every node module's ``main()`` shares.
 
     ``rclpy.init``; construct the node (a configuration error -> message and exit
     code 2); spin - or, ``until_finished``, spin until ``node.finished`` and let
     the last messages out; always ``on_exit(node)``, ``destroy_node()`` and
-    ``rclpy.try_shutdown()``.
+    ``rclpy.try_shutdown()``. ``events``: spin in rclpy's events executor
+    (:func:`node_executor`), for nodes that take a message per scale batch. Its own
+    ``spin()`` stays in C++: in this rclpy a SIGINT never reached Python and parameter
+    requests went unanswered (test/nodes/test_events_executor.py), so it is spun here
+    one callback (or 50 ms) at a time.
     """
     import sys
 
@@ -169,12 +185,17 @@ def run_node(node_class, args: list[str] | None, *, until_finished: bool = False
         print(f"{node_class.__name__}: {' '.join(str(exc).split())}", file=sys.stderr)
         rclpy.try_shutdown()
         return 2
+    executor = None
     try:
+        if until_finished or events:
+            executor = node_executor(node, events=events)
         if until_finished:
-            executor = node_executor(node)
             while rclpy.ok() and not node.finished:
                 executor.spin_once(timeout_sec=0.05)
             linger(node, executor=executor)
+        elif executor is not None:
+            while rclpy.ok():
+                executor.spin_once(timeout_sec=0.05)
         else:
             rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
@@ -187,6 +208,8 @@ def run_node(node_class, args: list[str] | None, *, until_finished: bool = False
     finally:
         if on_exit is not None:
             on_exit(node)
+        if executor is not None and events:
+            executor.shutdown()   # its C++ side lets go of the node's entities first
         node.destroy_node()
         rclpy.try_shutdown()
     return 0

@@ -351,7 +351,7 @@ class CompensationBroadcaster(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Entry point (console_scripts)."""
-    return run_node(CompensationBroadcaster, args)
+    return run_node(CompensationBroadcaster, args, events=True)
 
 
 if __name__ == "__main__":

@@ -472,7 +472,7 @@ class EncoderPublisher(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Entry point (console_scripts)."""
-    return run_node(EncoderPublisher, args, until_finished=True)
+    return run_node(EncoderPublisher, args, until_finished=True, events=True)
 
 
 if __name__ == "__main__":

@@ -143,7 +143,7 @@ class TemperaturePublisher(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Entry point (console_scripts)."""
-    return run_node(TemperaturePublisher, args, until_finished=True)
+    return run_node(TemperaturePublisher, args, until_finished=True, events=True)
 
 
 if __name__ == "__main__":

@@ -396,7 +396,7 @@ class YawEstimator(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Entry point (console_scripts)."""
-    return run_node(YawEstimator, args)
+    return run_node(YawEstimator, args, events=True)
 
 
 if __name__ == "__main__":
