@@ -4,11 +4,11 @@
    20 mm) and written as the machine description the model starts from.
 2. Separate processes: encoder and temperature publishers (the scenario
    ``demo``: warm-up, a Y guideway deterioration at 50 s, a column thermal drift
-   and an X ball-screw pitch error the model does not hold), the yaw/systematic estimator, the compensation
-   broadcaster, the model monitor and the recorder (MCAP). The virtual machine
-   is a CNC that applies the broadcast compensation (``compensation_input``:
-   real-time offset by default, or tables), so its reference instrument
-   measures the compensated machine: the loop is closed.
+   and an X ball-screw pitch error the model does not hold), the yaw/systematic
+   estimator, the compensation broadcaster, the model monitor and the recorder
+   (MCAP). The virtual machine is a CNC that applies the broadcast compensation
+   (``compensation_input``: real-time offset by default, or tables), so its
+   reference instrument measures the compensated machine: the loop is closed.
 3. This process listens like any ROS tool and acts as the user: when the
    monitor names a missing effect, it asks the monitor to add it (the
    ``add_effects`` parameter) and watches the machine's error fall.
@@ -258,9 +258,10 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     for axis in ("x", "y", "z"):
         listener.create_subscription(SystematicProfile, f"systematic/{axis}", on_profile,
                                      RESULT_QOS)
-    listener.create_subscription(VolumetricCompensation, "compensation", lambda m: compensation.append(
-        (stamp_to_nanoseconds(m.header.stamp), float(np.linalg.norm([m.error.x, m.error.y,
-                                                                   m.error.z])))),
+    listener.create_subscription(
+        VolumetricCompensation, "compensation", lambda m: compensation.append(
+            (stamp_to_nanoseconds(m.header.stamp),
+             float(np.linalg.norm([m.error.x, m.error.y, m.error.z])))),
         COMPENSATION_QOS)
     delivery: dict[str, dict[str, str]] = {}  # node -> latest delivery counters
 
@@ -716,9 +717,9 @@ def loop_story(references, models, alarms, *, compensation_mode: str,
     for when, axis in alarms:
         after = [p for p in phases if p.label.startswith(f"after the {axis.upper()}")]
         if after:
-            lines.append(f"  the {axis.upper()} guideway deterioration was detected at {when:.1f} s; "
-                         "its measured yaw change enters the compensation through the live profile "
-                         "(p2 = p1 - delta e); " + (
+            lines.append(f"  the {axis.upper()} guideway deterioration was detected at "
+                         f"{when:.1f} s; its measured yaw change enters the compensation "
+                         "through the live profile (p2 = p1 - delta e); " + (
                              "absorbed: the end state is back within the band (conformance "
                              "shown)" if state is Conformance.WITHIN else
                              f"not shown absorbed by the end of the run (end state {state.value})"))
@@ -1012,8 +1013,9 @@ def _write_report(out: Path, checks, actions, alarms, losses: list[str], story: 
         f"The virtual {chosen.machine.name} ran the scenario '{scenario}' "
         f"({chosen.description}) through the live graph, every node its own process."])
     for action in actions:
+        said = "accepted" if action["accepted"] else "refused: " + action["reason"]
         run.paragraphs.append(f"At {action['time_s']:.1f} s the user added {action['added']} "
-                              f"({'accepted' if action['accepted'] else 'refused: ' + action['reason']}).")
+                              f"({said}).")
         tilts = table_tilts(chosen.machine, action.get("effects", []))
         if tilts:
             run.paragraphs.append(

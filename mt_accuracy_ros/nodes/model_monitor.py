@@ -212,8 +212,9 @@ class ModelMonitor(Node):
                 names = [n for n in parameter.value if n]
                 absent = [n for n in names if n not in self.inputs.model.effects]
                 if absent:
+                    held = ", ".join(sorted(self.inputs.model.effects)) or "nothing"
                     return refuse(f"cannot remove {', '.join(absent)}: not in the model (it "
-                                  f"holds {', '.join(sorted(self.inputs.model.effects)) or 'nothing'})")
+                                  f"holds {held})")
                 model = self.inputs.model
                 for name in names:
                     model = model.without_effect(name)
@@ -625,8 +626,8 @@ class ModelMonitor(Node):
         self._check_direction(model, obs, stamp_ns)
         self.history.append({"version": model.version, "rmse": diagnosis.baseline_rmse})
         found = diagnosis.found
-        level = DiagnosticStatus.OK if found is None and diagnosis.baseline_rmse <= obs.uncertainty_m \
-            else DiagnosticStatus.WARN
+        level = DiagnosticStatus.OK if found is None and \
+            diagnosis.baseline_rmse <= obs.uncertainty_m else DiagnosticStatus.WARN
         refit = diagnosis.refit
         text = diagnosis.text() + (f"; {refit.sentence()}" if refit is not None and
                                    refit.recommended else "")
