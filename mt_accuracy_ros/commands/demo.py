@@ -957,7 +957,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
 
         summary["run_data_s"] = float(resolve_scenario(scenario).duration_s)
     # Everything the command prints as a warning or a failure is in the summary and the
-    # report too (issue 39): the dead nodes, a late real-time path, every loss.
+    # report too: the dead nodes, a late real-time path, every loss.
     summary["dead_nodes"] = list(dead_nodes or [])
     if check_timing is not None:
         summary["checks_late"] = check_timing["late"]

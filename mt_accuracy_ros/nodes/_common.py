@@ -52,7 +52,7 @@ COMPENSATION_QOS = QoSProfile(depth=2000, reliability=ReliabilityPolicy.RELIABLE
 #: ms), so it must never wait: on a reliable subscription one sample lost in
 #: transport holds every later one until the writer's heartbeat repairs the gap
 #: (Fast DDS's default period is 3 s), and the CNC then refuses ~2-3 s of
-#: corrections as stale in one burst (issue 27). Best effort delivers the next
+#: corrections as stale in one burst. Best effort delivers the next
 #: correction at once; a lost one is counted from ``sequence`` (``compensation.lost``
 #: on ``/diagnostics``) and the CNC holds the last valid correction for 10 ms.
 #: The publisher stays reliable (COMPENSATION_QOS), so recorders and listeners

@@ -114,7 +114,7 @@ class CompensationBroadcaster(Node):
         """Evaluate a copy of the model once before the first batch: the first call's
         lazy imports and first-use costs would otherwise fall on the first batches, whose
         corrections then reach a running CNC too late (a start-up burst of stale ones on
-        a loaded host, issue 27). A copy, so the live model's lag states stay untouched."""
+        a loaded host). A copy, so the live model's lag states stay untouched."""
         import copy
 
         try:
@@ -188,7 +188,8 @@ class CompensationBroadcaster(Node):
             if self._reported_dead:
                 self._warn(f"no valid reading from {', '.join(sorted(self._reported_dead))}; "
                            "their last valid value is used")
-        step = max(1, int(round(1.0 / (period * float(self.get_parameter("publish_rate_hz").value)))))
+        rate_hz = float(self.get_parameter("publish_rate_hz").value)
+        step = max(1, int(round(1.0 / (period * rate_hz))))
         # Every step-th sample of the run, on a grid fixed in data time (replays give the
         # same rows whatever the batching): samples step-1, 2 step-1, ... - the last of
         # each interval, so that a batch's newest sample, not its oldest, is corrected

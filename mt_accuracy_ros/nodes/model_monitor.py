@@ -743,7 +743,7 @@ class ModelMonitor(Node):
 
     def _uncertainty(self, values, what: str, direction: bool = False) -> float:
         """The readings' stated k = 2 uncertainty, or the documented default - said on
-        /diagnostics as a WARN (once per kind) when taken (issue 39: no silent default)."""
+        /diagnostics as a WARN (once per kind) when taken (no silent default)."""
         default, unit = ((DEFAULT_DIRECTION_UNCERTAINTY_RAD, "rad") if direction
                          else (DEFAULT_POSITION_UNCERTAINTY_M, "m"))
         value, note = stated_uncertainty(values, default, what, unit)

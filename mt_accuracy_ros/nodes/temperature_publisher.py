@@ -120,7 +120,8 @@ class TemperaturePublisher(Node):
                 if name in self._names:
                     values[self._names.index(name)] = np.nan
             message = TemperatureArray()
-            message.header.stamp = nanoseconds_to_stamp(self._scenario_clock.stamp_ns(self._time[self._next]))
+            stamp_ns = self._scenario_clock.stamp_ns(self._time[self._next])
+            message.header.stamp = nanoseconds_to_stamp(stamp_ns)
             message.header.frame_id = str(self.get_parameter("frame_id").value) or \
                 self.scenario.machine.name
             message.sensor_names = self._names

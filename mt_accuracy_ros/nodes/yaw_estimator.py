@@ -326,7 +326,8 @@ class YawEstimator(Node):
     # ---------------------------------------------------------------- outputs
     def _publish_profile(self, state: AxisState, message: ScaleBatch) -> None:
         try:
-            query = np.linspace(state.low, state.high, int(self.get_parameter("profile_points").value))
+            points = int(self.get_parameter("profile_points").value)
+            query = np.linspace(state.low, state.high, points)
             profile = state.streaming.profile(query)
         except MtAccuracyError:
             return
@@ -346,7 +347,8 @@ class YawEstimator(Node):
         after = float(self.get_parameter("baseline_after_s").value)
         if state.baseline is None and after > 0 and self._data_time_s >= after:
             state.baseline = profile.systematic.copy()
-            self.get_logger().info(f"axis {state.axis}: baseline taken at {self._data_time_s:.1f} s")
+            self.get_logger().info(
+                f"axis {state.axis}: baseline taken at {self._data_time_s:.1f} s")
         if state.baseline is not None:
             report = detect_deterioration(query, state.baseline, profile.systematic, tolerance)
             out.baseline_difference = pack_float64(report.change)

@@ -301,7 +301,7 @@ class Diagnosis:
     search_wall_s: float = float("nan")
     search_cpu_s: float = float("nan")
     #: Effects the selection named and took out again once a later one explained them:
-    #: [{"name", "by", "sentence"}] in the order dropped (issue 41).
+    #: [{"name", "by", "sentence"}] in the order dropped.
     dropped: list[dict] = field(default_factory=list)
 
     @property
@@ -453,7 +453,8 @@ def _candidate(scored, explanation_of, significant: bool) -> Candidate:
     return Candidate(term.family.name, dict(zip(names, map(float, values))), scored.cv_rmse,
                      scored.reduction, significant, explanation_of(scored), term.variant,
                      dict(zip(names, map(float, errors))), dict(scored.setting),
-                     float(1.0 - min(scored.adjusted_p, scored.coefficient_p)) if significant else 0.0,
+                     float(1.0 - min(scored.adjusted_p, scored.coefficient_p))
+                     if significant else 0.0,
                      float(scored.share_of_excess), term.family.group, declaration,
                      scored.refusal, float(scored.adjusted_p))
 

@@ -5,7 +5,8 @@ direction, acceleration, temperature rise, temperature difference, time,
 spindle speed, the product of two linear axes' positions, where a twist
 lives, each structure sensor lagged by 10, 20 and 40 min, where a
 structure following its sensor late lives, and the spindle speed and each
-axis' |feed| lagged likewise from rest, where a heat source's growth lives), the residual r_c is regressed on v alone with the
+axis' |feed| lagged likewise from rest, where a heat source's growth lives), the
+residual r_c is regressed on v alone with the
 k-nearest-neighbour smoother whose k is chosen by K-fold cross-validation
 (Kidani eqs. 4.10-4.12, the same estimator the yaw pipeline uses). The
 **share** of r_c's variance that v explains is 1 - CV MSE / var(r_c), so a

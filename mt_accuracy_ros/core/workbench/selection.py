@@ -317,7 +317,7 @@ class _ReadingCaches:
     sensitivities, where each term acts, and (per cut into folds) each design's products
     with itself - kept on the context, so that every selector over the same readings
     shares them: the look after the named effects are added (``check --auto``) scores
-    the same candidates' designs against another residual (issue 41)."""
+    the same candidates' designs against another residual."""
 
     def __init__(self) -> None:
         self.designs = ByteBoundedCache(DESIGN_CACHE_BYTES)
@@ -434,7 +434,7 @@ class Selector:
                                for a, b in self.fold_bounds]
         #: Per separable term: its sensitivity at each measured row and, after them, its
         #: square summed per reading - bounded like the designs (at 1e5 readings each is
-        #: megabytes, and a catalogue has a hundred separable terms; issue 41).
+        #: megabytes, and a catalogue has a hundred separable terms).
         caches = _reading_caches(ctx, mask)
         self._sensitivities = caches.sensitivities
         # Rows judged: all, or (forward) those after the first block.
@@ -457,7 +457,7 @@ class Selector:
         #: How many of a step's best candidates keep their per-reading errors.
         self.keep_errors = 3
         self.selected: list[tuple[Term, dict]] = []
-        #: Terms taken out again because a later one explains them: (dropped, by) (issue 41).
+        #: Terms taken out again because a later one explains them: (dropped, by).
         self.dropped: list[tuple[Scored, Scored]] = []
 
     # ------------------------------------------------------------ designs
@@ -629,7 +629,7 @@ class Selector:
 
         A candidate changes the held-out prediction only where its columns are non-zero,
         so its error there is the base model's: pooling those components into its test
-        dilutes an effect that lives in one component (issue 28) - it is judged on the
+        dilutes an effect that lives in one component - it is judged on the
         components it moves."""
         # Three booleans per term: kept apart from the designs' cache, whose evictions
         # would otherwise make a design again only to know where it acts.
@@ -1023,7 +1023,7 @@ class Selector:
         # every candidate tried, by the distribution of the *largest* t over them all
         # (Westfall-Young max-T, blocks' signs flipped together). Bonferroni assumed the
         # candidates independent; dozens of near-copies (thermal lags of one sensor, a
-        # straightness and its periodic twin) made it far too strict (issue 28: a 7 sigma
+        # straightness and its periodic twin) made it far too strict (a 7 sigma
         # coefficient ranked first and was not named).
         if scored:
             for s, adjusted in zip(scored, max_t_adjusted(np.array(gains))):
@@ -1055,7 +1055,7 @@ class Selector:
             # A weak effect spread evenly over the readings moves each block's error
             # too little for the blocks' t-test; the candidate the held-out data rank
             # first may then pass on its full-data coefficients instead, Bonferroni-
-            # adjusted over every candidate *and* setting tried (issue 41: a 7 sigma
+            # adjusted over every candidate *and* setting tried (a 7 sigma
             # straightness was named 7 times in 10). Its held-out reduction and share
             # must still be there. Not on a log validated forward: its residual is a slow
             # time series, whose full-data standard errors assume an independence the
@@ -1084,7 +1084,7 @@ class Selector:
         among the first ``keep_errors`` of the ranking nor its Occam choice: kept are the
         best ``keep_errors`` by out-of-fold error, overall and among the plausible, and the
         plausible ones within the tie of the best that no other beats in both simplicity
-        and error (memory stays bounded over a catalogue at 1e5 readings; issue 41)."""
+        and error (memory stays bounded over a catalogue at 1e5 readings)."""
         holding = [s for s in scored if s.per_sample_sq is not None]
         if len(holding) <= 2 * self.keep_errors:
             return
@@ -1187,7 +1187,7 @@ class Selector:
         a candidate now, against the terms selected before it *and* ``newest``; one that
         no longer passes the selection's tests (its out-of-fold gain, block test, share
         and strength) is explained by ``newest`` and taken out of :attr:`selected` and
-        its step (issue 41: a product first named as a simpler stand-in keeps none of
+        its step (a product first named as a simpler stand-in keeps none of
         them once it is in). Only what the newest term explains is dropped: a term that
         several later ones explain together stays (they may be stand-ins of it)."""
         dropped = []
