@@ -128,6 +128,14 @@ class Context:
                 self._jacobians[error_name] = sign * np.ascontiguousarray(sensitivity)
         return self._jacobians[error_name]
 
+    @property
+    def target_groups(self) -> NDArray[np.intp] | None:
+        """(N,) which located target each reading was taken at, or None for one target
+        (:func:`target_groups`)."""
+        if "target_groups" not in self.cache:
+            self.cache["target_groups"] = target_groups(self.work_point, self.n)
+        return self.cache["target_groups"]
+
     def located(self, error_name: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position (N, 3) [m per unit], orientation (N, 3) [rad per unit]) of a rotary
         axis' location error ``error_name`` as an instrument located at the set-up reads
@@ -270,6 +278,26 @@ class Context:
             if finite.size == values.size and np.ptp(finite) > 1e-3:
                 out.append(name)
         return sorted(out)
+
+
+#: Several targets are spheres located one by one when there are at most this fraction
+#: of the readings of them (a probing cycle's few spheres; a tracker's or the machining
+#: point's targets change with every reading and share one zero).
+TARGETS_PER_READING = 0.05
+
+
+def target_groups(work_point, n: int) -> NDArray[np.intp] | None:
+    """(N,) the index of each reading's target among the few an instrument located one by
+    one (several probed spheres: each found at the set-up, each its own zero), or None
+    when there is one target, none, or one per reading."""
+    if work_point is None:
+        return None
+    points = np.asarray(work_point, dtype=np.float64)
+    if points.ndim != 2 or points.shape[0] != n:
+        return None
+    _, groups = np.unique(points, axis=0, return_inverse=True)
+    count = int(groups.max()) + 1
+    return groups.ravel().astype(np.intp) if 1 < count <= TARGETS_PER_READING * n else None
 
 
 def per_component(column: NDArray[np.float64]) -> NDArray[np.float64]:

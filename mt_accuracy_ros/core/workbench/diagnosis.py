@@ -33,6 +33,7 @@ from ..compensation.error_model import ErrorModel
 from .statistics import DEFAULT_DIRECTION_UNCERTAINTY_RAD, stated_uncertainty
 from ..errors import InsufficientDataError, ParameterError
 from ..effects import Context, EffectFamily, families as catalogue_families, is_catalogue_entry
+from ..effects.base import target_groups
 from ..effects.user import UserExpression
 from .context_memo import ContextMemo
 from .localisation import Localisation, LocalisationMemo, localise
@@ -357,7 +358,8 @@ class Diagnosis:
 
 def residuals(model: ErrorModel, obs: Observations, *, absolute: bool = False
               ) -> NDArray[np.float64]:
-    """measured - model (N, 3), each measured component's mean removed.
+    """measured - model (N, 3), each measured component's mean removed (per target when
+    several spheres were located one by one: :func:`~..effects.base.target_groups`).
 
     Reference instruments measure from a zero reference of their own, so a
     constant offset per component carries no information about the model -
@@ -367,11 +369,15 @@ def residuals(model: ErrorModel, obs: Observations, *, absolute: bool = False
     predicted = obs.predicted_m if obs.predicted_m is not None else \
         model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[0]
     residual = obs.measured_m - obs.zeroed(predicted)
+    # Several spheres located one by one: each its own zero (Context.target_groups).
+    groups = target_groups(obs.work_point, obs.n)
+    groups = np.zeros(obs.n, dtype=np.intp) if groups is None else groups
     for c in range(3):
-        measured = obs.measured_mask[:, c]
-        # Zeroed runs know their zero (each run's first reading): no mean to take out.
-        if measured.any() and not absolute and not obs.zeroed_runs:
-            residual[measured, c] -= residual[measured, c].mean()
+        for group in np.unique(groups):
+            measured = obs.measured_mask[:, c] & (groups == group)
+            # Zeroed runs know their zero (each run's first reading): no mean to take out.
+            if measured.any() and not absolute and not obs.zeroed_runs:
+                residual[measured, c] -= residual[measured, c].mean()
     residual[~obs.measured_mask] = 0.0
     return residual
 

@@ -355,6 +355,17 @@ def _train(per_fold: NDArray[np.float64]) -> NDArray[np.float64]:
     return per_fold.sum(axis=0, keepdims=True) - per_fold
 
 
+def per_target(offsets: NDArray[np.float64], groups: NDArray[np.intp] | None,
+               sample_of_row: NDArray[np.intp]) -> NDArray[np.float64]:
+    """The offsets' columns (rows, 3) split by target (rows, 3 G): one zero per located
+    target (``groups`` (N,) of :attr:`Context.target_groups`), or as they are (None)."""
+    if groups is None:
+        return offsets
+    group = groups[sample_of_row]
+    count = int(groups.max()) + 1
+    return np.concatenate([offsets * (group == g)[:, None] for g in range(count)], axis=1)
+
+
 def time_blocks(n: int, count: int) -> NDArray[np.intp]:
     """Block number 0..count-1 of each of n readings in time order (contiguous, near equal)."""
     sizes = np.full(count, n // count)
@@ -410,10 +421,12 @@ class Selector:
         offsets = np.zeros((mask.size, width))
         offsets[np.arange(mask.size), np.tile(np.arange(width), n)] = 1.0
         # An instrument measures the TCP position from a zero of its own: a free offset
-        # per position component. The tool's direction it measures absolutely (an
-        # R-test's spheres lie on the tool axis; its nest is aligned to the table): a
-        # constant tilt is the machine's, not the instrument's.
-        self.offsets = offsets[self.rows][:, :3]
+        # per position component (per target, when each of several spheres was located on
+        # its own). The tool's direction it measures absolutely (an R-test's spheres lie
+        # on the tool axis; its nest is aligned to the table): a constant tilt is the
+        # machine's, not the instrument's.
+        self.offsets = per_target(offsets[self.rows][:, :3], ctx.target_groups,
+                                  self.sample_of_row)
         self.residual = residual
         self.component_of_row = self.rows % width
         self._ones = np.ones(n)

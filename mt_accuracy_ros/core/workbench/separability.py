@@ -47,6 +47,9 @@ _WHY = {
         "the target alike",
     frozenset({"rotary_location"}):
         "on these poses the lines of different rotary axes move the target alike",
+    frozenset({"squareness"}):
+        "the same pair out of square with the other axis as the reference (ISO 230-1), "
+        "the rest of the difference a turn the other named effects hold",
 }
 
 
@@ -95,10 +98,8 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
         unique = contribution - base @ own
         if term.family.name in FAMILIES and float(unique @ unique) > limit:
             for other in terms:
-                # A squareness's other reference is the same squareness (ISO 230-1).
                 if other.family.name not in FAMILIES or other.name == term.name or \
-                        _same_lines(term, other) or \
-                        other.family.name == term.family.name == "squareness":
+                        _same_lines(term, other):
                     continue
                 found += _reproduces(selector, base, contribution, term, other, limit)
         out.append(found)

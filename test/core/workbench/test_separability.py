@@ -13,7 +13,7 @@ import pytest
 
 from mt_accuracy_ros.core.compensation.error_model import ErrorModel
 from mt_accuracy_ros.core.effects import family_named
-from mt_accuracy_ros.core.effects.base import Context
+from mt_accuracy_ros.core.effects.base import Context, target_groups
 from mt_accuracy_ros.core.effects.variables import Variables
 from mt_accuracy_ros.core.kinematics.machine import machine_from_dict, with_setup_pose
 from mt_accuracy_ros.core.workbench.diagnosis import Observations, diagnose
@@ -133,3 +133,62 @@ def test_a_tool_side_c_with_its_tip_on_the_axis_folds_the_tilt_into_the_offset()
     # EX0C stands for EX0C + ratio x EB0C: here the tilt's share alone.
     assert named.parameters["EX0C"] == pytest.approx(ratio * -50e-6, rel=0.03)
     assert "EB0C" not in named.parameters
+
+
+def test_a_head_lines_tilt_and_a_squareness_are_said_alike_on_one_sphere():
+    """A swivel head's B line tilted about x moves a single sphere's readings in y by the
+    tilt times the tool's height under B, which the RTCP turns into Z travel: the Y-Z pair
+    out of square reads the same. Either is named, the other said, with its own value."""
+    work = [cs._ax("Y", -1, [0, 0, 0.054]), cs._ax("X", 1, [0, 0, 0.133]),
+            cs._ax("C", -1, [0, 0, 0])]
+    tool = [cs._ax("Z", -1, [0, 0, 0.752]), cs._ax("B", -1, [0, 0, -0.165])]
+    generator, described = _machines(work, tool, [0, 0, -0.121], {"C": 0, "B": 0},
+                                     {"C": (-360, 360), "B": (-110, 30)})
+    poses = [{"C": math.radians(c), "B": math.radians(b)}
+             for b in np.arange(-110, 31, 10) for c in np.arange(0, 360, 30)]
+    obs = _survey(generator, described, poses, [_effect("EA0B", "B", 11e-6,
+                                                         "location_tilt")])
+    diagnosis = diagnose(ErrorModel(described), obs)
+    named = diagnosis.selected[0]
+    said = {a["name"]: a["parameters"] for a in named.inseparable}
+    if named.name == "squareness:EYZ":
+        assert abs(said["rotary_location:B"]["EA0B"] - 11e-6) < 1e-6, said
+    else:
+        assert named.name.startswith("rotary_location") and "squareness:EYZ" in said, \
+            diagnosis.text()
+        assert abs(named.parameters["EA0B"] - 11e-6) < 1e-6
+    assert "move the target along the same circle" in named.explanation
+
+
+def test_several_spheres_located_one_by_one_each_keep_their_own_zero():
+    """Three spheres probed on a trunnion, each found at the set-up on its own: where each
+    sphere really sits is known only to that finding (here 20 um apart from the nominal),
+    so each reads from a zero of its own. A C-line offset moves each by (I - R_C) d from
+    that zero; judged with one zero for all, the steps between the spheres would be left
+    over and named as something else."""
+    generator, described = _trunnion_bc({"B": 0, "C": 0})
+    spheres = np.array([[0.06, -0.04, 0.05], [-0.08, 0.03, 0.02], [0.02, 0.09, 0.07]])
+    found_off = np.array([[20e-6, -15e-6, 8e-6], [-12e-6, 18e-6, -20e-6], [5e-6, 9e-6, 16e-6]])
+    q, target, group = [], [], []
+    for index, sphere in enumerate(spheres):
+        poses = [{"B": 0.0, "C": 0.0}] + [{"B": math.radians(b), "C": math.radians(c)}
+                                          for b in (-60, -30, 0, 30) for c in range(0, 360, 45)]
+        q += [cs.solve_linear(generator, p, sphere) for p in poses]
+        target += [sphere] * len(poses)
+        group += [index] * len(poses)
+    setup_rows = {g: group.index(g) for g in range(len(spheres))}
+    rows = {"q": q, "target": np.array(target), "group": group, "setup": setup_rows,
+            "tool_setup": 0}
+    errors, _ = cs.located_errors(generator, cs.errs_from_effects(
+        [_effect("EX0C", "C", 14e-6)]), rows)
+    n = len(q)
+    positions = {a: np.array([row[a] for row in q]) for a in described.axis_order}
+    measured = errors + found_off[group] + np.random.default_rng(3).normal(0.0, NOISE, (n, 3))
+    obs = Observations(positions, measured, np.ones((n, 3), bool), np.arange(n, dtype=float),
+                       {}, {}, 2 * NOISE, work_point=np.array(target))
+    found = target_groups(obs.work_point, n)
+    assert len(set(zip(found.tolist(), group))) == len(spheres)     # the same partition
+    diagnosis = diagnose(ErrorModel(described), obs)
+    assert [s.name for s in diagnosis.selected] == ["rotary_location:C"], diagnosis.text()
+    assert diagnosis.selected[0].parameters["EX0C"] == pytest.approx(14e-6, abs=1e-6)
+    assert diagnosis.final_cv_rmse < 3 * NOISE
