@@ -3,19 +3,19 @@
 Subscribes ``scales`` (``ScaleBatch``) and ``temperatures`` (``TemperatureArray``),
 and for every axis whose heads ``<axis>1``/``<axis>2`` are in the batches:
 
-* yaw from the pair (eq. 2.13) relative to the first sample heard, with the
-  relative scale expansion removed (eq. 3.17, thermocouples ``<axis><i>_s<j>``
+* yaw from the pair (Kidani eq. 2.13) relative to the first sample heard, with the
+  relative scale expansion removed (Kidani eq. 3.17, thermocouples ``<axis><i>_s<j>``
   every ``thermocouple_spacing_m``, rises over the first reading) -> ``yaw/<axis>``
   (``YawBatch``, reliable);
 * the streaming kNN systematic profile with periodic re-selection of k by
-  K-fold CV, and the random sigma (eqs. 2.22-2.23, 4.10-4.12) ->
+  K-fold CV, and the random sigma (Kidani eqs. 2.22-2.23, 4.10-4.12) ->
   ``systematic/<axis>`` (``SystematicProfile``, reliable) every ``profile_period_s``;
 * once ``baseline_after_s`` of data has passed the profile becomes the
   baseline; later profiles carry ``baseline_difference`` and a deterioration
-  alarm (|dE| >= ``tolerance_rad``, eq. 2.1) that also goes to ``/diagnostics``;
+  alarm (|dE| >= ``tolerance_rad``, Kidani eq. 2.1) that also goes to ``/diagnostics``;
 * with ``absorb_deterioration``, the alarm's rising edge restarts the profile
   from the samples that follow, so the profile - and the compensation built
-  on its change dE (p2 = p1 - delta e, eq. 3.16) - shows the deteriorated
+  on its change dE (p2 = p1 - delta e, Kidani eq. 3.16) - shows the deteriorated
   guideway after one pass instead of mixing both states for several memory
   horizons.
 
@@ -77,7 +77,7 @@ class YawEstimator(Node):
         self.declare_parameter("axes", [""], plain_descriptor(
             "Axes to estimate (empty: every pair in the batches)", read_only=True))
         self.declare_parameter("thermal_correction", True, plain_descriptor(
-            "Remove the relative scale expansion (eq. 3.17)"))
+            "Remove the relative scale expansion (Kidani eq. 3.17)"))
         self.declare_parameter("thermocouple_spacing_m", 0.11, float_descriptor(
             "Spacing of the thermocouples on each scale [m]", 0.001, 10.0, read_only=True))
         self.declare_parameter("expansion_per_k", SQ57_EXPANSION_PER_K, float_descriptor(
