@@ -1,10 +1,14 @@
 """Build ``msg_defs/`` into the rosidl interface package ``mt_accuracy_msgs``.
 
+Messages (``msg_defs/msg/*.msg``) and services (``msg_defs/srv/*.srv``) alike: each
+must be listed in ``msg_defs/CMakeLists.txt``; one that is not stops the build here.
+
 The package is configured, generated, compiled and installed into the prefix of
 the running interpreter (the project's virtual environment), where the
 ``ros-jazzy-*`` wheels keep ``share/``, ``lib/`` and ``include/``. Afterwards
-``from mt_accuracy_msgs.msg import ScaleBatch`` works in any process started from
-that environment, with no ``source`` step.
+``from mt_accuracy_msgs.msg import ScaleBatch`` (and ``from mt_accuracy_msgs.srv
+import ChangeModel``) works in any process started from that environment, with no
+``source`` step.
 
 A content hash of ``msg_defs/`` is stored next to the install; a second run with
 nothing changed only checks the hash and returns.
@@ -39,11 +43,24 @@ def source_hash() -> str:
     return digest.hexdigest()
 
 
+def interfaces() -> dict[str, list[str]]:
+    """The interface names per kind ("msg", "srv") that ``msg_defs/`` defines."""
+    return {kind: sorted(p.stem for p in (SOURCE / kind).glob(f"*.{kind}"))
+            for kind in ("msg", "srv")}
+
+
+def unlisted() -> list[str]:
+    """Interface files that ``msg_defs/CMakeLists.txt`` does not list (never generated)."""
+    listed = (SOURCE / "CMakeLists.txt").read_text()
+    return [f"{kind}/{name}.{kind}" for kind, names in interfaces().items() for name in names
+            if f'"{kind}/{name}.{kind}"' not in listed]
+
+
 def importable() -> bool:
-    probe = subprocess.run(
-        [sys.executable, "-c", "from mt_accuracy_msgs.msg import ScaleBatch"],
-        capture_output=True,
-    )
+    """Every message and service of ``msg_defs/`` imports in a fresh interpreter."""
+    imports = "; ".join(f"from mt_accuracy_msgs.{kind} import {', '.join(names)}"
+                        for kind, names in interfaces().items() if names)
+    probe = subprocess.run([sys.executable, "-c", imports], capture_output=True)
     return probe.returncode == 0
 
 
@@ -60,6 +77,10 @@ def main() -> int:
     parser.add_argument("--force", action="store_true", help="rebuild even if unchanged")
     args = parser.parse_args()
 
+    missing = unlisted()
+    if missing:
+        raise SystemExit(f"build_msgs: {', '.join(missing)} not listed in "
+                         "msg_defs/CMakeLists.txt (rosidl_generate_interfaces)")
     wanted = source_hash()
     if not args.force and STAMP.exists() and STAMP.read_text() == wanted and importable():
         print("mt_accuracy_msgs is up to date")
@@ -91,7 +112,8 @@ def main() -> int:
     run(["cmake", "--build", str(BUILD), "-j", str(os.cpu_count() or 2)], env, BUILD / "build.log")
     run(["cmake", "--install", str(BUILD)], env, BUILD / "install.log")
     if not importable():
-        raise SystemExit("build_msgs: installed, but 'import mt_accuracy_msgs.msg' still fails")
+        raise SystemExit("build_msgs: installed, but importing mt_accuracy_msgs' messages or "
+                         "services still fails")
     STAMP.write_text(wanted)
     print(f"mt_accuracy_msgs built and installed into {PREFIX} "
           f"in {time.monotonic() - started:.1f} s")
