@@ -9,9 +9,10 @@
    (MCAP). The virtual machine is a CNC that applies the broadcast compensation
    (``compensation_input``: real-time offset by default, or tables), so its
    reference instrument measures the compensated machine: the loop is closed.
-3. This process listens like any ROS tool and acts as the user: when the
-   monitor names a missing effect, it asks the monitor to add it (the
-   ``add_effects`` parameter) and watches the machine's error fall.
+3. This process runs the user, a node (:class:`..nodes.demo_user.DemoUser`) that
+   listens like any ROS tool and acts: when the monitor names a missing effect, it
+   asks the monitor to add it (the ``add_effects`` parameter) and watches the
+   machine's error fall. :func:`run_demo` starts the graph, spins it and summarises.
 4. At the end: a printed summary - the TCP error per component without
    compensation, with the starting model's, after each model change, after the
    deterioration, and at the end of the run, each with its k = 2 uncertainty -
@@ -96,11 +97,6 @@ LATE_MODEL_S = 20.0
 GRAPH_READY_TIMEOUT_S = 60.0
 #: Wall seconds between the start stamp being set and the machine's sample 0.
 START_LEAD_S = 1.0
-#: Data time [s] after which the scripted user acts on the first check naming effects.
-USER_LOOKS_AFTER_S = 30.0
-#: Wall seconds a lockstep run's user waits for the monitor to answer its request (a
-#: bound for a hung graph only: the machine waits for the user meanwhile).
-LOCKSTEP_ANSWER_S = 600.0
 #: Niceness of the compensation path's nodes (CNC, estimator, broadcaster): the CPU
 #: first while the monitor searches or the host is loaded (nodes/_priority.py).
 PATH_NICENESS = -15
@@ -136,22 +132,33 @@ LOCKSTEP_NODES = ["yaw_estimator:scales", "compensation_broadcaster:compensation
                   "demo_user:checks"]
 
 
+#: Subscriptions the machine holds its streams for, so that the bag holds the run from
+#: its first sample: scales go to the estimator, broadcaster and recorder; temperatures
+#: also to the monitor.
+SCALES_CONSUMERS = 3
+TEMPERATURE_CONSUMERS = 4
+#: Wall seconds between the run's progress lines.
+PROGRESS_EVERY_S = 5.0
+
+
 def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
              scenario: str = "demo", compensation_mode: str = "hybrid",
              path_niceness: int = PATH_NICENESS, lockstep: bool = False) -> int:
     """The main job; with ``lockstep`` the machine streams in data time, each batch once
     every node of the loop has caught up, so the outcome is the same on any host
-    (``rate_factor`` then plays no part: the run goes as fast as the graph can)."""
-    import rclpy
-    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-    from mt_accuracy_msgs.msg import (ModelCheck, ModelVersion, ReferenceMeasurement,
-                                      SystematicProfile, VolumetricCompensation)
+    (``rate_factor`` then plays no part: the run goes as fast as the graph can).
 
-    from ..nodes._common import (COMPENSATION_QOS, LATCHED_QOS, RESULT_QOS, node_executor,
-                                 stamp_to_nanoseconds)
-    from .check_timing import check_timeliness, timeliness_line
-    from .model_tools import set_remote_parameter
-    from .processes import start_node
+    Starts the graph (the nodes' processes and the user, :class:`..nodes.demo_user.
+    DemoUser`, in this one), spins it until the machine has streamed its scenario and
+    the monitor has judged every reading, then summarises (printed, ``summary.json``,
+    ``report.html``). Returns the exit code: 1 when the job failed (:func:`demo_failures`).
+    """
+    import rclpy
+    from rclpy.parameter import Parameter
+
+    from ..nodes._common import node_executor
+    from ..nodes._scenario import resolve_scenario
+    from ..nodes.demo_user import DemoUser
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -161,8 +168,6 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
 
         shutil.rmtree(bag)
     started = time.monotonic()
-    from ..nodes._scenario import resolve_scenario
-
     chosen = resolve_scenario(scenario)
     print(f"mt_accuracy_ros demo - virtual {chosen.machine.name}, scenario '{scenario}' "
           f"({chosen.description}); the CNC applies the compensation ({compensation_mode}); "
@@ -172,17 +177,44 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     if lockstep:
         rate_factor = 1.0   # the controller's real-time delays, in data time
     model = _prepare(out, scenario)
-    calibrated_machine = (model.parent / "machine_calibrated.yaml").resolve()
     five_axis = any(spec.is_rotary for spec in chosen.machine.axes.values())
-    # The machine's clock starts once every node is up (below): started at a fixed
-    # moment, a node still importing would meet a backlog of seconds of data, every
+    nodes, encoder = _start_nodes(model, bag, scenario, compensation_mode, rate_factor,
+                                  path_niceness, lockstep, five_axis)
+    rclpy.init()
+    user = DemoUser(_set_parameter, parameter_overrides=[
+        Parameter("rate_factor", value=float(rate_factor)),
+        Parameter("lockstep", value=bool(lockstep))])
+    # The user's own executor for the whole run: rclpy.spin_once(user) would add and
+    # remove it at every call (the wait set rebuilt each time), and rclpy's global executor
+    # outlives a context - in a process that ran rclpy before (a test worker) it woke
+    # only on its timeout, and the lockstep machine went 7 times slower.
+    executor = node_executor(user)
+    try:
+        _drive(user, executor, encoder, lockstep, _Console(user, started))
+    finally:
+        dead_nodes = _stop_graph(encoder, nodes)
+        executor.shutdown()
+        user.destroy_node()
+        rclpy.try_shutdown()
+    summary, story = _conclude(out, user, scenario, compensation_mode, five_axis, lockstep,
+                               time.monotonic() - started, dead_nodes)
+    return _print_summary(out, summary, story, rate_factor)
+
+
+def _start_nodes(model: Path, bag: Path, scenario: str, compensation_mode: str,
+                 rate_factor: float, path_niceness: int, lockstep: bool,
+                 five_axis: bool) -> tuple[list, object]:
+    """Start the graph's processes: the recorder, the estimator, the broadcaster, the
+    monitor, the thermometers and (its streams held until the run's start stamp is set)
+    the virtual machine. Returns (the others, the machine) as
+    :class:`.processes.NodeProcess`."""
+    from .processes import start_node
+
+    calibrated_machine = (model.parent / "machine_calibrated.yaml").resolve()
+    # The machine's clock starts once every node is up (:func:`_drive`): started at a
+    # fixed moment, a node still importing would meet a backlog of seconds of data, every
     # correction of it stale on arrival.
-    start_ns = time.time_ns() + 3600_000_000_000   # set when the graph is ready
     machine = {"scenario": scenario, "start_stamp_ns": -1, "rate_factor": rate_factor}
-    # The machine holds its streams until every consumer - the recorder first of all -
-    # is subscribed, so the bag holds the run from its first sample: scales go to the
-    # estimator, broadcaster and recorder; temperatures also to the monitor.
-    scales_consumers, temperature_consumers = 3, 4
     path = {"niceness": int(path_niceness)}
     step = {"lockstep": True} if lockstep else {}
     # A lockstep run's pacing reports (several per batch) are run control, not data: the
@@ -191,7 +223,7 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     nodes = [start_node("recorder", {"output": str(bag), "discovery_period_s": 0.2,
                                      **recording}, quiet=True),
              # The estimator reads the virtual machine's own strokes and scale distances:
-             # with another machine's its yaw (eq. 2.13, over the scales' distance D) and
+             # with another machine's its yaw (Kidani eq. 2.13, over the scales' distance D) and
              # its profile's grid were another machine's, and the profile that replaced
              # the calibration after the baseline held a constant beyond that grid.
              start_node("yaw_estimator", {"machine": str(calibrated_machine),
@@ -210,225 +242,116 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
                                           "max_effects": 5 if five_axis else 3, **step},
                         quiet=True),
              start_node("temperature_publisher",
-                        {**machine, "min_subscribers": temperature_consumers, **step},
+                        {**machine, "min_subscribers": TEMPERATURE_CONSUMERS, **step},
                         quiet=True)]
     if lockstep:
         step["lockstep_nodes"] = LOCKSTEP_NODES
     encoder = start_node("encoder_publisher", {
-        **machine, "min_subscribers": scales_consumers, "compensation_input": compensation_mode,
+        **machine, "min_subscribers": SCALES_CONSUMERS, "compensation_input": compensation_mode,
         "reference_period_s": REFERENCE_PERIOD_S, **paced(rate_factor), **path, **step},
         quiet=True)
-    rclpy.init()
-    listener = rclpy.create_node("demo_user")
-    # The user's own executor for the whole run: rclpy.spin_once(listener) would add and
-    # remove it at every call (the wait set rebuilt each time), and rclpy's global executor
-    # outlives a context - in a process that ran rclpy before (a test worker) it woke
-    # only on its timeout, and the lockstep machine went 7 times slower.
-    executor = node_executor(listener)
-    user_progress = None
-    if lockstep:
-        from ..nodes._lockstep import ProgressReporter
+    return nodes, encoder
 
-        # The user is a participant: the machine waits until it has looked at each check.
-        user_progress = ProgressReporter(listener, "demo_user", publishes_models=True)
-    checks: list[tuple[float, ModelCheck]] = []
-    alarms: list[tuple[float, str]] = []
-    compensation: list[tuple[int, float]] = []
-    actions: list[dict] = []
 
-    def now_s() -> float:
-        return (time.time_ns() - start_ns) / 1e9 * rate_factor
+class _Console:
+    """The run's progress line, every :data:`PROGRESS_EVERY_S` of wall time: feedback
+    while it runs (data time, the model live at the machine, checks, stale count)."""
 
-    def data_s(stamp) -> float:
-        """Data time [s] of a message stamped in the run's time base: what the user acts
-        on, so that host load cannot change which effect is named or when."""
-        return (stamp_to_nanoseconds(stamp) - start_ns) / 1e9
+    def __init__(self, user, started: float) -> None:
+        self.user = user
+        self.started = started
+        self.next = time.monotonic() + PROGRESS_EVERY_S
 
-    def on_profile(message: SystematicProfile) -> None:
-        if message.deterioration and not any(a[1] == message.axis for a in alarms):
-            alarms.append((data_s(message.header.stamp), message.axis))
+    def tick(self) -> None:
+        from ..nodes.demo_user import progress_line
 
-    check_arrivals: list[float] = []   # data time each check came [s] (wall x rate)
-
-    def on_check(message: ModelCheck) -> None:
-        checks.append((data_s(message.header.stamp), message))
-        check_arrivals.append(now_s())
-
-    listener.create_subscription(ModelCheck, "model_check", on_check, RESULT_QOS)
-    for axis in ("x", "y", "z"):
-        listener.create_subscription(SystematicProfile, f"systematic/{axis}", on_profile,
-                                     RESULT_QOS)
-    listener.create_subscription(
-        VolumetricCompensation, "compensation", lambda m: compensation.append(
-            (stamp_to_nanoseconds(m.header.stamp),
-             float(np.linalg.norm([m.error.x, m.error.y, m.error.z])))),
-        COMPENSATION_QOS)
-    delivery: dict[str, dict[str, str]] = {}  # node -> latest delivery counters
-
-    # Every WARN a node said (a lockstep participant left out, a sensor gone dead, a
-    # niceness not taken): repeated with each of its statuses, kept here in order.
-    node_warnings: dict[str, list[str]] = {}
-
-    def on_diagnostics(message: DiagnosticArray) -> None:
-        for status in message.status:
-            if status.name.endswith(": delivery"):
-                values = {v.key: v.value for v in status.values}
-                hear_warnings(node_warnings, status.name, values)
-                delivery[status.name.split(":")[0]] = values
-            elif status.name.endswith(": compensation"):
-                delivery[status.name.split(":")[0] + ":compensation"] = {
-                    v.key: v.value for v in status.values}
-
-    listener.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 50)
-    references: list[tuple] = []   # (data time [s], measured (3,), applied (3,), version)
-
-    # (measured (3,), applied (3,), uncertainty) [rad] per reading, None without a direction
-    orientations: list[tuple | None] = []
-
-    def on_reference(m: ReferenceMeasurement) -> None:
-        _take_reference(m, start_ns, references, orientations)
-
-    listener.create_subscription(ReferenceMeasurement, "reference/tcp_error", on_reference,
-                                 RESULT_QOS)
-    models: list[tuple[float, ModelVersion]] = []
-    listener.create_subscription(ModelVersion, "model", lambda m: models.append((now_s(), m)),
-                                 LATCHED_QOS)
-    diagnostics_text: list[tuple[float, str]] = []
-
-    searches: list[tuple[float, float]] = []   # each check's search: (wall, CPU) [s]
-
-    def on_model_status(message: DiagnosticArray) -> None:
-        for status in message.status:
-            values = {v.key: v.value for v in status.values}
-            if status.name.endswith(": model") and "search_cpu_s" in values:
-                searches.append((float(values["search_wall_s"]), float(values["search_cpu_s"])))
-            # The model's alarms, and an input that stopped (its node died): ERRORs.
-            if status.name.endswith((": model", ": inputs")) and \
-                    status.level == DiagnosticStatus.ERROR:
-                diagnostics_text.append((now_s(), status.message))
-
-    listener.create_subscription(DiagnosticArray, "/diagnostics", on_model_status, 50)
-    progress = {"next": time.monotonic() + 5.0}
-
-    def report_progress() -> None:
-        # Feedback while it runs: data time, the phase at the machine, model, stale count.
-        if time.monotonic() < progress["next"]:
+        if time.monotonic() < self.next:
             return
-        progress["next"] += 5.0
-        controller = delivery.get("/encoder_publisher:compensation", {})
-        if references:
-            version = references[-1][3]
-            reasons = {int(m.version): m.reason for _, m in models}
-            phase = f"v{version} live at the machine ({reasons.get(version, 'model')})" \
-                if version else "no compensation applied yet"
-            when = f"data {references[-1][0]:5.1f} s"
-        else:
-            phase, when = "waiting for the machine", "data   -  "
-        print(f"  [{time.monotonic() - started:5.0f} s wall] {when} | {phase} | checks "
-              f"{len(checks)} | corrections applied {controller.get('applied', 0)}, stale "
-              f"{controller.get('stale', 0)}", flush=True)
+        self.next += PROGRESS_EVERY_S
+        user = self.user
+        print(progress_line(time.monotonic() - self.started, user.references, user.models,
+                            len(user.checks), user.delivery.get(
+                                "/encoder_publisher:compensation", {})), flush=True)
 
-    try:
-        def graph_ready() -> bool:
-            # Every consumer subscribed, the broadcaster's compensation matched by the
-            # CNC (and this listener), the monitor constructed (its latched version 1).
-            return (listener.count_subscribers("/scales") >= scales_consumers and
-                    listener.count_subscribers("/temperatures") >= temperature_consumers and
-                    listener.count_publishers("/compensation") >= 1 and
-                    listener.count_subscribers("/compensation") >= 2 and bool(models))
 
-        ready_by = time.monotonic() + GRAPH_READY_TIMEOUT_S
-        while not graph_ready() and time.monotonic() < ready_by:
-            executor.spin_once(timeout_sec=0.05)
-            report_progress()
-        if not graph_ready():
-            print(f"  WARNING the graph was not complete after {GRAPH_READY_TIMEOUT_S:.0f} s; "
-                  "starting the machine anyway", flush=True)
-        start_ns = time.time_ns() + int(START_LEAD_S * 1e9)
-        for publisher in ("/encoder_publisher", "/temperature_publisher"):
-            # The same stamp twice changes nothing: asked again while unanswered.
-            ok, reason = set_remote_parameter(listener, publisher, "start_stamp_ns", start_ns,
-                                              resend_after_s=2.0, executor=executor)
-            if not ok:
-                raise RuntimeError(f"could not start {publisher}: {reason}")
+def _drive(user, executor, encoder, lockstep: bool, console: _Console) -> None:
+    """Start the machine once the graph is up; spin until it has streamed its scenario,
+    then until the monitor has judged every reading - the user looking after each
+    wake-up."""
+    from .model_tools import set_remote_parameter
 
-        def act() -> None:
-            report_progress()
-            latest = checks[-1][1] if checks else None
-            # The user looks once the machine has warmed for a while (30 s of data), at the
-            # first check that names something: data time, not wall time, so the readings
-            # behind the decision are the same on any host (checks every 30 readings).
-            if latest is not None and not actions and latest.named and \
-                    checks[-1][0] > USER_LOOKS_AFTER_S:
-                # Everything the monitor names, in one decision (its joint fit).
-                effects = [score.name for score in latest.named]
-                before = max((int(m.version) for _, m in models), default=0)
-                # The monitor fits and gates them before it answers (seconds of CPU on
-                # five axes): a lockstep run has no pace to keep, so the user waits as
-                # long as a slow host needs - the outcome must not depend on it.
-                ok, reason = _set_parameter(listener, "/model_monitor", "add_effects", effects,
-                                            executor, LOCKSTEP_ANSWER_S if lockstep else 30.0)
-                actions.append({"time_s": checks[-1][0], "added": ", ".join(effects),
-                                "effects": effects, "accepted": ok, "reason": reason,
-                                "rmse_before_m": latest.rmse, "where": latest.localisation,
-                                "diagnosis": latest.diagnosis})
-                print(f"  data {checks[-1][0]:.1f} s: the monitor names {', '.join(effects)}; "
-                      f"the user adds {'them' if len(effects) > 1 else 'it'} - "
-                      + ("accepted" if ok else f"refused: {reason}"), flush=True)
-                if ok and user_progress is not None:
-                    # The machine goes on once the version this made is settled where it
-                    # applies: the user waits to see it, then says which it is.
-                    seen_by = time.monotonic() + 30.0
-                    while max((int(m.version) for _, m in models), default=0) <= before and \
-                            time.monotonic() < seen_by:
-                        executor.spin_once(timeout_sec=0.05)
-                    user_progress.report(published=max((int(m.version) for _, m in models),
-                                                       default=0))
-            if latest is not None and user_progress is not None:
-                user_progress.report(check_handled_ns=stamp_to_nanoseconds(
-                    latest.header.stamp))
+    def graph_ready() -> bool:
+        return user.sees_graph_ready(SCALES_CONSUMERS, TEMPERATURE_CONSUMERS)
 
-        def monitor_done() -> bool:
-            # Every reference reading the machine made has been judged by the monitor.
-            counts = delivery.get("/model_monitor", {})
-            handled = sum(int(counts.get(f"reference/tcp_error.{k}", "0"))
-                          for k in ("processed", "refused", "lost"))
-            return handled >= len(references) > 0
+    ready_by = time.monotonic() + GRAPH_READY_TIMEOUT_S
+    while not graph_ready() and time.monotonic() < ready_by:
+        executor.spin_once(timeout_sec=0.05)
+        console.tick()
+    if not graph_ready():
+        print(f"  WARNING the graph was not complete after {GRAPH_READY_TIMEOUT_S:.0f} s; "
+              "starting the machine anyway", flush=True)
+    start_ns = time.time_ns() + int(START_LEAD_S * 1e9)
+    user.start(start_ns)
+    for publisher in ("/encoder_publisher", "/temperature_publisher"):
+        # The same stamp twice changes nothing: asked again while unanswered.
+        ok, reason = set_remote_parameter(user, publisher, "start_stamp_ns", start_ns,
+                                          resend_after_s=2.0, executor=executor)
+        if not ok:
+            raise RuntimeError(f"could not start {publisher}: {reason}")
+    # Lockstep has no pace to keep: bounded only so that a hung graph still ends.
+    deadline = time.monotonic() + (1800.0 if lockstep else 90.0 / user.rate_factor + 60.0)
+    while time.monotonic() < deadline and encoder.popen.poll() is None:
+        _wake(user, executor, console)
+    # Drain: a monitor that fell behind on a loaded host still judges every reading
+    # before the graph stops, so how many checks the run gets does not depend on the
+    # host's speed (bounded; its delivery counters come once a second).
+    settle = time.monotonic() + 2.0
+    drain = time.monotonic() + 60.0
+    while time.monotonic() < settle or (not user.monitor_done() and time.monotonic() < drain):
+        _wake(user, executor, console)
 
-        # Lockstep has no pace to keep: bounded only so that a hung graph still ends.
-        deadline = time.monotonic() + (1800.0 if lockstep else 90.0 / rate_factor + 60.0)
-        while time.monotonic() < deadline and encoder.popen.poll() is None:
-            executor.spin_once(timeout_sec=0.05)
-            act()
-        # Drain: a monitor that fell behind on a loaded host still judges every reading
-        # before the graph stops, so how many checks the run gets does not depend on the
-        # host's speed (bounded; its delivery counters come once a second).
-        settle = time.monotonic() + 2.0
-        drain = time.monotonic() + 60.0
-        while time.monotonic() < settle or (not monitor_done() and time.monotonic() < drain):
-            executor.spin_once(timeout_sec=0.05)
-            act()
-    finally:
-        # A node that died during the run (killed, crashed) is named: its absence explains
-        # frozen profiles or a silent monitor, and the run cannot be called a success.
-        # (The virtual machine's publishers end by themselves, with 0, when the scenario
-        # is over: a clean end, not a death.)
-        dead_nodes = [f"{p.name} (exit {_exit_text(p.popen.returncode)})"
-                      for p in [encoder, *nodes] if p.popen.poll() not in (None, 0)]
-        encoder.stop()
-        for process in nodes:
-            # The recorder may still be writing a backlog on a loaded host: time to close
-            # its file rather than a kill that leaves it unreadable.
-            process.stop(timeout_s=60.0 if process.name == "recorder" else 10.0)
-        executor.shutdown()
-        listener.destroy_node()
-        rclpy.try_shutdown()
-    losses = delivery_losses(delivery)
-    warnings = warning_lines(node_warnings)
+
+def _wake(user, executor, console: _Console) -> None:
+    """One wake-up of the run: the graph's callbacks, the progress line, the user's look."""
+    from ..nodes.demo_user import action_line
+
+    executor.spin_once(timeout_sec=0.05)
+    console.tick()
+    action = user.act()
+    if action is not None:
+        print(action_line(action), flush=True)
+
+
+def _stop_graph(encoder, nodes: list) -> list[str]:
+    """Stop every process of the graph; returns the nodes that died during the run."""
+    # A node that died during the run (killed, crashed) is named: its absence explains
+    # frozen profiles or a silent monitor, and the run cannot be called a success.
+    # (The virtual machine's publishers end by themselves, with 0, when the scenario
+    # is over: a clean end, not a death.)
+    dead_nodes = [f"{p.name} (exit {_exit_text(p.popen.returncode)})"
+                  for p in [encoder, *nodes] if p.popen.poll() not in (None, 0)]
+    encoder.stop()
+    for process in nodes:
+        # The recorder may still be writing a backlog on a loaded host: time to close
+        # its file rather than a kill that leaves it unreadable.
+        process.stop(timeout_s=60.0 if process.name == "recorder" else 10.0)
+    return dead_nodes
+
+
+def _conclude(out: Path, user, scenario: str, compensation_mode: str, five_axis: bool,
+              lockstep: bool, wall_s: float, dead_nodes: list[str]) -> tuple[dict, dict]:
+    """The run's story and summary from what the user heard and the bag recorded (the
+    final model saved as ``model.yaml``). Returns (summary, story)."""
+    from .check_timing import check_timeliness
+
+    bag = out / "bag"
+    losses = delivery_losses(user.delivery)
+    warnings = warning_lines(user.node_warnings)
+    references, orientations = user.references, user.orientations
     # The headline is computed from the record - the bag the report is made from - so
     # that the summary and the report tell one story, reading for reading.
     try:
-        recorded = _recorded_references(bag, start_ns)
+        recorded = _recorded_references(bag, user.start_ns)
     except Exception as exc:  # noqa: BLE001 - an unreadable bag: the listener's readings stand
         losses.append(f"the bag's reference readings could not be read ({type(exc).__name__}: "
                       f"{exc}): the headline is this listener's")
@@ -438,10 +361,11 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
             losses.append(f"the bag holds {len(recorded[0])} reference readings, this listener "
                           f"received {len(references)}: the headline is the bag's")
         references, orientations = recorded
-    if models:
+    if user.models:
         # The saved model is the final one, every effect added with its parameters.
-        (out / "model.yaml").write_text(models[-1][1].model_yaml)
-    story = loop_story(references, models, alarms, compensation_mode=compensation_mode,
+        (out / "model.yaml").write_text(user.models[-1][1].model_yaml)
+    story = loop_story(references, user.models, user.alarms,
+                       compensation_mode=compensation_mode,
                        orientations=orientations if any(o is not None for o in orientations)
                        else None, five_axis=five_axis)
     # A reading without a tool direction on a five-axis machine: a warning everywhere.
@@ -449,14 +373,22 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     print("  the run is over; writing the report", flush=True)
     # In lockstep the machine waits for every check: only a paced run can be late.
     timing = None if lockstep else check_timeliness(
-        [t for t, _ in checks], check_arrivals, MONITOR_CHECK_EVERY * REFERENCE_PERIOD_S)
+        [t for t, _ in user.checks], user.check_arrivals,
+        MONITOR_CHECK_EVERY * REFERENCE_PERIOD_S)
     if timing is not None:
-        timing["search_wall_s"] = [round(w, 3) for w, _ in searches]
-        timing["search_cpu_s"] = [round(c, 3) for _, c in searches]
-    summary = _summarise(out, checks, alarms, actions, compensation, time.monotonic() - started,
-                         references, losses, story, delivery, scenario,
-                         [text for _, text in diagnostics_text], start_ns=start_ns,
+        timing["search_wall_s"] = [round(w, 3) for w, _ in user.searches]
+        timing["search_cpu_s"] = [round(c, 3) for _, c in user.searches]
+    summary = _summarise(out, user.checks, user.alarms, user.actions, user.compensation,
+                         wall_s, references, losses, story, user.delivery, scenario,
+                         [text for _, text in user.model_alarms], start_ns=user.start_ns,
                          dead_nodes=dead_nodes, check_timing=timing, warnings=warnings)
+    return summary, story
+
+
+def _print_summary(out: Path, summary: dict, story: dict, rate_factor: float) -> int:
+    """Print the run's outcome; returns the exit code (1 when the job failed)."""
+    from .check_timing import timeliness_line
+
     # The headline first: what the instrument measured on the compensated machine.
     for line in story["lines"]:
         print(line)
@@ -474,7 +406,8 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
         print(f"  ALARM {text}")
     if "check_timing" in summary:
         print("  " + timeliness_line(summary["check_timing"], rate_factor))
-    print(f"  report: {out / 'report.html'}   bag: {bag}   final model: {out / 'model.yaml'}")
+    print(f"  report: {out / 'report.html'}   bag: {out / 'bag'}   final model: "
+          f"{out / 'model.yaml'}")
     failures = summary["failures"]
     for failure in failures:
         print(f"  FAILED: {failure}")
@@ -505,30 +438,14 @@ def _recorded_references(bag: Path, start_ns: int) -> tuple[list[tuple], list[tu
     direction was measured, (measured (3,), applied (3,), uncertainty) [rad] (None for a
     reading without one)."""
     from ..io.bag_reader import decode, read_messages
+    from ..nodes.demo_user import reference_entry
 
     references, orientations = [], []
     for m in (decode(m) for m in read_messages(bag, ["/reference/tcp_error"])):
-        _take_reference(m, start_ns, references, orientations)
+        reading, orientation = reference_entry(m, start_ns)
+        references.append(reading)
+        orientations.append(orientation)
     return references, orientations
-
-
-def _take_reference(m, start_ns: int, references: list, orientations: list) -> None:
-    """Append a ReferenceMeasurement as the demo holds it (see _recorded_references)."""
-    from ..nodes._common import stamp_to_nanoseconds
-
-    references.append(((stamp_to_nanoseconds(m.header.stamp) - start_ns) / 1e9,
-                       np.array([m.error.x, m.error.y, m.error.z]),
-                       np.array([m.applied_correction.x, m.applied_correction.y,
-                                 m.applied_correction.z]),
-                       int(m.compensation_model_version), float(m.uncertainty)))
-    if m.orientation_measured:
-        orientations.append((
-            np.array([m.orientation_error.x, m.orientation_error.y, m.orientation_error.z]),
-            np.array([m.applied_orientation_correction.x, m.applied_orientation_correction.y,
-                      m.applied_orientation_correction.z]),
-            float(m.orientation_uncertainty)))
-    else:
-        orientations.append(None)   # one entry per reading: a gap is told, not hidden
 
 
 def _exit_text(code: int | None) -> str:
@@ -539,12 +456,11 @@ def _exit_text(code: int | None) -> str:
 
 def hear_warnings(node_warnings: dict[str, list[str]], status_name: str,
                   values: dict[str, str]) -> None:
-    """Keep the warnings a ``<node>: delivery`` status carries (``warning.<n>``, every WARN
-    the node said: :class:`..nodes._health.DeliveryHealth`), once each, in order."""
-    from ..nodes._health import warnings_of
+    """Keep the warnings a ``<node>: delivery`` status carries, once each, in order: the
+    demo user's rule (:func:`..nodes.demo_user.hear_warnings`)."""
+    from ..nodes.demo_user import hear_warnings as hear
 
-    said = node_warnings.setdefault(status_name.split(":")[0], [])
-    said += [text for text in warnings_of(values) if text not in said]
+    hear(node_warnings, status_name, values)
 
 
 def warning_lines(node_warnings: dict[str, list[str]]) -> list[str]:
@@ -859,11 +775,20 @@ def table_tilts(machine, effects: list[str]) -> list[str]:
     return out
 
 
+def _pooled_rms_um(phase: dict | None, kind: str) -> float:
+    """[um] The per-component RMS of a phase of the loop table, pooled over x, y, z (NaN
+    without the phase): one way everywhere."""
+    return float(np.sqrt(np.mean([phase[kind][c]["rms_um"] ** 2 for c in "xyz"]))) \
+        if phase else float("nan")
+
+
 def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
                references, losses: list[str], story: dict, delivery: dict,
                scenario: str = "demo", model_alarms: list[str] | None = None,
                start_ns: int = 0, dead_nodes: list[str] | None = None,
                check_timing: dict | None = None, warnings: list[str] | None = None) -> dict:
+    """The run's figures (``summary.json``, written with the report): see
+    :func:`_close_summary`."""
     from ..io.bag_reader import bag_info
     from ..nodes._scenario import resolve_scenario
 
@@ -874,12 +799,7 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
     end = story["phases"][-1] if story["phases"] else None
     whole = story["phases"][0] if story["phases"] else None
     controller = delivery.get("/encoder_publisher:compensation", {})
-
-    def pooled(phase, kind):
-        # One way everywhere: the per-component RMS of the phase table, pooled.
-        return float(np.sqrt(np.mean([phase[kind][c]["rms_um"] ** 2 for c in "xyz"]))) \
-            if phase else float("nan")
-
+    pooled = _pooled_rms_um
     mode = story.get("compensation_mode", "hybrid")
     closed = mode == "off" or int(controller.get("applied", 0)) > 0 or \
         (mode == "table" and int(controller.get("tables_applied", 1)) > 0)
@@ -953,8 +873,6 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         summary["added_version_live_at_s"] = next(
             (round(t, 1) for t, _, _, version, _ in references
              if t > actions[0]["time_s"] and version > 1), None)
-        from ..nodes._scenario import resolve_scenario
-
         summary["run_data_s"] = float(resolve_scenario(scenario).duration_s)
     # Everything the command prints as a warning or a failure is in the summary and the
     # report too: the dead nodes, a late real-time path, every loss.
@@ -963,16 +881,24 @@ def _summarise(out: Path, checks, alarms, actions, compensation, wall_s: float,
         summary["checks_late"] = check_timing["late"]
         summary["check_latency_max_s"] = check_timing["latency_max_s"]
         summary["check_timing"] = check_timing
+    return _close_summary(out, summary, story, checks, actions, alarms, losses, scenario,
+                          warnings or [])
+
+
+def _close_summary(out: Path, summary: dict, story: dict, checks, actions, alarms,
+                   losses: list[str], scenario: str, warnings: list[str]) -> dict:
+    """The summary's warnings and failures, the report (a failure without a readable bag),
+    and ``summary.json``; returns the summary."""
+    from ..core.errors import BagError
+
     late = late_warning(summary)
     if late:
         losses.append(late)
-    summary["warnings"] = list(losses) + list(warnings or [])
+    summary["warnings"] = list(losses) + list(warnings)
     summary["failures"] = demo_failures(summary, story)
-    from ..core.errors import BagError
-
     try:
         report = _write_report(out, checks, actions, alarms, losses, story, scenario,
-                               summary["dead_nodes"], summary["failures"], warnings or [])
+                               summary["dead_nodes"], summary["failures"], warnings)
         summary["report"] = report.as_dict()
     except BagError as exc:
         # The run's numbers stand; without a readable bag there is no report, and the
