@@ -50,7 +50,7 @@ def test_a_design_cache_that_evicts_everything_gives_the_same_steps(monkeypatch)
     """The LRU bound (1e5 readings) must change only the cost, never a choice or a score."""
     selector, terms = _selector()
     steps = selector.run(terms, max_terms=2)
-    monkeypatch.setattr(selection, "DESIGN_CACHE_BYTES", 1)
+    monkeypatch.setattr(selection.designs, "DESIGN_CACHE_BYTES", 1)
     small, small_terms = _selector()
     assert small._designs.max_bytes == 1
     small_steps = small.run(small_terms, max_terms=2)
