@@ -10,13 +10,13 @@
       tau dh/dt = K u(t) - h    ->  h_n = a h_{n-1} + (1 - a) K u_{n-1},  a = exp(-dt/tau)
 
   (Zhu eq. 3.9, tau = 1/lambda, Zhu eq. 3.3), exact for a piecewise-constant
-  input, run with ``scipy.signal.lfilter``.
+  input, run as that recursion (a few thousand samples: the node processes that
+  simulate need not import scipy.signal, a second of CPU each).
 """
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.signal import lfilter
 
 from ..core.scales.dual_scale import THERMOCOUPLE_SPACING_M, thermocouple_positions  # noqa: F401
 
@@ -30,7 +30,12 @@ def first_order_response(u: NDArray[np.float64], dt_s: float, tau_s: float,
     a = float(np.exp(-dt_s / tau_s))
     # h_n = a h_{n-1} + (1 - a) K u_{n-1}: the input acts one step later.
     shifted = np.concatenate([[0.0], u[:-1]]) if u.size else u
-    return lfilter([1.0 - a], [1.0, -a], gain * shifted)
+    drive = ((1.0 - a) * (gain * shifted)).tolist()
+    out, state = [], 0.0
+    for term in drive:
+        state = term + a * state
+        out.append(state)
+    return np.array(out, dtype=np.float64)
 
 
 #: Cross-section of a scale body for its FE model: 30 x 10 mm steel bar (SQ57-like tape
