@@ -35,6 +35,17 @@ model version. ``remove_effects`` takes effects out. ``auto_add`` adds the top
 significant candidate by itself. ``mt-accuracy model add|remove EFFECT`` does
 the same from a terminal.
 
+A set is validated in the on_set callback only - the model parses and passes the
+gate, the effects are known, held or fittable with the readings held - and refused
+there with its reason, nothing changed. An accepted set is answered at once; its
+change (fit, gate, publish, a new version) is made afterwards on the node's executor,
+one change at a time in the order they were set; one that cannot be made (the
+physics refuses the fit, the gate refuses the fitted model) leaves the live version
+and says why on ``/diagnostics`` (ERROR) and in the log. The service
+``~/change_model`` (``mt_accuracy_msgs/srv/ChangeModel``) sets the same parameters
+itself and answers once their changes are made: ``accepted``, ``reason`` and the
+live ``version`` after.
+
 An effect is fitted on the readings held when it was added. Every check also
 refits the model's fitted effects on the readings held now
 (:mod:`..core.workbench.refit`: families and settings kept, only the numbers
@@ -52,10 +63,15 @@ from collections import deque
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from dataclasses import dataclass
+
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 
 from mt_accuracy_msgs.msg import EffectScore, ModelCheck, ModelVersion, ReferenceMeasurement
+from mt_accuracy_msgs.srv import ChangeModel
 
 from ..core.compensation.error_model import model_from_dict, model_to_dict
 from ..core.compensation.limits import gate_problem
@@ -73,6 +89,30 @@ from ._health import DeliveryHealth
 from ._lockstep import ProgressReporter
 from ._model_inputs import MODEL_DIR_DESCRIPTION, ModelInputs, network_model
 from ._search_worker import search, search_pool, search_serialized
+
+#: The run-time parameters that change the model, in the order ``change_model`` sets them.
+MODEL_CHANGES = ("model", "remove_effects", "add_effects", "refit_effects")
+#: The reason of a version a ``model`` parameter made.
+MODEL_SET_REASON = "model parameter set"
+#: Comparable reference readings needed before anything is fitted to them.
+MIN_FIT_READINGS = 10
+
+
+@dataclass
+class ModelChange:
+    """One accepted model parameter, queued until the node's executor makes it."""
+
+    name: str
+    value: object
+    #: What validation prepared (the parsed, gated model of a ``model`` parameter).
+    plan: object = None
+    #: (accepted, reason, live version after) once made; None while queued.
+    outcome: tuple[bool, str, int] | None = None
+
+
+def _names(value) -> list[str]:
+    """The non-empty names of a string-array parameter's value."""
+    return [n for n in value if n]
 
 
 class ModelMonitor(Node):
@@ -116,7 +156,17 @@ class ModelMonitor(Node):
             "Report on 'lockstep' which readings are handled - a reading that starts a check "
             "once the check is published - and each check and model version (a lockstep run)",
             read_only=True))
+        # Validate in on_set, act after the set: the model changes a set accepted are
+        # queued by the post-set callback and made one at a time on this node's executor
+        # (a guard condition wakes it), never inside the parameter callbacks.
+        self._validated: dict[str, object] = {}
+        self._changes: deque[ModelChange] = deque()
+        self._queued: list[ModelChange] = []
+        self._said_refusal = ""
+        self._wake = self.create_guard_condition(self._run_next_change)
         self.add_on_set_parameters_callback(self._validate)
+        self.add_post_set_parameters_callback(self._after_set)
+        self.create_service(ChangeModel, "~/change_model", self._on_change_model)
         self.health = DeliveryHealth(self)
         self._check_sequences: dict[str, int] = {}   # ModelCheck.sequence per quantity
         self._model_sequence = 0
@@ -170,59 +220,180 @@ class ModelMonitor(Node):
         super().destroy_node()
 
     # ---------------------------------------------------------------- parameters
-    def _validate(self, parameters):
+    def _validate(self, parameters: list[Parameter]) -> SetParametersResult:
+        """on_set: validate only - nothing is fitted, published or changed here.
+
+        A model parses (inline YAML, a bundled name or a file in ``model_dir``) and
+        passes the gate; named effects are known and the readings held can fit them;
+        effects to remove are in the model; effects to refit are fitted ones. The
+        refusal carries the reason (and is counted on /diagnostics); an accepted change
+        is made after the set (:meth:`_after_set`)."""
+        validated: dict[str, object] = {}
         try:
-            result = self._apply(parameters)
+            for parameter in parameters:
+                problem, plan = self._change_problem(parameter)
+                if problem:
+                    result = refuse(problem)
+                    break
+                validated[parameter.name] = plan
+            else:
+                result = accept()
         except Exception as exc:  # noqa: BLE001 - a parameter must never kill the node
             result = refuse(f"{type(exc).__name__}: {exc}")
-        if not result.successful:
+        if result.successful:
+            self._validated = validated   # taken by _after_set, in the same set call
+        else:
             self.health.refused("parameters", result.reason)
         return result
 
-    def _apply(self, parameters):
+    def _change_problem(self, parameter: Parameter) -> tuple[str, object]:
+        """Why ``parameter`` cannot be set ("" if it can) and what its change will use
+        (the model a ``model`` parameter names, parsed and gated; else None)."""
+        if parameter.name == "model":
+            try:
+                model = network_model(str(parameter.value), self.inputs.model_dir,
+                                      self.inputs.trusted_machines)
+            except MtAccuracyError as exc:
+                return f"model refused: {exc}", None
+            problem = gate_problem(model)
+            return (self._refuse_version(MODEL_SET_REASON, problem) if problem else ""), model
+        if parameter.name not in MODEL_CHANGES:
+            return "", None
+        names = _names(parameter.value)
+        if parameter.name == "add_effects":
+            return self._add_problem(names), None
+        if parameter.name == "remove_effects":
+            return self._remove_problem(names), None
+        return self._refit_problem(names), None
+
+    def _add_problem(self, names: list[str]) -> str:
+        problems = [p for p in (effect_name_problem(n, self.inputs.model) for n in names) if p]
+        if problems:
+            return "; ".join(problems)
+        wanted = self._wanted(names)
+        last = self._last_check
+        if wanted and not (last is not None and last[0] == self.inputs.model.version) and \
+                not self._enough_readings():
+            return f"cannot fit {', '.join(wanted)}: only {len(self._readings)} reference " \
+                "readings yet"
+        return ""
+
+    def _remove_problem(self, names: list[str]) -> str:
+        absent = [n for n in names if n not in self.inputs.model.effects]
+        if absent:
+            held = ", ".join(sorted(self.inputs.model.effects)) or "nothing"
+            return f"cannot remove {', '.join(absent)}: not in the model (it holds {held})"
+        return ""
+
+    def _refit_problem(self, names: list[str]) -> str:
+        from ..core.workbench.refit import refittable_effects
+
+        if not names:
+            return ""
+        if not self._enough_readings():
+            return f"cannot refit: only {len(self._readings)} reference readings yet"
+        available = refittable_effects(self.inputs.model)
+        wrong = [n for n in names if n not in available] if names != ["all"] else []
+        if wrong:
+            # The same rule as the refit's own request check (core.workbench.refit).
+            return (f"cannot refit {', '.join(wrong)}: not a fitted catalogue effect of the "
+                    f"model (those are: {', '.join(available) or 'none'})")
+        return "" if available else "cannot refit: the model holds no fitted catalogue effect"
+
+    def _enough_readings(self) -> bool:
+        """Whether the readings held are enough to fit to (:meth:`_observations`)."""
+        return bool(self._readings) and len(self._comparable_readings()) >= MIN_FIT_READINGS
+
+    def _wanted(self, names: list[str]) -> list[str]:
+        """``names`` the model does not hold fitted yet (a user expression is fitted)."""
+        return [n for n in names if not (n in self.inputs.model.effects and
+                                         "expression" not in self.inputs.model.effects[n])]
+
+    def _after_set(self, parameters: list[Parameter]) -> None:
+        """post-set: the parameters are set; each model change is queued for the node's
+        executor (:meth:`_run_next_change`), in order - never made here."""
+        validated, self._validated = self._validated, {}
+        queued = []
         for parameter in parameters:
-            if parameter.name == "model":
-                try:
-                    model = network_model(str(parameter.value), self.inputs.model_dir,
-                                          self.inputs.trusted_machines)
-                except MtAccuracyError as exc:
-                    return refuse(f"model refused: {exc}")
-                problem = self._make_live(model, "model parameter set")
-                if problem:
-                    return refuse(problem)
-            elif parameter.name == "window":
+            if parameter.name == "window":
                 self._readings = deque(self._readings, maxlen=int(parameter.value))
-            elif parameter.name == "add_effects":
-                names = [n for n in parameter.value if n]
-                problems = [p for p in (effect_name_problem(n, self.inputs.model) for n in names)
-                            if p]
-                if problems:
-                    return refuse("; ".join(problems))
-                if names:
-                    reason = self._add_many(names, "user")
-                    if reason:
-                        return refuse(reason)
-            elif parameter.name == "refit_effects":
-                names = [n for n in parameter.value if n]
-                if names:
-                    reason = self._refit(None if names == ["all"] else names, "user")
-                    if reason:
-                        return refuse(reason)
-            elif parameter.name == "remove_effects":
-                names = [n for n in parameter.value if n]
-                absent = [n for n in names if n not in self.inputs.model.effects]
-                if absent:
-                    held = ", ".join(sorted(self.inputs.model.effects)) or "nothing"
-                    return refuse(f"cannot remove {', '.join(absent)}: not in the model (it "
-                                  f"holds {held})")
-                model = self.inputs.model
-                for name in names:
-                    model = model.without_effect(name)
-                problem = self._make_live(model, f"removed {', '.join(names)} (user)")
-                if problem:
-                    return refuse(problem)
-                self._since_check = int(self.get_parameter("check_every").value)
-        return accept()
+            elif parameter.name in MODEL_CHANGES and (
+                    parameter.name == "model" or _names(parameter.value)):
+                queued.append(ModelChange(parameter.name, parameter.value,
+                                          validated.get(parameter.name)))
+        self._changes.extend(queued)
+        self._queued = queued
+        if queued:
+            self._wake.trigger()
+
+    def _run_next_change(self) -> None:
+        """Make the oldest queued change: one at a time, in the order they were set. A
+        change that cannot be made leaves the live version, and says why on /diagnostics
+        (ERROR) and in the log; the node runs on."""
+        if not self._changes:
+            return
+        change = self._changes.popleft()
+        before = int(self.inputs.model.version)
+        try:
+            problem = self._make_change(change)
+        except Exception as exc:  # noqa: BLE001 - a change must never kill the node
+            problem = f"{type(exc).__name__}: {exc}"
+        version = int(self.inputs.model.version)
+        if problem:
+            text = f"{change.name} {change.value!r} not applied: {problem}"
+            if problem != self._said_refusal:   # the gate has said it already
+                self.get_logger().error(text)
+                self._status(DiagnosticStatus.ERROR, text,
+                             [KeyValue(key="model_version", value=str(version))])
+        change.outcome = (not problem, problem or (self._reason if version != before else
+                                                   "nothing to change"), version)
+        if self._changes:
+            self._wake.trigger()
+
+    def _make_change(self, change: ModelChange) -> str | None:
+        """The action of one accepted parameter; the reason it could not be made, else None."""
+        if change.name == "model":
+            # Parsed and gated when the parameter was validated.
+            return self._make_live(change.plan, MODEL_SET_REASON, gated="")
+        names = _names(change.value)
+        if change.name == "add_effects":
+            return self._add_many(names, "user")
+        if change.name == "refit_effects":
+            return self._refit(None if names == ["all"] else names, "user")
+        problem = self._remove_problem(names)   # the model may have changed since the set
+        if problem:
+            return problem
+        model = self.inputs.model
+        for name in names:
+            model = model.without_effect(name)
+        problem = self._make_live(model, f"removed {', '.join(names)} (user)")
+        if problem is None:
+            self._since_check = int(self.get_parameter("check_every").value)
+        return problem
+
+    def _on_change_model(self, request, response):
+        """The ``change_model`` service: the parameters it names set here (validated
+        together: all or none), then their changes made before the answer - accepted,
+        reason and the live version after."""
+        wanted = [Parameter(name, value=value) for name, value in (
+            ("model", str(request.model)), ("remove_effects", list(request.remove_effects)),
+            ("add_effects", list(request.add_effects)),
+            ("refit_effects", list(request.refit_effects))) if value]
+        response.accepted, response.reason = True, "nothing to change"
+        if wanted:
+            self._queued = []
+            result = self.set_parameters_atomically(wanted)
+            response.accepted, response.reason = bool(result.successful), str(result.reason)
+            changes = self._queued if result.successful else []
+            while any(c.outcome is None for c in changes):
+                self._run_next_change()   # earlier changes first: they were set first
+            if changes:
+                # Accepted when every change was made; the reasons of those that were not.
+                response.accepted = all(c.outcome[0] for c in changes)
+                response.reason = "; ".join(c.outcome[1] for c in changes
+                                            if c.outcome[0] == response.accepted)
+        response.version = int(self.inputs.model.version)
+        return response
 
     def _make_live(self, model, reason: str, *, rollback: bool = False,
                    gated: str | None = None) -> str | None:
@@ -233,18 +404,24 @@ class ModelMonitor(Node):
         live = self.inputs.model
         problem = "" if rollback else (gated if gated is not None else gate_problem(model))
         if problem:
-            text = (f"model version refused before going live ({reason}): {problem}; "
-                    f"version {live.version} stays")
-            self.health.refused("model_gate", text)
-            self._status(DiagnosticStatus.ERROR, text,
-                         [KeyValue(key="model_version", value=str(live.version))])
-            return text
+            return self._refuse_version(reason, problem)
         previous = {"model": model_to_dict(live), "version": int(live.version)}
         self._reason = reason
         self.inputs.set_model(model)
         self._judging = None if rollback else {
             **previous, "version_new": int(self.inputs.model.version), "reason": reason}
         return None
+
+    def _refuse_version(self, reason: str, problem: str) -> str:
+        """A version the gate refused: counted, an ERROR on /diagnostics; the text."""
+        live = self.inputs.model
+        text = (f"model version refused before going live ({reason}): {problem}; "
+                f"version {live.version} stays")
+        self.health.refused("model_gate", text)
+        self._status(DiagnosticStatus.ERROR, text,
+                     [KeyValue(key="model_version", value=str(live.version))])
+        self._said_refusal = text
+        return text
 
     def _fitted_candidates(self, names: list[str]) -> tuple[list[Candidate], object] | str:
         """The candidates ``names`` ask for, fitted on the readings of the last check when
@@ -274,8 +451,7 @@ class ModelMonitor(Node):
     def _add_many(self, names: list[str], who: str) -> str | None:
         """Fit and add several effects from one diagnosis (their joint fit where the
         forward selection named them together), through the gate."""
-        wanted = [n for n in names if not (n in self.inputs.model.effects and
-                                           "expression" not in self.inputs.model.effects[n])]
+        wanted = self._wanted(names)
         if not wanted:
             return None
         fitted = self._fitted_candidates(wanted)
@@ -499,7 +675,7 @@ class ModelMonitor(Node):
             return None
         readings = self._comparable_readings()
         sensors = set(readings[-1]["temperatures"])
-        if len(readings) < 10:
+        if len(readings) < MIN_FIT_READINGS:
             return None
         axes = list(readings[0]["positions"])
         obs = Observations(
