@@ -39,6 +39,7 @@ from .context_memo import ContextMemo
 from .localisation import Localisation, LocalisationMemo, localise
 from .distributions import chi2_sf
 from .selection import Selector, Term
+from .selection.folds import Folds
 from .separability import alternatives, sentence
 from ..effects.variables import Variables, run_starts_of
 
@@ -690,19 +691,50 @@ def add_effects(model: ErrorModel, candidates: list[Candidate], obs: Observation
 
 def blocked_cv(x: NDArray, offsets: NDArray, y: NDArray, sample_of_row: NDArray,
                n_samples: int, k: int = 5) -> float:
-    """Time-blocked K-fold CV RMSE of y ~ [offsets, x] (contiguous blocks of samples)."""
+    """Time-blocked K-fold CV RMSE of y ~ [offsets, x] (contiguous blocks of samples).
+
+    Parameters
+    ----------
+    x : ndarray, shape (R, p)
+        The candidate's columns (p may be 0).
+    offsets : ndarray, shape (R, o)
+        The free offsets.
+    y : ndarray, shape (R,)
+        The residual.
+    sample_of_row : ndarray of int, shape (R,)
+        Each row's reading, non-decreasing (time order).
+    n_samples : int
+        N, the readings, cut into ``k`` near-equal blocks (:func:`.selection.folds.time_blocks`).
+    k : int
+        The blocks.
+
+    Returns
+    -------
+    float
+        The RMS of the held-out errors over the blocks that could be fitted (a block is
+        left out when its training rows are no more than the columns), in y's unit.
+
+    Raises
+    ------
+    InsufficientDataError
+        No block could be fitted.
+    """
     design = np.column_stack([offsets, x]) if x.size else offsets
-    folds = np.array_split(np.arange(n_samples), k)
-    squared, count = 0.0, 0
-    for fold in folds:
-        test = np.isin(sample_of_row, fold)
-        train = ~test
-        if test.sum() == 0 or train.sum() <= design.shape[1]:
-            continue
+    folds = Folds.of_readings(n_samples, k, sample_of_row)
+
+    def solve(fold: int) -> NDArray[np.float64] | None:
+        train = folds.training_rows(fold)
+        if train.sum() <= design.shape[1]:
+            return None
         coefficients, *_ = np.linalg.lstsq(design[train], y[train], rcond=None)
-        error = design[test] @ coefficients - y[test]
-        squared += float(error @ error)
-        count += int(test.sum())
+        return coefficients
+
+    error, judged = folds.held_out_residuals(design, y, solve)
+    squared, count = 0.0, 0
+    for a, b in folds.bounds:
+        if judged[a:b].any():
+            squared += float(error[a:b] @ error[a:b])
+            count += b - a
     if count == 0:
         raise InsufficientDataError("too few reference readings for cross-validation")
     return float(np.sqrt(squared / count))

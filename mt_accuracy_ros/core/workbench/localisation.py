@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..scales.knn import cross_validate_k_many
+from .selection.folds import Folds
 from ..effects.spectral import (direct_basis, frequency_grid, grid_periodogram, resolvable,
                                 weight_sums)
 from ..effects.variables import Variables
@@ -257,22 +258,26 @@ def _blocked_share(q: NDArray[np.float64], r: NDArray[np.float64], period_m: flo
     contiguous time blocks (fitted, with an offset, on the other blocks)."""
     phase = 2.0 * np.pi * q / period_m
     design = np.column_stack([np.ones(q.size), np.cos(phase), np.sin(phase)])
-    size = -(-q.size // folds)
-    edges = [(start, min(start + size, q.size)) for start in range(0, q.size, size)]
+    # Blocks of ceil(N / folds) readings, the last shorter.
+    cv = Folds.of_readings(q.size, folds, cut="ceil")
     # Each block's normal equations once; a fit on the others is the whole's minus its own
     # (3 columns of an offset and one sinusoid: well conditioned, and a 3 x 3 solve per
     # block instead of a least-squares fit of the other blocks' rows).
-    grams = np.stack([design[a:b].T @ design[a:b] for a, b in edges])
-    moments = np.stack([design[a:b].T @ r[a:b] for a, b in edges])
+    grams = cv.training_sums(cv.block_products(design, design))
+    moments = cv.training_sums(cv.block_products(design, r))
+
+    def solve(fold: int) -> NDArray[np.float64]:
+        if np.linalg.cond(grams[fold]) < 1e10:
+            return np.linalg.solve(grams[fold], moments[fold])
+        # A period the positions barely sample: the minimum-norm fit, as before.
+        train = cv.training_rows(fold)
+        coefficients, *_ = np.linalg.lstsq(design[train], r[train], rcond=None)
+        return coefficients
+
+    residual, _ = cv.held_out_residuals(design, r, solve)
     squared = 0.0
-    for fold, (a, b) in enumerate(edges):
-        gram, moment = grams.sum(axis=0) - grams[fold], moments.sum(axis=0) - moments[fold]
-        if np.linalg.cond(gram) < 1e10:
-            coefficients = np.linalg.solve(gram, moment)
-        else:   # a period the positions barely sample: the minimum-norm fit, as before
-            coefficients, *_ = np.linalg.lstsq(np.delete(design, np.s_[a:b], axis=0),
-                                               np.delete(r, np.s_[a:b]), rcond=None)
-        squared += float(np.sum((design[a:b] @ coefficients - r[a:b]) ** 2))
+    for a, b in cv.bounds:
+        squared += float(np.sum(residual[a:b] ** 2))
     return max(0.0, 1.0 - squared / float(np.sum(r ** 2)))
 
 

@@ -74,6 +74,7 @@ from ..errors import InsufficientDataError, ParameterError
 from .diagnosis import Candidate, Observations, add_effect, residual_frame
 from .selection import (Selector, Term, penalise, penalised_fit, penalty_of,
                         ridge_standard_errors, solve_normal)
+from .selection.folds import Folds
 
 #: A coefficient is said to have moved when |new - old| exceeds this many combined
 #: standard uncertainties.
@@ -352,16 +353,34 @@ def _datum_design(model: ErrorModel, base: ErrorModel, name: str, names: list[st
 def blocked_cv_errors(x: NDArray[np.float64], y: NDArray[np.float64],
                       fold_of_row: NDArray[np.intp], penalties: list[tuple[int, int, float]],
                       prior=None) -> NDArray[np.float64]:
-    """Out-of-fold errors (R,) of y ~ x: each fold predicted by a fit on the others
-    (``penalties``: ridge (start, stop, strength) of column ranges, and ``prior``, as
-    the fit used: see :func:`prior_fit`)."""
-    errors = np.empty_like(y)
-    for fold in np.unique(fold_of_row):
-        held = fold_of_row == fold
-        train = ~held
+    """Out-of-fold errors of y ~ x, each fold predicted by a fit on the others.
+
+    Parameters
+    ----------
+    x : ndarray, shape (R, p)
+        The design.
+    y : ndarray, shape (R,)
+        The readings [m].
+    fold_of_row : ndarray of int, shape (R,)
+        Each row's time block, non-decreasing (:class:`.selection.folds.Folds`).
+    penalties : list of (start, stop, strength)
+        Ridge strengths of column ranges, as the fit used.
+    prior : (precision (P,), mean (P,)) or None
+        A Gaussian prior on the first P columns, as the fit used (:func:`prior_fit`).
+
+    Returns
+    -------
+    ndarray, shape (R,)
+        y - the held-out prediction [m].
+    """
+    folds = Folds(fold_of_row)
+
+    def solve(fold: int) -> NDArray[np.float64]:
+        train = folds.training_rows(fold)
         _, penalised, right = _normal_equations(x[train], y[train], penalties, prior)
-        coefficients = solve_normal(penalised, right)
-        errors[held] = y[held] - x[held] @ coefficients
+        return solve_normal(penalised, right)
+
+    errors, _ = folds.held_out_residuals(x, y, solve)
     return errors
 
 

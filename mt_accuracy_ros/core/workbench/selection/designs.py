@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from ...effects.base import Context, EffectFamily
 from ...effects.lru import ByteBoundedCache
+from .folds import Folds
 
 
 @dataclass
@@ -144,10 +145,10 @@ class ReadingDesigns:
 
     def _set_readings(self, ctx: Context, residual: NDArray[np.float64],
                       mask: NDArray[np.bool_], fold_of_sample: NDArray[np.intp],
-                      folds: int) -> None:
+                      folds: int, forward: bool = False) -> None:
         """Lay out the rows ``mask`` (N, K) selects of ``residual`` (N, K) [m] at ``ctx``'s
         readings, each reading in its fold ``fold_of_sample`` (N,) (non-decreasing,
-        0..``folds`` - 1)."""
+        0..``folds`` - 1; ``forward``: each fold trained on the earlier ones only)."""
         n, width = residual.shape
         self.ctx = ctx
         self.width = width
@@ -174,9 +175,10 @@ class ReadingDesigns:
         self.fold_of_sample = fold_of_sample
         self.fold_of_row = self.fold_of_sample[self.sample_of_row]
         self.folds = folds
-        # Rows are in time order and folds contiguous: each fold is one slice of rows.
-        edges = np.searchsorted(self.fold_of_row, np.arange(folds + 1))
-        self.fold_bounds = [(int(edges[f]), int(edges[f + 1])) for f in range(folds)]
+        #: The time-blocked cross-validation (:class:`.folds.Folds`): rows are in time
+        #: order and folds contiguous, so each fold is one slice of rows.
+        self.cv = Folds(self.fold_of_row, folds, forward)
+        self.fold_bounds = self.cv.bounds
         # Separable designs (one sensitivity x scalar columns) live on the readings that
         # measured anything, one value each, instead of on the rows.
         self.present = np.unique(self.sample_of_row)
@@ -312,7 +314,7 @@ class ReadingDesigns:
     def _block_products(self, left: NDArray[np.float64], right: NDArray[np.float64]
                         ) -> NDArray[np.float64]:
         """(folds, a, b): left_f^T right_f over each fold's rows."""
-        return np.stack([left[a:b].T @ right[a:b] for a, b in self.fold_bounds])
+        return self.cv.block_products(left, right)
 
     def base_statistics(self, base: NDArray[np.float64]) -> _BaseStatistics:
         """The selected model's per-fold products (its columns with themselves and y)."""
@@ -325,7 +327,7 @@ class ReadingDesigns:
     def _candidate_products(self, stats: _BaseStatistics, design: NDArray[np.float64],
                             key: tuple | None = None):
         """Per-fold normal equations of base + ``design``: X_f'X_f (folds, q+p, q+p), X_f'y_f
-        (folds, q+p) and y_f'y_f (folds,); :func:`_train` turns them into the training
+        (folds, q+p) and y_f'y_f (folds,); :func:`.folds.training_sums` turns them into the training
         blocks', a sum over folds into the whole record's. ``key`` (term name, setting):
         the design's products with itself are kept under it (they hold for any base)."""
         q = stats.base.shape[1]

@@ -52,7 +52,7 @@ from ...effects.physics import consistency_allowances, limit_problems, spread_pr
 from ..distributions import chi2_sf
 from ..line_search import minimise_bounded
 from .designs import ReadingDesigns, Term, _BaseStatistics, penalty_of
-from .folds import _train, time_blocks
+from .folds import time_blocks
 from .linalg import (penalise, penalised_fit, products_fit, solve_normal,
                      solve_normal_grouped)
 from .significance import coefficient_p_value, gain_p_value, max_t_adjusted
@@ -127,7 +127,8 @@ class Selector(ReadingDesigns):
             raise ValueError(f"residual {residual.shape} and mask {mask.shape} must be "
                              f"({n}, {width}) for this context")
         self._set_readings(ctx, residual, mask,
-                           time_blocks(n, folds) if blocks is None else blocks, folds)
+                           time_blocks(n, folds) if blocks is None else blocks, folds,
+                           self.forward)
         self.allowances = consistency_allowances(residual, mask, noise_sigma)
         # Rows judged: all, or (forward) those after the first block.
         first_judged = self.fold_bounds[1][0] if self.forward else 0
@@ -208,10 +209,8 @@ class Selector(ReadingDesigns):
     # costs one pass over its own columns instead of a refit per fold and setting.
     def _train(self, per_fold: NDArray[np.float64]) -> NDArray[np.float64]:
         """Per-fold sums -> each fold's training sums: every other fold's, or (forward)
-        the earlier folds' only."""
-        if self.forward:
-            return np.cumsum(per_fold, axis=0) - per_fold
-        return _train(per_fold)
+        the earlier folds' only (:meth:`.folds.Folds.training_sums`)."""
+        return self.cv.training_sums(per_fold)
 
     def _per_sample(self, squared_rows: NDArray[np.float64]) -> NDArray[np.float64]:
         """Squared errors of the judged rows -> (N, 3) per reading and component."""
@@ -225,10 +224,10 @@ class Selector(ReadingDesigns):
 
     def _held_out_errors(self, x: NDArray[np.float64], coefficients: NDArray[np.float64]
                          ) -> NDArray[np.float64]:
-        squared = np.empty(self.y.size)
-        for fold, (a, b) in enumerate(self.fold_bounds):
-            squared[a:b] = (x[a:b] @ coefficients[fold] - self.y[a:b]) ** 2
-        return squared
+        """(R,) each row's squared error under its fold's ``coefficients`` (F, p) of
+        ``x`` (R, p)."""
+        residual, _ = self.cv.held_out_residuals(x, self.y, lambda fold: coefficients[fold])
+        return residual ** 2
 
     def out_of_fold(self, stats: _BaseStatistics, term: Term | None
                     ) -> tuple[NDArray[np.float64], dict]:
@@ -325,17 +324,7 @@ class Selector(ReadingDesigns):
         each other training block by a fit on the remaining training blocks (forward: each
         earlier block by a fit on the blocks before it). Never on the held-out block."""
         folds = self.folds
-        pairs = []
-        for f in range(folds):
-            for g in range(folds):
-                if g == f or (self.forward and (g >= f or g == 0)):
-                    continue
-                weights = np.ones(folds)
-                if self.forward:
-                    weights = (np.arange(folds) < g).astype(float)
-                else:
-                    weights[[f, g]] = 0.0
-                pairs.append((f, g, weights))
+        pairs = self.cv.validation_pairs()
         middle = term.settings[len(term.settings) // 2]
         if not pairs:
             return [middle] * folds
@@ -352,13 +341,7 @@ class Selector(ReadingDesigns):
         """A penalised family's strength on all readings: the least out-of-fold error
         after ``base``."""
         stats = self.base_statistics(base)
-        folds = self.folds
-        pairs = []
-        for g in range(1 if self.forward else 0, folds):
-            weights = (np.arange(folds) < g).astype(float) if self.forward else \
-                (np.arange(folds) != g).astype(float)
-            pairs.append((g, g, weights))
-        errors = self._validation_errors(term, stats, pairs)
+        errors = self._validation_errors(term, stats, self.cv.held_out_pairs())
         return term.settings[int(np.argmin(errors.sum(axis=0)))]
 
     def choose_setting_all(self, term: Term, base: NDArray[np.float64]) -> dict:
