@@ -22,6 +22,23 @@ class ErrorFunction:
     kind : ``"constant"``, ``"table"`` (piecewise-linear, flat beyond the ends),
     ``"polynomial"`` (coefficients c0, c1, ... of position^i) or ``"profile"``
     (a measured profile, e.g. a kNN systematic profile: same as a table).
+
+    Calling it with positions, shape ``S``, [m] (linear axis) or [rad] (rotary
+    axis) returns the error, shape ``S``, [m] (translational motion) or [rad]
+    (angular motion).
+
+    Parameters
+    ----------
+    kind : {"constant", "table", "profile", "polynomial"}
+        Form of the function, as above.
+    value : float
+        The constant's value [m] or [rad] (``kind="constant"``).
+    positions : ndarray, shape (K,)
+        Strictly ascending table / profile positions [m] or [rad].
+    values : ndarray, shape (K,)
+        Error at ``positions`` [m] or [rad].
+    coefficients : ndarray, shape (P,)
+        Polynomial coefficients c0, c1, ...; ``c_i`` in [m or rad] / [position unit]^i.
     """
 
     kind: str = "constant"
@@ -52,6 +69,25 @@ def parse_error_function(spec, where: str) -> ErrorFunction:
 
     Accepted forms: a number; ``{table: {positions: [...], values: [...]}}``;
     ``{profile: {positions: [...], values: [...]}}``; ``{polynomial: [c0, c1, ...]}``.
+
+    Parameters
+    ----------
+    spec : float or dict
+        The YAML value, positions in [m] / [rad], values in [m] / [rad].
+    where : str
+        Where ``spec`` sits in the description (e.g. ``"axes.X.errors.EXX"``),
+        quoted in error messages.
+
+    Returns
+    -------
+    ErrorFunction
+        The parsed function.
+
+    Raises
+    ------
+    MachineDescriptionError
+        If the form is unknown, a value is not a finite number, a table has fewer
+        than two points, unequal lengths or positions not strictly ascending.
     """
     def finite(values, name):
         try:
@@ -89,14 +125,45 @@ def parse_error_function(spec, where: str) -> ErrorFunction:
 
 
 def sampled(function: ErrorFunction, grid: ArrayLike) -> ErrorFunction:
-    """The function as a table on ``grid`` (what a CNC compensation table holds)."""
+    """The function as a table on ``grid`` (what a CNC compensation table holds).
+
+    Parameters
+    ----------
+    function : ErrorFunction
+        The error function to sample.
+    grid : array_like, shape (K,)
+        Ascending positions [m] (linear axis) or [rad] (rotary axis).
+
+    Returns
+    -------
+    ErrorFunction
+        ``kind="table"`` with ``positions=grid`` and ``values=function(grid)``.
+    """
     g = np.asarray(grid, dtype=np.float64)
     return ErrorFunction(kind="table", positions=g, values=function(g))
 
 
 def from_profile(positions: ArrayLike, systematic: ArrayLike) -> ErrorFunction:
     """An error function from a measured profile, e.g. the kNN systematic error
-    of :func:`mt_accuracy_ros.core.scales.knn.extract_systematic` (positions ascending)."""
+    of :func:`mt_accuracy_ros.core.scales.knn.extract_systematic` (positions ascending).
+
+    Parameters
+    ----------
+    positions : array_like, shape (K,)
+        Strictly ascending positions [m] (linear axis) or [rad] (rotary axis), K >= 2.
+    systematic : array_like, shape (K,)
+        Error at each position [m] or [rad].
+
+    Returns
+    -------
+    ErrorFunction
+        ``kind="profile"`` (interpolated linearly, flat beyond the ends).
+
+    Raises
+    ------
+    MachineDescriptionError
+        If the profile is not finite, too short or not strictly ascending.
+    """
     return parse_error_function({"profile": {"positions": np.asarray(positions).tolist(),
                                              "values": np.asarray(systematic).tolist()}},
                                 "profile")
