@@ -29,12 +29,38 @@ _DIRECTION = {"X": 0, "Y": 1, "Z": 2, "A": 0, "B": 1, "C": 2}
 
 
 def motion_error_name(component: str, axis: str) -> str:
-    """ISO 230-1 name of a position-dependent error, e.g. ('C', 'X') -> 'ECX'."""
+    """ISO 230-1 name of a position-dependent error, e.g. ('C', 'X') -> 'ECX'.
+
+    Parameters
+    ----------
+    component : {"X", "Y", "Z", "A", "B", "C"}
+        Error component: translation along or rotation about x, y, z.
+    axis : str
+        Axis letter the error belongs to.
+
+    Returns
+    -------
+    str
+        The name ``E<component><axis>``.
+    """
     return f"E{component}{axis}"
 
 
 def location_error_name(component: str, axis: str) -> str:
-    """ISO 230-1 name of a location error, e.g. ('C', 'Y') -> 'EC0Y' (squareness)."""
+    """ISO 230-1 name of a location error, e.g. ('C', 'Y') -> 'EC0Y' (squareness).
+
+    Parameters
+    ----------
+    component : {"X", "Y", "Z", "A", "B", "C"}
+        Error component: offset along or tilt about x, y, z.
+    axis : str
+        Axis letter the error belongs to.
+
+    Returns
+    -------
+    str
+        The name ``E<component>0<axis>``.
+    """
     return f"E{component}0{axis}"
 
 
@@ -42,14 +68,28 @@ def location_error_name(component: str, axis: str) -> str:
 class Axis:
     """One axis of the chain.
 
+    Parameters
+    ----------
+    name : str
+        Axis letter, one of X, Y, Z (linear) or A, B, C (rotary).
+    stroke : tuple of float, (low, high)
+        Travel [m] (linear) or [rad] (rotary).
+    offset : ndarray, shape (3,)
+        Position of the next body in this axis' frame [m] (Kidani's L_*).
+    sign : float
+        +1, or -1 when positive command moves the body backwards.
+    motion_errors : dict of str to ErrorFunction
+        Component letter -> error function of the position (6 entries), values in
+        [m] (X, Y, Z) or [rad] (A, B, C).
+    location_errors : dict of str to float
+        Component letter -> value [m] (X, Y, Z) or [rad] (A, B, C), declared ones only.
+
     Attributes
     ----------
-    name : str                   axis letter
-    stroke : (float, float)      travel [m] or [rad]
-    offset : ndarray, shape (3,) position of the next body in this axis' frame [m]
-    sign : float                 +1, or -1 when positive command moves the body backwards
-    motion_errors : dict         component letter -> ErrorFunction (6 entries)
-    location_errors : dict       component letter -> value [m or rad] (declared ones)
+    is_rotary : bool
+        True for A, B, C.
+    direction : int
+        Index 0, 1, 2 of the direction (x, y, z) the axis moves along or turns about.
     """
 
     name: str
@@ -74,6 +114,35 @@ class MachineDescription:
 
     ``workpiece_branch`` and ``tool_branch`` list axis letters from the bed
     outwards (Khan & Chen's N and M loops).
+
+    Parameters
+    ----------
+    name : str
+        Machine name.
+    chain : str
+        ISO 10791-1 chain string, e.g. ``"[w Z b X Y t]"``.
+    workpiece_branch, tool_branch : tuple of str
+        Axis letters of each branch from the bed outwards.
+    axes : dict of str to Axis
+        Axis letter -> axis.
+    tool : ndarray, shape (3,)
+        Tool tip in the last tool-side frame [m].
+    workpiece : ndarray, shape (3,)
+        Workpiece point in the last workpiece-side frame [m].
+    description : str
+        Free text.
+    scale_distance_m : dict of str to float
+        Axis -> distance between its two linear scales [m] (dual-scale yaw).
+    structure_length_m : float or None
+        See the attribute comment above.
+    cnc : dict
+        Validated compensation limits (keys of :data:`CNC_KEYS`, SI units).
+    abbe_arms_known : bool
+        See the attribute comment above.
+    setup_pose : dict of str to float
+        Rotary axis -> set-up command [rad].
+    setup_notes : tuple of str
+        Assumptions made reading the set-up pose.
     """
 
     name: str
@@ -105,7 +174,18 @@ class MachineDescription:
     setup_notes: tuple[str, ...] = ()
 
     def setup_angle(self, axis: str) -> float:
-        """The set-up command of rotary ``axis`` [rad] (0 when the set-up pose omits it)."""
+        """The set-up command of rotary ``axis`` [rad] (0 when the set-up pose omits it).
+
+        Parameters
+        ----------
+        axis : str
+            Rotary axis letter.
+
+        Returns
+        -------
+        float
+            Set-up command [rad].
+        """
         return float(self.setup_pose.get(axis, 0.0))
 
     @property
@@ -114,7 +194,20 @@ class MachineDescription:
 
     def check_positions(self, positions: dict[str, np.ndarray], tolerance: float = 1e-9) -> None:
         """Raise :class:`MachineDescriptionError` for unknown axes or positions outside the
-        stroke."""
+        stroke.
+
+        Parameters
+        ----------
+        positions : dict of str to ndarray, shape (N,)
+            Axis positions [m] (rotary [rad]).
+        tolerance : float, optional
+            Allowance beyond the stroke's ends, in the axis' unit [m] or [rad].
+
+        Raises
+        ------
+        MachineDescriptionError
+            An unknown axis, a non-finite position or one outside the stroke.
+        """
         for name, values in positions.items():
             if name not in self.axes:
                 raise MachineDescriptionError(f"unknown axis {name!r}; this machine has "
@@ -136,6 +229,23 @@ def parse_chain(chain: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """Workpiece and tool branches (from the bed outwards) of an ISO 10791-1 chain string.
 
     ``"[w Z b X Y t]"`` -> ``(("Z",), ("X", "Y"))``.
+
+    Parameters
+    ----------
+    chain : str
+        Chain string ``[w <axes> b <axes> t]``, axes from X, Y, Z, A, B, C.
+
+    Returns
+    -------
+    workpiece : tuple of str
+        Workpiece-side axes from the bed outwards.
+    tool : tuple of str
+        Tool-side axes from the bed outwards.
+
+    Raises
+    ------
+    MachineDescriptionError
+        Not a string of that form, or an axis named twice.
     """
     if not isinstance(chain, str):
         raise MachineDescriptionError(
@@ -165,7 +275,27 @@ def _vector(spec, where: str) -> np.ndarray:
 
 @reraise_as(MachineDescriptionError, "machine description")
 def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
-    """Build and validate a description from its parsed YAML mapping."""
+    """Build and validate a description from its parsed YAML mapping.
+
+    Parameters
+    ----------
+    data : dict
+        The YAML mapping: ``name``, ``chain``, ``axes``, ``tool``, ``workpiece`` required;
+        lengths in [m], angles in [rad] unless written ``{value: .., unit: ..}``.
+    source : str, optional
+        Where ``data`` came from, quoted in error messages.
+
+    Returns
+    -------
+    MachineDescription
+        The validated description.
+
+    Raises
+    ------
+    MachineDescriptionError
+        Any missing, malformed, non-finite or out-of-stroke entry (other errors
+        raised inside are re-raised as this one).
+    """
     if not isinstance(data, dict):
         raise MachineDescriptionError(f"{source}: top level must be a mapping")
     for key in ("name", "chain", "axes", "tool", "workpiece"):
@@ -276,7 +406,29 @@ def _stroke(spec, letter: str, where: str) -> np.ndarray:
 def angle_with_unit(value, where: str, error: type[Exception],
                     units: dict[str, float] | None = None) -> float:
     """``{value: -90, unit: deg}`` -> rad; a bare number, an unknown unit or a value that
-    is not a finite number is refused with ``error`` naming ``where`` and the mend."""
+    is not a finite number is refused with ``error`` naming ``where`` and the mend.
+
+    Parameters
+    ----------
+    value : dict
+        ``{value: <number>, unit: <str>}``.
+    where : str
+        Where the angle sits, quoted in the message.
+    error : type of Exception
+        The package error class to raise.
+    units : dict of str to float, optional
+        Unit name -> factor to [rad]; :data:`ANGLE_UNITS` by default.
+
+    Returns
+    -------
+    float
+        The angle [rad].
+
+    Raises
+    ------
+    error
+        A bare number, an unknown unit or a non-finite value.
+    """
     units = ANGLE_UNITS if units is None else units
     if not (isinstance(value, dict) and set(value) == {"value", "unit"}):
         raise error(f"{where}: give the angle with its unit, e.g. {{value: -90, unit: deg}}"
@@ -297,6 +449,28 @@ def read_setup_pose(spec, axes: dict[str, "Axis"], where: str,
     Every angle carries its unit; an axis the machine lacks, a linear axis, or a bare
     number is refused in one line saying how to write it. ``notes`` collects what was
     assumed (an angle of a continuous axis taken modulo a full turn).
+
+    Parameters
+    ----------
+    spec : dict or None
+        The ``setup_pose`` mapping; None gives an empty pose.
+    axes : dict of str to Axis
+        The machine's axes.
+    where : str
+        Where the pose sits, quoted in messages.
+    notes : list of str, optional
+        Appended with one sentence per assumption made.
+
+    Returns
+    -------
+    dict of str to float
+        Rotary axis -> set-up command [rad], within the stroke.
+
+    Raises
+    ------
+    MachineDescriptionError
+        Not a mapping, not a rotary axis of the machine, an angle without a unit or
+        outside the stroke.
     """
     if spec is None:
         return {}
@@ -328,6 +502,27 @@ def setup_angle_in_stroke(axis: "Axis", angle: float, where: str,
     angle and the same angle plus whole turns are one orientation, so -45 deg is taken
     as 315 deg, and ``notes`` gets the sentence that says so. Anything else outside the
     stroke is refused in one line.
+
+    Parameters
+    ----------
+    axis : Axis
+        The rotary axis.
+    angle : float
+        Set-up angle [rad].
+    where : str
+        Where the angle sits, quoted in messages.
+    notes : list of str, optional
+        Appended with the sentence when the angle is taken modulo a turn.
+
+    Returns
+    -------
+    float
+        The command [rad] within the stroke.
+
+    Raises
+    ------
+    MachineDescriptionError
+        A non-finite angle, or one outside the stroke of a non-continuous axis.
     """
     low, high = axis.stroke
     if not np.isfinite(angle):
@@ -417,6 +612,28 @@ def generic_cartesian(strokes: dict[str, tuple[float, float]], tool_length_m: fl
     that varies over the survey. A constant arm the real machine has adds an angular
     error times a constant: a straightness of the same axis, which the catalogue
     names as such.
+
+    Parameters
+    ----------
+    strokes : dict of str to tuple of float
+        Axis (X, Y, Z) -> (low, high) travel [m]; an axis that stood still gets a
+        nominal 1 mm of travel.
+    tool_length_m : float, optional
+        Tool length along z [m].
+    name : str, optional
+        Machine name.
+    work_axes : tuple of str, optional
+        Surveyed axes that carry the workpiece, from the bed outwards.
+
+    Returns
+    -------
+    MachineDescription
+        With ``abbe_arms_known=False``, work axes with ``sign=-1``.
+
+    Raises
+    ------
+    MachineDescriptionError
+        No linear axis, a work axis not surveyed or named twice, a non-finite travel.
     """
     axes = [a for a in "XYZ" if a in strokes]
     if not axes:
@@ -453,7 +670,27 @@ def with_setup_pose(machine: MachineDescription, pose: dict[str, float],
                     source: str = "setup_pose") -> MachineDescription:
     """``machine`` with the set-up pose ``pose`` (rotary axis -> command [rad]) on top of
     its own; an axis that is not one of its rotary axes, or an angle outside its stroke,
-    is refused in one line."""
+    is refused in one line.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine.
+    pose : dict of str to float
+        Rotary axis -> set-up command [rad].
+    source : str, optional
+        Where the pose came from, quoted in messages.
+
+    Returns
+    -------
+    MachineDescription
+        A copy with the merged pose and notes (``machine`` itself when ``pose`` is empty).
+
+    Raises
+    ------
+    MachineDescriptionError
+        An axis that is not rotary on ``machine`` or an angle outside its stroke.
+    """
     from dataclasses import replace
 
     if not pose:
@@ -473,7 +710,26 @@ def with_setup_pose(machine: MachineDescription, pose: dict[str, float],
 
 def checked_datum(datum, machine: MachineDescription) -> dict[str, float]:
     """A work offset (axis -> command) checked against ``machine``: every axis once, finite,
-    within its stroke (a datum outside it is a unit slip). Empty stays empty."""
+    within its stroke (a datum outside it is a unit slip). Empty stays empty.
+
+    Parameters
+    ----------
+    datum : dict of str to float or None
+        Axis -> command [m] (rotary [rad]).
+    machine : MachineDescription
+        The machine whose axes and strokes apply.
+
+    Returns
+    -------
+    dict of str to float
+        Axis -> command [m] or [rad], every axis of ``machine`` (or empty).
+
+    Raises
+    ------
+    ParameterError
+        Not a mapping, not every axis exactly once, a non-finite value or one outside
+        the stroke.
+    """
     import math
 
     from ..errors import ParameterError
@@ -507,7 +763,23 @@ def bundled_machine_names() -> list[str]:
 
 def bundled_machine_path(name: str) -> Path:
     """The file of the bundled machine ``name``; a name that is not one is refused
-    (nothing outside the bundled directory is reachable through a name)."""
+    (nothing outside the bundled directory is reachable through a name).
+
+    Parameters
+    ----------
+    name : str
+        Bundled machine name without suffix, e.g. ``"kidani_hmc"``.
+
+    Returns
+    -------
+    pathlib.Path
+        The YAML file in :data:`BUNDLED_MACHINES`.
+
+    Raises
+    ------
+    MachineDescriptionError
+        Not a plain name, or no such bundled machine.
+    """
     if not plain_name(name) or not (BUNDLED_MACHINES / f"{name}.yaml").is_file():
         raise MachineDescriptionError(f"no bundled machine {name[:80]!r} (bundled: "
                                       f"{', '.join(bundled_machine_names())}; or a path to a "
@@ -522,6 +794,21 @@ def load_machine(path_or_name: str | Path) -> MachineDescription:
 
     The file must be a regular file of at most
     :data:`~mt_accuracy_ros.core.inputs.safe_files.MAX_DESCRIPTION_BYTES`; errors never quote it.
+
+    Parameters
+    ----------
+    path_or_name : str or pathlib.Path
+        Path to a machine YAML, or a bundled machine's name.
+
+    Returns
+    -------
+    MachineDescription
+        The validated description.
+
+    Raises
+    ------
+    MachineDescriptionError
+        Unreadable or too large file, bad YAML, or an invalid description.
     """
     path = Path(path_or_name)
     if not path.suffix:
