@@ -74,6 +74,19 @@ class ErrorOverrides:
     ``thermal[axis]`` : (N, 6) or (6,) small-displacement twist (dx, dy, dz, ex, ey, ez)
     of the body carried by ``axis`` (or ``'bed_tool'`` / ``'bed_work'``), a thermal link.
     ``scale`` : multiplies every error (for order-of-magnitude checks).
+
+    Parameters
+    ----------
+    motion : dict of str to float or ndarray, shape (N,)
+        Motion error name (``ECX``) -> value [m] (EX., EY., EZ.) or [rad] (EA., EB., EC.).
+    location : dict of str to float or ndarray, shape (N,)
+        Location error name (``EC0Y``) -> value [m] or [rad].
+    thermal : dict of str to ndarray, shape (6,) or (N, 6)
+        Axis (or ``bed_tool`` / ``bed_work``) -> twist: dx, dy, dz [m], ex, ey, ez [rad].
+    scale : float
+        Dimensionless factor on every error.
+    use_description : bool
+        False: errors not overridden are zero instead of the description's.
     """
 
     motion: dict[str, object] = field(default_factory=dict)
@@ -84,7 +97,13 @@ class ErrorOverrides:
 
 
 class KinematicModel:
-    """HTM chain model built from a :class:`MachineDescription`."""
+    """HTM chain model built from a :class:`MachineDescription`.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine: chain, offsets [m], strokes, error functions.
+    """
 
     def __init__(self, machine: MachineDescription) -> None:
         self.machine = machine
@@ -111,7 +130,22 @@ class KinematicModel:
                 for a in self.machine.axis_order}, n
 
     def motion_errors(self, axis: str, q: NDArray, overrides: ErrorOverrides) -> NDArray:
-        """(N, 6) error motions (dx, dy, dz, ex, ey, ez) of ``axis`` at positions ``q``."""
+        """(N, 6) error motions (dx, dy, dz, ex, ey, ez) of ``axis`` at positions ``q``.
+
+        Parameters
+        ----------
+        axis : str
+            Axis letter.
+        q : ndarray, shape (N,)
+            Positions of ``axis`` [m] (rotary [rad]).
+        overrides : ErrorOverrides
+            Error values replacing or adding to the description's (none by default).
+
+        Returns
+        -------
+        ndarray, shape (N, 6)
+            dx, dy, dz [m] and ex, ey, ez [rad], times ``overrides.scale``.
+        """
         spec = self.machine.axes[axis]
         out = np.zeros((q.size, 6))
         for i, component in enumerate(COMPONENTS):
@@ -123,7 +157,22 @@ class KinematicModel:
         return out * overrides.scale
 
     def location_errors(self, axis: str, n: int, overrides: ErrorOverrides) -> NDArray:
-        """(N, 6) location errors (EX0., EY0., EZ0., EA0., EB0., EC0.) of ``axis``."""
+        """(N, 6) location errors (EX0., EY0., EZ0., EA0., EB0., EC0.) of ``axis``.
+
+        Parameters
+        ----------
+        axis : str
+            Axis letter.
+        n : int
+            Number of configurations N.
+        overrides : ErrorOverrides
+            Error values replacing or adding to the description's (none by default).
+
+        Returns
+        -------
+        ndarray, shape (N, 6)
+            Offsets [m] and tilts / zero [rad], undeclared ones zero, times ``overrides.scale``.
+        """
         spec = self.machine.axes[axis]
         out = np.zeros((n, 6))
         for i, component in enumerate(COMPONENTS):
@@ -160,6 +209,34 @@ class KinematicModel:
         frame's origin is that point. ``end_point`` ((3,) or (N, 3) [m], in the
         branch's last frame) replaces the description's tool vector or workpiece
         reference point.
+
+        Parameters
+        ----------
+        which : {"tool", "workpiece"}
+            The branch.
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+        errors : bool, optional
+            Include the error HTMs (False: the nominal chain).
+        first_order : bool, optional
+            First-order error matrices (Kidani eq. 2.7) instead of the exact products.
+        overrides : ErrorOverrides, optional
+            Error values replacing or adding to the description's (none by default).
+        check_stroke : bool, optional
+            Refuse positions outside an axis' stroke.
+        end_point : array_like, shape (3,) or (N, 3), optional
+            End point [m] in the branch's last frame.
+
+        Returns
+        -------
+        ndarray, shape (N, 4, 4)
+            Bed-to-end-point HTMs, translation in [m].
+
+        Raises
+        ------
+        MachineDescriptionError
+            Missing or unknown axes, arrays of different lengths, or (``check_stroke``)
+            positions outside the stroke.
         """
         rot, pos = self._branch_rp(which, positions, errors, first_order,
                                    overrides or ErrorOverrides(), check_stroke, end_point)
@@ -250,6 +327,18 @@ class KinematicModel:
         machine whose workpiece branch is empty). This is the w of Kidani eqs.
         2.9-2.10 ("the target position on the work surface"): the material the
         tool is cutting in this configuration.
+
+        Parameters
+        ----------
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+        check_stroke : bool, optional
+            Refuse positions outside an axis' stroke.
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            Machining point [m], workpiece frame.
         """
         q, _ = self._positions(positions, check_stroke)
         return self._machining_point(q)
@@ -282,6 +371,14 @@ class KinematicModel:
 
         Parameters
         ----------
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+        first_order : bool, optional
+            First-order error matrices (Kidani eq. 2.7) instead of the exact products.
+        overrides : ErrorOverrides, optional
+            Error values replacing or adding to the description's (none by default).
+        check_stroke : bool, optional
+            Refuse positions outside an axis' stroke.
         work_point : (3,) or (N, 3) [m], optional
             The workpiece-side point the error is taken at, in the workpiece frame
             (a fixed instrument target: an R-test or probed sphere). Default: the
@@ -294,6 +391,12 @@ class KinematicModel:
         (Kidani eq. 2.10) and ``orientation`` (N, 3) [rad], the rotation vector of
         the actual tool orientation relative to the workpiece against the nominal
         one, in the bed frame.
+
+        Raises
+        ------
+        MachineDescriptionError
+            Missing or unknown axes, arrays of different lengths, positions outside the
+            stroke (``check_stroke``), or a malformed ``work_point``.
         """
         overrides = overrides or ErrorOverrides()
         q, n = self._positions(positions, check_stroke)
@@ -328,6 +431,24 @@ class KinematicModel:
         The workpiece branch enters with a minus sign; its end point is the
         machining point (the nominal tool point itself) unless ``work_point`` is
         given (see :meth:`tcp_error`).
+
+        Parameters
+        ----------
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+        overrides : ErrorOverrides, optional
+            Error values replacing or adding to the description's (none by default).
+        check_stroke : bool, optional
+            Refuse positions outside an axis' stroke.
+        work_point : array_like, shape (3,) or (N, 3), optional
+            Workpiece-side point [m] in the workpiece frame the error is taken at
+            (default: the machining point).
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``position`` (N, 3) [m] and ``orientation`` (N, 3) [rad], bed frame, to first
+            order in the errors.
         """
         overrides = overrides or ErrorOverrides()
         q, n = self._positions(positions, check_stroke)
@@ -395,6 +516,22 @@ class KinematicModel:
         R_p the frame before the turn: not a rotation, but the consumers above
         take its columns linearly. Its zero error (EC0C for C) and the offset along
         its own line then move nothing: the set-up takes them out.
+
+        Parameters
+        ----------
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+        check_stroke : bool, optional
+            Refuse positions outside an axis' stroke.
+        work_point : array_like, shape (3,) or (N, 3), optional
+            Workpiece-side point [m] in the workpiece frame the error is taken at
+            (default: the machining point).
+
+        Returns
+        -------
+        dict of str to tuple of (float, ndarray, ndarray)
+            Every motion and location error name of every axis -> (sign, R shape (N, 3, 3),
+            lever shape (N, 3) [m]).
         """
         q, n = self._positions(positions, check_stroke)
         frames: dict[str, tuple[float, NDArray, NDArray]] = {}
@@ -509,7 +646,18 @@ class KinematicModel:
 
     def tool_axis(self, positions: Positions) -> NDArray:
         """(N, 3) unit vector of the tool axis in the bed frame, nominal chain (the tool
-        vector's direction; +z of the spindle frame for a zero tool vector)."""
+        vector's direction; +z of the spindle frame for a zero tool vector).
+
+        Parameters
+        ----------
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            Unit vectors (dimensionless), bed frame.
+        """
         tool = self.branch("tool", positions, errors=False, check_stroke=False)
         vector = np.asarray(self.machine.tool, dtype=np.float64)
         norm = float(np.linalg.norm(vector))
@@ -523,6 +671,20 @@ class KinematicModel:
         The point is the description's workpiece reference point (the work
         offset) or ``work_point`` ((3,) or (N, 3) [m], workpiece frame): the
         commanded geometry, whose derivative maps axis moves to TCP moves.
+
+        Parameters
+        ----------
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+        check_stroke : bool, optional
+            Refuse positions outside an axis' stroke.
+        work_point : array_like, shape (3,) or (N, 3), optional
+            Workpiece point [m], workpiece frame (default: the description's ``workpiece``).
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            Nominal tool point minus workpiece point [m], bed frame.
         """
         q, n = self._positions(positions, check_stroke)
         point = None if work_point is None else self._work_point(q, n, work_point)
@@ -541,10 +703,24 @@ class KinematicModel:
         (the error varies with position): p_{i+1} = p1 - e(p_i). Rotary axes
         keep their commands here (see :meth:`compensate_orientation`).
 
+        Parameters
+        ----------
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+        iterations : int, optional
+            Number of fixed-point steps (at least one).
+        overrides : ErrorOverrides, optional
+            Error values replacing or adding to the description's (none by default).
+
         Returns
         -------
         dict: ``positions`` (corrected commands), ``residual`` (N, 3) TCP error
         left after compensation [m], ``initial`` (N, 3) the error before [m].
+
+        Raises
+        ------
+        MachineDescriptionError
+            Positions outside the stroke, or a machine without exactly three linear axes.
         """
         q, n = self._positions(positions, check_stroke=True)
         linear = [a for a in self.machine.axis_order if not self.machine.axes[a].is_rotary]
@@ -585,6 +761,26 @@ class KinematicModel:
         on the numeric Jacobian of the nominal R_rel w.r.t. the rotary axes;
         components no rotary axis can produce (e.g. a rotation about the tool
         axis) remain in ``residual`` (rotation vectors in the workpiece frame [rad]).
+
+        Parameters
+        ----------
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+        iterations : int, optional
+            Number of Gauss-Newton steps (at least one).
+        overrides : ErrorOverrides, optional
+            Error values replacing or adding to the description's (none by default).
+
+        Returns
+        -------
+        dict
+            ``positions`` (corrected commands, dict of str to ndarray (N,), [m] / [rad]),
+            ``initial`` and ``residual`` (N, 3) orientation errors [rad] before and after.
+
+        Raises
+        ------
+        MachineDescriptionError
+            Positions outside the stroke, or a machine without a rotary axis.
         """
         q, n = self._positions(positions, check_stroke=True)
         rotary = [a for a in self.machine.axis_order if self.machine.axes[a].is_rotary]
@@ -670,6 +866,25 @@ def volumetric_map(model: KinematicModel, positions: Positions, *, chunk: int = 
     ``positions`` maps each axis to an (N,) array. Chunks bound the memory of the
     (chunk, 4, 4) temporaries. ``overrides_factory(slice)`` may return the
     :class:`ErrorOverrides` for a chunk.
+
+    Parameters
+    ----------
+    model : KinematicModel
+        The model.
+    positions : dict of str to ndarray, shape (N,)
+        Axis commands [m] (rotary [rad]).
+    chunk : int, optional
+        Configurations per chunk.
+    overrides_factory : callable, optional
+        ``slice -> ErrorOverrides or None`` for each chunk.
+    first_order : bool, optional
+        First-order error matrices instead of the exact products.
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``position`` (N, 3) [m] and ``orientation`` (N, 3) [rad], as
+        :meth:`KinematicModel.tcp_error`.
     """
     n = len(next(iter(positions.values())))
     position = np.empty((n, 3))
