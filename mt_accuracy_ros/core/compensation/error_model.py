@@ -118,7 +118,31 @@ def checked_datum_vector(key: str, value, datum: dict, *, non_negative: bool = F
                          ) -> NDArray[np.float64]:
     """The model's error at its datum, corrected or uncertain: three finite values [m]
     (x, y, z), each within 1 mm (a calibration's at one pose; beyond that it is no
-    calibration's), and - when not zero - only with a datum."""
+    calibration's), and - when not zero - only with a datum.
+
+    Parameters
+    ----------
+    key : str
+        Name of the field checked (``datum_uncertainty_m``, ``datum_correction_m``),
+        quoted in messages.
+    value : array_like, shape (3,)
+        The values [m] (x, y, z).
+    datum : dict of str to float
+        The model's datum (axis -> command [m] / [rad]); empty: no datum.
+    non_negative : bool, optional
+        Refuse negative values (an uncertainty).
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        The values [m].
+
+    Raises
+    ------
+    ParameterError
+        Not three finite values within 1 mm (non-negative if asked), or non-zero
+        without a datum.
+    """
     if isinstance(value, (str, bytes, dict)):
         value = None
     try:
@@ -149,7 +173,41 @@ def _datum_point(work_point) -> NDArray[np.float64] | None:
 
 @dataclass
 class ErrorModel:
-    """Machine + included effects; evaluate the TCP error at command positions."""
+    """Machine + included effects; evaluate the TCP error at command positions.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine description (chain, offsets [m], calibrated error functions).
+    effects : dict of str to dict
+        Effect name -> parameters (module table; SI units as the keys say:
+        ``beta_m_per_k`` [m/K], ``lag_s`` [s] ...), a catalogue entry or a user effect.
+        Each is validated on construction.
+    reference_temperatures_c : dict of str to float
+        Sensor -> reference temperature [degC]; a sensor not named takes its first reading.
+    profiles : dict of str to ErrorFunction
+        Motion error name (``ECY``) -> live measured profile, [m] or [rad].
+    version : int
+        Model version (counts changes of effects and parameters).
+    machine_source : str
+        Bundled name or path the machine was loaded from.
+    profile_offsets : dict of str to float
+        Motion error name -> offset [m] or [rad] added to its live profile (to meet
+        the calibration's mean).
+    profile_revision : int
+        Counts live profile updates.
+    datum : dict of str to float
+        Work offset: axis -> command [m] (rotary [rad]); empty: absolute errors.
+    datum_uncertainty_m : ndarray, shape (3,), or None
+        Expanded (k = 2) uncertainty [m] of the model's error at the datum.
+    datum_correction_m : ndarray, shape (3,)
+        Machine's error at the datum beyond the model's [m].
+
+    Raises
+    ------
+    ParameterError
+        An unknown effect or parameter, or a value of the wrong kind.
+    """
 
     machine: MachineDescription
     effects: dict[str, dict] = field(default_factory=dict)
@@ -210,7 +268,25 @@ class ErrorModel:
 
     # ------------------------------------------------------------ changes
     def with_effect(self, name: str, parameters: dict | None = None) -> "ErrorModel":
-        """A new model version that also holds ``name`` (or holds it with new parameters)."""
+        """A new model version that also holds ``name`` (or holds it with new parameters).
+
+        Parameters
+        ----------
+        name : str
+            Effect name (see the module table), or a catalogue / user effect's name.
+        parameters : dict, optional
+            Its parameters (SI units as keyed); defaults for those not given.
+
+        Returns
+        -------
+        ErrorModel
+            A copy with ``version + 1``.
+
+        Raises
+        ------
+        ParameterError
+            An unknown effect or an invalid parameter.
+        """
         effects = copy.deepcopy(self.effects)
         effects[name] = parameters or {}
         return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),
@@ -220,7 +296,18 @@ class ErrorModel:
                           datum_correction_m=self.datum_correction_m.copy())
 
     def with_machine(self, machine: MachineDescription) -> "ErrorModel":
-        """The same model on ``machine`` (e.g. its description with a survey's set-up pose)."""
+        """The same model on ``machine`` (e.g. its description with a survey's set-up pose).
+
+        Parameters
+        ----------
+        machine : MachineDescription
+            The machine to evaluate on.
+
+        Returns
+        -------
+        ErrorModel
+            A copy at the same version.
+        """
         return ErrorModel(machine, copy.deepcopy(self.effects),
                           dict(self.reference_temperatures_c), dict(self.profiles),
                           self.version, self.machine_source, dict(self.profile_offsets),
@@ -228,6 +315,18 @@ class ErrorModel:
                           datum_correction_m=self.datum_correction_m.copy())
 
     def without_effect(self, name: str) -> "ErrorModel":
+        """A new model version without effect ``name``.
+
+        Parameters
+        ----------
+        name : str
+            Effect name; a name the model does not hold changes only the version.
+
+        Returns
+        -------
+        ErrorModel
+            A copy with ``version + 1``.
+        """
         effects = {k: v for k, v in self.effects.items() if k != name}
         return ErrorModel(self.machine, effects, dict(self.reference_temperatures_c),
                           dict(self.profiles), self.version + 1, self.machine_source,
@@ -236,7 +335,22 @@ class ErrorModel:
                           datum_correction_m=self.datum_correction_m.copy())
 
     def set_profile(self, error_name: str, positions_m: ArrayLike, values: ArrayLike) -> None:
-        """Use a measured profile (e.g. the kNN systematic yaw ECY) as that motion error."""
+        """Use a measured profile (e.g. the kNN systematic yaw ECY) as that motion error.
+
+        Parameters
+        ----------
+        error_name : str
+            ISO 230-1 motion error name, e.g. ``"ECY"``.
+        positions_m : array_like, shape (K,)
+            Strictly ascending positions of the error's axis [m], K >= 2.
+        values : array_like, shape (K,)
+            Error at each position [m] (translational) or [rad] (angular).
+
+        Raises
+        ------
+        InputDataError
+            Unequal lengths, fewer than two or non-ascending positions, or NaN/inf.
+        """
         x = np.asarray(positions_m, dtype=np.float64)
         y = np.asarray(values, dtype=np.float64)
         if x.shape != y.shape or x.ndim != 1 or x.size < 2 or not np.all(np.diff(x) > 0):
@@ -265,6 +379,17 @@ class ErrorModel:
 
         Raises :class:`InputDataError` for a name that is not an ISO 230-1 motion error
         (``E`` + component + axis, e.g. ``ECX``).
+
+        Parameters
+        ----------
+        error_name : str
+            ISO 230-1 motion error name.
+
+        Returns
+        -------
+        ErrorFunction or None
+            The calibrated function ([m] or [rad] of the axis position), None when the
+            machine lacks the axis or the function is zero.
         """
         if not isinstance(error_name, str) or len(error_name) != 3 or error_name[0] != "E" or \
                 error_name[1] not in "XYZABC" or error_name[2] not in "XYZABC":
@@ -292,6 +417,27 @@ class ErrorModel:
         calibrated table the live profile itself is the error (:meth:`set_profile`).
 
         Returns True when the model changed.
+
+        Parameters
+        ----------
+        error_name : str
+            ISO 230-1 motion error name, e.g. ``"ECY"``.
+        positions_m : array_like, shape (K,)
+            Strictly ascending positions [m], K >= 2.
+        values : array_like, shape (K,)
+            The live profile [m] or [rad] (used when there is no calibrated table).
+        baseline_difference : array_like, shape (K,), optional
+            Change of the profile against the estimator's baseline [m] or [rad].
+
+        Returns
+        -------
+        bool
+            True when the model changed.
+
+        Raises
+        ------
+        InputDataError
+            A malformed name, or positions / values not finite, ascending and of equal length.
         """
         function = self.calibrated(error_name)
         if function is None:
@@ -324,7 +470,27 @@ class ErrorModel:
 
     def overrides(self, positions: dict[str, NDArray], temperatures: dict | None = None
                   ) -> ErrorOverrides:
-        """Kinematic-model inputs of the included effects at N positions."""
+        """Kinematic-model inputs of the included effects at N positions.
+
+        Parameters
+        ----------
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]).
+        temperatures : dict of str to array_like, shape (N,) or scalar, optional
+            Sensor name -> temperature [degC]; the effects use rises over
+            :attr:`reference_temperatures_c` (the first reading when not set).
+
+        Returns
+        -------
+        ErrorOverrides
+            Motion / location errors [m] or [rad] and the bed-to-tool thermal twist
+            (N, 6) of the built-in effects.
+
+        Raises
+        ------
+        InputDataError
+            A temperature an effect needs is missing.
+        """
         temperatures = temperatures or {}
         n = int(np.size(next(iter(positions.values()))))
         # "geometric" = the description's calibrated errors plus the live profiles.
@@ -369,7 +535,21 @@ class ErrorModel:
         axes at rest, the live profiles as they are; at the instrument's fixed target
         ``work_point`` when it has one (else the machining point); plus
         :attr:`datum_correction_m`, what readings showed the calibration missed there.
-        Zero without a datum."""
+        Zero without a datum.
+
+        Parameters
+        ----------
+        temperatures : dict of str to array_like, optional
+            Sensor -> temperature [degC]; the first value of each is used for a sensor
+            without a reference.
+        work_point : array_like, shape (3,), optional
+            The instrument's target [m], workpiece frame.
+
+        Returns
+        -------
+        ndarray, shape (3,)
+            Position error at the datum [m], bed frame.
+        """
         if not self.datum:
             return np.zeros(3)
         sensors = {**{k: float(np.ravel(np.asarray(v, dtype=np.float64))[0])
@@ -424,6 +604,45 @@ class ErrorModel:
         calibration missed there), and every constant of a fitted effect (which a fit
         against a zeroed instrument cannot know) is referred to the instrument's zero.
         The orientation stays absolute: a touch-off does not take out a tilt.
+
+        Parameters
+        ----------
+        positions : dict of str to array_like, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+        temperatures : dict of str to array_like, shape (N,) or scalar, optional
+            Sensor name -> temperature [degC]; the effects use rises over
+            :attr:`reference_temperatures_c` (the first reading when not set).
+        velocities : dict of str to array_like, shape (N,), optional
+            Axis -> velocity [m/s] (rotary [rad/s]); needed by ``reversal`` and ``servo_lag``.
+        directions : dict of str to array_like, shape (N,), optional
+            Axis -> direction of the last motion, +1 or -1 (dimensionless).
+        time_s : array_like, shape (N,), optional
+            Time of each reading [s].
+        accelerations : dict of str to array_like, shape (N,), optional
+            Axis -> acceleration [m/s^2] (rotary [rad/s^2]).
+        spindle_speed_rad_s : array_like, shape (N,), optional
+            Spindle speed [rad/s].
+        fresh : bool, optional
+            Restart lagged terms in steady state at the first reading.
+        referred : bool, optional
+            Refer the position error to the datum's (when the model has a datum).
+        work_point : array_like, shape (3,) or (N, 3), optional
+            Instrument target [m], workpiece frame.
+        run_starts : array_like of int, shape (R,), optional
+            Row index of the first reading of each run.
+
+        Returns
+        -------
+        position : ndarray, shape (N, 3)
+            TCP position error [m], bed frame.
+        orientation : ndarray, shape (N, 3)
+            Tool-orientation error, rotation vector [rad], bed frame.
+
+        Raises
+        ------
+        InputDataError
+            A missing axis, a missing temperature, or velocities missing for an effect
+            that needs them.
         """
         q = {a: np.atleast_1d(np.asarray(positions[a], dtype=np.float64))
              for a in self.machine.axis_order if a in positions}
@@ -485,7 +704,24 @@ class ErrorModel:
         """Per-axis error motions of the fitted catalogue effects on ``grid`` (ISO name ->
         values [m or rad]), for a CNC's compensation table: a position-dependent error
         belongs in the table the CNC interpolates at its own command, not in a stream
-        that arrives a few milliseconds (and, at feed, millimetres) late."""
+        that arrives a few milliseconds (and, at feed, millimetres) late.
+
+        Parameters
+        ----------
+        axis : str
+            Axis letter.
+        grid : array_like, shape (K,)
+            Positions of ``axis`` [m] (rotary [rad]).
+        include_user : bool, optional
+            Add fitted user effects of this axis' position alone (:mod:`.user_tables`).
+        strict : bool, optional
+            Refuse a user effect of this axis' position that no table can hold.
+
+        Returns
+        -------
+        dict of str to ndarray, shape (K,)
+            ISO motion error name -> summed values [m] or [rad].
+        """
         out: dict[str, NDArray[np.float64]] = {}
         for entry in self.effects.values():
             if not (is_catalogue_entry(entry) and "family" in entry):
@@ -516,6 +752,23 @@ class ErrorModel:
         else the machine description's function, plus every fitted catalogue
         effect that is a function of this axis' position: what a CNC's per-axis
         compensation table holds.
+
+        Parameters
+        ----------
+        axis : str
+            Linear axis letter.
+        grid : array_like, shape (K,)
+            Positions of ``axis`` [m] (rotary [rad]).
+        include_user : bool, optional
+            Add fitted user effects of this axis' position alone.
+        strict : bool, optional
+            Refuse a user effect of this axis' position that no table can hold.
+
+        Returns
+        -------
+        dict of str to ndarray, shape (K,)
+            ``E<component><axis>`` for the six components -> values [m] (X, Y, Z) or
+            [rad] (A, B, C).
         """
         spec = self.machine.axes[axis]
         grid = np.asarray(grid, dtype=np.float64)
@@ -543,7 +796,18 @@ class ErrorModel:
         return out
 
     def backlash_m(self, axis: str) -> float:
-        """Reversal value of a linear axis [m]: the built-in and catalogue ``reversal``."""
+        """Reversal value of a linear axis [m]: the built-in and catalogue ``reversal``.
+
+        Parameters
+        ----------
+        axis : str
+            Linear axis letter.
+
+        Returns
+        -------
+        float
+            Total backlash [m] (0 when the model holds none for ``axis``).
+        """
         total = 0.0
         builtin = self.effects.get("reversal")
         if isinstance(builtin, dict) and axis in builtin.get("axes", []):
@@ -576,6 +840,18 @@ class ErrorModel:
         """d(tool - workpiece)/d q_axis (N, 3): where a unit move of the axis takes the TCP.
 
         +unit for a tool-branch linear axis, -unit for one carrying the workpiece.
+
+        Parameters
+        ----------
+        axis : str
+            Axis letter.
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]).
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            TCP displacement per unit command, [m/m] (per [rad] for a rotary axis), bed frame.
         """
         q = {a: np.asarray(v, dtype=np.float64) for a, v in positions.items()}
         step = 1e-6
@@ -585,7 +861,22 @@ class ErrorModel:
             / step
 
     def correction(self, positions, temperatures=None, velocities=None) -> NDArray[np.float64]:
-        """Value to add to the command [m]: minus the position error (first order)."""
+        """Value to add to the command [m]: minus the position error (first order).
+
+        Parameters
+        ----------
+        positions : dict of str to array_like, shape (N,)
+            Axis commands [m] (rotary [rad]).
+        temperatures : dict of str to array_like, optional
+            Sensor -> temperature [degC].
+        velocities : dict of str to array_like, shape (N,), optional
+            Axis -> velocity [m/s].
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            Correction [m], bed frame.
+        """
         return -self.tcp_error(positions, temperatures, velocities)[0]
 
 
@@ -615,7 +906,24 @@ def representative_variables(machine: MachineDescription, names, readings: int =
     over its whole stroke (each in its own order, so the points spread over the work
     volume), the temperatures ``names`` asks for over the controller's temperature range
     about 20 degC, feeds, accelerations and directions of both signs up to the
-    controller's feed, spindle speeds up to its maximum, 8 h of time."""
+    controller's feed, spindle speeds up to its maximum, 8 h of time.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine (strokes and ``cnc:`` limits).
+    names : iterable of str
+        Variable names an expression uses; ``T_<sensor>`` ones get temperatures.
+    readings : int, optional
+        Number of points N.
+
+    Returns
+    -------
+    Variables
+        Positions [m] / [rad], time [s] over 8 h, feeds [m/s], accelerations within
+        +-10 [m/s^2], directions +-1, temperatures [degC] and references (20 degC),
+        spindle speed [rad/s]; every array shape (N,), seeded (reproducible).
+    """
     from .limits import CorrectionLimits
 
     limits = CorrectionLimits.of(machine)
@@ -714,7 +1022,19 @@ def _checked_catalogue_entry(name: str, entry: dict, machine: MachineDescription
 
 
 def model_to_dict(model: ErrorModel) -> dict:
-    """The YAML form of a model (profiles excluded: they stream in live)."""
+    """The YAML form of a model (profiles excluded: they stream in live).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model.
+
+    Returns
+    -------
+    dict
+        ``machine``, ``version``, ``effects``, ``reference_temperatures_c`` [degC] and,
+        when set, ``datum`` [m / rad], ``datum_uncertainty_m`` and ``datum_correction_m`` [m].
+    """
     out = {"machine": model.machine_source or model.machine.name, "version": int(model.version),
            "effects": {name: copy.deepcopy(params) for name, params in model.effects.items()},
            "reference_temperatures_c": dict(model.reference_temperatures_c)}
@@ -739,6 +1059,31 @@ def model_from_dict(data: dict, source: str = "<dict>", base_dir: Path | None = 
     the node was started with, as its model names it) - never another path.
 
     Raises only :class:`ParameterError` (malformed content of any kind included).
+
+    Parameters
+    ----------
+    data : dict
+        The parsed YAML mapping.
+    source : str, optional
+        Where ``data`` came from, quoted in messages.
+    base_dir : pathlib.Path, optional
+        Directory a relative machine path is resolved against (the model file's).
+    from_network : bool, optional
+        The model came from a DDS peer (see above).
+    model_dir : pathlib.Path, optional
+        The node's model directory.
+    trusted_machines : tuple of str, optional
+        Machine references a network model may also use.
+
+    Returns
+    -------
+    ErrorModel
+        The validated model, at the version ``data`` gives.
+
+    Raises
+    ------
+    ParameterError
+        Any malformed content, an invalid machine, or a refused machine path.
     """
     if not isinstance(data, dict) or "machine" not in data:
         raise ParameterError(f"{source}: a model needs 'machine' (bundled name or path)")
@@ -871,7 +1216,30 @@ def _bundled_model_names() -> list[str]:
 
 def load_model(path, *, from_network: bool = False, model_dir: Path | None = None,
                trusted_machines: tuple[str, ...] = ()) -> ErrorModel:
-    """A model YAML file (regular, bounded in size; errors do not quote it)."""
+    """A model YAML file (regular, bounded in size; errors do not quote it).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The model file.
+    from_network : bool, optional
+        The file was named by a DDS peer (its machine is then restricted, see
+        :func:`model_from_dict`).
+    model_dir : pathlib.Path, optional
+        The node's model directory.
+    trusted_machines : tuple of str, optional
+        Machine references a network model may also use.
+
+    Returns
+    -------
+    ErrorModel
+        The validated model.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable or oversized file, bad YAML, or invalid content.
+    """
     path = Path(path)
     text = read_description(path, "model", ParameterError)
     data = load_yaml(text, str(path), ParameterError)
