@@ -61,7 +61,27 @@ def _from_file(name: str, value_file):
 
 
 def table_grid(stroke: tuple[float, float], spacing: float, axis: str) -> NDArray[np.float64]:
-    """Positions from the stroke's start at ``spacing``, the stroke's end always included."""
+    """Positions from the stroke's start at ``spacing``, the stroke's end always included.
+
+    Parameters
+    ----------
+    stroke : tuple of float, (low, high)
+        The axis' travel [m].
+    spacing : float
+        Table spacing [m].
+    axis : str
+        Axis letter, quoted in messages.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        Ascending positions [m], first ``low``, last exactly ``high``.
+
+    Raises
+    ------
+    ParameterError
+        A spacing that is not a positive number or exceeds the stroke.
+    """
     length = stroke[1] - stroke[0]
     if not np.isfinite(spacing) or spacing <= 0:
         raise ParameterError(f"table spacing must be a positive number (got {spacing!r})")
@@ -79,7 +99,18 @@ def table_grid(stroke: tuple[float, float], spacing: float, axis: str) -> NDArra
 
 @dataclass
 class BilateralTable:
-    """One linear axis: positions (n,) [m]; per ISO name, forward and reverse (n,) [m or rad]."""
+    """One linear axis: positions (n,) [m]; per ISO name, forward and reverse (n,) [m or rad].
+
+    Parameters
+    ----------
+    axis : str
+        Linear axis letter.
+    positions_m : ndarray, shape (n,)
+        Ascending table positions [m].
+    forward, reverse : dict of str to ndarray, shape (n,)
+        ISO 230-1 component error name -> values moving in the positive / negative
+        direction [m] (translational) or [rad] (rotational).
+    """
 
     axis: str
     positions_m: NDArray[np.float64]
@@ -87,7 +118,20 @@ class BilateralTable:
     reverse: dict[str, NDArray[np.float64]] = field(default_factory=dict)
 
     def at(self, position_m, direction: float) -> dict[str, NDArray[np.float64]]:
-        """Linear interpolation of every column at ``position_m`` moving in ``direction``."""
+        """Linear interpolation of every column at ``position_m`` moving in ``direction``.
+
+        Parameters
+        ----------
+        position_m : array_like, shape S
+            Axis positions [m] (flat beyond the table's ends).
+        direction : float
+            Sign of the motion: >= 0 reads the forward columns, < 0 the reverse ones.
+
+        Returns
+        -------
+        dict of str to ndarray, shape S
+            ISO name -> interpolated error [m] or [rad].
+        """
         columns = self.forward if direction >= 0 else self.reverse
         return {name: np.interp(position_m, self.positions_m, values)
                 for name, values in columns.items()}
@@ -96,10 +140,23 @@ class BilateralTable:
 def bilateral_tables(model: ErrorModel, spacing_m: float) -> dict[str, BilateralTable]:
     """Per-axis bilateral tables of every linear axis (see module docstring).
 
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose geometric part and reversal values are exported.
+    spacing_m : float
+        Table spacing [m].
+
+    Returns
+    -------
+    dict of str to BilateralTable
+        Linear axis letter -> its table.
+
     Raises
     ------
     ParameterError
-        A spacing that is not positive or exceeds an axis's stroke.
+        A spacing that is not positive or exceeds an axis's stroke, or a fitted
+        user effect no table can hold.
     """
     refuse_untabled(model)
     machine = model.machine
@@ -120,7 +177,20 @@ def bilateral_tables(model: ErrorModel, spacing_m: float) -> dict[str, Bilateral
 
 
 def write_bilateral_csv(table: BilateralTable, machine_name: str) -> str:
-    """CSV text of one axis' bilateral table (header line of columns, ``#`` comments)."""
+    """CSV text of one axis' bilateral table (header line of columns, ``#`` comments).
+
+    Parameters
+    ----------
+    table : BilateralTable
+        The table, in SI units.
+    machine_name : str
+        Machine name written in the header comment.
+
+    Returns
+    -------
+    str
+        CSV text: positions [mm], translational errors [mm], rotational errors [urad].
+    """
     names = list(table.forward)
     text = io.StringIO()
     text.write(f"# mt_accuracy_ros bilateral axis table v1\n# machine: {machine_name}\n"
@@ -138,7 +208,24 @@ def write_bilateral_csv(table: BilateralTable, machine_name: str) -> str:
 
 
 def read_bilateral_csv(text: str) -> BilateralTable:
-    """Parse :func:`write_bilateral_csv`'s text; errors name the line."""
+    """Parse :func:`write_bilateral_csv`'s text; errors name the line.
+
+    Parameters
+    ----------
+    text : str
+        The CSV text (positions [mm], errors [mm] / [urad]).
+
+    Returns
+    -------
+    BilateralTable
+        The table in SI units ([m], [rad]).
+
+    Raises
+    ------
+    MachineDescriptionError
+        A bad header, a row of the wrong length, a non-number or non-finite value,
+        fewer than two rows, no ``# axis:`` line, or positions not increasing.
+    """
     axis = ""
     header: list[str] = []
     rows: list[list[float]] = []
@@ -183,7 +270,25 @@ def read_bilateral_csv(text: str) -> BilateralTable:
 
 # ------------------------------------------------------------ volumetric (ISG CSV)
 def write_isg_csv(model: ErrorModel, spacing_m: float) -> str:
-    """The model's geometric parameters as an ISG-CSV-style volumetric parameter file."""
+    """The model's geometric parameters as an ISG-CSV-style volumetric parameter file.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose geometric part is exported.
+    spacing_m : float
+        Table spacing [m].
+
+    Returns
+    -------
+    str
+        The file's text: positions [mm], translational errors [mm], rotational errors [urad].
+
+    Raises
+    ------
+    ParameterError
+        A bad spacing, or a fitted user effect no table can hold.
+    """
     refuse_untabled(model)
     machine = model.machine
     linear = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
@@ -213,7 +318,24 @@ def write_isg_csv(model: ErrorModel, spacing_m: float) -> str:
 def read_isg_csv(text: str) -> CompensationTable:
     """Parse :func:`write_isg_csv`'s text (``//`` comments, ``#`` block breaks) into the
     per-axis grids, component errors and location errors of a :class:`~.tables.CompensationTable`
-    (apply it with :func:`~.tables.machine_with_table`)."""
+    (apply it with :func:`~.tables.machine_with_table`).
+
+    Parameters
+    ----------
+    text : str
+        The file's text ([mm], [urad]).
+
+    Returns
+    -------
+    CompensationTable
+        Grids [m], component errors and location errors [m] or [rad].
+
+    Raises
+    ------
+    MachineDescriptionError
+        A row of the wrong length, a non-number or non-finite value, an empty block,
+        or no axis block.
+    """
     machine = ""
     grids: dict[str, NDArray] = {}
     components: dict[str, dict[str, NDArray]] = {}
@@ -266,7 +388,22 @@ def read_isg_csv(text: str) -> CompensationTable:
 # ------------------------------------------------------------------- round trip
 def interpolation_bound(function_values: NDArray, dense_positions: NDArray,
                         spacing: float) -> float:
-    """h^2/8 max|f''| with f'' by finite differences on a dense grid."""
+    """h^2/8 max|f''| with f'' by finite differences on a dense grid.
+
+    Parameters
+    ----------
+    function_values : ndarray, shape (M,)
+        f on ``dense_positions`` (unit-agnostic: the bound has f's unit).
+    dense_positions : ndarray, shape (M,)
+        Ascending positions, same unit as ``spacing``.
+    spacing : float
+        Table spacing h.
+
+    Returns
+    -------
+    float
+        Bound on the linear-interpolation error, in f's unit (0 for fewer than 3 points).
+    """
     if dense_positions.size < 3:
         return 0.0
     second = np.gradient(np.gradient(function_values, dense_positions), dense_positions)
@@ -275,7 +412,23 @@ def interpolation_bound(function_values: NDArray, dense_positions: NDArray,
 
 @dataclass
 class RoundTrip:
-    """Table (written, read back) minus model, per axis column and at the TCP."""
+    """Table (written, read back) minus model, per axis column and at the TCP.
+
+    Parameters
+    ----------
+    spacing_m : float
+        Table spacing [m].
+    column_max_error : dict of str to float
+        ISO name -> max |table - model| [m or rad].
+    column_bound : dict of str to float
+        ISO name -> h^2/8 max|f''| [m or rad].
+    tcp_max_error_m, tcp_rms_error_m : float
+        Largest and RMS TCP gap between the applied file and the model [m].
+    tcp_bound_m : float
+        Column bounds propagated to the TCP through the Abbe arm [m].
+    tcp_model_rms_m : float
+        RMS of the model's geometric TCP error itself [m].
+    """
 
     spacing_m: float
     column_max_error: dict[str, float]        # ISO name -> max |table - model| [m or rad]
@@ -314,6 +467,27 @@ def round_trip(model: ErrorModel, spacing_m: float, *, points: int = 2000,
     volumetric file through the kinematic chain against the model's geometric
     TCP error at ``points`` random configurations (rotary axes included).
     The TCP bound propagates each column's bound through its Abbe arm.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model exported.
+    spacing_m : float
+        Table spacing [m].
+    points : int, optional
+        Random positions / configurations compared.
+    seed : int, optional
+        Seed of the random positions.
+
+    Returns
+    -------
+    RoundTrip
+        Errors and bounds [m] / [rad].
+
+    Raises
+    ------
+    ParameterError
+        A bad spacing, or a fitted user effect no table can hold.
     """
     rng = np.random.default_rng(seed)
     machine = model.machine
