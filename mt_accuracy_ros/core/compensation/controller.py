@@ -88,6 +88,14 @@ class RealtimeOffset:
         Rotary axes of the machine: each correction also carries one angle [rad]
         per rotary axis (the tool-orientation part of a 5-axis compensation),
         held and applied together with its position part.
+    max_correction_m : float, optional
+        The controller's own limit on each position component [m]: a larger
+        correction is refused.
+
+    Raises
+    ------
+    ParameterError
+        A value that is not finite or below its minimum, or ``max_age_s < delay_s``.
     """
 
     def __init__(self, cycle_s: float, delay_s: float, max_age_s: float,
@@ -130,6 +138,25 @@ class RealtimeOffset:
         """Take one correction (3,) [m] (and ``rotary_rad`` (R,) [rad]) stamped ``stamp_ns``.
 
         Returns ``None`` or the refusal reason.
+
+        Parameters
+        ----------
+        stamp_ns : int
+            Time the correction was computed for [ns].
+        arrival_ns : int
+            Time it reached the controller [ns].
+        correction_m : array_like, shape (3,)
+            Position correction [m], bed frame.
+        version : int
+            Model version that computed it; an older one than the last applied is refused.
+        rotary_rad : array_like, shape (R,) or (0,), optional
+            Rotary-axis corrections [rad], R = ``rotary_axes`` (empty: zeros).
+
+        Returns
+        -------
+        str or None
+            None when accepted, else the reason (not finite, too large, out of order,
+            stale, old model); counted in :attr:`statistics`.
         """
         self.statistics.offered += 1
         correction = np.asarray(correction_m, dtype=np.float64).reshape(-1)
@@ -177,13 +204,38 @@ class RealtimeOffset:
 
         The offset live at time t is the last accepted correction applied from
         a cycle tick at or before t (zero and version 0 before the first).
+
+        Parameters
+        ----------
+        times_ns : array_like of int, shape (N,)
+            Controller times [ns].
+
+        Returns
+        -------
+        values : ndarray, shape (N, 3)
+            Live position correction [m].
+        versions : ndarray of int64, shape (N,)
+            Its model version (0 before the first).
         """
         values, versions = self.at_with_rotary(times_ns)
         return values[:, :3], versions
 
     def at_with_rotary(self, times_ns: ArrayLike) -> tuple[NDArray[np.float64],
                                                           NDArray[np.int64]]:
-        """As :meth:`at`, the values (N, 3 + R): position [m], then rotary [rad]."""
+        """As :meth:`at`, the values (N, 3 + R): position [m], then rotary [rad].
+
+        Parameters
+        ----------
+        times_ns : array_like of int, shape (N,)
+            Controller times [ns].
+
+        Returns
+        -------
+        values : ndarray, shape (N, 3 + R)
+            Live correction: position [m], then one angle per rotary axis [rad].
+        versions : ndarray of int64, shape (N,)
+            Its model version (0 before the first).
+        """
         t = np.atleast_1d(np.asarray(times_ns, dtype=np.int64))
         tick = (t // self.cycle_ns) * self.cycle_ns
         out = np.zeros((t.size, 3 + self.rotary_axes))
@@ -200,7 +252,13 @@ class RealtimeOffset:
         return out, versions
 
     def forget_before(self, t_ns: int) -> None:
-        """Drop corrections superseded before ``t_ns`` (keeps the one live then)."""
+        """Drop corrections superseded before ``t_ns`` (keeps the one live then).
+
+        Parameters
+        ----------
+        t_ns : int
+            Controller time [ns].
+        """
         if len(self._applied_from) < 2:
             return
         starts = np.maximum.accumulate(np.asarray(self._applied_from, dtype=np.int64))
@@ -212,7 +270,19 @@ class RealtimeOffset:
 # --------------------------------------------------------------------- tables
 @dataclass
 class AxisTable:
-    """One axis' compensation table: grid (M,) [m] and component columns (M,) each."""
+    """One axis' compensation table: grid (M,) [m] and component columns (M,) each.
+
+    Parameters
+    ----------
+    axis : str
+        Linear axis letter.
+    grid_m : ndarray, shape (M,)
+        Strictly ascending positions [m].
+    components : dict of str to ndarray, shape (M,)
+        ISO name (e.g. ``"EYX"``) -> values [m] (translational) or [rad] (angular).
+    version : int
+        Model version the table belongs to.
+    """
 
     axis: str
     grid_m: NDArray[np.float64]
@@ -228,6 +298,8 @@ class TableCompensation:
     machine : MachineDescription
         The controller's nominal machine (axis order, strokes, chain offsets):
         what a CNC's volumetric-compensation package is configured with.
+    max_correction_m : float, optional
+        Largest translational table value taken [m] (angular values: 10 mrad).
     """
 
     def __init__(self, machine: MachineDescription,
@@ -258,6 +330,26 @@ class TableCompensation:
         ``E<c><AXIS>_<m|rad>``, a value is NaN/inf, the grid is not strictly
         ascending, leaves a gap (a step over 1.5 times the median step) or does
         not cover the stroke, or its model version is older than the live one.
+
+        Parameters
+        ----------
+        axis : str
+            Linear axis letter.
+        columns : list of str
+            Column names: ``<AXIS>_m`` then ``E<c><AXIS>_m`` or ``E<c><AXIS>_rad``.
+        values : array_like, shape (M * len(columns),) or (M, len(columns))
+            Row-major table: positions [m], then each column in its unit [m] / [rad].
+        squareness_names : list of str
+            Location error names (``EC0Y`` ...).
+        squareness : array_like, shape (len(squareness_names),)
+            Their values [rad], each within 10 mrad.
+        version : int
+            Model version; a new one goes live once every linear axis' table of it is in.
+
+        Returns
+        -------
+        str or None
+            None when taken (live or staged), else the reason; counted in :attr:`refusals`.
         """
         axis = str(axis).upper()
         spec = self.machine.axes.get(axis)
@@ -338,7 +430,18 @@ class TableCompensation:
         return None
 
     def error(self, positions: dict[str, ArrayLike]) -> NDArray[np.float64]:
-        """TCP error (N, 3) [m] the tables describe at command positions (axis -> (N,))."""
+        """TCP error (N, 3) [m] the tables describe at command positions (axis -> (N,)).
+
+        Parameters
+        ----------
+        positions : dict of str to array_like, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            TCP position error [m], bed frame (end values held beyond a table).
+        """
         q = {a: np.atleast_1d(np.asarray(positions[a], dtype=np.float64))
              for a in self.machine.axis_order}
         overrides = ErrorOverrides(use_description=False)
@@ -351,7 +454,18 @@ class TableCompensation:
         return self._kinematics.tcp_error(q, overrides=overrides, check_stroke=False)["position"]
 
     def correction(self, positions: dict[str, ArrayLike]) -> NDArray[np.float64]:
-        """Value to add to the command (N, 3) [m]: minus the tables' TCP error (Kidani eq. 3.16)."""
+        """Value to add to the command (N, 3) [m]: minus the tables' TCP error (Kidani eq. 3.16).
+
+        Parameters
+        ----------
+        positions : dict of str to array_like, shape (N,)
+            Axis commands [m] (rotary [rad]), every axis of the machine.
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            Correction [m], bed frame (zero before any table).
+        """
         if not self.tables and not self.squareness:
             n = np.atleast_1d(np.asarray(next(iter(positions.values())))).size
             return np.zeros((n, 3))
