@@ -65,7 +65,21 @@ CONTROLLERS = {"siemens": {"max_points": 200, "name": "SINUMERIK EEC"},
 
 @dataclass
 class SpacingChoice:
-    """A table spacing and why: the error it leaves and what limited it."""
+    """A table spacing and why: the error it leaves and what limited it.
+
+    Parameters
+    ----------
+    spacing_m : float
+        Table spacing [m].
+    max_error_m : float
+        Largest |table - model| of any axis' E_AA [m].
+    periods_m : dict of str to float
+        Periodic effects: name -> period [m].
+    limited_by : str
+        "" or why the spacing is coarser than wished.
+    errors_m : dict of str to float
+        Axis -> its largest interpolation error [m].
+    """
 
     spacing_m: float
     max_error_m: float                 # largest |table - model| of any axis' E_AA
@@ -75,7 +89,18 @@ class SpacingChoice:
 
 
 def periodic_periods(model: ErrorModel) -> dict[str, float]:
-    """The periods [m] of the model's periodic catalogue effects (name -> period)."""
+    """The periods [m] of the model's periodic catalogue effects (name -> period).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model.
+
+    Returns
+    -------
+    dict of str to float
+        Effect name -> ``setting.period_m`` [m], for effects that have one.
+    """
     out = {}
     for name, entry in model.effects.items():
         setting = entry.get("setting") if isinstance(entry, dict) else None
@@ -92,14 +117,45 @@ def positioning_error(model: ErrorModel, axis: str, q: NDArray[np.float64]
     E_AA is the moving body's error along its direction in the machine frame; an axis
     whose positive command moves its body backwards (``sign`` -1: a table moving against
     the tool's commanded motion) is that much *behind* its command, so its table holds
-    sign x E_AA. A table written without the sign would double such an axis' error."""
+    sign x E_AA. A table written without the sign would double such an axis' error.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose fitted positioning errors are tabled.
+    axis : str
+        Linear axis letter.
+    q : ndarray, shape (K,)
+        Commands of ``axis`` [m].
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        sign x E_AA [m].
+
+    Raises
+    ------
+    ParameterError
+        A fitted user effect of this axis no table can hold.
+    """
     sign = model.machine.axes[axis].sign
     return sign * np.asarray(model.component_errors(axis, q, strict=True)[f"E{axis}{axis}"],
                              dtype=np.float64)
 
 
 def linear_axes(model: ErrorModel) -> list[str]:
-    """The linear axes in a control's order (X, Y, Z first: its axis numbers 1, 2, 3)."""
+    """The linear axes in a control's order (X, Y, Z first: its axis numbers 1, 2, 3).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model (its machine's axes).
+
+    Returns
+    -------
+    list of str
+        Linear axis letters.
+    """
     machine = model.machine
     axes = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
     return sorted(axes, key=lambda a: ("XYZUVW".index(a) if a in "XYZUVW" else 9, a))
@@ -107,7 +163,20 @@ def linear_axes(model: ErrorModel) -> list[str]:
 
 def table_points(stroke: tuple[float, float], spacing_m: float) -> NDArray[np.float64]:
     """Equidistant points from the stroke's start covering its end (a control's table
-    is equidistant: the last point may lie past the stroke's end)."""
+    is equidistant: the last point may lie past the stroke's end).
+
+    Parameters
+    ----------
+    stroke : tuple of float, (low, high)
+        Travel [m].
+    spacing_m : float
+        Distance between points [m] (> 0).
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        ``low + spacing_m * k``, k = 0 .. ceil(length / spacing_m) [m].
+    """
     length = stroke[1] - stroke[0]
     count = int(np.ceil(length / spacing_m - 1e-9))
     return stroke[0] + spacing_m * np.arange(count + 1)
@@ -115,7 +184,24 @@ def table_points(stroke: tuple[float, float], spacing_m: float) -> NDArray[np.fl
 
 def interpolation_error(model: ErrorModel, axis: str, spacing_m: float,
                         dense: int = 20001) -> float:
-    """max |linear interpolation of E_AA at ``spacing_m`` - E_AA| over the stroke [m]."""
+    """max |linear interpolation of E_AA at ``spacing_m`` - E_AA| over the stroke [m].
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose fitted positioning errors are tabled.
+    axis : str
+        Linear axis letter.
+    spacing_m : float
+        Distance between table points [m].
+    dense : int, optional
+        Points the stroke is checked at.
+
+    Returns
+    -------
+    float
+        Largest interpolation error [m].
+    """
     stroke = model.machine.axes[axis].stroke
     points = table_points(stroke, spacing_m)
     q = np.linspace(*stroke, dense)
@@ -124,7 +210,20 @@ def interpolation_error(model: ErrorModel, axis: str, spacing_m: float,
 
 
 def period_problems(periods: dict[str, float], spacing_m: float) -> list[str]:
-    """Why ``spacing_m`` samples a periodic effect too coarsely (one line each)."""
+    """Why ``spacing_m`` samples a periodic effect too coarsely (one line each).
+
+    Parameters
+    ----------
+    periods : dict of str to float
+        Effect name -> period [m].
+    spacing_m : float
+        Table spacing [m].
+
+    Returns
+    -------
+    list of str
+        One sentence per effect with fewer than :data:`POINTS_PER_PERIOD` points a period.
+    """
     return [f"{name} has a {period * 1e3:.4g} mm period ({POINTS_PER_PERIOD} points a "
             f"period need <= {period / POINTS_PER_PERIOD * 1e3:.4g} mm)"
             for name, period in periods.items() if period / spacing_m < POINTS_PER_PERIOD]
@@ -133,7 +232,20 @@ def period_problems(periods: dict[str, float], spacing_m: float) -> list[str]:
 def volumetric_spacing(model: ErrorModel, band_m: float) -> float:
     """The coarsest round spacing whose bilateral tables and volumetric file, read back and
     applied (:func:`.cnc_export.round_trip`), keep the TCP within ``band_m`` and sample
-    every period at :data:`POINTS_PER_PERIOD` points or more."""
+    every period at :data:`POINTS_PER_PERIOD` points or more.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model exported.
+    band_m : float
+        Largest TCP error the tables may leave [m].
+
+    Returns
+    -------
+    float
+        Spacing [m] from :data:`NICE_SPACINGS_M` (the finest when none holds).
+    """
     from .cnc_export import round_trip
 
     periods = periodic_periods(model)
@@ -160,6 +272,8 @@ def spacing_for(model: ErrorModel, band_m: float, *, asked_m: float | None = Non
 
     Parameters
     ----------
+    model : ErrorModel
+        The model whose fitted positioning errors are tabled.
     band_m : float
         The largest interpolation error allowed [m] (the instrument's band).
     asked_m : float, optional
@@ -167,6 +281,11 @@ def spacing_for(model: ErrorModel, band_m: float, *, asked_m: float | None = Non
         that holds the model) if it cannot hold it.
     max_points : int, optional
         The control's points per axis: a table may not need more.
+
+    Returns
+    -------
+    SpacingChoice
+        The spacing [m], the error it leaves [m] and what limited it.
 
     Raises
     ------
@@ -225,7 +344,31 @@ def spacing_for(model: ErrorModel, band_m: float, *, asked_m: float | None = Non
 def siemens_eec(model: ErrorModel, spacing_m: float, *, axis_names: dict[str, str] | None
                 = None, reference_m: dict[str, float] | None = None) -> tuple[str, dict]:
     """The EEC ``.INI`` text for every linear axis, and per axis the shift applied so the
-    value at the reference point is zero [m]."""
+    value at the reference point is zero [m].
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose fitted positioning errors are tabled.
+    spacing_m : float
+        Distance between table points [m].
+    axis_names : dict of str to str, optional
+        Axis -> the control's axis name (default ``<axis>1``, e.g. ``X1``).
+    reference_m : dict of str to float, optional
+        Axis -> reference point [m] (default: 0 clipped into the stroke).
+
+    Returns
+    -------
+    text : str
+        The part program: values, step, min and max in [mm].
+    shifts : dict of str to float
+        Axis -> shift subtracted from its table [m].
+
+    Raises
+    ------
+    ParameterError
+        A fitted user effect no table can hold.
+    """
     lines = ["%_N_AX_EEC_INI", "CHANDATA(1)",
              f"; mt-accuracy: positioning error compensation of {model.machine.name}, "
              "values in mm (a positive value moves the axis negative: value = error)"]
@@ -256,6 +399,24 @@ FANUC_POINTS = 1024
 
 @dataclass
 class FanucAxis:
+    """One axis' FANUC pitch error compensation parameters.
+
+    Parameters
+    ----------
+    axis_number : int
+        The control's axis number (1, 2, 3 ...).
+    reference_point : int
+        Compensation point number of the reference position (parameter 3620).
+    most_negative, most_positive : int
+        First and last point numbers (3621, 3622).
+    magnification : int
+        Compensation magnification (3623).
+    interval_units : int
+        Point interval [detection units] (3624).
+    increments : dict of int to int
+        Point number -> increment over the section ending there [detection units /
+        magnification].
+    """
     axis_number: int
     reference_point: int       # 3620
     most_negative: int         # 3621
@@ -271,12 +432,36 @@ def fanuc_pitch(model: ErrorModel, spacing_m: float, *, detection_unit_m: float 
                 ) -> tuple[str, dict[str, FanucAxis]]:
     """The parameter tape and its content per axis (see the module docstring).
 
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose fitted positioning errors are tabled.
+    spacing_m : float
+        Distance between table points [m].
+    detection_unit_m : float, optional
+        The control's detection unit [m].
+    magnification : int, optional
+        Compensation magnification (parameter 3623).
+    step_limit : int, optional
+        Largest increment per point the control takes [x magnification detection units].
+    first_point : int, optional
+        Number of the first compensation point used.
+    reference_m : dict of str to float, optional
+        Axis -> reference point [m] (default: 0 clipped into the stroke).
+
+    Returns
+    -------
+    tape : str
+        The parameter tape.
+    axes : dict of str to FanucAxis
+        Axis -> its parameters and increments.
+
     Raises
     ------
     ParameterError
         The spacing is not a whole number of detection units, or an increment exceeds
         ``step_limit`` x ``magnification`` (a finer spacing or a larger magnification
-        is needed: both are named).
+        is needed: both are named), or more than 1024 points in all.
     """
     interval = spacing_m / detection_unit_m
     if abs(interval - round(interval)) > 1e-6 * max(1.0, interval):
@@ -333,7 +518,33 @@ def directional_errors(model: ErrorModel, axis: str, spacing_m: float, most_poin
     """(points, error moving positive, error moving negative) (n,) [m] of ``axis``'s
     positioning error on a table of ``spacing_m``: moving positive the axis lags its
     reversal half behind, moving negative it leads by as much. More than ``most_points``
-    points is refused, saying ``limit`` and the spacing that fits."""
+    points is refused, saying ``limit`` and the spacing that fits.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose fitted positioning errors are tabled.
+    axis : str
+        Linear axis letter.
+    spacing_m : float
+        Distance between table points [m].
+    most_points : int
+        Points the control holds per axis.
+    limit : str
+        The limit's wording, quoted in the refusal.
+
+    Returns
+    -------
+    points : ndarray, shape (n,)
+        Table positions [m].
+    forward, reverse : ndarray, shape (n,)
+        Positioning error moving positive / negative [m].
+
+    Raises
+    ------
+    ParameterError
+        More than ``most_points`` points, or a user effect no table can hold.
+    """
     stroke = model.machine.axes[axis].stroke
     points = table_points(stroke, spacing_m)
     if points.size > most_points:
@@ -358,7 +569,23 @@ ISG_UNIT_M = 1e-7
 @dataclass
 class IsgAxis:
     """One axis' leadscrew error compensation list: interval and start [0.1 um], values
-    per direction [0.1 um] (``neg`` None when unilateral)."""
+    per direction [0.1 um] (``neg`` None when unilateral).
+
+    Parameters
+    ----------
+    axis_number : int
+        ``kopf.achs_nr``.
+    axis_name : str
+        ``kopf.log_achs_name``.
+    interval : int
+        ``kw.ssfk.interval`` [0.1 um].
+    start : int
+        ``kw.ssfk.kw_startpos`` [0.1 um].
+    pos : list of int
+        Values moving positive [0.1 um].
+    neg : list of int or None
+        Values moving negative [0.1 um]; None when unilateral.
+    """
 
     axis_number: int
     axis_name: str
@@ -387,6 +614,26 @@ def isg_leadscrew_lists(model: ErrorModel, spacing_m: float, *, bilateral: bool 
     error at the point, actual minus programmed position (ISG's example list: measured
     19856.5 um at 19866.7 um programmed gives ``pos`` -102), rounded to 0.1 um. Comment
     lines start with ``# ``.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose fitted positioning errors are tabled.
+    spacing_m : float
+        Distance between table points [m].
+    bilateral : bool, optional
+        A value per direction (True) or their mean for both.
+    max_points : int, optional
+        ``kw.ssfk.max_points`` of the control.
+    axis_numbers : dict of str to int, optional
+        Axis -> the control's axis number (default 1, 2, 3 in :func:`linear_axes` order).
+
+    Returns
+    -------
+    texts : dict of str to str
+        File name (``achskw<n>.lis``) -> list text.
+    axes : dict of str to IsgAxis
+        Axis -> its list content [0.1 um].
 
     Raises
     ------
@@ -450,6 +697,24 @@ def linuxcnc_comp_files(model: ErrorModel, spacing_m: float, *, file_type: int =
     actual, moving positive and negative. A joint with a ``COMP_FILE`` uses no
     ``BACKLASH``: the reversal error is in the two columns.
 
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose fitted positioning errors are tabled.
+    spacing_m : float
+        Distance between table points [m].
+    file_type : {0, 1}, optional
+        ``COMP_FILE_TYPE``: actual positions (0) or trims (1).
+    unit_m : float, optional
+        The machine unit [m] (1e-3: mm).
+
+    Returns
+    -------
+    texts : dict of str to str
+        File name (``<axis>.comp``) -> text in machine units.
+    ini : dict of str to str
+        Axis -> its ``[JOINT_n]`` lines.
+
     Raises
     ------
     ParameterError
@@ -477,7 +742,18 @@ def linuxcnc_comp_files(model: ErrorModel, spacing_m: float, *, file_type: int =
 
 def uncovered_effects(model: ErrorModel) -> list[str]:
     """Fitted effects a positioning table does not hold (straightness, tilts, squareness,
-    thermal): the control's other compensations, or the real-time offset, carry them."""
+    thermal): the control's other compensations, or the real-time offset, carry them.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model.
+
+    Returns
+    -------
+    list of str
+        Names of fitted catalogue effects other than an axis' own positioning error.
+    """
     from ..effects import is_catalogue_entry
 
     out = []
