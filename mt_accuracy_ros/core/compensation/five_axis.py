@@ -44,14 +44,15 @@ JACOBIAN_STEP_RAD = 1e-6
 class FiveAxisCorrection:
     """What to add to the commands at N positions.
 
-    Attributes
+    Parameters
     ----------
-    position_m : ndarray (N, 3)
+    position_m : ndarray, shape (N, 3)
         Correction of the TCP in the bed frame [m] (the linear axes realise it).
-    rotary_rad : ndarray (N, R)
+    rotary_rad : ndarray, shape (N, R)
         Correction of each rotary axis [rad], columns in ``rotary_axes`` order.
     rotary_axes : tuple of str
-    residual_direction_rad : ndarray (N, 3)
+        The R rotary axis letters.
+    residual_direction_rad : ndarray, shape (N, 3)
         Tool-direction error the rotary axes cannot take out (singular poses) [rad].
     """
 
@@ -62,7 +63,20 @@ class FiveAxisCorrection:
 
 
 def tool_direction(kinematics: KinematicModel, positions: dict[str, ArrayLike]) -> NDArray:
-    """Unit vector (N, 3) of the tool axis in the bed frame, nominal chain."""
+    """Unit vector (N, 3) of the tool axis in the bed frame, nominal chain.
+
+    Parameters
+    ----------
+    kinematics : KinematicModel
+        The nominal machine.
+    positions : dict of str to array_like, shape (N,)
+        Axis commands [m] (rotary [rad]), every axis.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        Unit vectors (dimensionless), bed frame.
+    """
     return kinematics.tool_axis(positions)
 
 
@@ -72,6 +86,15 @@ def rotary_jacobians(kinematics: KinematicModel, positions: dict[str, ArrayLike]
 
     The workpiece point is the machining point of ``positions`` (the material
     under the tool), held fixed in the workpiece frame while the axis turns.
+
+    Parameters
+    ----------
+    kinematics : KinematicModel
+        The nominal machine.
+    positions : dict of str to array_like, shape (N,)
+        Axis commands [m] (rotary [rad]), every axis.
+    step_rad : float, optional
+        Central-difference step [rad].
 
     Returns
     -------
@@ -115,9 +138,20 @@ def five_axis_correction(kinematics: KinematicModel, positions: dict[str, ArrayL
     positions : dict
         Axis -> command (N,) [m or rad], every axis of the machine.
     position_error_m, orientation_error_rad : array_like (N, 3)
-        The model's TCP error and tool-orientation error at the commands (bed frame).
+        The model's TCP error [m] and tool-orientation error [rad] at the commands
+        (bed frame).
     rcond : float
         Singular values of P J_o below ``rcond`` x the largest are not inverted.
+
+    Returns
+    -------
+    FiveAxisCorrection
+        Position [m] and rotary [rad] corrections, and the direction error left [rad].
+
+    Raises
+    ------
+    InputDataError
+        Errors not both (N, 3), or not finite.
     """
     e_p = np.atleast_2d(np.asarray(position_error_m, dtype=np.float64))
     eps = np.atleast_2d(np.asarray(orientation_error_rad, dtype=np.float64))
