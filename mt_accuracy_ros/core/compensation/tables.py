@@ -32,7 +32,19 @@ HEADER = "# mt_accuracy_ros compensation table v1"
 
 @dataclass(frozen=True)
 class CompensationTable:
-    """Parsed table: per axis a grid and six columns; location errors by name."""
+    """Parsed table: per axis a grid and six columns; location errors by name.
+
+    Parameters
+    ----------
+    machine : str
+        Machine name.
+    grids : dict of str to ndarray, shape (K,)
+        Axis -> ascending positions [m] (rotary [rad]).
+    errors : dict of str to dict of str to ndarray, shape (K,)
+        Axis -> ISO name -> values on the grid [m] (translational) or [rad] (angular).
+    location : dict of str to float
+        Location error name (``EC0Y``) -> value [m] or [rad].
+    """
 
     machine: str
     grids: dict[str, np.ndarray]
@@ -41,7 +53,25 @@ class CompensationTable:
 
 
 def table_from_machine(machine: MachineDescription, points_per_axis: int = 41) -> CompensationTable:
-    """Sample every axis' error functions on a uniform grid over its stroke."""
+    """Sample every axis' error functions on a uniform grid over its stroke.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine.
+    points_per_axis : int, optional
+        Grid points per axis (>= 2).
+
+    Returns
+    -------
+    CompensationTable
+        Grids [m] / [rad], component errors and location errors [m] / [rad].
+
+    Raises
+    ------
+    MachineDescriptionError
+        ``points_per_axis`` below 2.
+    """
     if points_per_axis < 2:
         raise MachineDescriptionError("points_per_axis must be >= 2")
     grids, errors, location = {}, {}, {}
@@ -56,7 +86,18 @@ def table_from_machine(machine: MachineDescription, points_per_axis: int = 41) -
 
 
 def write_csv(table: CompensationTable) -> str:
-    """CSV text of a table (17 significant digits: reading it back is exact)."""
+    """CSV text of a table (17 significant digits: reading it back is exact).
+
+    Parameters
+    ----------
+    table : CompensationTable
+        The table, SI units.
+
+    Returns
+    -------
+    str
+        CSV text in SI units (positions [m] / [rad], errors [m] / [rad]).
+    """
     out = io.StringIO()
     out.write(f"{HEADER}\n# machine: {table.machine}\n")
     out.write("# units: positions m (rotary rad), linear errors m, angular errors rad\n")
@@ -73,7 +114,24 @@ def write_csv(table: CompensationTable) -> str:
 
 
 def read_csv(text: str) -> CompensationTable:
-    """Parse the CSV written by :func:`write_csv`; errors name the line."""
+    """Parse the CSV written by :func:`write_csv`; errors name the line.
+
+    Parameters
+    ----------
+    text : str
+        CSV text in SI units.
+
+    Returns
+    -------
+    CompensationTable
+        The parsed table.
+
+    Raises
+    ------
+    MachineDescriptionError
+        A wrong header line, a non-number or non-finite value, or a row of the
+        wrong length.
+    """
     lines = text.splitlines()
     if not lines or lines[0].strip() != HEADER:
         raise MachineDescriptionError(f"line 1: expected {HEADER!r}")
@@ -130,6 +188,18 @@ def machine_with_table(machine: MachineDescription, table: CompensationTable) ->
     An axis without a grid in the table (a rotary axis of a linear-axis table)
     keeps its own error motions; the table's location errors of that axis, if
     it lists any, replace the machine's.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The nominal machine.
+    table : CompensationTable
+        The table applied.
+
+    Returns
+    -------
+    MachineDescription
+        A copy with tabled error motions and location errors.
     """
     axes = {}
     for name, axis in machine.axes.items():
