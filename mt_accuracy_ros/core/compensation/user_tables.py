@@ -27,7 +27,18 @@ _AGREEMENT = 1e-9         # relative
 
 
 def fitted_user_effects(model) -> dict[str, dict]:
-    """The model's user effects that have fitted values (name -> declaration)."""
+    """The model's user effects that have fitted values (name -> declaration).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model.
+
+    Returns
+    -------
+    dict of str to dict
+        Effect name -> its declaration (``expression``, ``parameters``, ``values`` ...).
+    """
     return {name: entry for name, entry in model.effects.items()
             if isinstance(entry, dict) and "expression" in entry and "values" in entry}
 
@@ -44,7 +55,24 @@ def _variables(model, name: str, entry: dict) -> tuple[list[str], list[str]]:
 
 def table_axis(model, name: str, entry: dict) -> tuple[str | None, str]:
     """(axis, "") when the user effect is a function of one linear axis' position alone,
-    else (None, why it is not a per-axis table effect)."""
+    else (None, why it is not a per-axis table effect).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model (its machine's axes).
+    name : str
+        Effect name, quoted in messages.
+    entry : dict
+        The effect's declaration.
+
+    Returns
+    -------
+    axis : str or None
+        The linear axis, or None.
+    why : str
+        "" or the reason.
+    """
     positions, others = _variables(model, name, entry)
     if others:
         return None, (f"depends on {', '.join(others)}: not a position error, it stays in the "
@@ -58,7 +86,18 @@ def table_axis(model, name: str, entry: dict) -> tuple[str | None, str]:
 def refuse_untabled(model) -> None:
     """Raise ParameterError naming every fitted user effect of positions alone that no
     per-axis table can hold (export must not leave a geometric effect out silently);
-    effects of temperatures, time or feeds stay real-time and are not refused."""
+    effects of temperatures, time or feeds stay real-time and are not refused.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model about to be exported.
+
+    Raises
+    ------
+    ParameterError
+        One or more such effects (all named).
+    """
     from ..errors import ParameterError
 
     problems = []
@@ -89,6 +128,24 @@ def user_motion_errors(model, axis: str, grid: ArrayLike, *, strict: bool = True
                        seed: int = 0) -> dict[str, NDArray[np.float64]]:
     """Error motions of ``axis`` (ISO name -> values [m] on ``grid``) equivalent to the
     model's fitted user effects of that axis' position.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model.
+    axis : str
+        Linear axis letter.
+    grid : array_like, shape (K,)
+        Positions of ``axis`` [m].
+    strict : bool, optional
+        Refuse (True) or leave out (False) an effect that is not a per-axis error motion.
+    seed : int, optional
+        Seed of the other axes' random configurations.
+
+    Returns
+    -------
+    dict of str to ndarray, shape (K,)
+        ``E<X|Y|Z><axis>`` -> translational error motion [m] (non-zero ones only).
 
     Raises
     ------
@@ -125,7 +182,20 @@ def user_motion_errors(model, axis: str, grid: ArrayLike, *, strict: bool = True
 
 def user_tcp_error(model, positions: dict[str, ArrayLike]) -> NDArray[np.float64]:
     """(N, 3) TCP error [m] of the model's fitted user effects that go into the tables,
-    computed from the expressions directly (the round trip's independent reference)."""
+    computed from the expressions directly (the round trip's independent reference).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model.
+    positions : dict of str to array_like, shape (N,)
+        Axis commands [m] (rotary [rad]), every axis.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        TCP error [m], bed frame.
+    """
     q = {a: np.atleast_1d(np.asarray(positions[a], dtype=np.float64))
          for a in model.machine.axis_order}
     n = next(iter(q.values())).size
