@@ -52,7 +52,23 @@ _ROTARY_STEP_RAD = np.radians(1.0)
 
 @dataclass(frozen=True)
 class CorrectionLimits:
-    """The controller's limits (see the module docstring); per TCP component X, Y, Z."""
+    """The controller's limits (see the module docstring); per TCP component X, Y, Z.
+
+    Parameters
+    ----------
+    max_correction_m : tuple of float, (x, y, z)
+        Largest correction per TCP component [m].
+    max_correction_rate_m_per_s : float
+        Largest change of the correction [m/s].
+    max_feed_m_per_s : float
+        Fastest feed of a linear axis [m/s].
+    temperature_range_k : float
+        Temperatures the model must stay bounded over: +- this about each reference [K].
+    max_temperature_rate_k_per_s : float
+        Fastest temperature change of a structure [K/s].
+    max_spindle_speed_rpm : float
+        Fastest spindle speed [rpm].
+    """
 
     max_correction_m: tuple[float, float, float]
     max_correction_rate_m_per_s: float
@@ -63,6 +79,18 @@ class CorrectionLimits:
 
     @classmethod
     def of(cls, machine: MachineDescription) -> "CorrectionLimits":
+        """The limits of ``machine``: its ``cnc:`` section over :data:`DEFAULT_LIMITS`.
+
+        Parameters
+        ----------
+        machine : MachineDescription
+            The machine (its validated ``cnc`` mapping).
+
+        Returns
+        -------
+        CorrectionLimits
+            The limits, a scalar ``max_correction_m`` repeated for x, y, z.
+        """
         spec = {**DEFAULT_LIMITS, **(machine.cnc or {})}
         per_axis = spec["max_correction_m"]
         if isinstance(per_axis, dict):
@@ -82,6 +110,17 @@ class Envelope:
 
     ``max_abs_m`` (3,) [m] and ``max_rate_m_per_s`` (3,) [m/s], per TCP
     component; ``where`` names the command position of each maximum.
+
+    Parameters
+    ----------
+    max_abs_m : ndarray, shape (3,)
+        Largest |correction| per TCP component [m].
+    max_rate_m_per_s : ndarray, shape (3,)
+        Largest |d correction / dt| per component [m/s].
+    where : list of str
+        Per component, where the maximum lies (positions, temperature range).
+    points : int
+        Command positions evaluated.
     """
 
     max_abs_m: NDArray[np.float64]
@@ -90,6 +129,18 @@ class Envelope:
     points: int
 
     def problems(self, limits: CorrectionLimits) -> list[str]:
+        """Why the envelope exceeds ``limits``: one sentence per component and kind.
+
+        Parameters
+        ----------
+        limits : CorrectionLimits
+            The controller's limits.
+
+        Returns
+        -------
+        list of str
+            Empty when within; a non-finite value is a problem.
+        """
         out = []
         for c, component in enumerate("xyz"):
             if not np.isfinite(self.max_abs_m[c]) or \
@@ -181,7 +232,21 @@ def _moves_with_direction(model) -> bool:
 
 def correction_envelope(model, limits: CorrectionLimits) -> Envelope:
     """The model's largest |correction| and |d correction / dt| per component (see the
-    module docstring). Heat-source lags count at their steady state."""
+    module docstring). Heat-source lags count at their steady state.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model version to bound (not changed: a copy is evaluated).
+    limits : CorrectionLimits
+        Feed [m/s], temperature range [K] and rate [K/s], spindle speed [rpm] bounding
+        the variables.
+
+    Returns
+    -------
+    Envelope
+        Bounds [m] and [m/s] per TCP component.
+    """
     machine = model.machine
     axes = list(machine.axis_order)
     state = copy.copy(model)
@@ -251,7 +316,20 @@ def correction_envelope(model, limits: CorrectionLimits) -> Envelope:
 
 
 def gate_problem(model, limits: CorrectionLimits | None = None) -> str:
-    """Why ``model`` must not go live on this controller ("" if it may)."""
+    """Why ``model`` must not go live on this controller ("" if it may).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model version.
+    limits : CorrectionLimits, optional
+        Default: those of ``model.machine``.
+
+    Returns
+    -------
+    str
+        "" or the problems joined by "; " (including a model that cannot be evaluated).
+    """
     limits = limits or CorrectionLimits.of(model.machine)
     try:
         envelope = correction_envelope(model, limits)
