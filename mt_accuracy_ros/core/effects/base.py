@@ -57,6 +57,29 @@ class Context:
     for the Abbe family (optional). ``work_point`` ((3,) or (N, 3) [m], workpiece
     frame): a fixed target the readings were taken at (an R-test or probed
     sphere); by default the machining point (:meth:`KinematicModel.machining_point`).
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine.
+    variables : Variables
+        Positions [m] / [rad], temperatures [degC], feeds ... at the N readings.
+    kinematics : KinematicModel, optional
+        The machine's chain (built from ``machine`` when not given).
+    orientation : ndarray, shape (N, 3), optional
+        Model's tool-orientation error [rad].
+    orientation_lever_m : float, optional
+        Set when the readings measured the tool's direction: the instrument's
+        position noise over its direction noise [m per rad].
+    work_point : ndarray, shape (3,) or (N, 3), optional
+        Fixed target [m], workpiece frame.
+    zero_rows : ndarray of int, shape (N,), optional
+        The row each reading's instrument was zeroed at.
+
+    Raises
+    ------
+    InputDataError
+        Positions missing for an axis of the machine.
     """
 
     def __init__(self, machine: MachineDescription, variables: Variables,
@@ -89,7 +112,20 @@ class Context:
         """Columns several candidates ask for at these readings (the harmonics of one
         axis' position at one period serve its positioning, straightness and angular
         errors): ``make()`` once, kept read-only in a least-recently-used store of
-        :data:`SHARED_COLUMNS_BYTES`."""
+        :data:`SHARED_COLUMNS_BYTES`.
+
+        Parameters
+        ----------
+        key : tuple
+            Hashable identity of the columns.
+        make : callable
+            ``() -> ndarray, shape (N, P)`` computing them (unit-agnostic).
+
+        Returns
+        -------
+        ndarray, shape (N, P)
+            The columns, read-only.
+        """
         if self._shared is None:
             # A step asks for dozens of them before asking again: nothing is kept that the
             # store could not hold that many of (1e5 readings: 3.2 MB each).
@@ -109,6 +145,16 @@ class Context:
         of the HTM chain (:meth:`KinematicModel.error_frames`: the frame the
         error acts in and its lever to the TCP); a name the chain does not have
         moves nothing.
+
+        Parameters
+        ----------
+        error_name : str
+            ISO 230-1 motion error (``EXX``, ``EBX``, ``ECA``) or location error (``EC0Y``).
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            TCP displacement per unit error, bed frame [m/m] (translation) or [m/rad] (rotation).
         """
         if error_name not in self._jacobians:
             if self._frames is None:
@@ -142,7 +188,20 @@ class Context:
         it: the body turning about its actual line, the target (and a head's tool) located
         by a translation at the set-up pose
         (:meth:`~..kinematics.chain.KinematicModel.located_sensitivities`). Computed for
-        the axis' four line errors at once."""
+        the axis' four line errors at once.
+
+        Parameters
+        ----------
+        error_name : str
+            Location error of a rotary axis, e.g. ``EX0C``, ``EA0C``.
+
+        Returns
+        -------
+        position : ndarray, shape (N, 3)
+            [m per m] or [m per rad].
+        orientation : ndarray, shape (N, 3)
+            [rad per m] or [rad per rad].
+        """
         key = "located:" + error_name
         if key not in self._jacobians:
             axis = error_name[3]
@@ -159,7 +218,18 @@ class Context:
         """d e_TCP / d (rotation ``error_name`` times an extra arm of 1 m along the tool
         axis), (N, 3) [m per rad m]: ``sign (R[:, :, c] x t)`` for a rotation component c,
         t the nominal tool axis; zero for a translation. How a tilt moves the TCP through
-        the part of its Abbe arm the chain does not know (a tool offset not given)."""
+        the part of its Abbe arm the chain does not know (a tool offset not given).
+
+        Parameters
+        ----------
+        error_name : str
+            ISO 230-1 motion error (``EXX``, ``EBX``, ``ECA``) or location error (``EC0Y``).
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            [m per (rad m)], bed frame.
+        """
         key = "arm:" + error_name
         if key not in self._jacobians:
             self._jacobians[key] = self._arm_sensitivity(error_name)
@@ -177,7 +247,18 @@ class Context:
     def arm_moves(self, error_name: str) -> bool:
         """Does an extra arm along the tool carry the rotation ``error_name`` to the TCP
         anywhere (:meth:`arm_jacobian` not zero)? Asked of every rotation; answered
-        without keeping the sensitivity."""
+        without keeping the sensitivity.
+
+        Parameters
+        ----------
+        error_name : str
+            ISO 230-1 motion error (``EXX``, ``EBX``, ``ECA``) or location error (``EC0Y``).
+
+        Returns
+        -------
+        bool
+            True when any component exceeds 1e-12 m per (rad m).
+        """
         key = "arm:" + error_name
         arm = self._jacobians[key] if key in self._jacobians else \
             self._arm_sensitivity(error_name)
@@ -187,7 +268,18 @@ class Context:
         """d (tool orientation relative to the workpiece) / d (error ``error_name``), (N, 3)
         [rad per m or rad]: ``sign R[:, :, c]`` for a rotation component c of the error
         (its axis in the bed frame), zero for a translation (Kidani eq. 2.10's rotation
-        part; :meth:`KinematicModel.tcp_error_linear`)."""
+        part; :meth:`KinematicModel.tcp_error_linear`).
+
+        Parameters
+        ----------
+        error_name : str
+            ISO 230-1 motion error (``EXX``, ``EBX``, ``ECA``) or location error (``EC0Y``).
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            [rad per rad] (zero for a translation), bed frame.
+        """
         key = "orientation:" + error_name
         if key not in self._jacobians:
             self._jacobians[key] = self._orientation_sensitivity(error_name)
@@ -226,7 +318,23 @@ class Context:
     def measured_design(self, family: "EffectFamily", variant: str, setting: dict
                         ) -> NDArray[np.float64]:
         """(N, width, P): the family's TCP design, and (when the direction was measured)
-        its direction design as the instrument sees it (module docstring)."""
+        its direction design as the instrument sees it (module docstring).
+
+        Parameters
+        ----------
+        family : EffectFamily
+            The effect family.
+        variant : str
+            Its variant.
+        setting : dict
+            Its setting.
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P) or (N, 6, P)
+            Position rows [m per parameter unit], then direction rows scaled by
+            ``orientation_lever_m`` [m per parameter unit]; referred to ``zero_rows`` if set.
+        """
         design = family.design(self, variant, setting)
         if self.zero_rows is not None:
             # A zeroed instrument reads e(t) - e(t_zero): so does every column.
@@ -239,7 +347,23 @@ class Context:
 
     def measured_separable(self, family: "EffectFamily", variant: str, setting: dict
                            ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
-        """:meth:`EffectFamily.separable_design` with the sensitivity (N, width)."""
+        """:meth:`EffectFamily.separable_design` with the sensitivity (N, width).
+
+        Parameters
+        ----------
+        family : EffectFamily
+            The effect family.
+        variant : str
+            Its variant.
+        setting : dict
+            Its setting.
+
+        Returns
+        -------
+        tuple of ndarray or None
+            (sensitivity (N, 3) or (N, 6) [m per unit], basis (N, P)); None when the
+            design is not separable or the readings are referred to zero rows.
+        """
         if self.zero_rows is not None:
             return None     # referred to a zero row, a design is no longer one product
         separable = family.separable_design(self, variant, setting)
@@ -251,20 +375,66 @@ class Context:
         return np.concatenate([sensitivity, turn], axis=1), basis
 
     def normalised_position(self, axis: str) -> NDArray[np.float64]:
-        """Position mapped to [-1, 1] over the stroke (Legendre's domain)."""
+        """Position mapped to [-1, 1] over the stroke (Legendre's domain).
+
+        Parameters
+        ----------
+        axis : str
+            Axis letter.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Dimensionless u = (2 q - (low + high)) / (high - low).
+        """
         low, high = self.machine.axes[axis].stroke
         return (2.0 * self.variables.positions[axis] - (low + high)) / (high - low)
 
     def moves(self, axis: str) -> bool:
         """Did ``axis`` move over these readings? (an axis that stood still cannot show an
-        error that depends on its position)"""
+        error that depends on its position)
+
+        Parameters
+        ----------
+        axis : str
+            Axis letter.
+
+        Returns
+        -------
+        bool
+            True when its positions span a non-zero range.
+        """
         return bool(np.ptp(self.variables.positions[axis]) > 0)
 
     def linear_axes(self, moving: bool = False) -> list[str]:
+        """The machine's linear axes, in chain order.
+
+        Parameters
+        ----------
+        moving : bool, optional
+            Only those that moved over the readings.
+
+        Returns
+        -------
+        list of str
+            Axis letters.
+        """
         return [a for a in self.machine.axis_order if not self.machine.axes[a].is_rotary
                 and (not moving or self.moves(a))]
 
     def rotary_axes(self, moving: bool = False) -> list[str]:
+        """The machine's rotary axes, in chain order.
+
+        Parameters
+        ----------
+        moving : bool, optional
+            Only those that moved over the readings.
+
+        Returns
+        -------
+        list of str
+            Axis letters.
+        """
         return [a for a in self.machine.axis_order if self.machine.axes[a].is_rotary
                 and (not moving or self.moves(a))]
 
@@ -289,7 +459,20 @@ TARGETS_PER_READING = 0.05
 def target_groups(work_point, n: int) -> NDArray[np.intp] | None:
     """(N,) the index of each reading's target among the few an instrument located one by
     one (several probed spheres: each found at the set-up, each its own zero), or None
-    when there is one target, none, or one per reading."""
+    when there is one target, none, or one per reading.
+
+    Parameters
+    ----------
+    work_point : array_like, shape (3,) or (N, 3), or None
+        The readings' targets [m], workpiece frame.
+    n : int
+        Number of readings N.
+
+    Returns
+    -------
+    ndarray of intp, shape (N,), or None
+        Target index per reading.
+    """
     if work_point is None:
         return None
     points = np.asarray(work_point, dtype=np.float64)
@@ -301,7 +484,18 @@ def target_groups(work_point, n: int) -> NDArray[np.intp] | None:
 
 
 def per_component(column: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(N,) -> (N, 3, 3): the same regressor on x, y and z, one parameter each."""
+    """(N,) -> (N, 3, 3): the same regressor on x, y and z, one parameter each.
+
+    Parameters
+    ----------
+    column : ndarray, shape (N,)
+        The regressor (unit-agnostic).
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 3)
+        ``design[:, c, c] = column``; a parameter's unit is [m] per the column's unit.
+    """
     design = np.zeros((column.size, 3, 3))
     for c in range(3):
         design[:, c, c] = column
@@ -309,7 +503,20 @@ def per_component(column: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def along(jacobian: NDArray[np.float64], columns: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(N, 3) sensitivity x (N, P) basis -> (N, 3, P) design."""
+    """(N, 3) sensitivity x (N, P) basis -> (N, 3, P) design.
+
+    Parameters
+    ----------
+    jacobian : ndarray, shape (N, 3)
+        TCP sensitivity [m per error unit].
+    columns : ndarray, shape (N, P)
+        Basis columns (error units per parameter unit).
+
+    Returns
+    -------
+    ndarray, shape (N, 3, P)
+        Design [m per parameter unit].
+    """
     return jacobian[:, :, None] * columns[:, None, :]
 
 
@@ -336,10 +543,34 @@ class EffectFamily:
 
     def variant_complexity(self, variant: str) -> int:
         """:attr:`complexity` of one variant (a family whose variants differ in what they
-        assume overrides this)."""
+        assume overrides this).
+
+        Parameters
+        ----------
+        variant : str
+            The variant.
+
+        Returns
+        -------
+        int
+            1, 2 or 3 (see :attr:`complexity`).
+        """
         return self.complexity
 
     def variants(self, ctx: Context) -> list[str]:
+        """The variants this family offers on these readings (axes that moved, sensors
+        that changed ...).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        list of str
+            Variant names.
+        """
         raise NotImplementedError
 
     #: The key of a setting that is a continuous quantity searched on a grid (a period, a
@@ -353,7 +584,22 @@ class EffectFamily:
         """Which columns of the ``largest`` setting's design, in order, are ``setting``'s
         design, or None when it is no part of it: the workbench then makes one design
         (and one set of products) for all the settings. By default the first columns,
-        for a family with :attr:`nested_settings`."""
+        for a family with :attr:`nested_settings`.
+
+        Parameters
+        ----------
+        variant : str
+            The variant.
+        setting : dict
+            A setting.
+        largest : dict
+            The setting whose design holds all the others'.
+
+        Returns
+        -------
+        list of int or None
+            Column indices into the largest design.
+        """
         if not self.nested_settings:
             return None
         return list(range(len(self.parameter_names(variant, setting))))
@@ -366,13 +612,58 @@ class EffectFamily:
             type(self).preselect_folds is not EffectFamily.preselect_folds
 
     def settings(self, ctx: Context, variant: str) -> list[dict[str, Any]]:
+        """The grid of settings (hyperparameters) searched for ``variant``; one empty
+        setting by default.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+
+        Returns
+        -------
+        list of dict
+            Settings, e.g. ``[{"order": 1}, {"order": 2}]``.
+        """
         return [{}]
 
     def parameter_names(self, variant: str, setting: dict) -> list[str]:
+        """Names of the P linear parameters of ``variant`` at ``setting``, in design-column
+        order.
+
+        Parameters
+        ----------
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+        setting : dict
+            Hyperparameters (one of :meth:`settings`), e.g. ``{"period_m": 0.01}``.
+
+        Returns
+        -------
+        list of str
+            P parameter names (their units are the family's).
+        """
         raise NotImplementedError
 
     def design(self, ctx: Context, variant: str, setting: dict) -> NDArray[np.float64]:
-        """(N, 3, P) TCP error per unit parameter [m per parameter unit]."""
+        """(N, 3, P) TCP error per unit parameter [m per parameter unit].
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+        setting : dict
+            Hyperparameters (one of :meth:`settings`), e.g. ``{"period_m": 0.01}``.
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            Design [m per parameter unit], bed frame.
+        """
         raise NotImplementedError
 
     def separable_design(self, ctx: Context, variant: str, setting: dict
@@ -381,21 +672,67 @@ class EffectFamily:
         ``along(sensitivity, basis)`` - one direction at the TCP times scalar columns, as
         an error motion acting through the kinematic chain is - else None. The workbench
         then scores the candidate on N values per column instead of 3N (it keeps the
-        sensitivity per candidate, so families may differ for the same variant)."""
+        sensitivity per candidate, so families may differ for the same variant).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+        setting : dict
+            Hyperparameters (one of :meth:`settings`), e.g. ``{"period_m": 0.01}``.
+
+        Returns
+        -------
+        tuple of ndarray or None
+            (sensitivity (N, 3) [m per error unit], basis (N, P) [error unit per
+            parameter unit]), or None.
+        """
         return None
 
     def orientation_sensitivity(self, ctx: Context, variant: str, setting: dict
                                 ) -> NDArray[np.float64] | None:
         """(N, 3) tool-orientation sensitivity [rad per unit] along the same scalar columns
         as :meth:`separable_design`'s, or None when the effect turns nothing (a
-        translation, a thermal drift): the default."""
+        translation, a thermal drift): the default.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+        setting : dict
+            Hyperparameters (one of :meth:`settings`), e.g. ``{"period_m": 0.01}``.
+
+        Returns
+        -------
+        ndarray, shape (N, 3), or None
+            [rad per error unit], bed frame.
+        """
         return None
 
     def orientation_design(self, ctx: Context, variant: str, setting: dict
                            ) -> NDArray[np.float64] | None:
         """(N, 3, P) tool-orientation error per unit parameter [rad per parameter unit],
         or None when the effect does not turn the tool relative to the workpiece. By
-        default the separable design's columns along :meth:`orientation_sensitivity`."""
+        default the separable design's columns along :meth:`orientation_sensitivity`.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+        setting : dict
+            Hyperparameters (one of :meth:`settings`), e.g. ``{"period_m": 0.01}``.
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P), or None
+            [rad per parameter unit], bed frame.
+        """
         sensitivity = self.orientation_sensitivity(ctx, variant, setting)
         if sensitivity is None:
             return None
@@ -405,20 +742,76 @@ class EffectFamily:
         return along(sensitivity, separable[1])
 
     def explanation(self, variant: str, setting: dict) -> str:
+        """One sentence of physics for a user: what this variant at this setting is.
+
+        Parameters
+        ----------
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+        setting : dict
+            Hyperparameters (one of :meth:`settings`), e.g. ``{"period_m": 0.01}``.
+
+        Returns
+        -------
+        str
+            The sentence (the family's :attr:`summary` by default).
+        """
         return self.summary
 
     def preselect(self, ctx: Context, variant: str, settings: list[dict],
                   residual: NDArray[np.float64], mask: NDArray[np.bool_],
                   train: NDArray[np.bool_]) -> dict | None:
         """Optionally choose a setting from the training readings' residual (fast path for
-        long grids); None = let the workbench choose by BIC over every setting."""
+        long grids); None = let the workbench choose by BIC over every setting.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+        settings : list of dict
+            The settings to choose from.
+        residual : ndarray, shape (N, 3)
+            Residual of the model so far [m].
+        mask : ndarray of bool, shape (N, 3)
+            Components measured.
+        train : ndarray of bool, shape (N,)
+            Training readings.
+
+        Returns
+        -------
+        dict or None
+            The chosen setting.
+        """
         return None
 
     def preselect_folds(self, ctx: Context, variant: str, settings: list[dict],
                         residuals: NDArray[np.float64], mask: NDArray[np.bool_],
                         trains: NDArray[np.bool_]) -> list[dict | None]:
         """:meth:`preselect` for several training sets at once: ``residuals`` (F, N, 3),
-        ``trains`` (F, N); a family may do them together faster."""
+        ``trains`` (F, N); a family may do them together faster.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+        settings : list of dict
+            The settings to choose from.
+        residuals : ndarray, shape (F, N, 3)
+            Residual per fold [m].
+        mask : ndarray of bool, shape (N, 3)
+            Components measured.
+        trains : ndarray of bool, shape (F, N)
+            Training readings per fold.
+
+        Returns
+        -------
+        list of (dict or None)
+            One choice per fold.
+        """
         return [self.preselect(ctx, variant, settings, r, mask, t)
                 for r, t in zip(residuals, trains)]
 
@@ -426,15 +819,59 @@ class EffectFamily:
                          ) -> dict[str, tuple[float, str]]:
         """The largest |value| physics allows each parameter on ``ctx.machine``, with the
         reason: ``{name: (bound, why)}``; parameters not named are bounded only by the
-        consistency rule and the controller's limits (:mod:`.physics`)."""
+        consistency rule and the controller's limits (:mod:`.physics`).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+        setting : dict
+            Hyperparameters (one of :meth:`settings`), e.g. ``{"period_m": 0.01}``.
+
+        Returns
+        -------
+        dict of str to tuple of (float, str)
+            Parameter name -> (bound in the parameter's unit, reason).
+        """
         return {}
 
     def fit_problems(self, ctx: Context, variant: str, setting: dict, coefficients
                      ) -> list[str]:
         """Why physics refuses this fit beyond single parameters' limits (a relation
-        between the parameters, e.g. an implausible arm): one sentence each, or none."""
+        between the parameters, e.g. an implausible arm): one sentence each, or none.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            Which axis, error or sensor (one of :meth:`variants`).
+        setting : dict
+            Hyperparameters (one of :meth:`settings`), e.g. ``{"period_m": 0.01}``.
+        coefficients : sequence of float, length P
+            Fitted parameters, in :meth:`parameter_names` order and their units.
+
+        Returns
+        -------
+        list of str
+            Problems (empty: none).
+        """
         return []
 
     def describe_setting(self, setting: dict) -> str:
+        """The setting in words, e.g. ``"period_m 0.01"``.
+
+        Parameters
+        ----------
+        setting : dict
+            The setting.
+
+        Returns
+        -------
+        str
+            ``key value`` pairs joined by commas.
+        """
         return ", ".join(f"{k} {v:g}" if isinstance(v, (int, float)) else f"{k} {v}"
                          for k, v in setting.items())
