@@ -55,7 +55,20 @@ def _legendre_columns(u, first: int, last: int):
 
 
 def component_names(ctx: Context, kind: str) -> list[str]:
-    """ISO names of every component error of this kind over the machine's linear axes."""
+    """ISO names of every component error of this kind over the machine's linear axes.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and readings (only axes that moved count).
+    kind : {"positioning", "straightness", "angular"}
+        The kind of component error.
+
+    Returns
+    -------
+    list of str
+        ISO 230-1 names, e.g. ``EXX`` / ``EYX, EZX`` / ``EAX, EBX, ECX`` per axis.
+    """
     names = []
     for axis in ctx.linear_axes(moving=True):
         if kind == "positioning":
@@ -68,7 +81,16 @@ def component_names(ctx: Context, kind: str) -> list[str]:
 
 
 class ComponentError(EffectFamily):
-    """Positioning / straightness / angular error of a linear axis, smooth or periodic."""
+    """Positioning / straightness / angular error of a linear axis, smooth or periodic.
+
+    Parameters
+    ----------
+    kind : {"positioning", "straightness", "angular"}
+        Which component errors the family holds.
+    periodic : bool
+        Periodic (cos/sin of 2 pi q / lambda and its second harmonic) instead of smooth
+        (Legendre polynomials).
+    """
 
     group = "geometric"
     reference = "ISO 230-1; Kidani eqs. 2.6-2.12; Khan & Chen eqs. 8, 17"
@@ -90,9 +112,35 @@ class ComponentError(EffectFamily):
                         "smoothly along its travel")
 
     def variants(self, ctx: Context) -> list[str]:
+        """The component errors of this kind of every linear axis that moved.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        list of str
+            ISO 230-1 names (``EXX``, ``EYX`` ...).
+        """
         return component_names(ctx, self.kind)
 
     def settings(self, ctx: Context, variant: str) -> list[dict]:
+        """Periods searched (periodic) or Legendre orders (smooth).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+
+        Returns
+        -------
+        list of dict
+            ``{"period_m": lambda}`` [m] on a resolvable frequency grid, or ``{"order": k}``.
+        """
         if self.periodic:
             low, high = ctx.machine.axes[variant[2]].stroke
             # Frequencies a quarter cycle apart over the stroke: no peak falls between;
@@ -103,6 +151,21 @@ class ComponentError(EffectFamily):
         return [{"order": k} for k in range(first, first + _ORDERS)]
 
     def parameter_names(self, variant: str, setting: dict) -> list[str]:
+        """Harmonic or Legendre coefficients.
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        list of str
+            ``cos1, sin1, cos2, sin2`` or ``P<k>``; each in the error's unit, [m] (positioning,
+            straightness) or [rad] (angular).
+        """
         if self.periodic:
             return ["cos1", "sin1", "cos2", "sin2"]
         first = 2 if self.kind == "straightness" else 1
@@ -122,9 +185,41 @@ class ComponentError(EffectFamily):
         return _legendre_columns(u, first, setting["order"])
 
     def design(self, ctx: Context, variant: str, setting: dict):
+        """(N, 3, P) TCP error per unit coefficient: the error's sensitivity along its basis.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            [m per m] or [m per rad] of coefficient.
+        """
         return along(*self.separable_design(ctx, variant, setting))
 
     def separable_design(self, ctx: Context, variant: str, setting: dict):
+        """The error's sensitivity and its basis columns (shared between the axis' errors).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        tuple of ndarray
+            (sensitivity (N, 3) [m per error unit], basis (N, P) dimensionless).
+        """
         axis = variant[2]
         if self.periodic:
             # Every periodic error of an axis has the same harmonics at one period.
@@ -145,12 +240,47 @@ class ComponentError(EffectFamily):
         return ctx.jacobian(variant), basis
 
     def orientation_sensitivity(self, ctx: Context, variant: str, setting: dict):
+        """The tool's turn per unit angular error; None for positioning and straightness.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3), or None
+            [rad per rad], or None.
+        """
         # Pitch, yaw and roll turn the tool; positioning and straightness do not.
         return ctx.orientation_jacobian(variant) if self.kind == "angular" else None
 
     def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
         """The error motion itself, E(q) [m or rad] at axis positions q: what a CNC's
-        per-axis compensation table holds (not its effect at the TCP)."""
+        per-axis compensation table holds (not its effect at the TCP).
+
+        Parameters
+        ----------
+        machine : MachineDescription
+            The machine (the axis' stroke maps q to Legendre's domain).
+        variant : str
+            ISO name, e.g. ``ECX``.
+        setting : dict
+            The fitted setting.
+        coefficients : sequence of float, length P
+            Fitted coefficients [m] or [rad].
+        q : array_like, shape (K,)
+            Axis positions [m].
+
+        Returns
+        -------
+        ndarray, shape (K,)
+            E(q) [m] or [rad].
+        """
         low, high = machine.axes[variant[2]].stroke
         q = np.asarray(q, dtype=np.float64)
         return self._basis(q, (2.0 * q - (low + high)) / (high - low), setting) @ \
@@ -161,10 +291,55 @@ class ComponentError(EffectFamily):
         return self.periodic    # by the periodogram
 
     def preselect(self, ctx, variant, settings, residual, mask, train):
+        """The period by the periodogram of the training residual (periodic only; None for smooth).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        settings : list of dict
+            Periods to choose from.
+        residual : ndarray, shape (N, 3)
+            Residual [m].
+        mask : ndarray of bool, shape (N, 3)
+            Components measured.
+        train : ndarray of bool, shape (N,)
+            Training readings.
+
+        Returns
+        -------
+        dict or None
+            The chosen setting, or None.
+        """
         return self.preselect_folds(ctx, variant, settings, residual[None], mask,
                                     np.asarray(train)[None])[0]
 
     def preselect_folds(self, ctx, variant, settings, residuals, mask, trains):
+        """The period per fold by a weighted periodogram of its training residual along the error's
+        sensitivity (fundamental alone).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        settings : list of dict
+            Periods to choose from.
+        residuals : ndarray, shape (F, N, 3)
+            Residual per fold [m].
+        mask : ndarray of bool, shape (N, 3)
+            Components measured.
+        trains : ndarray of bool, shape (F, N)
+            Training readings per fold.
+
+        Returns
+        -------
+        list of (dict or None)
+            One setting per fold (None for smooth).
+        """
         if not self.periodic:
             return [None] * len(trains)
         jac = ctx.jacobian(variant)
@@ -193,6 +368,20 @@ class ComponentError(EffectFamily):
         return [settings[int(i)] for i in np.argmax(explained, axis=0)]
 
     def explanation(self, variant: str, setting: dict) -> str:
+        """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        str
+            The sentence.
+        """
         axis = variant[2]
         if self.periodic:
             return (f"{variant} repeats every {setting['period_m'] * 1e3:.2f} mm of {axis} "
@@ -205,6 +394,18 @@ class ComponentError(EffectFamily):
                 f"(Legendre order {setting.get('order')}){reach} (ISO 230-1, Kidani eq. 2.6)")
 
     def describe_setting(self, setting: dict) -> str:
+        """The setting in words, e.g. ``"period 5.000 mm"`` or ``"order 3"``.
+
+        Parameters
+        ----------
+        setting : dict
+            The setting.
+
+        Returns
+        -------
+        str
+            The words.
+        """
         if self.periodic:
             return f"period {setting['period_m'] * 1e3:.3f} mm"
         return f"order {setting['order']}"
@@ -235,6 +436,19 @@ class Squareness(EffectFamily):
              "EYZ": "Y and Z"}
 
     def variants(self, ctx: Context) -> list[str]:
+        """Location errors EC0Y, EB0Z, EA0Z of pairs whose later axis moved, and the other-reference
+        slopes (EYX ...) of pairs that both moved.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        list of str
+            Variant names.
+        """
         moving = ctx.linear_axes(moving=True)
         axes = ctx.linear_axes()
         # The error grows with the last letter's axis: it must have moved.
@@ -245,15 +459,61 @@ class Squareness(EffectFamily):
                         if name[2] in moving and name[1] in moving and base[-1] in axes]
 
     def parameter_names(self, variant, setting):
+        """One angle.
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        list of str
+            ``["angle_rad"]`` [rad].
+        """
         return ["angle_rad"]
 
     def design(self, ctx, variant, setting):
+        """Location error's sensitivity, or the slope's: sensitivity times position.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, 1)
+            (N, 3, 1) [m per rad].
+        """
         if variant in self.OTHER_REFERENCE:
             position = ctx.variables.positions[variant[2]]
             return (ctx.jacobian(variant) * position[:, None])[:, :, None]
         return ctx.jacobian(variant)[:, :, None]
 
     def orientation_design(self, ctx, variant, setting):
+        """The turn of the later axis' frame; None for the other-reference (translational) form.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, 1), or None
+            (N, 3, 1) [rad per rad], or None.
+        """
         # The first form turns the later axis' frame (and what it carries); the other
         # reference is a straightness slope, a translation.
         if variant in self.OTHER_REFERENCE:
@@ -262,20 +522,66 @@ class Squareness(EffectFamily):
 
     def location_error(self, variant: str, coefficients) -> dict[str, float]:
         """The location error it stands for (a CNC table's squareness entry) [rad]; the
-        other-reference form is a motion error (:meth:`motion_error`), not one."""
+        other-reference form is a motion error (:meth:`motion_error`), not one.
+
+        Parameters
+        ----------
+        variant : str
+            The variant.
+        coefficients : sequence of float, length 1
+            The fitted angle [rad].
+
+        Returns
+        -------
+        dict of str to float
+            ``{variant: angle}`` [rad], or empty.
+        """
         if variant in self.OTHER_REFERENCE:
             return {}
         return {variant: float(coefficients[0])}
 
     def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
         """The other-reference form as its axis' error motion: angle x position [m]
-        (the first form has none: it is a location error)."""
+        (the first form has none: it is a location error).
+
+        Parameters
+        ----------
+        machine : MachineDescription
+            Unused (the common signature).
+        variant : str
+            The variant.
+        setting : dict
+            Unused.
+        coefficients : sequence of float, length 1
+            The fitted angle [rad].
+        q : array_like, shape (K,)
+            Positions of the variant's axis [m].
+
+        Returns
+        -------
+        ndarray, shape (K,)
+            Error motion [m] (zeros for a location error).
+        """
         q = np.asarray(q, dtype=np.float64)
         if variant not in self.OTHER_REFERENCE:
             return np.zeros_like(q)
         return float(np.asarray(coefficients, dtype=np.float64)[0]) * q
 
     def explanation(self, variant, setting):
+        """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        str
+            The sentence.
+        """
         pair = self.PAIRS[variant]
         if variant in self.OTHER_REFERENCE:
             return (f"the residual in {variant[1].lower()} grows linearly with the "
@@ -295,12 +601,50 @@ class RotaryError(EffectFamily):
     reference = "Khan & Chen eqs. 9-16 (E_XA ... E_CA); Zhu ch. 5"
 
     def variants(self, ctx):
+        """The six error motions of every rotary axis that moved.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        list of str
+            ISO names ``E<XYZABC><axis>``.
+        """
         return [f"E{c}{a}" for a in ctx.rotary_axes(moving=True) for c in "XYZABC"]
 
     def settings(self, ctx, variant):
+        """Number of harmonics: 1, 2 or 3.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+
+        Returns
+        -------
+        list of dict
+            ``{"harmonics": h}``.
+        """
         return [{"harmonics": h} for h in (1, 2, 3)]
 
     def variant_complexity(self, variant: str) -> int:
+        """One more for an angular error (a wobble acting through a lever) than for a runout.
+
+        Parameters
+        ----------
+        variant : str
+            The variant.
+
+        Returns
+        -------
+        int
+            Occam's complexity of the variant.
+        """
         # As for a linear axis: a wobble acting through a lever assumes more than a runout.
         # With a constant lever the two are the same signature to the last bit, and
         # the tie must not be broken by rounding.
@@ -316,31 +660,131 @@ class RotaryError(EffectFamily):
         start at the second harmonic (as ISO 230-7 separates them). A once-per-revolution
         radial or axial runout and angular positioning error (an eccentric bearing or
         encoder disc) is no location error: those start at the first.
+
+        Parameters
+        ----------
+        variant : str
+            ISO name of a rotary axis' error motion, e.g. ``EAC``.
+
+        Returns
+        -------
+        int
+            1 or 2.
         """
         along_axis = "ABC".index(variant[2])
         tilt = variant[1] in "ABC" and "ABC".index(variant[1]) != along_axis
         return 2 if tilt else 1
 
     def harmonics(self, variant, setting) -> range:
+        """The harmonics of ``variant`` at ``setting``.
+
+        Parameters
+        ----------
+        variant : str
+            ISO name.
+        setting : dict
+            ``{"harmonics": h}``.
+
+        Returns
+        -------
+        range
+            From :meth:`first_harmonic`, h of them.
+        """
         first = self.first_harmonic(variant)
         return range(first, first + setting["harmonics"])
 
     def parameter_names(self, variant, setting):
+        """Fourier coefficients in the axis angle.
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        list of str
+            ``cos<h>, sin<h>`` per harmonic, [m] (runout) or [rad] (wobble, positioning).
+        """
         return [f"{f}{h}" for h in self.harmonics(variant, setting) for f in ("cos", "sin")]
 
     def design(self, ctx, variant, setting):
+        """(N, 3, P) TCP error per unit Fourier coefficient.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            [m per m] or [m per rad].
+        """
         return along(*self.separable_design(ctx, variant, setting))
 
     def separable_design(self, ctx, variant, setting):
+        """The error's sensitivity and cos/sin of h times the angle.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        tuple of ndarray
+            (sensitivity (N, 3), basis (N, P) dimensionless).
+        """
         angle = ctx.variables.positions[variant[2]]
         columns = np.column_stack([f(h * angle) for h in self.harmonics(variant, setting)
                                    for f in (np.cos, np.sin)])
         return ctx.jacobian(variant), columns
 
     def orientation_sensitivity(self, ctx, variant, setting):
+        """The tool's turn per unit angular error motion; None for a runout.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3), or None
+            [rad per rad], or None.
+        """
         return ctx.orientation_jacobian(variant) if variant[1] in "ABC" else None
 
     def explanation(self, variant, setting):
+        """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        str
+            The sentence.
+        """
         what = {"X": "radial/axial runout", "Y": "radial/axial runout", "Z": "radial/axial runout",
                 "A": "wobble or angular positioning", "B": "wobble or angular positioning",
                 "C": "wobble or angular positioning"}[variant[1]]
@@ -358,6 +802,18 @@ class RotaryLocation(EffectFamily):
     reference = "Khan & Chen position-independent errors (section 5); Zhu ch. 5"
 
     def variants(self, ctx):
+        """Every rotary axis, and all of them at once when there are several.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        list of str
+            Axis letters, e.g. ``["B", "C", "BC"]``.
+        """
         rotary = ctx.rotary_axes()
         # Every rotary axis at once as well: a tilt of one axis and of the next turn the
         # tool alike (in Khan & Chen's chain both are constant rotations of the tool
@@ -366,6 +822,18 @@ class RotaryLocation(EffectFamily):
         return rotary + (["".join(rotary)] if len(rotary) > 1 else [])
 
     def variant_complexity(self, variant: str) -> int:
+        """One more for several axes at once.
+
+        Parameters
+        ----------
+        variant : str
+            The variant.
+
+        Returns
+        -------
+        int
+            Occam's complexity of the variant.
+        """
         return self.complexity + (len(variant) > 1)
 
     def _names(self, variant):
@@ -382,6 +850,20 @@ class RotaryLocation(EffectFamily):
         return names
 
     def settings(self, ctx, variant):
+        """One setting: the line errors these readings cannot part (or none when nothing is seen).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+
+        Returns
+        -------
+        list of dict
+            ``[{"inseparable": str}]`` (:func:`inseparable_location_errors`) or ``[]``.
+        """
         # The location errors these poses cannot part are folded into those they move
         # the readings as (one setting: which, and by how much).
         setting = {"inseparable": inseparable_location_errors(ctx, self._names(variant))}
@@ -389,21 +871,81 @@ class RotaryLocation(EffectFamily):
         return [setting] if self.parameter_names(variant, setting) else []
 
     def parameter_names(self, variant, setting):
+        """The line errors (two offsets, two tilts per axis) not folded.
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        list of str
+            ISO names: offsets ``EX0C`` ... [m], tilts ``EA0C`` ... [rad].
+        """
         folded = parse_inseparable(setting.get("inseparable", ""))
         return [name for name in self._names(variant) if name not in folded]
 
     def design(self, ctx, variant, setting):
+        """(N, 3, P) as an instrument located at the set-up reads them (:meth:`Context.located`).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            [m per m] (offsets) or [m per rad] (tilts).
+        """
         # As an instrument located at the set-up reads them (Context.located).
         return np.stack([ctx.located(name)[0] for name in self.parameter_names(variant,
                                                                                 setting)],
                         axis=2)
 
     def orientation_design(self, ctx, variant, setting):
+        """(N, 3, P) the tool's turn per unit line error.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            [rad per m] or [rad per rad].
+        """
         return np.stack([ctx.located(name)[1] for name in self.parameter_names(variant,
                                                                                 setting)],
                         axis=2)
 
     def explanation(self, variant, setting):
+        """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        str
+            The sentence.
+        """
         which = f"the {variant} axis is" if len(variant) == 1 else \
             f"the {' and '.join(variant)} axes are"
         text = (f"{which} not where the model puts it: centre line offset or tilted "
@@ -414,6 +956,18 @@ class RotaryLocation(EffectFamily):
         return f"{text}; {folded}" if folded else text
 
     def describe_setting(self, setting):
+        """The setting in words, e.g. the folds in words.
+
+        Parameters
+        ----------
+        setting : dict
+            The setting.
+
+        Returns
+        -------
+        str
+            The words.
+        """
         return inseparable_sentence(setting.get("inseparable", "")) or "every line error seen"
 
 
@@ -432,6 +986,18 @@ def inseparable_location_errors(ctx: Context, names: list[str]) -> str:
     calibration measures first), each against the offsets (an instrument's own zero, on
     the position rows) and the columns kept before it; one that keeps less than
     :data:`INSEPARABLE_FRACTION` of its norm is folded into them (least squares).
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the readings.
+    names : list of str
+        Location error names, offsets [m] before tilts [rad].
+
+    Returns
+    -------
+    str
+        The setting string (ratios in the kept error's unit per the folded one's).
     """
     columns = []
     for name in names:
@@ -471,7 +1037,18 @@ def inseparable_location_errors(ctx: Context, names: list[str]) -> str:
 def parse_inseparable(text: str) -> dict[str, dict[str, float]]:
     """The setting string of :func:`inseparable_location_errors` as {folded: {kept: ratio}}
     (ratio in the kept parameter's unit per the folded one's; {} for one that moves
-    nothing)."""
+    nothing).
+
+    Parameters
+    ----------
+    text : str
+        The setting string.
+
+    Returns
+    -------
+    dict of str to dict of str to float
+        Folded name -> kept name -> ratio [m/rad, rad/m, m/m or rad/rad].
+    """
     out: dict[str, dict[str, float]] = {}
     for part in filter(None, str(text).split(";")):
         name, _, terms = part.partition("=")
@@ -481,7 +1058,18 @@ def parse_inseparable(text: str) -> dict[str, dict[str, float]]:
 
 
 def inseparable_sentence(text: str) -> str:
-    """The folds of a setting string in words ("" when there are none)."""
+    """The folds of a setting string in words ("" when there are none).
+
+    Parameters
+    ----------
+    text : str
+        The setting string of :func:`inseparable_location_errors`.
+
+    Returns
+    -------
+    str
+        The sentence(s).
+    """
     folded = parse_inseparable(text)
     if not folded:
         return ""
@@ -515,13 +1103,55 @@ class CrossAxis(EffectFamily):
     reference = "beyond the rigid-body model (Kidani eq. 2.12 holds one axis' errors per axis)"
 
     def variants(self, ctx):
+        """Every pair of linear axes that moved.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        list of str
+            Pairs, e.g. ``"XY"``.
+        """
         axes = sorted(ctx.linear_axes(moving=True))
         return [a + b for i, a in enumerate(axes) for b in axes[i + 1:]]
 
     def parameter_names(self, variant, setting):
+        """One coefficient per TCP component.
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        list of str
+            ``on_x, on_y, on_z`` [m].
+        """
         return ["on_x", "on_y", "on_z"]
 
     def design(self, ctx, variant, setting):
+        """The product of the two normalised positions on each TCP component.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            (N, 3, 3) dimensionless (parameters in [m]).
+        """
         product = ctx.normalised_position(variant[0]) * ctx.normalised_position(variant[1])
         design = np.zeros((ctx.n, 3, 3))
         for c in range(3):
@@ -529,6 +1159,20 @@ class CrossAxis(EffectFamily):
         return design
 
     def explanation(self, variant, setting):
+        """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        str
+            The sentence.
+        """
         return (f"the residual follows {variant[0]} x {variant[1]}: the {variant[0]}{variant[1]} "
                 "travel plane is twisted (a cross-axis error no single axis' error motion "
                 "can express)")
@@ -542,17 +1186,73 @@ class AbbeOffset(EffectFamily):
     reference = "Kidani eq. 2.10; ISO 230-1 (Abbe principle)"
 
     def variants(self, ctx):
+        """``["tool"]`` when the model has an orientation error at the readings, else none.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        list of str
+            Variant names.
+        """
         if ctx.orientation is None or not np.any(ctx.orientation):
             return []
         return ["tool"]
 
     def parameter_names(self, variant, setting):
+        """The lever's components.
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        list of str
+            ``ox, oy, oz`` [m].
+        """
         return ["ox", "oy", "oz"]
 
     def design(self, ctx, variant, setting):
+        """eps x e_k for each unit lever direction, eps the model's orientation error.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            (N, 3, 3) [m per m] (eps in [rad]).
+        """
         return np.stack([np.cross(ctx.orientation, unit) for unit in np.eye(3)], axis=2)
 
     def explanation(self, variant, setting):
+        """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        str
+            The sentence.
+        """
         return ("the residual follows the measured angular errors times a lever - the tool or "
                 "workpiece is offset from the scales' line (Abbe)")
 
@@ -583,6 +1283,19 @@ class AngularWithArm(EffectFamily):
     nested_settings = False
 
     def variants(self, ctx: Context) -> list[str]:
+        """Angular errors of moving linear axes with an arm along the tool, on a machine whose arms
+        are not known.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        list of str
+            ISO names (none on a described machine).
+        """
         # A machine whose description gives its offsets has its arms: nothing to fit.
         if getattr(ctx.machine, "abbe_arms_known", True):
             return []
@@ -591,9 +1304,37 @@ class AngularWithArm(EffectFamily):
         return [name for name in component_names(ctx, "angular") if ctx.arm_moves(name)]
 
     def settings(self, ctx: Context, variant: str) -> list[dict]:
+        """Legendre orders 1 ..
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+
+        Returns
+        -------
+        list of dict
+            ``{"order": k}``.
+        """
         return [{"order": k} for k in range(1, 1 + _ORDERS)]
 
     def parameter_names(self, variant: str, setting: dict) -> list[str]:
+        """The tilt's Legendre coefficients, then the arm's.
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        list of str
+            ``P<k>`` [rad] then ``arm_P<k>`` [rad m].
+        """
         orders = range(1, setting["order"] + 1)
         return [f"P{k}" for k in orders] + [f"arm_P{k}" for k in orders]
 
@@ -607,22 +1348,88 @@ class AngularWithArm(EffectFamily):
         return ctx.cache[key][:, 1:setting["order"] + 1]
 
     def nested_columns(self, variant: str, setting: dict, largest: dict) -> list[int]:
+        """The tilt's orders, then the arm's: a lower order's are the first of each half.
+
+        Parameters
+        ----------
+        variant : str
+            The variant.
+        setting : dict
+            ``{"order": k}``.
+        largest : dict
+            ``{"order": K}``, K >= k.
+
+        Returns
+        -------
+        list of int
+            Column indices into the largest design.
+        """
         # The tilt's orders, then the arm's: a lower order's are the first of each half.
         order, most = setting["order"], largest["order"]
         return list(range(order)) + list(range(most, most + order))
 
     def design(self, ctx: Context, variant: str, setting: dict):
+        """Tilt columns along the chain's sensitivity, then the same basis along the arm's.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            (N, 3, 2k) [m per rad], then [m per (rad m)].
+        """
         basis = self._basis(ctx, variant, setting)
         return np.concatenate([along(ctx.jacobian(variant), basis),
                                along(ctx.arm_jacobian(variant), basis)], axis=2)
 
     def orientation_design(self, ctx: Context, variant: str, setting: dict):
+        """The tilt's turn; the arm turns nothing.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            (N, 3, 2k) [rad per rad], the arm's half zero.
+        """
         basis = self._basis(ctx, variant, setting)
         turn = along(ctx.orientation_jacobian(variant), basis)
         return np.concatenate([turn, np.zeros_like(turn)], axis=2)
 
     def fit_problems(self, ctx: Context, variant: str, setting: dict, coefficients
                      ) -> list[str]:
+        """An arm beyond the machine's reach is no tilt.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting.
+        coefficients : sequence of float, length 2k
+            Tilt [rad] and arm [rad m] coefficients.
+
+        Returns
+        -------
+        list of str
+            Problems (empty: none).
+        """
         # An arm beyond the machine's reach is no tilt: the "arm" part is then a
         # straightness or squareness of the axis that a vanishing tilt divides.
         reach = sum(high - low for low, high in (ctx.machine.axes[a].stroke
@@ -637,17 +1444,54 @@ class AngularWithArm(EffectFamily):
 
     @staticmethod
     def arm_m(coefficients) -> float:
-        """The extra arm l [m] the fitted coefficients (a..., b...) identify."""
+        """The extra arm l [m] the fitted coefficients (a..., b...) identify.
+
+        Parameters
+        ----------
+        coefficients : sequence of float, length 2k
+            Tilt coefficients a [rad], then arm coefficients b [rad m].
+
+        Returns
+        -------
+        float
+            l = <a, b> / <a, a> [m] (0 when a is zero).
+        """
         values = np.asarray(coefficients, dtype=np.float64)
         a, b = values[:values.size // 2], values[values.size // 2:]
         return float(a @ b / (a @ a)) if a @ a > 0 else 0.0
 
     def explanation(self, variant: str, setting: dict) -> str:
+        """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
+
+        Parameters
+        ----------
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        str
+            The sentence.
+        """
         return (f"the angular error {variant} of the {variant[2]} axis (Legendre order "
                 f"{setting.get('order')}), acting through an Abbe arm along the tool that the "
                 "machine description does not give - the fit names the arm (ISO 230-1)")
 
     def describe_setting(self, setting: dict) -> str:
+        """The setting in words, e.g. ``"order 2, arm fitted"``.
+
+        Parameters
+        ----------
+        setting : dict
+            The setting.
+
+        Returns
+        -------
+        str
+            The words.
+        """
         return f"order {setting['order']}, arm fitted"
 
 
