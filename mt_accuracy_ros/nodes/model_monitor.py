@@ -334,6 +334,7 @@ class ModelMonitor(Node):
             return
         change = self._changes.popleft()
         before = int(self.inputs.model.version)
+        self._said_refusal = ""
         try:
             problem = self._make_change(change)
         except Exception as exc:  # noqa: BLE001 - a change must never kill the node
