@@ -53,6 +53,25 @@ class SortedTraining:
 
     @classmethod
     def build(cls, positions: ArrayLike, values: ArrayLike) -> "SortedTraining":
+        """Sort a training set by position (stable).
+
+        Parameters
+        ----------
+        positions : array_like, shape (m,)
+            Training positions [m] (any unit, the queries' unit).
+        values : array_like, shape (m,)
+            Training values (any unit).
+
+        Returns
+        -------
+        SortedTraining
+            Positions ascending, values in the same order, and the order.
+
+        Raises
+        ------
+        InputDataError
+            Non-finite or non-1-D inputs, or lengths that differ.
+        """
         x = finite_array(positions, "positions", ndim=1)
         y = finite_array(values, "values", ndim=1)
         same_length("positions", x, "values", y)
@@ -157,10 +176,26 @@ def knn_predict_all_k(training: SortedTraining, queries: ArrayLike,
                       k_max: int) -> NDArray[np.float64]:
     """kNN means for every k = 1 ... k_max at once.
 
+    Parameters
+    ----------
+    training : SortedTraining
+        The sorted training set (m points).
+    queries : array_like, shape (n,)
+        Query positions, the training positions' unit.
+    k_max : int
+        Largest k, 1 <= k_max <= m.
+
     Returns
     -------
     ndarray, shape (k_max, n)
-        Row ``k - 1`` holds the k-NN mean at every query.
+        Row ``k - 1`` holds the k-NN mean at every query, the values' unit.
+
+    Raises
+    ------
+    ParameterError
+        ``k`` not a positive integer.
+    InsufficientDataError
+        ``k`` larger than the training set.
     """
     q = finite_array(queries, "queries", ndim=1, allow_empty=True)
     k_max = _check_k(k_max, len(training), "k_max")
@@ -176,9 +211,25 @@ def knn_predict_all_k(training: SortedTraining, queries: ArrayLike,
 def knn_neighbour_indices(positions: ArrayLike, queries: ArrayLike, k: int) -> NDArray[np.intp]:
     """Input indices of the k nearest neighbours of each query, nearest first.
 
+    Parameters
+    ----------
+    positions : array_like, shape (m,)
+        Training positions (any unit).
+    queries : array_like, shape (n,)
+        Query positions, same unit.
+    k : int
+        Neighbours, 1 <= k <= m.
+
     Returns
     -------
     ndarray of int, shape (n, k)
+
+    Raises
+    ------
+    ParameterError
+        ``k`` not a positive integer.
+    InsufficientDataError
+        ``k`` larger than the training set.
     """
     x = finite_array(positions, "positions", ndim=1)
     training = SortedTraining.build(x, np.zeros_like(x))
@@ -200,6 +251,27 @@ def knn_brute_force_indices(positions: ArrayLike, queries: ArrayLike,
     Applies the module's tie rule literally - key (distance, position,
     |rank - insertion point|) - with no windows; the tests' independent
     formulation.
+
+    Parameters
+    ----------
+    positions : array_like, shape (m,)
+        Training positions (any unit).
+    queries : array_like, shape (n,)
+        Query positions, same unit.
+    k : int
+        Neighbours, 1 <= k <= m.
+
+    Returns
+    -------
+    ndarray of int, shape (n, k)
+        Input indices.
+
+    Raises
+    ------
+    ParameterError
+        ``k`` not a positive integer.
+    InsufficientDataError
+        ``k`` larger than the training set.
     """
     x = finite_array(positions, "positions", ndim=1)
     q = finite_array(queries, "queries", ndim=1)
@@ -220,6 +292,27 @@ def knn_brute_force(positions: ArrayLike, values: ArrayLike, queries: ArrayLike,
 
     Applies the module's tie rule literally; used by the tests as the
     independent formulation.
+
+    Parameters
+    ----------
+    positions, values : array_like, shape (m,)
+        Training positions (any unit) and values (any unit).
+    queries : array_like, shape (n,)
+        Query positions, the positions' unit.
+    k : int
+        Neighbours, 1 <= k <= m.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        kNN mean, the values' unit.
+
+    Raises
+    ------
+    ParameterError
+        ``k`` not a positive integer.
+    InsufficientDataError
+        ``k`` larger than the training set.
     """
     y = finite_array(values, "values", ndim=1)
     x = finite_array(positions, "positions", ndim=1)
@@ -262,6 +355,27 @@ def shuffled_folds(n_samples: int, n_folds: int, seed: int | None = 0) -> NDArra
     The partition matches ``sklearn.model_selection.KFold(n_folds, shuffle=True)``
     in structure (the first ``n % K`` folds get one extra sample); the
     permutation comes from ``numpy.random.default_rng(seed)``.
+
+    Parameters
+    ----------
+    n_samples : int
+        N.
+    n_folds : int
+        K >= 2, at most N.
+    seed : int or None, optional
+        Seed of the permutation.
+
+    Returns
+    -------
+    ndarray of int, shape (N,)
+        Fold 0 ... K-1 of each sample.
+
+    Raises
+    ------
+    ParameterError
+        ``n_folds`` below 2.
+    InsufficientDataError
+        Fewer samples than folds.
     """
     if n_folds < 2:
         raise ParameterError(f"n_folds must be >= 2, got {n_folds}")
@@ -440,7 +554,23 @@ def _fold_rmse(x: NDArray[np.float64], y: NDArray[np.float64], fold_of: NDArray[
 
 
 def rmse(predicted: ArrayLike, measured: ArrayLike) -> float:
-    """Root-mean-square difference (Kidani eq. 4.11)."""
+    """Root-mean-square difference (Kidani eq. 4.11).
+
+    Parameters
+    ----------
+    predicted, measured : array_like, shape (n,)
+        Values in one unit.
+
+    Returns
+    -------
+    float
+        RMS difference, the values' unit.
+
+    Raises
+    ------
+    InputDataError
+        Non-finite or non-1-D inputs, or lengths that differ.
+    """
     a = finite_array(predicted, "predicted", ndim=1)
     b = finite_array(measured, "measured", ndim=1)
     same_length("predicted", a, "measured", b)
@@ -477,7 +607,36 @@ def extract_systematic(positions: ArrayLike, values: ArrayLike, query_positions:
                        k_lim: int = 100, n_folds: int = 5, seed: int | None = 0,
                        new_positions: ArrayLike | None = None,
                        new_values: ArrayLike | None = None) -> SystematicExtraction:
-    """Choose k by cross-validation, extract the profile, and test it on new data."""
+    """Choose k by cross-validation, extract the profile, and test it on new data.
+
+    Parameters
+    ----------
+    positions, values : array_like, shape (N,)
+        Scattered positions [m] and error values (any unit, e.g. [rad] of yaw).
+    query_positions : array_like, shape (n,)
+        Where the profile is wanted [m].
+    k_lim : int, optional
+        Largest k tried.
+    n_folds : int, optional
+        K of the K-fold cross-validation.
+    seed : int or None, optional
+        Seed of the fold shuffle.
+    new_positions, new_values : array_like, shape (M,), optional
+        New data the profile is tested on.
+
+    Returns
+    -------
+    SystematicExtraction
+        The choice of k, the systematic profile and random sigma at the queries (the
+        values' unit), and the RMSE against new data (NaN without it).
+
+    Raises
+    ------
+    InputDataError
+        Non-finite or mismatched inputs.
+    InsufficientDataError
+        Too few samples for ``n_folds`` folds of ``k_lim`` training points.
+    """
     cv = cross_validate_k(positions, values, k_lim, n_folds, seed)
     systematic, sigma = knn_predict(positions, values, query_positions, cv.k, return_sigma=True)
     new_rmse = float("nan")
