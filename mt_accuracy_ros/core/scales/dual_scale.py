@@ -141,10 +141,26 @@ def thermal_yaw_error(travel_m: ArrayLike, expansion_1_m: ArrayLike, expansion_2
     ``(dL2 - dL1) / D``; the sign here follows from the reading model and is
     the one the simulator uses.
 
+    Parameters
+    ----------
+    travel_m : array_like, shape (n,)
+        Travel from the zero reference [m] (checked for length only).
+    expansion_1_m, expansion_2_m : array_like, shape (n,)
+        Expansion dL of scale 1 and scale 2 over the travel [m].
+    scale_distance_m : float
+        Distance D between the two scales [m] (> 0).
+
     Returns
     -------
     ndarray, shape (n,)
         Apparent yaw [rad] to subtract from the measured yaw.
+
+    Raises
+    ------
+    InputDataError
+        Non-finite values or lengths that differ.
+    ParameterError
+        ``scale_distance_m`` not positive.
     """
     travel = finite_array(travel_m, "travel_m", ndim=1)
     dl1 = finite_array(expansion_1_m, "expansion_1_m", ndim=1)
@@ -161,6 +177,25 @@ def parallelism_yaw_error(travel_m: ArrayLike, parallelism_rad: float,
     ``dE_yaw = (L / cos(delta) - L) / D`` for a travel L from the zero reference;
     the sign of L carries through (travel to the negative side gives a negative
     apparent yaw), the sign of delta does not (cos is even).
+
+    Parameters
+    ----------
+    travel_m : array_like, shape (n,)
+        Travel L from the zero reference [m].
+    parallelism_rad : float
+        Parallelism error delta [rad], |delta| < pi/2.
+    scale_distance_m : float
+        Distance D between the two scales [m] (> 0).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Apparent yaw [rad].
+
+    Raises
+    ------
+    ParameterError
+        delta not finite or too large, or D not positive.
     """
     travel = finite_array(travel_m, "travel_m", ndim=1)
     delta = float(parallelism_rad)
@@ -176,6 +211,25 @@ def timing_yaw_error(velocity_m_per_s: ArrayLike, skew_s: float,
     Head 2 then reads the position ``v * dt`` further along, so
     ``dE = v * dt / D`` (the thesis writes ``+-F dt / D``; the sign is the
     direction of motion).
+
+    Parameters
+    ----------
+    velocity_m_per_s : array_like, shape (n,)
+        Axis velocity v [m/s].
+    skew_s : float
+        Sampling skew dt of head 2 after head 1 [s].
+    scale_distance_m : float
+        Distance D between the two scales [m] (> 0).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Apparent yaw [rad].
+
+    Raises
+    ------
+    ParameterError
+        A non-finite skew or D not positive.
     """
     velocity = finite_array(velocity_m_per_s, "velocity_m_per_s", ndim=1)
     skew = float(skew_s)
@@ -276,7 +330,25 @@ THERMOCOUPLE_SPACING_M = 0.11
 
 def thermocouple_positions(length_m: float, spacing_m: float = THERMOCOUPLE_SPACING_M
                            ) -> NDArray[np.float64]:
-    """Positions along a scale of thermocouples every ``spacing_m``, both ends included [m]."""
+    """Positions along a scale of thermocouples every ``spacing_m``, both ends included [m].
+
+    Parameters
+    ----------
+    length_m : float
+        Scale length [m] (> 0).
+    spacing_m : float, optional
+        Thermocouple spacing [m] (> 0).
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        Positions from 0 to ``length_m`` [m].
+
+    Raises
+    ------
+    ParameterError
+        A length or spacing that is not positive.
+    """
     length = positive(length_m, "length_m")
     spacing = positive(spacing_m, "spacing_m")
     count = int(np.floor(length / spacing + 1e-9)) + 1
