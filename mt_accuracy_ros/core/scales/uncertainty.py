@@ -112,14 +112,54 @@ def yaw_uncertainty(travel_m: ArrayLike, scale_distance_m: float,
 
 def timing_error_per_distance(feed_m_per_s: float, skew_s: float,
                               scale_distance_m: float) -> float:
-    """Worst-case yaw error from sampling misalignment, F dt / D [rad] (Kidani eqs. 3.1-3.4)."""
+    """Worst-case yaw error from sampling misalignment, F dt / D [rad] (Kidani eqs. 3.1-3.4).
+
+    Parameters
+    ----------
+    feed_m_per_s : float
+        Feed F [m/s] (> 0).
+    skew_s : float
+        Sampling skew dt [s] (its magnitude counts).
+    scale_distance_m : float
+        Distance D between the two scales [m] (> 0).
+
+    Returns
+    -------
+    float
+        Yaw error [rad].
+
+    Raises
+    ------
+    ParameterError
+        F or D not positive.
+    """
     return positive(feed_m_per_s, "feed_m_per_s") * abs(float(skew_s)) / positive(
         scale_distance_m, "scale_distance_m")
 
 
 def parallelism_error_at_stroke(stroke_m: float, parallelism_rad: float,
                                 scale_distance_m: float) -> float:
-    """Yaw error of Kidani eq. 3.5 at the end of the stroke [rad]."""
+    """Yaw error of Kidani eq. 3.5 at the end of the stroke [rad].
+
+    Parameters
+    ----------
+    stroke_m : float
+        Stroke L [m] (> 0).
+    parallelism_rad : float
+        Parallelism error delta [rad].
+    scale_distance_m : float
+        Distance D between the two scales [m] (> 0).
+
+    Returns
+    -------
+    float
+        (L / cos(delta) - L) / D [rad].
+
+    Raises
+    ------
+    ParameterError
+        L or D not positive.
+    """
     stroke = positive(stroke_m, "stroke_m")
     return (stroke / np.cos(parallelism_rad) - stroke) / positive(scale_distance_m,
                                                                    "scale_distance_m")
@@ -130,6 +170,23 @@ def tolerable_scale_uncertainty(tcp_target_m: float, n_scales: int = 6) -> float
 
     ``sigma_e = sqrt(n * sigma_x^2)`` with equal scales, so
     ``sigma_x = sigma_e / sqrt(n)``; 3.2 um over six scales gives 1.31 um.
+
+    Parameters
+    ----------
+    tcp_target_m : float
+        Target TCP uncertainty sigma_e [m] (> 0).
+    n_scales : int, optional
+        Number of equal scales n (>= 1).
+
+    Returns
+    -------
+    float
+        sigma_x [m].
+
+    Raises
+    ------
+    ParameterError
+        A target that is not positive or n below 1.
     """
     if int(n_scales) < 1:
         raise ParameterError(f"n_scales must be >= 1, got {n_scales}")
@@ -146,6 +203,17 @@ def tcp_uncertainty_from_yaw(sigma_yaw_bx: float, sigma_yaw_bz: float,
         sigma_e = [sqrt(s_BX^2 + s_BZ^2 + s_CY^2), s_CY, sqrt(s_BX^2 + s_BZ^2)]
 
     (Units as given: Kidani eq. 2.15 treats the lever arms as folded into the sigmas.)
+
+    Parameters
+    ----------
+    sigma_yaw_bx, sigma_yaw_bz, sigma_yaw_cy : float
+        Yaw uncertainties of the three axes, each already times its lever arm
+        (unit-agnostic: the result has their unit, [m] when so folded).
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        sigma_e per TCP component x, y, z, the inputs' unit.
     """
     bx, bz, cy = (float(v) for v in (sigma_yaw_bx, sigma_yaw_bz, sigma_yaw_cy))
     return np.array([np.sqrt(bx ** 2 + bz ** 2 + cy ** 2), cy, np.sqrt(bx ** 2 + bz ** 2)])
