@@ -44,6 +44,31 @@ def group_by_position(positions: ArrayLike, values: ArrayLike,
     Positions within ``tolerance_m`` of the previous one (after sorting) form one
     group. Returns ``(group_position, systematic, random, count)``; ``random`` is
     NaN for groups of one sample.
+
+    Parameters
+    ----------
+    positions : array_like, shape (N,)
+        Positions [m].
+    values : array_like, shape (N,)
+        Errors (any unit).
+    tolerance_m : float, optional
+        Largest gap [m] between sorted positions of one group.
+
+    Returns
+    -------
+    group_position : ndarray, shape (G,)
+        Mean position of each group [m].
+    systematic : ndarray, shape (G,)
+        Mean error (Kidani eq. 2.22), the values' unit.
+    random : ndarray, shape (G,)
+        Sample standard deviation, ddof = 1 (Kidani eq. 2.23), the values' unit.
+    count : ndarray of int, shape (G,)
+        Samples per group.
+
+    Raises
+    ------
+    InputDataError
+        Non-finite values or lengths that differ.
     """
     x = finite_array(positions, "positions", ndim=1)
     y = finite_array(values, "values", ndim=1)
@@ -163,10 +188,30 @@ def positioning_runs(positions: ArrayLike, deviations: ArrayLike, directions: Ar
     from both sides and at least ``min_share`` of the readings sit on such
     targets (a continuous motion that crosses a position twice does not).
 
+    Parameters
+    ----------
+    positions : array_like, shape (N,)
+        Axis positions [m].
+    deviations : array_like, shape (N,)
+        Positioning deviations [m].
+    directions : array_like, shape (N,)
+        Approach direction: > 0 rising, < 0 falling.
+    resolution_m : float, optional
+        Positions within this [m] are one target.
+    min_targets, min_runs : int, optional
+        Fewest targets, and fewest approaches per side of each.
+    min_share : float, optional
+        Fewest fraction of readings on such targets (dimensionless).
+
     Returns
     -------
     (targets (m,), up (m, n), down (m, n)) ready for :func:`iso230_2`, with n
     the smallest run count (the first n of each target), or None.
+
+    Raises
+    ------
+    InputDataError
+        Non-finite values or lengths that differ.
     """
     q = finite_array(positions, "positions", ndim=1)
     e = finite_array(deviations, "deviations", ndim=1)
@@ -226,6 +271,32 @@ def runs_by_target(target_m: ArrayLike, deviation_m: ArrayLike, direction: Array
 
     Every target must be read once per run in each direction; a target missing from a
     run, a run read twice, or fewer than 2 runs is an :class:`InputDataError` naming it.
+
+    Parameters
+    ----------
+    target_m : array_like, shape (N,)
+        Target position of each reading [m].
+    deviation_m : array_like, shape (N,)
+        Deviation [m].
+    direction : array_like, shape (N,)
+        Approach direction: > 0 rising, < 0 falling.
+    run : array_like of int, shape (N,)
+        Run number of each reading.
+    resolution_m : float, optional
+        Targets within this [m] are one.
+
+    Returns
+    -------
+    targets : ndarray, shape (m,)
+        Target positions [m].
+    up, down : ndarray, shape (m, n)
+        Deviations [m] per target and run, each direction.
+
+    Raises
+    ------
+    InputDataError
+        Mismatched lengths, non-finite values, a target missing from a run, a run read
+        twice, or fewer than 2 runs.
     """
     p = finite_array(target_m, "targets", ndim=1)
     x = finite_array(deviation_m, "deviations", ndim=1)
