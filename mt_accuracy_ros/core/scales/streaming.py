@@ -108,7 +108,25 @@ class StreamingSystematic:
         self._shift: float | None = None  # values are stored minus this, for precision
 
     def add(self, positions: ArrayLike, values: ArrayLike) -> int:
-        """Add samples; returns how many were dropped (non-finite or outside the stroke)."""
+        """Add samples; returns how many were dropped (non-finite or outside the stroke).
+
+        Parameters
+        ----------
+        positions : array_like, shape (n,)
+            Axis positions [m].
+        values : array_like, shape (n,)
+            Errors at them (any unit, e.g. yaw [rad]).
+
+        Returns
+        -------
+        int
+            Samples dropped (non-finite or outside [lower_m, upper_m]).
+
+        Raises
+        ------
+        ParameterError
+            Lengths that differ.
+        """
         x = np.asarray(positions, dtype=np.float64).ravel()
         y = np.asarray(values, dtype=np.float64).ravel()
         if x.size != y.size:
@@ -182,6 +200,21 @@ class StreamingSystematic:
         """Current kNN systematic error and random sigma at the query positions.
 
         ``None`` queries every occupied bin centre.
+
+        Parameters
+        ----------
+        query_positions : array_like, shape (n,), optional
+            Positions [m].
+
+        Returns
+        -------
+        StreamingProfile
+            Systematic error and random sigma at the queries, the values' unit.
+
+        Raises
+        ------
+        InsufficientDataError
+            No samples added yet.
         """
         occupied = self.weight > 1e-12
         if not occupied.any():
