@@ -173,7 +173,9 @@ def progress_line(wall_s: float, references: Sequence[tuple], models: Sequence[t
 class DemoUser(Node):
     """The scripted user of the main job: what it heard, and the one decision it makes.
 
-    Attributes (in the order things came)
+    Each list holds what came in the order it came.
+
+    Attributes
     ----------
     checks : list of (float, ModelCheck)
         Data time [s] and each check of the monitor.
