@@ -64,7 +64,27 @@ ALUMINIUM = Material(conductivity=167.0, specific_heat=896.0, density=2.70e3,
 
 @dataclass
 class ThermalFEModel:
-    """Assembled C, K of one model; node coordinates (n, 2) [m] (y = 0 for rods)."""
+    """Assembled C, K of one model; node coordinates (n, 2) [m] (y = 0 for rods).
+
+    Parameters
+    ----------
+    capacity : ndarray or scipy.sparse matrix, shape (n, n)
+        Heat capacity matrix C [J/K].
+    conductivity : ndarray or scipy.sparse matrix, shape (n, n)
+        Conduction plus convection matrix K [W/K].
+    nodes : ndarray, shape (n, 2)
+        Node coordinates x, y [m].
+    material : Material
+        The material.
+    kind : {"rod", "beam"}
+        The element type.
+    length_m : float
+        Length [m].
+    height_m, width_m : float
+        Section height and width [m] (beam; 0 for a rod).
+    heat_nodes : ndarray of int, shape (h,)
+        Nodes the heat input is shared by.
+    """
 
     capacity: NDArray | scipy.sparse.spmatrix
     conductivity: NDArray | scipy.sparse.spmatrix
@@ -81,7 +101,18 @@ class ThermalFEModel:
         return self.nodes.shape[0]
 
     def heat_vector(self, power_w: float = 1.0) -> NDArray[np.float64]:
-        """Q for ``power_w`` watts shared by the heat-input nodes (the fixed end)."""
+        """Q for ``power_w`` watts shared by the heat-input nodes (the fixed end).
+
+        Parameters
+        ----------
+        power_w : float, optional
+            Heat input [W].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Q per node [W].
+        """
         q = np.zeros(self.n_nodes)
         q[self.heat_nodes] = power_w / self.heat_nodes.size
         return q
@@ -90,6 +121,23 @@ class ThermalFEModel:
         """Nearest node of each sensor position along the element [m].
 
         Raises :class:`InputDataError` for a sensor outside the body.
+
+        Parameters
+        ----------
+        positions_m : array_like, shape (s,)
+            Sensor positions x along the element [m].
+        y_m : float, optional
+            Height y of the sensors [m] (beam).
+
+        Returns
+        -------
+        ndarray of int, shape (s,)
+            Node indices.
+
+        Raises
+        ------
+        InputDataError
+            A sensor outside the body or not finite.
         """
         x = np.atleast_1d(np.asarray(positions_m, dtype=np.float64))
         outside = (x < -1e-9) | (x > self.length_m + 1e-9) | ~np.isfinite(x)
@@ -107,6 +155,16 @@ class ThermalFEModel:
         (Krulewich eq. 1); for the beam, the curvature kappa(x) =
         alpha int T (y - y_c) dA / I, theta = int kappa dx, delta = int kappa (L - x) dx.
         Positive delta bends towards +y (the hotter lower face pushes it up).
+
+        Parameters
+        ----------
+        temperatures : array_like, shape (..., n)
+            Node temperature rises [K].
+
+        Returns
+        -------
+        dict of str to ndarray, shape (...)
+            ``expansion`` [m], ``deflection`` [m] and ``slope`` [rad] (zeros for a rod).
         """
         t = np.asarray(temperatures, dtype=np.float64)
         alpha = self.material.expansion
@@ -150,6 +208,40 @@ def rod_model(length_m: float = ZHU_LENGTH_M, area_m2: float = ZHU_AREA_M2,
     a round bar (P = 2 sqrt(pi A)) unless ``perimeter_m`` is given. ``heat_at_m``
     moves the heat input along the rod (Krulewich's heated wire at 8.75 in);
     ``base_conductance_w_k`` ties x = 0 to a heat sink (his granite block).
+
+    Parameters
+    ----------
+    length_m : float, optional
+        Rod length L [m].
+    area_m2 : float, optional
+        Cross-section A [m^2].
+    n_elements : int, optional
+        Linear elements along the rod.
+    convection_w_m2k : float, optional
+        Lateral convection coefficient h [W/m^2 K].
+    material : Material, optional
+        The material.
+    perimeter_m : float, optional
+        Section perimeter P [m] (default: a round bar's).
+    heat_at_m : float, optional
+        Where the heat enters [m], within [0, L].
+    base_conductance_w_k : float, optional
+        Conductance from x = 0 to a heat sink [W/K].
+    end_convection_w_m2k : float, optional
+        Convection on the free end face [W/m^2 K] (default: ``convection_w_m2k``).
+    sparse : bool, optional
+        Keep C and K as sparse matrices.
+
+    Returns
+    -------
+    ThermalFEModel
+        ``kind="rod"``, n_elements + 1 nodes.
+
+    Raises
+    ------
+    ParameterError
+        A length or area not positive, no element, a negative convection, or the
+        heat input outside the rod.
     """
     _check_positive(length_m=length_m, area_m2=area_m2)
     if int(n_elements) < 1:
@@ -202,6 +294,31 @@ def beam_model(length_m: float = ZHU_LENGTH_M, area_m2: float = ZHU_AREA_M2,
     Bilinear quadrilaterals, ``n_elements`` along x and ``n_layers`` through the
     height, per unit depth scaled by the width; convection h_up on y = H, h_low on
     y = 0 (Zhu: 20 and 100 W/m^2 K) and on the free end face.
+
+    Parameters
+    ----------
+    length_m : float, optional
+        Beam length L [m].
+    area_m2 : float, optional
+        Square cross-section A [m^2].
+    n_elements, n_layers : int, optional
+        Elements along x and through the height.
+    upper_convection_w_m2k, lower_convection_w_m2k, end_convection_w_m2k : float, optional
+        Convection on y = H, y = 0 and the free end [W/m^2 K].
+    material : Material, optional
+        The material.
+    sparse : bool, optional
+        Keep C and K as sparse matrices.
+
+    Returns
+    -------
+    ThermalFEModel
+        ``kind="beam"``, (n_elements + 1) (n_layers + 1) nodes, y-major.
+
+    Raises
+    ------
+    ParameterError
+        A length or area not positive, or no element.
     """
     _check_positive(length_m=length_m, area_m2=area_m2)
     if int(n_elements) < 1 or int(n_layers) < 1:
@@ -260,7 +377,15 @@ def beam_model(length_m: float = ZHU_LENGTH_M, area_m2: float = ZHU_AREA_M2,
 
 @dataclass
 class ThermalModes:
-    """Eigen-solution of Zhu eq. 3.2: lambda (m,) [1/s], tau (m,) [s], shapes Phi (n, m)."""
+    """Eigen-solution of Zhu eq. 3.2: lambda (m,) [1/s], tau (m,) [s], shapes Phi (n, m).
+
+    Parameters
+    ----------
+    eigenvalues : ndarray, shape (m,)
+        lambda [1/s], ascending.
+    shapes : ndarray, shape (n, m)
+        Mode shapes Phi, normalised Phi^T C Phi = I (Zhu eq. 3.6).
+    """
 
     eigenvalues: NDArray[np.float64]
     shapes: NDArray[np.float64]
@@ -270,15 +395,50 @@ class ThermalModes:
         return 1.0 / self.eigenvalues  # Zhu eq. 3.3
 
     def modal_load(self, heat: ArrayLike) -> NDArray[np.float64]:
-        """xi = Phi^T Q (Zhu eq. 3.8); ``heat`` (..., n) -> (..., m)."""
+        """xi = Phi^T Q (Zhu eq. 3.8); ``heat`` (..., n) -> (..., m).
+
+        Parameters
+        ----------
+        heat : array_like, shape (..., n)
+            Heat input per node Q [W].
+
+        Returns
+        -------
+        ndarray, shape (..., m)
+            Modal loads xi (xi tau is a modal temperature amplitude).
+        """
         return np.asarray(heat, dtype=np.float64) @ self.shapes
 
     def weights(self, heat: ArrayLike) -> NDArray[np.float64]:
-        """w_i = |xi_i tau_i| for a step heat input (Zhu eq. 3.11)."""
+        """w_i = |xi_i tau_i| for a step heat input (Zhu eq. 3.11).
+
+        Parameters
+        ----------
+        heat : array_like, shape (..., n)
+            Heat input per node Q [W].
+
+        Returns
+        -------
+        ndarray, shape (..., m)
+            Mode weights.
+        """
         return np.abs(self.modal_load(heat) * self.time_constants_s)
 
     def dominant(self, heat: ArrayLike, share: float = 0.9) -> NDArray[np.int64]:
-        """Indices of the fewest modes holding >= ``share`` of the total weight (3.2.2)."""
+        """Indices of the fewest modes holding >= ``share`` of the total weight (3.2.2).
+
+        Parameters
+        ----------
+        heat : array_like, shape (n,)
+            Heat input per node Q [W].
+        share : float, optional
+            Fraction of the total weight (dimensionless).
+
+        Returns
+        -------
+        ndarray of int
+            Mode indices, ascending.
+        """
         w = self.weights(heat)
         order = np.argsort(w)[::-1]
         cumulative = np.cumsum(w[order]) / np.sum(w)
@@ -287,7 +447,22 @@ class ThermalModes:
 
     def step_response(self, heat: ArrayLike, times_s: ArrayLike,
                       modes: ArrayLike | None = None) -> NDArray[np.float64]:
-        """T(t) (len(t), n) for a constant ``heat`` from t = 0 (Zhu eqs. 3.4, 3.10)."""
+        """T(t) (len(t), n) for a constant ``heat`` from t = 0 (Zhu eqs. 3.4, 3.10).
+
+        Parameters
+        ----------
+        heat : array_like, shape (n,)
+            Constant heat input per node Q [W].
+        times_s : array_like, shape (T,)
+            Times [s].
+        modes : array_like of int, optional
+            Mode indices kept (default: all).
+
+        Returns
+        -------
+        ndarray, shape (T, n)
+            Node temperature rises [K].
+        """
         t = np.asarray(times_s, dtype=np.float64)[:, None]
         selected = np.arange(self.eigenvalues.size) if modes is None else np.asarray(modes)
         xi = self.modal_load(heat)[selected]
@@ -300,6 +475,20 @@ class ThermalModes:
         """T at the end of each step for piecewise-constant Q (steps, n) - exact per mode.
 
         theta_i(t + dt) = theta_i e^{-dt/tau_i} + xi_i tau_i (1 - e^{-dt/tau_i}) (Zhu eq. 3.9).
+
+        Parameters
+        ----------
+        heat_history : array_like, shape (steps, n)
+            Heat input per node during each step [W].
+        dt_s : float
+            Step length [s].
+        modes : array_like of int, optional
+            Mode indices kept (default: all).
+
+        Returns
+        -------
+        ndarray, shape (steps, n)
+            Node temperature rises [K], from zero at t = 0.
         """
         q = np.atleast_2d(np.asarray(heat_history, dtype=np.float64))
         selected = np.arange(self.eigenvalues.size) if modes is None else np.asarray(modes)
@@ -319,6 +508,23 @@ def thermal_modes(model: ThermalFEModel, n_modes: int | None = None) -> ThermalM
 
     ``n_modes`` None: all (dense). With sparse matrices or ``n_modes`` given for a
     model above 400 nodes, ARPACK ``eigsh`` (sigma = 0) finds the slowest modes.
+
+    Parameters
+    ----------
+    model : ThermalFEModel
+        The assembled model.
+    n_modes : int, optional
+        Slowest modes wanted (default: all).
+
+    Returns
+    -------
+    ThermalModes
+        Eigenvalues [1/s] and C-normalised shapes, each shape's largest entry positive.
+
+    Raises
+    ------
+    InputDataError
+        A non-positive eigenvalue (no heat loss, or a singular model).
     """
     capacity, conductivity = model.capacity, model.conductivity
     n = model.n_nodes
@@ -351,6 +557,22 @@ def integrate_directly(model: ThermalFEModel, heat_history: ArrayLike, dt_s: flo
     """Zhu eq. 3.1 by Crank-Nicolson time stepping (independent of the modal solution).
 
     Returns T at the end of each of the ``steps`` (steps, n); Q piecewise constant.
+
+    Parameters
+    ----------
+    model : ThermalFEModel
+        The assembled model.
+    heat_history : array_like, shape (steps, n)
+        Heat input per node during each step [W].
+    dt_s : float
+        Step length [s].
+    substeps : int, optional
+        Crank-Nicolson steps per step.
+
+    Returns
+    -------
+    ndarray, shape (steps, n)
+        Node temperature rises [K], from zero at t = 0.
     """
     q = np.atleast_2d(np.asarray(heat_history, dtype=np.float64))
     capacity = model.capacity.toarray() if scipy.sparse.issparse(model.capacity) else model.capacity
@@ -383,6 +605,24 @@ def place_sensors(modes: ThermalModes, candidates: ArrayLike, mode_indices: Arra
     adds a sensor per mode unless ``max_sensors`` stops it.
 
     Returns indices into ``candidates``.
+
+    Parameters
+    ----------
+    modes : ThermalModes
+        The modes.
+    candidates : array_like of int, shape (c,)
+        Node indices a sensor may sit at.
+    mode_indices : array_like of int
+        Dominant modes, most important first.
+    near_extreme : float, optional
+        Eligible fraction of the best |phi| (dimensionless).
+    max_sensors : int, optional
+        Most sensors placed.
+
+    Returns
+    -------
+    list of int
+        Indices into ``candidates``.
     """
     cand = np.asarray(candidates, dtype=np.int64)
     modes_so_far: list[int] = []
