@@ -46,6 +46,23 @@ class LinearThermalModel:
     ridge: float = 0.0
 
     def predict(self, design: ArrayLike) -> NDArray[np.float64]:
+        """E = X beta + intercept at new samples.
+
+        Parameters
+        ----------
+        design : array_like, shape (n, p)
+            Regressors, each in the unit it was fitted in (e.g. [degC] or [K]).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Predicted E, the target's unit (e.g. [m]).
+
+        Raises
+        ------
+        InputDataError
+            A design not (n, p).
+        """
         x = np.asarray(design, dtype=np.float64)
         if x.ndim != 2 or x.shape[1] != self.coefficients.size:
             raise InputDataError(f"design must be (n, {self.coefficients.size}), got {x.shape}")
@@ -69,11 +86,35 @@ def fit_linear(design: ArrayLike, target: ArrayLike, names: list[str] | None = N
                intercept: bool = True, ridge: float = 0.0) -> LinearThermalModel:
     """Least squares (Zhu eq. 3.15) done soundly: centre, scale, QR, optional ridge.
 
+    Parameters
+    ----------
+    design : array_like, shape (n, p)
+        Regressors (unit-agnostic, e.g. temperatures [degC]).
+    target : array_like, shape (n,)
+        E (unit-agnostic, e.g. [m]).
+    names : list of str, optional
+        Regressor names (default ``x0, x1, ...``).
+    intercept : bool, optional
+        Fit an intercept.
+    ridge : float, optional
+        Ridge strength on the scaled regressors (dimensionless, >= 0).
+
+    Returns
+    -------
+    LinearThermalModel
+        beta in the target's unit per regressor unit, the intercept, the condition
+        number and the training RMSE.
+
     Raises
     ------
-    InsufficientDataError  fewer samples than parameters
-    InputDataError         NaN/inf values, a constant regressor
-    CalibrationError       rank-deficient design without ridge
+    InsufficientDataError
+        Fewer samples than parameters.
+    InputDataError
+        NaN/inf values, a constant regressor, or shapes that do not match.
+    ParameterError
+        A negative or non-finite ridge.
+    CalibrationError
+        A rank-deficient design without ridge.
     """
     x = np.asarray(design, dtype=np.float64)
     y = np.asarray(target, dtype=np.float64)
@@ -113,7 +154,22 @@ def fit_linear(design: ArrayLike, target: ArrayLike, names: list[str] | None = N
 
 def position_independent_design(temperatures: ArrayLike, names: list[str] | None = None
                                 ) -> tuple[NDArray[np.float64], list[str]]:
-    """Columns T_i(t) of Zhu eq. 3.12; ``temperatures`` (n, N) [K or degC]."""
+    """Columns T_i(t) of Zhu eq. 3.12; ``temperatures`` (n, N) [K or degC].
+
+    Parameters
+    ----------
+    temperatures : array_like, shape (n, N) or (n,)
+        Sensor temperatures [K or degC].
+    names : list of str, optional
+        Sensor names (default ``T1 ... TN``).
+
+    Returns
+    -------
+    design : ndarray, shape (n, N)
+        The temperatures as columns.
+    names : list of str
+        Column names.
+    """
     t = np.asarray(temperatures, dtype=np.float64)
     if t.ndim == 1:
         t = t[:, None]
@@ -123,7 +179,33 @@ def position_independent_design(temperatures: ArrayLike, names: list[str] | None
 def position_dependent_design(temperatures: ArrayLike, position: ArrayLike, degree: int = 1,
                               names: list[str] | None = None
                               ) -> tuple[NDArray[np.float64], list[str]]:
-    """Columns P(x)^j T_i(t), j = 0 ... degree, of Zhu eq. 3.13 (P(x) = x)."""
+    """Columns P(x)^j T_i(t), j = 0 ... degree, of Zhu eq. 3.13 (P(x) = x).
+
+    Parameters
+    ----------
+    temperatures : array_like, shape (n, N) or (n,)
+        Sensor temperatures [K or degC].
+    position : array_like, shape (n,)
+        Axis position x [m].
+    degree : int, optional
+        Highest power j (>= 0).
+    names : list of str, optional
+        Sensor names.
+
+    Returns
+    -------
+    design : ndarray, shape (n, N (degree + 1))
+        Columns [temperature unit x m^j].
+    names : list of str
+        Column names (``T1*x^2`` ...).
+
+    Raises
+    ------
+    InputDataError
+        A position of the wrong length.
+    ParameterError
+        A negative degree.
+    """
     t, base = position_independent_design(temperatures, names)
     x = np.asarray(position, dtype=np.float64)
     if x.shape != (t.shape[0],):
@@ -147,6 +229,29 @@ def lag_features(time_s: ArrayLike, heat_input: ArrayLike, time_constants_s: Arr
     input switched on at t = 0); ``"steady"`` at h(0) = u(0), the state the
     record started in - the right start for a temperature, whose lag from 0
     would carry a start-up ramp of the whole temperature.
+
+    Parameters
+    ----------
+    time_s : array_like, shape (n,)
+        Uniformly spaced times [s].
+    heat_input : array_like, shape (n,)
+        Input u (unit-agnostic: a power [W], a temperature [K] ...).
+    time_constants_s : array_like, shape (m,)
+        Time constants tau [s] (> 0).
+    initial : {"rest", "steady"}, optional
+        The start state.
+
+    Returns
+    -------
+    ndarray, shape (n, m)
+        h_tau, the input's unit.
+
+    Raises
+    ------
+    ParameterError
+        An unknown ``initial`` or a time constant not positive.
+    InputDataError
+        Mismatched, too short, non-uniform or non-finite inputs.
     """
     if initial not in ("rest", "steady"):
         raise ParameterError(f"initial must be 'rest' or 'steady', got {initial!r}")
@@ -190,6 +295,28 @@ def fit_time_constants(time_s: ArrayLike, temperature: ArrayLike, n_modes: int =
     """Fit Zhu eq. 3.17 to a step-response temperature record (log-tau parametrisation).
 
     Sorted slowest first, like Zhu's tau_1 = 363.6, tau_2 = 61.7, tau_3 = 27.0 min.
+
+    Parameters
+    ----------
+    time_s : array_like, shape (n,)
+        Times from the step [s].
+    temperature : array_like, shape (n,)
+        Temperature record [K or degC].
+    n_modes : int, optional
+        Number of exponentials.
+    initial_s : array_like, shape (n_modes,), optional
+        Starting time constants [s].
+
+    Returns
+    -------
+    TimeConstantFit
+        Amplitudes [K], time constants [s] slowest first, offset T0 and RMSE
+        (the temperature's unit).
+
+    Raises
+    ------
+    InputDataError
+        Mismatched or non-finite inputs, or too few samples.
     """
     t = np.asarray(time_s, dtype=np.float64)
     y = np.asarray(temperature, dtype=np.float64)
