@@ -56,7 +56,23 @@ class ThermalLink:
                                 for s in self.sensors])
 
     def deformation(self, temperatures: dict[str, ArrayLike]) -> dict[str, NDArray[np.float64]]:
-        """epsilon [m], delta [m], theta [rad] per sample (Zhu Table 4.2)."""
+        """epsilon [m], delta [m], theta [rad] per sample (Zhu Table 4.2).
+
+        Parameters
+        ----------
+        temperatures : dict of str to array_like, shape (N,)
+            Sensor -> temperature, in the unit the models were fitted in ([degC] or [K]).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (N,)
+            ``expansion`` [m], ``deflection`` [m], ``slope`` [rad] (zero where no model).
+
+        Raises
+        ------
+        InputDataError
+            A sensor of the link without temperatures.
+        """
         x = self._columns(temperatures)
         zero = np.zeros(x.shape[0])
         return {key: (model.predict(x) if model is not None else zero)
@@ -64,7 +80,23 @@ class ThermalLink:
                                    ("slope", self.slope))}
 
     def twist(self, temperatures: dict[str, ArrayLike]) -> NDArray[np.float64]:
-        """(N, 6) twist (dx, dy, dz, ex, ey, ez) for ``ErrorOverrides.thermal``."""
+        """(N, 6) twist (dx, dy, dz, ex, ey, ez) for ``ErrorOverrides.thermal``.
+
+        Parameters
+        ----------
+        temperatures : dict of str to array_like, shape (N,)
+            Sensor -> temperature, in the unit the models were fitted in ([degC] or [K]).
+
+        Returns
+        -------
+        ndarray, shape (N, 6)
+            Translations [m] and rotations [rad] of the link's end.
+
+        Raises
+        ------
+        InputDataError
+            A sensor of the link without temperatures.
+        """
         parts = self.deformation(temperatures)
         out = np.zeros((parts["expansion"].size, 6))
         order = [AXES.index(a) for a in (self.length_axis, self.deflection_axis, self.normal_axis)]
@@ -79,7 +111,37 @@ def fit_link(name: str, sensors: list[str], temperatures: dict[str, ArrayLike],
              expansion_m: ArrayLike | None = None, deflection_m: ArrayLike | None = None,
              slope_rad: ArrayLike | None = None, *, length_axis: str = "z",
              deflection_axis: str = "y", ridge: float = 0.0) -> ThermalLink:
-    """Fit a link's epsilon / delta / theta models (Zhu eq. 3.12 with intercept) from records."""
+    """Fit a link's epsilon / delta / theta models (Zhu eq. 3.12 with intercept) from records.
+
+    Parameters
+    ----------
+    name : str
+        Link name.
+    sensors : list of str
+        Sensors used as regressors.
+    temperatures : dict of str to array_like, shape (N,)
+        Sensor -> temperatures [degC] (or rises [K]).
+    expansion_m, deflection_m : array_like, shape (N,), optional
+        Measured expansion and deflection of the link's end [m].
+    slope_rad : array_like, shape (N,), optional
+        Measured slope [rad].
+    length_axis, deflection_axis : {"x", "y", "z"}
+        The link's length and deflection axes (different).
+    ridge : float, optional
+        Ridge strength (see :func:`fit_linear`).
+
+    Returns
+    -------
+    ThermalLink
+        With a model for each quantity given.
+
+    Raises
+    ------
+    ParameterError
+        Axes not two different of x, y, z.
+    InputDataError, InsufficientDataError, CalibrationError
+        As :func:`fit_linear`.
+    """
     link = ThermalLink(name, list(sensors), length_axis, deflection_axis)
     x = link._columns(temperatures)
     for key, target in (("expansion", expansion_m), ("deflection", deflection_m),
