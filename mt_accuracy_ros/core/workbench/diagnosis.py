@@ -40,6 +40,7 @@ from .localisation import Localisation, LocalisationMemo, localise
 from .distributions import chi2_sf
 from .selection import Selector, Term
 from .selection.folds import Folds
+from .selection.significance import Evidence, PassRule
 from .separability import alternatives, sentence
 from ..effects.variables import Variables, run_starts_of
 
@@ -825,26 +826,13 @@ def diagnose_yaw(included: dict[str, float], obs: YawObservations, *,
 
 def selection_refusal(candidate: Candidate, min_reduction: float, alpha: float = 0.05,
                       min_share: float = 0.25, block_test: bool = True) -> str:
-    """Which of the selection's tests (:mod:`.selection`) refuses ``candidate`` on its own
-    against the current model, with its numbers; "" when it passes them all.
-    ``block_test=False`` leaves the held-out block test out (a log's caller judges on
-    whole later runs instead)."""
-    if candidate.refusal:
-        return f"physics refuses its fit ({candidate.refusal})"
-    if block_test and not candidate.adjusted_p < alpha:
-        return (f"the held-out block test: p = {candidate.adjusted_p:.3g} after adjusting for "
-                f"every candidate tried (max-T), above {alpha:g}")
-    if candidate.error_reduction < 0:
-        return f"it raises the CV error by {-100 * candidate.error_reduction:.1f} %"
-    if candidate.error_reduction < min_reduction:
-        return (f"it cuts the CV error by {100 * candidate.error_reduction:.1f} %, below "
-                f"{100 * min_reduction:.0f} %")
-    if candidate.share_of_excess < min_share:
-        return (f"it removes {100 * candidate.share_of_excess:.0f} % of the error above the "
-                f"noise, below {100 * min_share:.0f} %")
+    """Which of the selection's tests refuses ``candidate`` on its own against the current
+    model, with its numbers; "" when it passes them all (the one acceptance rule,
+    :class:`.selection.significance.PassRule`). ``block_test=False`` leaves the held-out
+    block test out (a log's caller judges on whole later runs instead)."""
     values = np.array(list(candidate.parameters.values()), dtype=float)
     errors = np.array([candidate.parameter_uncertainties.get(k, np.nan)
                        for k in candidate.parameters], dtype=float)
-    if not np.any(np.abs(values) > 3.0 * errors):
-        return "no parameter is above 3 standard errors"
-    return ""
+    evidence = Evidence(candidate.refusal, candidate.adjusted_p, candidate.error_reduction,
+                        candidate.share_of_excess, values, errors)
+    return PassRule(alpha, min_reduction, min_share, block_test).refusal(evidence)

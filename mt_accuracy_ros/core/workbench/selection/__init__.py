@@ -17,10 +17,11 @@ from .folds import _train, time_blocks
 from .linalg import (NORMAL_RCOND, normal_inverse, penalise, penalised_fit, products_fit,
                      ridge_standard_errors, solve_normal, solve_normal_grouped)
 from .selector import Scored, Selector, Step
-from .significance import (MAX_T_DRAWS, block_gains, coefficient_p_value, gain_p_value,
-                           max_t_adjusted)
+from .significance import (MAX_T_DRAWS, Evidence, PassRule, block_gains, coefficient_p_value,
+                           gain_p_value, max_t_adjusted)
 
-__all__ = ["COMPONENT_NAMES", "DESIGN_CACHE_BYTES", "MAX_T_DRAWS", "NORMAL_RCOND",
+__all__ = ["COMPONENT_NAMES", "DESIGN_CACHE_BYTES", "Evidence", "MAX_T_DRAWS", "NORMAL_RCOND",
+           "PassRule",
            "SENSITIVITY_CACHE_BYTES", "ReadingDesigns", "Scored", "Selector", "Step", "Term",
            "_BaseStatistics", "_ReadingCaches", "_SERIALS", "_largest_magnitude_per_row",
            "_reading_caches", "_train", "block_gains", "coefficient_p_value",

@@ -41,7 +41,7 @@ in ``bench/workbench_catalogue.py`` (docs/results.md).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,7 +55,8 @@ from .designs import ReadingDesigns, Term, _BaseStatistics, penalty_of
 from .folds import time_blocks
 from .linalg import (penalise, penalised_fit, products_fit, solve_normal,
                      solve_normal_grouped)
-from .significance import coefficient_p_value, gain_p_value, max_t_adjusted
+from .significance import (Evidence, PassRule, coefficient_p_value, gain_p_value,
+                           max_t_adjusted)
 
 
 @dataclass
@@ -83,6 +84,14 @@ class Scored:
     #: Its full-data coefficients' p-value, adjusted for every candidate setting tried
     #: (set for the step's first candidate only; 1 otherwise).
     coefficient_p: float = 1.0
+
+    def evidence(self, on_coefficients: bool = False) -> Evidence:
+        """What :class:`.significance.PassRule` reads of this candidate; with
+        ``on_coefficients`` it may pass on its full-data coefficients (:attr:`coefficient_p`)
+        instead of the held-out block test."""
+        return Evidence(self.refusal, self.adjusted_p, self.reduction, self.share_of_excess,
+                        self.coefficients, self.standard_errors,
+                        self.coefficient_p if on_coefficients else 1.0)
 
 
 @dataclass
@@ -143,6 +152,8 @@ class Selector(ReadingDesigns):
                                                           self.n_test_blocks)
         self.noise_sigma = float(noise_sigma)
         self.alpha, self.min_reduction, self.min_share = alpha, min_reduction, min_share
+        #: The one acceptance rule (:class:`.significance.PassRule`).
+        self.rule = PassRule(alpha, min_reduction, min_share)
         self.tie = tie
         #: How many of a step's best candidates keep their per-reading errors.
         self.keep_errors = 3
@@ -507,7 +518,6 @@ class Selector(ReadingDesigns):
             best.coefficients, best.standard_errors = coefficients[-1], standard[-1]
             best.parameter_names = best.term.family.parameter_names(best.term.variant, setting)
             best.refusal = self.physics_refusal(best.term, setting, best.coefficients)
-            strong = bool(np.any(np.abs(coefficients[-1]) > 3.0 * standard[-1]))
             # A weak effect spread evenly over the readings moves each block's error
             # too little for the blocks' t-test; the candidate the held-out data rank
             # first may then pass on its full-data coefficients instead, Bonferroni-
@@ -519,13 +529,8 @@ class Selector(ReadingDesigns):
             settings_tried = sum(max(1, len(t.settings)) for t in terms)
             best.coefficient_p = min(1.0, coefficient_p_value(
                 coefficients[-1], standard[-1], self.y.size) * settings_tried)
-            held_out = best.adjusted_p < self.alpha or \
-                (not self.forward and best is plausible_best and
-                 best.coefficient_p < self.alpha)
-            best.significant = bool(held_out and
-                                    best.reduction >= self.min_reduction and
-                                    best.share_of_excess >= self.min_share and strong and
-                                    not best.refusal)
+            best.significant = self.rule.passes(
+                best.evidence(on_coefficients=not self.forward and best is plausible_best))
             if best.significant:
                 added = best
         # Per-reading errors are kept only where a pair look-ahead may need them (N floats
@@ -605,6 +610,7 @@ class Selector(ReadingDesigns):
         the best second term after it; the pair must pass the block test against the
         current model (Bonferroni over every pair tried) and the second its own test."""
         stats, base_sq, count, base_mse, excess = self._baseline()
+        pair_rule = replace(self.rule, min_share=2 * self.rule.min_share)
         options = []
         for first in step.ranking[:beam]:
             setting = self.choose_setting_all(first.term, stats.base)
@@ -624,10 +630,11 @@ class Selector(ReadingDesigns):
             coefficients, standard, _ = self.fit_full(self.selected + [(first.term, setting),
                                                                        (second.term,
                                                                         second.setting)])
-            strong = bool(np.any(np.abs(coefficients[-2]) > 3.0 * standard[-2])) and \
-                not self.physics_refusal(first.term, setting, coefficients[-2])
-            if adjusted < self.alpha and share >= 2 * self.min_share and strong and \
-                    1.0 - np.sqrt(mse / base_mse) >= self.min_reduction:
+            # The first term of a pair passes the one rule, with twice the share.
+            evidence = Evidence(self.physics_refusal(first.term, setting, coefficients[-2]),
+                                adjusted, 1.0 - np.sqrt(mse / base_mse), share,
+                                coefficients[-2], standard[-2])
+            if pair_rule.passes(evidence):
                 first.setting, first.adjusted_p = setting, adjusted
                 first.parameter_names = first.term.family.parameter_names(first.term.variant,
                                                                           setting)
