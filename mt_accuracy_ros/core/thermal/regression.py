@@ -316,7 +316,9 @@ def fit_time_constants(time_s: ArrayLike, temperature: ArrayLike, n_modes: int =
     Raises
     ------
     InputDataError
-        Mismatched or non-finite inputs, or too few samples.
+        Mismatched or non-finite inputs.
+    InsufficientDataError
+        Fewer than 2 n_modes + 2 samples.
     """
     t = np.asarray(time_s, dtype=np.float64)
     y = np.asarray(temperature, dtype=np.float64)
