@@ -66,6 +66,22 @@ def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
     ------
     InputDataError
         Times that are not increasing, or non-finite values.
+
+    Parameters
+    ----------
+    time_s : array_like, shape (N,)
+        Sample times [s], not decreasing.
+    signal : array_like, shape (N,)
+        The input u at those times, any unit (the output has the same).
+    tau_s : float
+        Time constant [s], finite and >= 0.
+    initial : float, optional
+        y at the first sample, in the signal's unit (default u_0).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The lagged signal y, in the signal's unit.
     """
     t = np.asarray(time_s, dtype=np.float64)
     u = np.asarray(signal, dtype=np.float64)
@@ -108,7 +124,18 @@ def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
 
 
 def run_starts_of(run_of_row: ArrayLike) -> NDArray[np.intp]:
-    """(R,) first row of each run from a run label per row (N,) whose runs are contiguous."""
+    """(R,) first row of each run from a run label per row (N,) whose runs are contiguous.
+
+    Parameters
+    ----------
+    run_of_row : array_like, shape (N,)
+        A run label per row, equal within a run (any comparable values).
+
+    Returns
+    -------
+    ndarray of int, shape (R,)
+        Row index of each run's first row (starts with 0; empty for no rows).
+    """
     labels = np.asarray(run_of_row)
     if labels.size == 0:
         return np.zeros(0, dtype=np.intp)
@@ -116,7 +143,22 @@ def run_starts_of(run_of_row: ArrayLike) -> NDArray[np.intp]:
 
 
 def subset_run_starts(run_starts: NDArray[np.intp], n: int, rows) -> NDArray[np.intp]:
-    """The run starts of ``rows`` (an index or mask into n rows, in time order)."""
+    """The run starts of ``rows`` (an index or mask into n rows, in time order).
+
+    Parameters
+    ----------
+    run_starts : ndarray of int, shape (R,)
+        First row of each run of the n rows.
+    n : int
+        Number of rows.
+    rows : ndarray of int or bool
+        The rows kept: indices in time order, or a mask of shape (n,).
+
+    Returns
+    -------
+    ndarray of int, shape (R',)
+        First row of each run among the kept rows, as indices into them.
+    """
     label = np.zeros(n, dtype=np.intp)
     label[np.asarray(run_starts)[1:]] = 1
     return run_starts_of(np.cumsum(label)[rows])
@@ -142,6 +184,34 @@ class Variables:
     lag_states : optional store that continues lags across calls (live nodes).
     run_starts : optional (R,) increasing row indices, the first row of each run
     (the first is 0): lags restart and ``t`` counts from each run's start.
+
+    Parameters
+    ----------
+    positions : dict of str to ndarray, shape (N,)
+        Axis letter -> command position [m] (rotary [rad]); a scalar is broadcast.
+    time_s : ndarray, shape (N,), optional
+        Reading times [s].
+    velocities : dict of str to ndarray, shape (N,), optional
+        Axis letter -> command velocity [m/s] (rotary [rad/s]).
+    accelerations : dict of str to ndarray, shape (N,), optional
+        Axis letter -> command acceleration [m/s^2] (rotary [rad/s^2]).
+    directions : dict of str to ndarray, shape (N,), optional
+        Axis letter -> direction of the last motion (+1 / -1, 0 unknown).
+    temperatures : dict of str to ndarray, shape (N,), optional
+        Sensor name -> temperature [degC].
+    reference_temperatures_c : dict of str to float, optional
+        Sensor name -> reference of its rise [degC] (default its first reading).
+    spindle_speed_rad_s : ndarray, shape (N,), optional
+        Spindle speed [rad/s].
+    lag_states : dict, optional
+        (key, tau [s]) -> :class:`LagState`, kept across calls (live nodes).
+    run_starts : ndarray of int, shape (R,), optional
+        First row of each run, increasing from 0.
+
+    Raises
+    ------
+    InputDataError
+        No positions, or run starts that are not increasing row indices from 0.
     """
 
     positions: dict[str, NDArray[np.float64]]
@@ -191,7 +261,23 @@ class Variables:
 
     # ------------------------------------------------------------ primitives
     def rise(self, sensor: str) -> NDArray[np.float64]:
-        """Temperature rise of ``sensor`` over its reference [K], shape (N,)."""
+        """Temperature rise of ``sensor`` over its reference [K], shape (N,).
+
+        Parameters
+        ----------
+        sensor : str
+            Sensor name.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Temperature minus the sensor's reference [K].
+
+        Raises
+        ------
+        InputDataError
+            No such sensor.
+        """
         if sensor not in self.temperatures:
             raise InputDataError(f"no temperature {sensor!r}; have "
                                  f"{', '.join(sorted(self.temperatures)) or 'none'}")
@@ -221,12 +307,45 @@ class Variables:
         return out
 
     def velocity(self, axis: str) -> NDArray[np.float64]:
+        """The command velocity of ``axis``, shape (N,) [m/s] (rotary [rad/s]).
+
+        Parameters
+        ----------
+        axis : str
+            Axis letter.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Velocity [m/s] (rotary [rad/s]).
+
+        Raises
+        ------
+        InputDataError
+            No velocity of that axis.
+        """
         if axis not in self.velocities:
             raise InputDataError(f"this effect needs the {axis} velocity")
         return self.velocities[axis]
 
     def acceleration(self, axis: str) -> NDArray[np.float64]:
-        """Given accelerations, else the time derivative of the velocity [m/s^2]."""
+        """Given accelerations, else the time derivative of the velocity [m/s^2].
+
+        Parameters
+        ----------
+        axis : str
+            Axis letter.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Acceleration [m/s^2] (rotary [rad/s^2]); zeros when the times do not increase.
+
+        Raises
+        ------
+        InputDataError
+            Neither accelerations nor velocities and times of that axis.
+        """
         if axis in self.accelerations:
             return self.accelerations[axis]
         v = self.velocity(axis)
@@ -236,7 +355,23 @@ class Variables:
             np.zeros(self.n)
 
     def direction(self, axis: str) -> NDArray[np.float64]:
-        """The last direction of motion where known, else sign(v)."""
+        """The last direction of motion where known, else sign(v).
+
+        Parameters
+        ----------
+        axis : str
+            Axis letter.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            +1 / -1, 0 where unknown (dimensionless).
+
+        Raises
+        ------
+        InputDataError
+            Neither directions nor velocities of that axis.
+        """
         if axis in self.directions:
             held = self.directions[axis]
             return np.where(held != 0, np.sign(held), np.sign(self.velocities.get(
@@ -255,7 +390,29 @@ class Variables:
 
         Without live states the result is a function of the readings alone: it is kept
         (read-only, up to :data:`LAG_MEMO_BYTES`) for the next design that asks for the
-        same signal and time constant - a selection asks again at every step."""
+        same signal and time constant - a selection asks again at every step.
+
+        Parameters
+        ----------
+        key : str
+            Name of the lagged signal (the key of its live state).
+        signal : ndarray, shape (N,)
+            The input, any unit (the output has the same).
+        tau_s : float
+            Time constant [s].
+        from_rest : bool, optional
+            Start from 0 (an operating input, a cold machine) instead of steady state.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            The lagged signal, in the signal's unit (read-only when kept).
+
+        Raises
+        ------
+        InputDataError
+            No reading times, or times that decrease.
+        """
         if self.lag_states is not None:
             return self._lag(key, signal, tau_s, from_rest)
         signal = np.ascontiguousarray(signal, dtype=np.float64)
@@ -310,7 +467,23 @@ class Variables:
         return list(dict.fromkeys(out))
 
     def get(self, name: str) -> NDArray[np.float64]:
-        """The variable ``name`` (N,); raises InputDataError naming what exists."""
+        """The variable ``name`` (N,); raises InputDataError naming what exists.
+
+        Parameters
+        ----------
+        name : str
+            A variable's name (see the module table), e.g. ``x``, ``v_x``, ``T_spindle``.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            The variable in its unit (module table).
+
+        Raises
+        ------
+        InputDataError
+            An unknown name, or one whose data is missing.
+        """
         try:
             if name == "t":
                 return self.relative_time()
@@ -331,6 +504,18 @@ class Variables:
         raise InputDataError(f"unknown variable {name!r}; available: {', '.join(self.names())}")
 
     def subset(self, rows) -> "Variables":
+        """The variables at some of the readings, runs kept.
+
+        Parameters
+        ----------
+        rows : ndarray of int or bool
+            The rows kept: indices in time order, or a mask of shape (N,).
+
+        Returns
+        -------
+        Variables
+            The same variables at those rows (references kept; live lag states not carried).
+        """
         pick = lambda d: {k: np.asarray(v)[rows] for k, v in d.items()}  # noqa: E731
         return Variables(pick(self.positions),
                          None if self.time_s is None else self.time_s[rows],
