@@ -38,6 +38,13 @@ __all__ = ["Context", "EffectFamily", "ENTRY_POINT_GROUP", "UserExpression", "al
 
 
 def builtin_families() -> list[EffectFamily]:
+    """Every family this package defines, newly made.
+
+    Returns
+    -------
+    list of EffectFamily
+        Geometric, set-up location, thermal, motion and log-only families.
+    """
     return geometric.families() + setup_location.families() + thermal.families() + \
         motion.families() + log_models.families()
 
@@ -47,7 +54,26 @@ _PLUGINS: list[EffectFamily] | None = None
 
 def families(user_effects: dict[str, dict] | None = None, *, plugins: bool = True
              ) -> list[EffectFamily]:
-    """Built-in families, installed plugins, and one family per declared user effect."""
+    """Built-in families, installed plugins, and one family per declared user effect.
+
+    Parameters
+    ----------
+    user_effects : dict of str to dict, optional
+        Effect name -> declaration (``expression``, ``parameters`` ...; see
+        :func:`user_declaration`) of the user effects declared in a model.
+    plugins : bool, optional
+        Include families installed under :data:`ENTRY_POINT_GROUP` (default True).
+
+    Returns
+    -------
+    list of EffectFamily
+        The families, built-in ones first.
+
+    Raises
+    ------
+    ParameterError
+        A plugin family named like a built-in one.
+    """
     global _PLUGINS
     out = builtin_families()
     if plugins:
@@ -65,6 +91,25 @@ def families(user_effects: dict[str, dict] | None = None, *, plugins: bool = Tru
 
 
 def family_named(name: str, *, user: tuple[str, dict] | None = None) -> EffectFamily:
+    """The family called ``name``, or the user expression ``user``.
+
+    Parameters
+    ----------
+    name : str
+        A family's :attr:`~EffectFamily.name`.
+    user : tuple of (str, dict), optional
+        (name, declaration) of a user effect: that family is made instead.
+
+    Returns
+    -------
+    EffectFamily
+        A new instance.
+
+    Raises
+    ------
+    ParameterError
+        No family of that name.
+    """
     if user is not None:
         return UserExpression(*user)
     for family in families():
@@ -75,12 +120,44 @@ def family_named(name: str, *, user: tuple[str, dict] | None = None) -> EffectFa
 
 
 def is_catalogue_entry(parameters) -> bool:
-    """A model effect entry that the catalogue evaluates (fitted family, or user expression)."""
+    """A model effect entry that the catalogue evaluates (fitted family, or user expression).
+
+    Parameters
+    ----------
+    parameters : object
+        A model's entry for one effect.
+
+    Returns
+    -------
+    bool
+        True for a dict with ``family`` or ``expression``.
+    """
     return isinstance(parameters, dict) and ("family" in parameters or "expression" in parameters)
 
 
 def catalogue_error(name: str, entry: dict, ctx: Context) -> NDArray[np.float64]:
-    """(N, 3) TCP error [m] of one fitted catalogue or user effect in a model."""
+    """(N, 3) TCP error [m] of one fitted catalogue or user effect in a model.
+
+    Parameters
+    ----------
+    name : str
+        The effect's name in the model.
+    entry : dict
+        Its entry: ``{family, variant, setting, coefficients}`` (SI, in the family's
+        parameter units), or a user declaration with ``expression`` and fitted ``values``.
+    ctx : Context
+        The machine and the variables at the N readings.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        TCP error [m], bed frame (zeros for a user effect not fitted yet).
+
+    Raises
+    ------
+    ParameterError
+        An unknown family.
+    """
     if "expression" in entry:
         if "values" not in entry:
             return np.zeros((ctx.n, 3))  # declared, not fitted yet
@@ -103,7 +180,27 @@ def _fitted(entry: dict) -> tuple[EffectFamily, str, dict, NDArray[np.float64]]:
 def catalogue_orientation(name: str, entry: dict, ctx: Context) -> NDArray[np.float64]:
     """(N, 3) tool-orientation error [rad] of one fitted catalogue effect in a model: what
     a tilted rotary axis or a pitching guideway turns (zero for a translation and for
-    user expressions, which declare a TCP error)."""
+    user expressions, which declare a TCP error).
+
+    Parameters
+    ----------
+    name : str
+        The effect's name in the model.
+    entry : dict
+        Its entry ``{family, variant, setting, coefficients}`` (or a user declaration).
+    ctx : Context
+        The machine and the variables at the N readings.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        Tool-orientation error [rad], bed frame.
+
+    Raises
+    ------
+    ParameterError
+        An unknown family.
+    """
     if "family" not in entry:
         return np.zeros((ctx.n, 3))
     family, variant, setting, coefficients = _fitted(entry)
