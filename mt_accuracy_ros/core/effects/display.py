@@ -39,7 +39,22 @@ _KIND_OF_FAMILY = {**{f: "length" for f in _LENGTH_FAMILIES},
 
 def parameter_unit(family: str, variant: str, name: str) -> tuple[str, float]:
     """(unit, factor) a parameter ``name`` of ``family:variant`` is read in; ("", 1.0) for
-    one without a physical reading (a user expression's own constants stay as declared)."""
+    one without a physical reading (a user expression's own constants stay as declared).
+
+    Parameters
+    ----------
+    family : str
+        The family's name, e.g. ``structural_thermal_drift``.
+    variant : str
+        The variant, e.g. ``EXB`` for a rotary error.
+    name : str
+        The parameter's name.
+
+    Returns
+    -------
+    tuple of (str, float)
+        The unit read in (e.g. ``"µm/K"``) and the factor from the SI value to it.
+    """
     if family == "rotary_error":        # E<component><axis>: a translation or a rotation
         kind = "length" if variant[1:2] in ("X", "Y", "Z") else "angle"
     elif family == "rotary_location":   # each parameter its own ISO location error
@@ -53,7 +68,22 @@ def parameter_unit(family: str, variant: str, name: str) -> tuple[str, float]:
 
 def format_measured(value: float, uncertainty: float | None, unit: str = "") -> str:
     """``1.47 ± 0.42 µm/K``: U to two significant digits, the value to its decimal place
-    (no uncertainty: four significant digits)."""
+    (no uncertainty: four significant digits).
+
+    Parameters
+    ----------
+    value : float
+        The value, in ``unit``.
+    uncertainty : float or None
+        Expanded uncertainty U (k = 2), in ``unit``; None or <= 0 for none.
+    unit : str, optional
+        Unit written after the numbers.
+
+    Returns
+    -------
+    str
+        ``value ± U unit``.
+    """
     suffix = f" {unit}" if unit else ""
     if not math.isfinite(value):
         return f"{value}{suffix}"
@@ -73,7 +103,25 @@ def format_measured(value: float, uncertainty: float | None, unit: str = "") -> 
 def display_parameters(family: str, variant: str, parameters: dict[str, float],
                        standard_uncertainties: dict[str, float] | None = None
                        ) -> dict[str, str]:
-    """Every parameter as ``value ± U (k = 2)`` in its physical unit."""
+    """Every parameter as ``value ± U (k = 2)`` in its physical unit.
+
+    Parameters
+    ----------
+    family : str
+        The family's name.
+    variant : str
+        The variant.
+    parameters : dict of str to float
+        Parameter name -> fitted value in SI (the family's parameter units).
+    standard_uncertainties : dict of str to float, optional
+        Parameter name -> standard uncertainty u (k = 1), SI; U = 2 u is shown.
+
+    Returns
+    -------
+    dict of str to str
+        Parameter name -> text in its reading unit (see :func:`format_measured`); a
+        parameter with value and u both 0 (not measured) is left out.
+    """
     out = {}
     for name, value in parameters.items():
         unit, factor = parameter_unit(family, variant, name)
@@ -87,7 +135,18 @@ def display_parameters(family: str, variant: str, parameters: dict[str, float],
 
 
 def display_setting(setting: dict) -> str:
-    """A searched setting as read: a period in mm, a time constant in min."""
+    """A searched setting as read: a period in mm, a time constant in min.
+
+    Parameters
+    ----------
+    setting : dict
+        The setting, SI (``period_m`` [m], ``tau_s`` [s], ...).
+
+    Returns
+    -------
+    str
+        Its parts joined by commas, e.g. ``"period 10 mm, tau 30 min"``.
+    """
     parts = []
     for key, value in setting.items():
         if key in ("period_m", "period"):
