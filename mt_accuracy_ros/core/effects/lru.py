@@ -18,6 +18,13 @@ class ByteBoundedCache:
     ``min_items``: an array too large for the store to hold this many of its size is
     handed back without being kept (a store that cannot hold what is asked for again
     before it is asked for only costs memory).
+
+    Parameters
+    ----------
+    max_bytes : int
+        Most bytes held [bytes].
+    min_items : int, optional
+        How many arrays of one size the store must hold for it to keep one.
     """
 
     def __init__(self, max_bytes: int, min_items: int = 1) -> None:
@@ -33,13 +40,38 @@ class ByteBoundedCache:
         return len(self._items)
 
     def get(self, key: Hashable) -> NDArray | None:
+        """The array under ``key``, made the most recently used, or None.
+
+        Parameters
+        ----------
+        key : hashable
+            The key.
+
+        Returns
+        -------
+        ndarray or None
+            The array kept (not a copy), or None.
+        """
         item = self._items.get(key)
         if item is not None:
             self._items.move_to_end(key)
         return item
 
     def put(self, key: Hashable, item: NDArray) -> bool:
-        """Keep ``item`` under ``key`` (True), or not when it is too large (False)."""
+        """Keep ``item`` under ``key`` (True), or not when it is too large (False).
+
+        Parameters
+        ----------
+        key : hashable
+            The key.
+        item : ndarray
+            The array kept (not copied).
+
+        Returns
+        -------
+        bool
+            Whether it was kept; the least recently used are dropped beyond ``max_bytes``.
+        """
         if self.min_items > 1 and item.nbytes * self.min_items > self.max_bytes:
             return False
         self._items[key] = item
