@@ -37,7 +37,30 @@ _COMPONENTS = "xyz"
 
 
 def user_declaration(name: str, spec: dict) -> dict:
-    """Checked, normalised declaration of a user effect (raises ParameterError naming it)."""
+    """Checked, normalised declaration of a user effect (raises ParameterError naming it).
+
+    Parameters
+    ----------
+    name : str
+        The effect's name in the model (named in every error).
+    spec : dict
+        The declaration: ``expression``, ``parameters``, ``acts_on`` and optionally
+        ``values``, ``bounds`` (in the parameters' own units), ``explanation`` (see the
+        module docstring).
+
+    Returns
+    -------
+    dict
+        The declaration with the expression's text normalised, values and bounds as
+        floats.
+
+    Raises
+    ------
+    ParameterError
+        An unknown key, a bad parameter list, a target, value or bound.
+    ExpressionError
+        An expression that does not parse or uses what is not allowed.
+    """
     where = f"user effect {name!r}"
     if not isinstance(spec, dict):
         raise ParameterError(f"{where}: expected a mapping with expression, parameters, acts_on")
@@ -93,7 +116,20 @@ def user_declaration(name: str, spec: dict) -> dict:
 
 
 class UserExpression(EffectFamily):
-    """One user effect declared as an expression; its variant is the effect's name."""
+    """One user effect declared as an expression; its variant is the effect's name.
+
+    Parameters
+    ----------
+    effect_name : str
+        The effect's name in the model (its variant).
+    declaration : dict
+        Its declaration (see :func:`user_declaration`).
+
+    Raises
+    ------
+    ParameterError, ExpressionError
+        A declaration :func:`user_declaration` refuses.
+    """
 
     name = "user"
     group = "user"
@@ -110,9 +146,35 @@ class UserExpression(EffectFamily):
         self.summary = self.declaration.get("explanation", f"user effect {self.expression.text}")
 
     def variants(self, ctx: Context) -> list[str]:
+        """The one variant: the effect's name.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        list of str
+            ``[effect_name]``.
+        """
         return [self.effect_name]
 
     def parameter_names(self, variant, setting):
+        """The declared parameters, ``<p>_<target>`` for several targets.
+
+        Parameters
+        ----------
+        variant : str
+            The effect's name (the one variant).
+        setting : dict
+            The setting (the one empty setting).
+
+        Returns
+        -------
+        list of str
+            P names, in the units the user's expression gives them.
+        """
         base = self.declaration["parameters"]
         return [p if len(self.targets) == 1 else f"{p}_{t}" for t in self.targets for p in base]
 
@@ -128,7 +190,26 @@ class UserExpression(EffectFamily):
         return variables
 
     def columns(self, ctx: Context) -> np.ndarray:
-        """(N, P) value of the expression per unit parameter; checks linearity."""
+        """(N, P) value of the expression per unit parameter; checks linearity.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        ndarray, shape (N, P0)
+            The expression at each declared parameter set to 1, the others 0, for the P0
+            declared parameters; in the expression's unit (a TCP error [m] per parameter unit).
+
+        Raises
+        ------
+        ParameterError
+            A variable the readings do not have.
+        ExpressionError
+            Not linear in its parameters, or NaN/inf on these data.
+        """
         values = self._values(ctx)
 
         def lag(variable, tau):
@@ -161,6 +242,29 @@ class UserExpression(EffectFamily):
         return columns
 
     def design(self, ctx: Context, variant, setting):
+        """The columns along each target: a TCP component, or an axis' motion (its EXX).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The effect's name (the one variant).
+        setting : dict
+            The setting (the one empty setting).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            TCP error [m] per parameter unit, bed frame; P = P0 x number of targets.
+
+        Raises
+        ------
+        ParameterError
+            A target axis the machine does not have, or a missing variable.
+        ExpressionError
+            Not linear in its parameters, or NaN/inf on these data.
+        """
         columns = self.columns(ctx)
         n_base = columns.shape[1]
         design = np.zeros((ctx.n, 3, n_base * len(self.targets)))
@@ -177,6 +281,22 @@ class UserExpression(EffectFamily):
         return design
 
     def parameter_limits(self, ctx, variant, setting):
+        """The bounds declared with the effect.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The effect's name (the one variant).
+        setting : dict
+            The setting (the one empty setting).
+
+        Returns
+        -------
+        dict of str to tuple of (float, str)
+            Parameter name -> (bound in the parameter's unit, reason), for those declared.
+        """
         bounds = self.declaration.get("bounds") or {}
         out = {}
         for name in self.parameter_names(variant, setting):
@@ -186,6 +306,20 @@ class UserExpression(EffectFamily):
         return out
 
     def explanation(self, variant, setting):
+        """The declared explanation, else the expression and its targets.
+
+        Parameters
+        ----------
+        variant : str
+            The effect's name (the one variant).
+        setting : dict
+            The setting (the one empty setting).
+
+        Returns
+        -------
+        str
+            The sentence.
+        """
         return self.declaration.get("explanation") or \
             f"the user's effect {self.effect_name}: {self.expression.text} on " \
             f"{', '.join(self.targets)}"
@@ -222,6 +356,11 @@ def load_plugins() -> list[EffectFamily]:
 
     Raises ParameterError naming the entry point when one cannot be loaded or is
     not an :class:`EffectFamily`.
+
+    Returns
+    -------
+    list of EffectFamily
+        One instance per entry point (a class is instantiated without arguments).
     """
     if not _entry_point_files_may_name(ENTRY_POINT_GROUP):
         return []
