@@ -58,7 +58,21 @@ class Expression:
 
     def evaluate(self, values: dict[str, object], lag: Callable[[str, float], NDArray]
                  ) -> NDArray[np.float64]:
-        """Value of the expression; ``values`` maps every name, ``lag(var, tau)`` the lags."""
+        """Value of the expression; ``values`` maps every name, ``lag(var, tau)`` the lags.
+
+        Parameters
+        ----------
+        values : dict of str to object
+            Every name the expression uses -> a float or an ndarray of shape (N,), in the
+            variable's unit (:mod:`.variables`).
+        lag : callable
+            ``lag(variable, tau_s)`` -> ndarray, shape (N,): the lagged variable.
+
+        Returns
+        -------
+        ndarray
+            The value, broadcast over the inputs' shape (N,) (0-d for constants only).
+        """
         with np.errstate(all="ignore"):
             return np.asarray(_interpret(self.tree, values, lag), dtype=np.float64)
 
@@ -76,6 +90,18 @@ def _describe(node: ast.AST) -> str:
 
 def parse(text: str, where: str = "expression") -> Expression:
     """Check ``text`` and return an :class:`Expression`.
+
+    Parameters
+    ----------
+    text : str
+        The expression (see the module docstring for the grammar).
+    where : str, optional
+        What it belongs to, named in errors.
+
+    Returns
+    -------
+    Expression
+        The checked expression with its names and lags.
 
     Raises
     ------
