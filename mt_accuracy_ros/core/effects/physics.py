@@ -44,7 +44,19 @@ CONSISTENCY_FACTOR = 2.0
 
 
 def structure_length_m(machine) -> float:
-    """Length of structure that can expand between a sensor and the tool [m]."""
+    """Length of structure that can expand between a sensor and the tool [m].
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine (its ``structure_length_m``, else strokes [m], offsets, tool and
+        workpiece [m]).
+
+    Returns
+    -------
+    float
+        Length [m], at least 0.1.
+    """
     if getattr(machine, "structure_length_m", None):
         return float(machine.structure_length_m)
     length = float(np.linalg.norm(machine.tool) + np.linalg.norm(machine.workpiece))
@@ -57,13 +69,39 @@ def structure_length_m(machine) -> float:
 
 
 def thermal_gain_limit_m_per_k(machine) -> float:
-    """Largest TCP displacement per kelvin of one sensor's rise [m/K]."""
+    """Largest TCP displacement per kelvin of one sensor's rise [m/K].
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine.
+
+    Returns
+    -------
+    float
+        :data:`GENEROUS_CTE_PER_K` x :func:`structure_length_m` [m/K].
+    """
     return GENEROUS_CTE_PER_K * structure_length_m(machine)
 
 
 def limit_problems(names: list[str], values: NDArray[np.float64],
                    limits: dict[str, tuple[float, str]]) -> list[str]:
-    """Parameters beyond their declared limits, each named with its limit and reason."""
+    """Parameters beyond their declared limits, each named with its limit and reason.
+
+    Parameters
+    ----------
+    names : list of str
+        P parameter names.
+    values : ndarray, shape (P,)
+        Their fitted values, in their units.
+    limits : dict of str to tuple of (float, str)
+        Name -> (bound in the same unit, reason) (:meth:`~.base.EffectFamily.parameter_limits`).
+
+    Returns
+    -------
+    list of str
+        One sentence per parameter beyond its bound or not finite.
+    """
     out = []
     for name, value in zip(names, np.asarray(values, dtype=float)):
         if name not in limits:
@@ -82,7 +120,23 @@ COMPONENT_NAMES = "xyzabc"
 def consistency_allowances(residual: NDArray[np.float64], mask: NDArray[np.bool_],
                            noise_sigma: float) -> dict[str, float]:
     """Per measured component, the largest spread [m] an effect may have at the readings:
-    :data:`CONSISTENCY_FACTOR` x the residual's spread + 2 sigma of noise."""
+    :data:`CONSISTENCY_FACTOR` x the residual's spread + 2 sigma of noise.
+
+    Parameters
+    ----------
+    residual : ndarray, shape (N, C)
+        Residual at the readings [m], C = 3 (TCP) or 6 (with the tool direction scaled to
+        metres).
+    mask : ndarray of bool, shape (N, C)
+        Components measured.
+    noise_sigma : float
+        The instrument's noise, standard deviation [m].
+
+    Returns
+    -------
+    dict of str to float
+        Component (``x`` ... ``c``) -> largest spread allowed [m], for components measured.
+    """
     out = {}
     for c, component in enumerate(COMPONENT_NAMES[:residual.shape[1]]):
         rows = mask[:, c]
@@ -97,7 +151,23 @@ def spread_problems(spreads: dict[str, float], allowances: dict[str, float],
                     orientation_lever_m: float | None = None) -> list[str]:
     """Components where an effect's own spread [m] exceeds its allowance
     (:func:`consistency_allowances`); a direction component (a, b, c: scaled by
-    ``orientation_lever_m``) is said in urad."""
+    ``orientation_lever_m``) is said in urad.
+
+    Parameters
+    ----------
+    spreads : dict of str to float
+        Component -> the effect's RMS spread about its mean at the readings [m].
+    allowances : dict of str to float
+        Component -> largest spread allowed [m] (:func:`consistency_allowances`).
+    orientation_lever_m : float, optional
+        Lever that scaled a direction component to metres [m]; with it, a, b, c are said
+        in urad.
+
+    Returns
+    -------
+    list of str
+        One sentence per component beyond its allowance.
+    """
     out = []
     for component, allowed in allowances.items():
         spread = spreads.get(component, 0.0)
@@ -117,7 +187,24 @@ def spread_problems(spreads: dict[str, float], allowances: dict[str, float],
 
 def consistency_problems(contribution: NDArray[np.float64], residual: NDArray[np.float64],
                          mask: NDArray[np.bool_], noise_sigma: float) -> list[str]:
-    """Components where an effect's own spread (N, 3) is larger than the residual allows."""
+    """Components where an effect's own spread (N, 3) is larger than the residual allows.
+
+    Parameters
+    ----------
+    contribution : ndarray, shape (N, 3)
+        The effect's TCP error at the readings [m].
+    residual : ndarray, shape (N, 3)
+        The residual it explains [m].
+    mask : ndarray of bool, shape (N, 3)
+        Components measured.
+    noise_sigma : float
+        The instrument's noise, standard deviation [m].
+
+    Returns
+    -------
+    list of str
+        One sentence per component beyond its allowance (see :func:`spread_problems`).
+    """
     spreads = {}
     for c, component in enumerate("xyz"):
         own = contribution[mask[:, c], c]
