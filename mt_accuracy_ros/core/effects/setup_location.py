@@ -34,7 +34,20 @@ _BRANCH = {"work": "workpiece", "tool": "tool"}
 
 def side_rotations(ctx: Context, side: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """((N, 3, 3) R_S(q) at the readings, (3, 3) R_S(q_s) at the set-up pose): the nominal
-    rotation of the ``side``'s end frame in the bed frame (linear axes do not turn it)."""
+    rotation of the ``side``'s end frame in the bed frame (linear axes do not turn it).
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings (the result is kept in its cache).
+    side : str
+        ``work`` or ``tool``.
+
+    Returns
+    -------
+    tuple of ndarray
+        R_S(q), shape (N, 3, 3), and R_S(q_s), shape (3, 3): rotations, dimensionless.
+    """
     key = ("side_rotations", side)
     if key not in ctx.cache:
         machine = ctx.machine
@@ -51,7 +64,20 @@ def side_rotations(ctx: Context, side: str) -> tuple[NDArray[np.float64], NDArra
 
 
 def located_design(ctx: Context, side: str) -> NDArray[np.float64]:
-    """(N, 3, 3) [m per m]: the readings' change per component of v, (I - R_S R_S(q_s)^T)."""
+    """(N, 3, 3) [m per m]: the readings' change per component of v, (I - R_S R_S(q_s)^T).
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings.
+    side : str
+        ``work`` or ``tool``.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 3)
+        TCP reading's change [m] per component of v [m], bed frame (ISO 10791-6 set-up).
+    """
     turned, at_setup = side_rotations(ctx, side)
     return np.eye(3)[None] - turned @ at_setup.T
 
@@ -69,6 +95,18 @@ class SetupLocation(EffectFamily):
     reference = "ISO 10791-6 (R-test set-up); ISO 230-7 (rotary axes' location)"
 
     def variants(self, ctx: Context) -> list[str]:
+        """The sides whose branch holds a rotary axis that moved.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+
+        Returns
+        -------
+        list of str
+            ``work`` and/or ``tool``.
+        """
         machine = ctx.machine
         out = []
         # The work side turns with its rotary axes; the tool's own set-up matters only when
@@ -80,13 +118,58 @@ class SetupLocation(EffectFamily):
 
     def settings(self, ctx: Context, variant: str) -> list[dict]:
         # An instrument that measured the tool's direction located it too (two spheres).
+        """``{"direction": True}`` when the instrument measured the tool's direction, else empty.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The side.
+
+        Returns
+        -------
+        list of dict
+            The one setting.
+        """
         return [{"direction": True}] if ctx.orientation_lever_m is not None else [{}]
 
     def parameter_names(self, variant: str, setting: dict) -> list[str]:
+        """v, and w when the direction was located too.
+
+        Parameters
+        ----------
+        variant : str
+            The side, ``work`` or ``tool`` (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        list of str
+            ``v_x, v_y, v_z`` [m] and, with ``direction``, ``w_x, w_y, w_z`` (change of the
+            tool's unit direction, dimensionless ~ [rad]).
+        """
         return ["v_x", "v_y", "v_z"] + (["w_x", "w_y", "w_z"] if setting.get("direction")
                                         else [])
 
     def design(self, ctx: Context, variant: str, setting: dict) -> NDArray[np.float64]:
+        """(I - R_S R_S(q_s)^T) on v; w moves no TCP position.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The side, ``work`` or ``tool`` (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P)
+            TCP error [m] per parameter (P = 3, or 6 with zero columns for w), bed frame.
+        """
         design = located_design(ctx, variant)
         if setting.get("direction"):
             design = np.concatenate([design, np.zeros_like(design)], axis=2)
@@ -94,6 +177,23 @@ class SetupLocation(EffectFamily):
 
     def orientation_design(self, ctx: Context, variant: str, setting: dict
                            ) -> NDArray[np.float64] | None:
+        """The tool direction's turn u x du, du = -R_S R_S(q_s)^T w, when the direction was located.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The side, ``work`` or ``tool`` (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, 6), or None
+            Tool-orientation error [rad] per parameter (zero columns for v), bed frame; None
+            without ``direction``.
+        """
         if not setting.get("direction"):
             return None
         # The tool direction's change w at the set-up (bed frame), located with it: the
@@ -105,6 +205,20 @@ class SetupLocation(EffectFamily):
         return np.concatenate([np.zeros_like(turn), turn], axis=2)
 
     def explanation(self, variant: str, setting: dict) -> str:
+        """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
+
+        Parameters
+        ----------
+        variant : str
+            The side, ``work`` or ``tool`` (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        str
+            The sentence.
+        """
         what = "the work (the sphere or part)" if variant == "work" else "the tool"
         return (f"{what} was located at the set-up pose with the machine's own error there "
                 "(v, bed frame), and that error turns with the "
@@ -113,4 +227,11 @@ class SetupLocation(EffectFamily):
 
 
 def families() -> list[EffectFamily]:
+    """The family of this module, newly made.
+
+    Returns
+    -------
+    list of EffectFamily
+        :class:`SetupLocation`.
+    """
     return [SetupLocation()]
