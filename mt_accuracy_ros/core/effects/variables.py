@@ -62,11 +62,6 @@ def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
     holds still. ``initial`` is y_0 (default u_0: steady state). ``tau_s`` = 0 returns
     u itself.
 
-    Raises
-    ------
-    InputDataError
-        Times that are not increasing, or non-finite values.
-
     Parameters
     ----------
     time_s : array_like, shape (N,)
@@ -82,6 +77,11 @@ def first_order_lag(time_s: ArrayLike, signal: ArrayLike, tau_s: float, *,
     -------
     ndarray, shape (N,)
         The lagged signal y, in the signal's unit.
+
+    Raises
+    ------
+    InputDataError
+        Times that are not increasing, or non-finite values.
     """
     t = np.asarray(time_s, dtype=np.float64)
     u = np.asarray(signal, dtype=np.float64)
