@@ -40,7 +40,18 @@ _DIRECT_MAX_PRODUCT = 400_000
 
 def frequency_grid(span_m: float) -> NDArray[np.float64]:
     """Frequencies [1/m] for periods in :data:`PERIOD_RANGE_M`, a quarter cycle apart over
-    ``span_m`` (so no peak falls between two of them), all multiples of 1/(4 span)."""
+    ``span_m`` (so no peak falls between two of them), all multiples of 1/(4 span).
+
+    Parameters
+    ----------
+    span_m : float
+        Travel the readings cover [m], > 0.
+
+    Returns
+    -------
+    ndarray, shape (P,)
+        Ascending frequencies [1/m], multiples of 1 / (4 ``span_m``).
+    """
     step = 1.0 / (4.0 * span_m)
     first = int(np.ceil(1.0 / PERIOD_RANGE_M[1] / step - 1e-9))
     last = int(np.floor(1.0 / PERIOD_RANGE_M[0] / step + 1e-9))
@@ -55,6 +66,16 @@ def shortest_resolvable_period(q: NDArray[np.float64]) -> float:
     is only aliasing. At least two distinct positions per cycle on average (Nyquist on
     the mean spacing) are asked for: 2 span / (distinct positions - 1). Random positions
     along the travel (hundreds of them) restrict nothing in :data:`PERIOD_RANGE_M`.
+
+    Parameters
+    ----------
+    q : ndarray, shape (N,)
+        Positions of the readings [m] (distinct to 1e-7 m).
+
+    Returns
+    -------
+    float
+        Period [m]; inf for fewer than 3 distinct positions.
     """
     distinct = np.unique(np.round(np.asarray(q, dtype=np.float64), 7))
     if distinct.size < 3:
@@ -64,7 +85,20 @@ def shortest_resolvable_period(q: NDArray[np.float64]) -> float:
 
 def resolvable(frequencies: NDArray[np.float64], q: NDArray[np.float64]
                ) -> NDArray[np.float64]:
-    """``frequencies`` [1/m] whose periods :func:`shortest_resolvable_period` allows."""
+    """``frequencies`` [1/m] whose periods :func:`shortest_resolvable_period` allows.
+
+    Parameters
+    ----------
+    frequencies : ndarray, shape (P,)
+        Frequencies [1/m].
+    q : ndarray, shape (N,)
+        Positions of the readings [m].
+
+    Returns
+    -------
+    ndarray, shape (P',)
+        The frequencies kept, in their order [1/m].
+    """
     return frequencies[frequencies <= 1.0 / shortest_resolvable_period(q) + 1e-12]
 
 
@@ -98,6 +132,9 @@ def periodogram(q, target, weight, periods, *, block: int = 64):
     q, target, weight : array_like, shape (N,)
         Positions [m], weighted residual J . r [m], weights |J|^2 [-].
     periods : array_like, shape (P,)
+        Periods [m].
+    block : int, optional
+        Frequencies evaluated together (memory O(N x block)).
 
     Returns
     -------
@@ -137,6 +174,22 @@ def grid_transform(q, values, step: float, count: int):
 
     By linear spreading onto a lattice of positions modulo 1/step and one FFT; the
     spreading's transfer is divided out. ``values`` shape (N, M) -> (count, M) complex.
+
+    Parameters
+    ----------
+    q : array_like, shape (N,)
+        Positions [m].
+    values : array_like, shape (N,) or (N, M)
+        Values at the positions, any unit.
+    step : float
+        Frequency step [1/m].
+    count : int
+        Number of frequencies k = 0 .. count - 1.
+
+    Returns
+    -------
+    ndarray of complex, shape (count, M)
+        The sums, in the values' unit (M = 1 for 1-D values).
     """
     q = np.asarray(q, float)
     values = np.asarray(values, float).reshape(q.size, -1)
@@ -170,7 +223,20 @@ def direct_basis(q, frequencies) -> NDArray[np.complex128] | None:
     """exp(-2 pi i f q_n), shape (P, N), where :func:`grid_periodogram` takes the sums
     directly (few readings); None where it spreads them onto a lattice. A selection
     computes it once per axis and passes it to every later periodogram of that axis: the
-    exponentials, not the products, are most of a direct periodogram's cost."""
+    exponentials, not the products, are most of a direct periodogram's cost.
+
+    Parameters
+    ----------
+    q : array_like, shape (N,)
+        Positions [m].
+    frequencies : array_like, shape (P,)
+        Frequencies [1/m].
+
+    Returns
+    -------
+    ndarray of complex, shape (P, N), or None
+        The exponentials (dimensionless), or None when N x P > 400 000.
+    """
     q = np.asarray(q, float)
     frequencies = np.asarray(frequencies, float)
     if q.size * frequencies.size > _DIRECT_MAX_PRODUCT:
@@ -195,7 +261,24 @@ def _sums_at(q, values, frequencies, harmonic: bool, basis=None):
 def weight_sums(q, weight, frequencies, *, basis=None) -> tuple[NDArray, NDArray, NDArray]:
     """What :func:`grid_periodogram` needs of the weights alone - sum w (M,), Z_w(f) and
     Z_w(2f) (P, M) - to reuse while only the target changes (a selection's later steps).
-    ``basis``: :func:`direct_basis` of ``q`` and ``frequencies``, if already made."""
+    ``basis``: :func:`direct_basis` of ``q`` and ``frequencies``, if already made.
+
+    Parameters
+    ----------
+    q : array_like, shape (N,)
+        Positions [m].
+    weight : array_like, shape (N,) or (N, M)
+        Weights |J|^2, dimensionless.
+    frequencies : ndarray, shape (P,)
+        Multiples of one step [1/m], ascending.
+    basis : ndarray of complex, shape (P, N), optional
+        :func:`direct_basis` of ``q`` and ``frequencies``.
+
+    Returns
+    -------
+    tuple of ndarray
+        sum w, shape (M,); Z_w(f) and Z_w(2f), complex, shape (P, M); dimensionless.
+    """
     q = np.asarray(q, float)
     weight2 = np.asarray(weight, float).reshape(q.size, -1)
     zw1, zw2 = _sums_at(q, weight2, frequencies, harmonic=True, basis=basis)
@@ -209,7 +292,9 @@ def grid_periodogram(q, target, weight, frequencies, *, weights=None, basis=None
     Parameters
     ----------
     q : array_like, shape (N,)
+        Positions [m].
     target, weight : array_like, shape (N,) or (N, M)
+        Weighted residual J . r [m] and weights |J|^2 [-], per column.
     frequencies : ndarray, shape (P,)
         Multiples of one step [1/m], ascending.
     weights : tuple, optional
@@ -221,6 +306,8 @@ def grid_periodogram(q, target, weight, frequencies, *, weights=None, basis=None
     Returns
     -------
     explained, amplitude : ndarray, shape (P,) or (P, M)
+        Sum of squares explained beyond the offset [m^2] and amplitude of the fitted
+        fundamental [m] (the shape of ``target``'s columns).
     """
     target = np.asarray(target, float)
     single = target.ndim == 1
