@@ -50,6 +50,19 @@ def reraise_as(error_class: type[MtAccuracyError], context: str):
     Any :data:`MALFORMED_INPUT` exception escaping the wrapped function becomes
     ``error_class`` with ``context`` and the original message, chained with
     ``from``; this package's own errors pass through unchanged.
+
+    Parameters
+    ----------
+    error_class : type of MtAccuracyError
+        The error raised instead.
+    context : str
+        What was being read, put before the message (with the first argument when it is
+        a path or text).
+
+    Returns
+    -------
+    callable
+        The decorator.
     """
     import functools
 
