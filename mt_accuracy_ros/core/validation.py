@@ -11,6 +11,22 @@ def finite_array(values: ArrayLike, name: str, *, ndim: int | None = None,
                  allow_empty: bool = False) -> NDArray[np.float64]:
     """Return ``values`` as a float64 array after checking it is finite.
 
+    Parameters
+    ----------
+    values : array_like
+        Numbers, any shape and unit (returned unchanged in value).
+    name : str
+        What they are, named in errors.
+    ndim : int, optional
+        Required number of dimensions.
+    allow_empty : bool, optional
+        Accept an empty array.
+
+    Returns
+    -------
+    ndarray of float64
+        The values, shape as given.
+
     Raises
     ------
     InputDataError
@@ -35,13 +51,48 @@ def finite_array(values: ArrayLike, name: str, *, ndim: int | None = None,
 
 
 def same_length(name_a: str, a: NDArray, name_b: str, b: NDArray) -> None:
-    """Raise :class:`InputDataError` unless ``a`` and ``b`` have equal length."""
+    """Raise :class:`InputDataError` unless ``a`` and ``b`` have equal length.
+
+    Parameters
+    ----------
+    name_a : str
+        Name of ``a``, for the message.
+    a : sequence
+        First array.
+    name_b : str
+        Name of ``b``, for the message.
+    b : sequence
+        Second array.
+
+    Raises
+    ------
+    InputDataError
+        Lengths differ.
+    """
     if len(a) != len(b):
         raise InputDataError(f"{name_a} has {len(a)} values but {name_b} has {len(b)}")
 
 
 def positive(value: float, name: str) -> float:
-    """Return ``value`` as float after checking it is finite and > 0."""
+    """Return ``value`` as float after checking it is finite and > 0.
+
+    Parameters
+    ----------
+    value : float
+        The number, any unit.
+    name : str
+        What it is, named in errors.
+
+    Returns
+    -------
+    float
+        ``value``.
+
+    Raises
+    ------
+    ParameterError
+        Not finite or not > 0.
+    """
     value = float(value)
     if not np.isfinite(value) or value <= 0.0:
         raise ParameterError(f"{name} must be a finite positive number, got {value!r}")
@@ -54,7 +105,25 @@ SAMPLE_PERIOD_RANGE_S = (1e-7, 10.0)
 
 
 def sample_period(value: float, name: str = "sample_period") -> float:
-    """A stream's sample period [s], checked against :data:`SAMPLE_PERIOD_RANGE_S`."""
+    """A stream's sample period [s], checked against :data:`SAMPLE_PERIOD_RANGE_S`.
+
+    Parameters
+    ----------
+    value : float
+        Sample period [s].
+    name : str, optional
+        What it is, named in errors.
+
+    Returns
+    -------
+    float
+        ``value`` [s].
+
+    Raises
+    ------
+    InputDataError
+        Not finite or outside :data:`SAMPLE_PERIOD_RANGE_S`.
+    """
     value = float(value)
     low, high = SAMPLE_PERIOD_RANGE_S
     if not (np.isfinite(value) and low <= value <= high):
