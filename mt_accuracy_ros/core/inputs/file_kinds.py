@@ -33,7 +33,18 @@ TEXT_SHARE = 0.95
 
 
 def bom_encoding(data: bytes) -> str:
-    """The encoding a byte-order mark at the start of ``data`` declares ("" without one)."""
+    """The encoding a byte-order mark at the start of ``data`` declares ("" without one).
+
+    Parameters
+    ----------
+    data : bytes
+        A file's first bytes.
+
+    Returns
+    -------
+    str
+        A codec name (e.g. ``utf-8-sig``, ``utf-16``), or "".
+    """
     for mark, encoding in BYTE_ORDER_MARKS:
         if data.startswith(mark):
             return encoding
@@ -41,7 +52,19 @@ def bom_encoding(data: bytes) -> str:
 
 
 def signature_kind(head: bytes) -> str:
-    """What the signature at the start of ``head`` says the file is ("" for none known)."""
+    """What the signature at the start of ``head`` says the file is ("" for none known).
+
+    Parameters
+    ----------
+    head : bytes
+        A file's first bytes.
+
+    Returns
+    -------
+    str
+        What the file is, in words with the mend (e.g. "a gzip archive (unpack it
+        first)"), or "".
+    """
     for signature, kind in FILE_SIGNATURES:
         if head.startswith(signature):
             return kind
@@ -50,7 +73,18 @@ def signature_kind(head: bytes) -> str:
 
 def looks_like_text(head: bytes) -> bool:
     """Whether a file's first bytes are text (a CSV, a YAML): a byte-order mark, or no NUL
-    byte and (almost) only printable characters, whitespace or non-ASCII letters."""
+    byte and (almost) only printable characters, whitespace or non-ASCII letters.
+
+    Parameters
+    ----------
+    head : bytes
+        A file's first bytes.
+
+    Returns
+    -------
+    bool
+        True for text (at least :data:`TEXT_SHARE` of the bytes printable).
+    """
     if bom_encoding(head):
         return True
     if not head or b"\x00" in head:
@@ -60,6 +94,22 @@ def looks_like_text(head: bytes) -> bool:
 
 
 def read_head(path) -> bytes:
-    """The first :data:`IDENTIFY_BYTES` bytes of ``path`` (``OSError`` as ``open``)."""
+    """The first :data:`IDENTIFY_BYTES` bytes of ``path`` (``OSError`` as ``open``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    bytes
+        Up to :data:`IDENTIFY_BYTES` bytes.
+
+    Raises
+    ------
+    OSError
+        As ``open`` raises it (the caller words it).
+    """
     with open(path, "rb") as stream:
         return stream.read(IDENTIFY_BYTES)
