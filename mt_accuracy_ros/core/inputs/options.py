@@ -66,5 +66,20 @@ def in_range(flag: str, value: float | int | None, *, low: float = -math.inf,
 
 
 def not_applicable(flag: str, applies_to: str, given_with: str) -> ParameterError:
-    """The error of ``flag`` given where nothing reads it (raise it)."""
+    """The error of ``flag`` given where nothing reads it (raise it).
+
+    Parameters
+    ----------
+    flag : str
+        The option as the user wrote it, e.g. ``--tau``.
+    applies_to : str
+        What reads it, in words.
+    given_with : str
+        What it was given with, in words.
+
+    Returns
+    -------
+    ParameterError
+        The error, not raised.
+    """
     return ParameterError(f"{flag} applies to {applies_to}, not to {given_with}; leave it out")
