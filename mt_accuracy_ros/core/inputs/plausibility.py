@@ -140,13 +140,44 @@ HOT_SENSOR_WORDS = ("spindle", "motor", "bearing", "drive", "hot")
 
 def temperature_quantity(sensor: str) -> str:
     """``"temperature_hot"`` for a sensor named after a spindle, motor, bearing or drive
-    (up to 150 degC), else ``"temperature"`` (structure, ambient: up to 80 degC)."""
+    (up to 150 degC), else ``"temperature"`` (structure, ambient: up to 80 degC).
+
+    Parameters
+    ----------
+    sensor : str
+        The sensor's name.
+
+    Returns
+    -------
+    str
+        A key of :data:`BOUNDS`.
+    """
     name = sensor.lower()
     return "temperature_hot" if any(w in name for w in HOT_SENSOR_WORDS) else "temperature"
 
 
 def to_si(values: np.ndarray, family: str, unit: str) -> np.ndarray:
-    """``values`` in ``unit`` of a unit ``family`` in SI (temperatures in degC)."""
+    """``values`` in ``unit`` of a unit ``family`` in SI (temperatures in degC).
+
+    Parameters
+    ----------
+    values : ndarray
+        Values in ``unit``, any shape.
+    family : str
+        A key of :data:`UNITS`, or ``"temperature"``.
+    unit : str
+        A unit of that family (a key of its table, or of :data:`TEMPERATURE`).
+
+    Returns
+    -------
+    ndarray of float64
+        The values in SI ([m], [rad], [s] ...; temperatures [degC]), same shape.
+
+    Raises
+    ------
+    KeyError
+        A unit the family's table does not hold (callers check the unit first).
+    """
     if family == "temperature":
         scale, offset = TEMPERATURE[unit]
         return np.asarray(values, dtype=np.float64) * scale + offset
@@ -188,7 +219,27 @@ def _bound(quantity: str) -> Bound:
 def likely_unit(values: np.ndarray, quantity: str, declared_unit: str = "") -> str | None:
     """The unit that brings ``values`` into ``quantity``'s plausible range (the one
     nearest its typical figure when several do), other than ``declared_unit``; None when
-    no known unit does."""
+    no known unit does.
+
+    Parameters
+    ----------
+    values : ndarray
+        The values as given, any shape (non-finite ones are left out).
+    quantity : str
+        A key of :data:`BOUNDS`.
+    declared_unit : str, optional
+        The unit declared (not offered again).
+
+    Returns
+    -------
+    str or None
+        A unit of the quantity's family, or None.
+
+    Raises
+    ------
+    ParameterError
+        An unknown quantity.
+    """
     bound = _bound(quantity)
     finite = np.asarray(values, dtype=np.float64)
     finite = finite[np.isfinite(finite)]
@@ -205,7 +256,18 @@ _SHOWN_UNIT = {"um": "µm", "urad": "µrad", "degC": "°C", "degF": "°F", "in":
 
 
 def shown_unit(unit: str) -> str:
-    """``unit`` as a message writes it (``um`` -> ``µm``, ``degC`` -> ``°C``)."""
+    """``unit`` as a message writes it (``um`` -> ``µm``, ``degC`` -> ``°C``).
+
+    Parameters
+    ----------
+    unit : str
+        A unit in its plain spelling.
+
+    Returns
+    -------
+    str
+        The unit as written in messages.
+    """
     return _SHOWN_UNIT.get(unit, unit)
 
 
