@@ -26,7 +26,19 @@ _PLAIN_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
 
 def plain_name(text: str) -> bool:
-    """Is ``text`` a bare file or bundled name (no directory part, no traversal)?"""
+    """Is ``text`` a bare file or bundled name (no directory part, no traversal)?
+
+    Parameters
+    ----------
+    text : str
+        A name as given.
+
+    Returns
+    -------
+    bool
+        True for letters, digits, ``_``, ``-`` and inner dots, no ``..``, at most 255
+        characters.
+    """
     return bool(_PLAIN_NAME.match(text)) and ".." not in text and len(text) <= 255
 
 
@@ -37,6 +49,27 @@ def read_description(path: str | Path, what: str, error_class: type[MtAccuracyEr
 
     Raises ``error_class`` (naming ``path`` and ``what``, never the content) when it is
     missing, not a regular file, larger than ``max_bytes`` or not text.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    what : str
+        What it is (``machine description``, ``model``), named in errors.
+    error_class : type of MtAccuracyError
+        The error raised.
+    max_bytes : int, optional
+        Largest size read [bytes] (default :data:`MAX_DESCRIPTION_BYTES`).
+
+    Returns
+    -------
+    str
+        The decoded text.
+
+    Raises
+    ------
+    MtAccuracyError
+        ``error_class``: missing, not a regular file, too large, or not text.
     """
     path = Path(path)
     try:
@@ -82,7 +115,19 @@ def _description_text(data: bytes, path: Path, what: str,
 
 
 def yaml_problem(exc: Exception) -> str:
-    """Where and what a YAML error is, without the snippet of text it would quote."""
+    """Where and what a YAML error is, without the snippet of text it would quote.
+
+    Parameters
+    ----------
+    exc : Exception
+        A YAML error (with ``problem_mark`` / ``problem`` when PyYAML's).
+
+    Returns
+    -------
+    str
+        The problem, quoted tokens longer than two characters left out, and its line
+        and column.
+    """
     mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
     problem = getattr(exc, "problem", None) or getattr(exc, "context", None) or "malformed"
     # PyYAML's problems quote at most a token ("found undefined alias 'secret'"): a
@@ -93,7 +138,27 @@ def yaml_problem(exc: Exception) -> str:
 
 
 def load_yaml(text: str, source: str, error_class: type[MtAccuracyError]):
-    """``yaml.safe_load`` of ``text``; a YAML error becomes ``error_class`` without content."""
+    """``yaml.safe_load`` of ``text``; a YAML error becomes ``error_class`` without content.
+
+    Parameters
+    ----------
+    text : str
+        The YAML text.
+    source : str
+        Where it came from, named in errors.
+    error_class : type of MtAccuracyError
+        The error raised.
+
+    Returns
+    -------
+    object
+        The loaded document (None for an empty one).
+
+    Raises
+    ------
+    MtAccuracyError
+        ``error_class``: not valid YAML, or nested too deeply.
+    """
     import yaml
 
     try:
