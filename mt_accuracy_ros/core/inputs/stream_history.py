@@ -57,7 +57,31 @@ class StreamHistory:
 
     def check(self, index: int, count: int, stamp_ns: int, period_s: float) -> int:
         """Accept the batch (return the samples lost before it, >= 0, or -1 when it goes
-        back: out of order) or raise :class:`InputDataError` saying why it is refused."""
+        back: out of order) or raise :class:`InputDataError` saying why it is refused.
+
+        Parameters
+        ----------
+        index : int
+            The batch's first sample index (a running count).
+        count : int
+            Samples in the batch.
+        stamp_ns : int
+            Stamp of its first sample [ns].
+        period_s : float
+            Sample period [s].
+
+        Returns
+        -------
+        int
+            Samples lost since the last accepted batch (>= 0), 0 for the first batch or a
+            resynchronisation, -1 for a batch that goes back.
+
+        Raises
+        ------
+        InputDataError
+            An index outside 0 ... 2**62, or an index jump or stamp beyond the horizon (the
+            history is left alone).
+        """
         index, count, stamp_ns = int(index), int(count), int(stamp_ns)
         if not 0 <= index <= MAX_INDEX:
             raise InputDataError(f"first_sample_index {index} is not a running count "
