@@ -58,7 +58,18 @@ WORKSHOP_RANGE_C = (BOUNDS["temperature"].low, BOUNDS["temperature"].high)
 
 def workshop_range_c(sensor: str) -> tuple[float, float]:
     """The plausible readings [degC] of ``sensor``: hot ones (spindle, motor ... by name)
-    up to the plausibility table's hot bound."""
+    up to the plausibility table's hot bound.
+
+    Parameters
+    ----------
+    sensor : str
+        The sensor's name.
+
+    Returns
+    -------
+    tuple of float
+        (low, high) [degC].
+    """
     bound = BOUNDS[temperature_quantity(sensor)]
     return bound.low, bound.high
 
@@ -148,7 +159,18 @@ class SensorHealth:
 def noise_from_differences(values: ArrayLike) -> float:
     """The white-noise sigma of a smooth signal from its successive differences (von
     Neumann): the median absolute difference / (0.6745 sqrt 2), robust to steps. Same
-    unit as ``values``."""
+    unit as ``values``.
+
+    Parameters
+    ----------
+    values : array_like, shape (N,)
+        The signal, any unit (non-finite differences are left out).
+
+    Returns
+    -------
+    float
+        Sigma in the values' unit; 0 for fewer than 3 usable values.
+    """
     steps = np.diff(np.asarray(values, dtype=np.float64))
     steps = steps[np.isfinite(steps)]
     if steps.size < 2:
@@ -157,7 +179,20 @@ def noise_from_differences(values: ArrayLike) -> float:
 
 
 def row_ranges(rows: ArrayLike, shown: int = SHOWN_RANGES) -> str:
-    """Row numbers (sorted) as "5, 9-40, 77 and 2 more ranges"."""
+    """Row numbers (sorted) as "5, 9-40, 77 and 2 more ranges".
+
+    Parameters
+    ----------
+    rows : array_like of int, shape (R,)
+        Row numbers, sorted.
+    shown : int, optional
+        Ranges named at most.
+
+    Returns
+    -------
+    str
+        The ranges, or "no row".
+    """
     rows = np.asarray(rows, dtype=np.int64)
     if rows.size == 0:
         return "no row"
@@ -177,7 +212,18 @@ def _stretches(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
 
 def dead_rows(values: NDArray[np.float64]) -> NDArray[np.bool_]:
     """(N,) rows reading a physically absent value: outside :data:`PHYSICAL_RANGE_C`, or
-    exactly 0 over :data:`MIN_ZERO_ROWS` rows in a row."""
+    exactly 0 over :data:`MIN_ZERO_ROWS` rows in a row.
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        The sensor's readings [degC] (NaN for no reading).
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        The dead rows.
+    """
     low, high = PHYSICAL_RANGE_C
     finite = np.isfinite(values)
     dead = finite & ((values < low) | (values > high))
@@ -190,7 +236,20 @@ def dead_rows(values: NDArray[np.float64]) -> NDArray[np.bool_]:
 
 def out_of_range_rows(values: NDArray[np.float64],
                       workshop_c: tuple[float, float] = WORKSHOP_RANGE_C) -> NDArray[np.bool_]:
-    """(N,) finite rows outside ``workshop_c`` [degC] (dead ones not counted)."""
+    """(N,) finite rows outside ``workshop_c`` [degC] (dead ones not counted).
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        The sensor's readings [degC] (NaN for no reading).
+    workshop_c : tuple of float, optional
+        (low, high) plausible readings [degC] (default :data:`WORKSHOP_RANGE_C`).
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        The rows out of range.
+    """
     low, high = workshop_c
     return np.isfinite(values) & ((values < low) | (values > high)) & ~dead_rows(values)
 
@@ -224,7 +283,20 @@ def stuck_rows(values: NDArray[np.float64], others: list[NDArray[np.float64]]
     """(N,) rows of a stretch where the sensor holds still (within one quantum) over
     :data:`STUCK_MIN_SHARE` of the rows or more while another sensor spans
     :data:`OTHERS_MOVE_K` or more; with no other sensor, only a sensor constant on every
-    finite row."""
+    finite row.
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        The sensor's readings [degC] (NaN for no reading).
+    others : list of ndarray, shape (N,)
+        The other sensors' readings [degC].
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        The stuck rows.
+    """
     n = values.size
     stuck = np.zeros(n, dtype=bool)
     finite = np.isfinite(values)
@@ -272,7 +344,22 @@ def jump_rows(values: NDArray[np.float64], others: list[NDArray[np.float64]],
     :data:`JUMP_MIN_K` or more between two readings (:data:`JUMP_ISOLATION`), the step
     lasting :data:`JUMP_WINDOW` rows, while no other
     sensor steps by more than its own :data:`JUMP_SIGMAS` noises there. ``breaks`` (N,):
-    rows that start a new run or follow a clock jump (a step there is the break's)."""
+    rows that start a new run or follow a clock jump (a step there is the break's).
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        The sensor's readings [degC] (NaN for no reading).
+    others : list of ndarray, shape (N,)
+        The other sensors' readings [degC].
+    breaks : ndarray of bool, shape (N,), optional
+        Rows that start a run or follow a clock jump.
+
+    Returns
+    -------
+    list of int
+        Row indices (0-based) of the jumps: the first row after each step.
+    """
     # A quantised sensor's noise reads 0 off its differences: one quantum is its floor.
     noise = max(noise_from_differences(values), _quantum(values))
     threshold = max(JUMP_SIGMAS * noise, JUMP_MIN_K)
