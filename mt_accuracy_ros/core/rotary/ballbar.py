@@ -127,9 +127,26 @@ def length_change(angles_rad: ArrayLike, setup: BallBarSetup, errors: RotaryAxis
     The actual table HTM is Trans(D) Rot(E_x, E_y, E_z) Rot_z(c) with exact
     rotations; B sits at (H_x, H_y, H) (Zhu eq. 5.12).
 
+    Parameters
+    ----------
+    angles_rad : array_like, shape (n,)
+        Table angles c [rad].
+    setup : BallBarSetup
+        The setup's geometry (L, R_x, R_z [m]).
+    errors : RotaryAxisErrors
+        The six error components (D [m], E [rad]).
+    eccentricity_m : tuple of float, optional
+        (H_x, H_y) of the spindle ball B from the table axis [m].
+
     Returns
     -------
-    ndarray, shape (n,) [m]
+    ndarray, shape (n,)
+        Delta_1 [m].
+
+    Raises
+    ------
+    InputDataError
+        Angles not 1-D or not finite.
     """
     c = _angles(angles_rad)
     ideal = np.stack([np.cos(c), np.sin(c), np.zeros_like(c)], axis=1) * setup.radius_m
@@ -145,7 +162,29 @@ def length_change(angles_rad: ArrayLike, setup: BallBarSetup, errors: RotaryAxis
 def squared_length_change(angles_rad: ArrayLike, setup: BallBarSetup, errors: RotaryAxisErrors,
                           eccentricity_m: tuple[float, float] = (0.0, 0.0)
                           ) -> NDArray[np.float64]:
-    """Delta_2' = |L^E'|^2 - |L|^2, Zhu's first-order closed form (Zhu eq. 5.13) [m^2]."""
+    """Delta_2' = |L^E'|^2 - |L|^2, Zhu's first-order closed form (Zhu eq. 5.13) [m^2].
+
+    Parameters
+    ----------
+    angles_rad : array_like, shape (n,)
+        Table angles c [rad].
+    setup : BallBarSetup
+        The setup's geometry (L, R_x, R_z [m]).
+    errors : RotaryAxisErrors
+        The six error components (D [m], E [rad]).
+    eccentricity_m : tuple of float, optional
+        (H_x, H_y) of the spindle ball B from the table axis [m].
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Delta_2' [m^2].
+
+    Raises
+    ------
+    InputDataError
+        Angles not 1-D or not finite.
+    """
     c = _angles(angles_rad)
     r_x, r_z, h = setup.radius_m, setup.socket_height_m, setup.spindle_height_m
     h_x, h_y = eccentricity_m
@@ -158,14 +197,47 @@ def squared_length_change(angles_rad: ArrayLike, setup: BallBarSetup, errors: Ro
 
 def squared_change_from_reading(length_change_m: ArrayLike, bar_length_m: float
                                 ) -> NDArray[np.float64]:
-    """Delta_2' = (L + Delta_1)^2 - L^2 = 2 L Delta_1 + Delta_1^2, exact [m^2]."""
+    """Delta_2' = (L + Delta_1)^2 - L^2 = 2 L Delta_1 + Delta_1^2, exact [m^2].
+
+    Parameters
+    ----------
+    length_change_m : array_like
+        Readings Delta_1 [m], any shape.
+    bar_length_m : float
+        L [m].
+
+    Returns
+    -------
+    ndarray
+        Delta_2' [m^2], the readings' shape.
+    """
     delta = np.asarray(length_change_m, dtype=np.float64)
     return 2.0 * bar_length_m * delta + delta ** 2
 
 
 def difference_design(angles_rad: ArrayLike, short: BallBarSetup, long: BallBarSetup
                       ) -> NDArray[np.float64]:
-    """J of Zhu eq. 5.19: columns for (E_x, E_y, D_z), shape (n, 3) [m^2/rad, m^2/rad, m]."""
+    """J of Zhu eq. 5.19: columns for (E_x, E_y, D_z), shape (n, 3) [m^2/rad, m^2/rad, m].
+
+    Parameters
+    ----------
+    angles_rad : array_like, shape (n,)
+        Table angles c [rad].
+    short, long : BallBarSetup
+        The two setups, sharing the table ball (same R_x, R_z).
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        J [m^2/rad, m^2/rad, m].
+
+    Raises
+    ------
+    ParameterError
+        Setups that do not share the table ball, or bars of equal length.
+    InputDataError
+        Angles not 1-D or not finite.
+    """
     c = _angles(angles_rad)
     _check_pair(short, long)
     dh = long.spindle_height_m - short.spindle_height_m
@@ -235,7 +307,26 @@ def _column_scale(design: NDArray) -> NDArray:
 
 
 def fit_l2(design: NDArray, observed: NDArray) -> NormFit:
-    """Least squares (l2 norm, Zhu eq. 5.17) with the parameters' covariance."""
+    """Least squares (l2 norm, Zhu eq. 5.17) with the parameters' covariance.
+
+    Parameters
+    ----------
+    design : ndarray, shape (n, p)
+        J (Zhu eq. 5.19) [m^2 per parameter unit].
+    observed : ndarray, shape (n,)
+        y, the squared-change differences [m^2].
+
+    Returns
+    -------
+    NormFit
+        ``"l2"``: parameters (p,) [rad, rad, m], residuals (n,) [m^2] and standard (k = 1)
+        uncertainties (p,).
+
+    Raises
+    ------
+    CalibrationError
+        n <= p, or a zero column.
+    """
     n, p = design.shape
     if n <= p:
         raise CalibrationError(f"ball bar: {n} readings cannot fix {p} parameters")
@@ -254,6 +345,24 @@ def fit_linf(design: NDArray, observed: NDArray) -> NormFit:
 
     minimise t  subject to  -t <= y_i - J_i p <= t; solved by HiGHS on columns
     and observations scaled to order one.
+
+    Parameters
+    ----------
+    design : ndarray, shape (n, p)
+        J (Zhu eq. 5.19) [m^2 per parameter unit].
+    observed : ndarray, shape (n,)
+        y, the squared-change differences [m^2].
+
+    Returns
+    -------
+    NormFit
+        ``"linf"``: parameters (p,) [rad, rad, m] and residuals (n,) [m^2], no
+        uncertainties.
+
+    Raises
+    ------
+    CalibrationError
+        n <= p, a zero column, or a linear programme that fails.
     """
     n, p = design.shape
     if n <= p:
@@ -571,7 +680,23 @@ def _single_setup(run: BallBarRun, tilts: NDArray) -> SingleSetupFit:
 
 
 def reversal_jump(run_name: str, angles_rad: NDArray, residuals: NDArray) -> ReversalJump | None:
-    """The 0/360 deg jump of a residual, or None when the run is not a full turn."""
+    """The 0/360 deg jump of a residual, or None when the run is not a full turn.
+
+    Parameters
+    ----------
+    run_name : str
+        The run, named in the result.
+    angles_rad : ndarray, shape (n,)
+        Table angles [rad], in the order indexed.
+    residuals : ndarray, shape (n,)
+        A fit's residuals, any unit (here [m^2]).
+
+    Returns
+    -------
+    ReversalJump or None
+        First minus last residual and the robust noise of the others (the residuals'
+        unit); None unless the last angle is a full turn from the first and n >= 5.
+    """
     if not _same_angle_ends(angles_rad) or residuals.size < 5:
         return None
     return ReversalJump(run_name, float(residuals[0] - residuals[-1]),
@@ -603,6 +728,20 @@ def calibrate(short: BallBarRun, long: BallBarRun, *,
       angle twice): the jump between them as a linear ramp over the run's readings,
       propagated through the fit, also a rectangular bound (a lost motion of the axis
       makes the same jump; either way the result is that uncertain).
+
+    Parameters
+    ----------
+    short, long : BallBarRun
+        The two runs, indexing the same angles (swapped if ``long`` has the shorter bar).
+    socket_change_m : float, optional
+        Largest unseen re-seat of the table ball between the setups [m].
+
+    Returns
+    -------
+    BallBarCalibration
+        The l2 and l-infinity fits of (E_x [rad], E_y [rad], D_z [m]), the design (n, 3)
+        and observations (n,) [m^2], cond(J), the single-setup fits and the runs'
+        closing jumps.
 
     Raises
     ------
@@ -708,7 +847,19 @@ class AxisLineReading:
 
 
 def axis_line_reading(calibration: BallBarCalibration) -> AxisLineReading:
-    """:class:`AxisLineReading` of a calibration (first order in the errors)."""
+    """:class:`AxisLineReading` of a calibration (first order in the errors).
+
+    Parameters
+    ----------
+    calibration : BallBarCalibration
+        The result of :func:`calibrate`.
+
+    Returns
+    -------
+    AxisLineReading
+        EA0C, EB0C [rad], the ball's set-up height offset [m] and the line's offsets from
+        the spindle ball per run [m], with expanded uncertainties (k = 2).
+    """
     e_x, e_y, d_z = calibration.l2.parameters
     r_x = calibration.short.setup.radius_m
     u = (calibration.l2.uncertainties if calibration.l2.uncertainties is not None
