@@ -60,6 +60,22 @@ def fit_sphere(points_m: ArrayLike, radius_m: float | None = None, *,
     Gauss-Newton on the distances |p - c| - r (with r fixed when the sphere's
     calibrated radius is given).
 
+    Parameters
+    ----------
+    points_m : array_like, shape (m, 3)
+        Touch points [m].
+    radius_m : float, optional
+        The sphere's calibrated radius [m]; fitted when None.
+    tolerance_m : float, optional
+        Largest distance of a point from the fitted surface [m].
+    label : str, optional
+        The sphere, named in errors.
+
+    Returns
+    -------
+    SphereFit
+        Centre (3,) [m], radius [m] and residuals (m,) [m].
+
     Raises
     ------
     InputDataError
@@ -113,6 +129,17 @@ def default_rotary_parameters(machine: MachineDescription) -> list[str]:
 
     A (about x): EY0A, EZ0A, EB0A, EC0A; B (about y): EX0B, EZ0B, EA0B, EC0B;
     C (about z): EX0C, EY0C, EA0C, EB0C.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine.
+
+    Returns
+    -------
+    list of str
+        ISO 230-7 location error names (offsets [m], tilts [rad]), then each rotary axis'
+        zero-angle error [rad].
     """
     names = []
     for axis in machine.axis_order:
@@ -154,7 +181,18 @@ class LocationIdentification:
     probe_length_aliases: dict[str, float] = field(default_factory=dict)
 
     def identified_as(self, name: str) -> str:
-        """``EZ0A - EZ0B`` for a parameter others fold into, else the name."""
+        """``EZ0A - EZ0B`` for a parameter others fold into, else the name.
+
+        Parameters
+        ----------
+        name : str
+            A fitted parameter's name.
+
+        Returns
+        -------
+        str
+            The name, with the parameters folded into it and their coefficients.
+        """
         text = name
         for other, c in self.aliases.get(name, {}).items():
             size = abs(c)
@@ -493,6 +531,24 @@ def observable_parameters(machine: MachineDescription, positions: dict[str, Arra
     not already span. A translation of a rotary axis's frame that stays fixed
     in the machine as the axes turn looks like the sphere's setup position or
     like another axis's offset, and lands in the second list.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine.
+    positions : dict of str to array_like, shape (N,)
+        Axis letter -> positions of the probing cycle [m] (rotary [rad]).
+    candidates : list of str, optional
+        Location error names to try, in order (default :func:`default_rotary_parameters`,
+        tilts before offsets).
+    sphere_nominal_m : array_like, shape (3,), optional
+        The sphere's nominal position, workpiece frame [m] (default the machine's
+        workpiece point).
+
+    Returns
+    -------
+    tuple of list of str
+        (kept, dropped): the names one sphere identifies, and the rest.
     """
     names = candidates if candidates is not None else default_rotary_parameters(machine)
     names = sorted(names, key=lambda n: n[1] in LETTERS) if candidates is None else list(names)
@@ -529,7 +585,22 @@ def _repeatability(q: dict[str, NDArray], deviations: NDArray) -> float | None:
 
 def volumetric_error(machine: MachineDescription, location_errors: dict[str, float],
                      positions: dict[str, ArrayLike]) -> NDArray[np.float64]:
-    """(N, 3) TCP error that ``location_errors`` alone cause at ``positions`` [m]."""
+    """(N, 3) TCP error that ``location_errors`` alone cause at ``positions`` [m].
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine (its own error description is not used).
+    location_errors : dict of str to float
+        ISO 230-7 location error name -> value [m] or [rad].
+    positions : dict of str to array_like, shape (N,)
+        Axis letter -> positions [m] (rotary [rad]); the stroke is not checked.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        TCP position error [m], bed frame.
+    """
     model = KinematicModel(machine)
     q = {a: np.asarray(v, float) for a, v in positions.items()}
     overrides = ErrorOverrides(location=dict(location_errors), use_description=False)
