@@ -58,16 +58,59 @@ class Phase:
         The RMS includes the instrument's own noise (u = U/2 per reading), so a perfect
         compensation reads about U/2 with an instrument of band U: conformance is shown
         only when the phase has enough readings for RMS + U(RMS) to fall below the band.
+
+        Parameters
+        ----------
+        band : float
+            The limit each component's RMS is judged against [m] (or [rad]).
+        unit : str, optional
+            Display unit of the verdicts.
+        scale : float, optional
+            Factor from the figures' unit to ``unit``.
+        prefix : str, optional
+            Put before the component letter in each verdict's name.
+
+        Returns
+        -------
+        list of Verdict
+            One per component x, y, z, in ``unit``.
+
+        Raises
+        ------
+        ParameterError
+            A band that is not finite and > 0.
         """
         return [judge(f"{prefix}{c}", f.rms * scale, f.rms_u_k2 * scale, band * scale, unit)
                 for c, f in zip(COMPONENTS, self.with_compensation)]
 
     def conformance(self, band: float) -> Conformance:
-        """Every component's verdict together (:func:`.conformance.overall`)."""
+        """Every component's verdict together (:func:`.conformance.overall`).
+
+        Parameters
+        ----------
+        band : float
+            The limit [m] (or [rad]).
+
+        Returns
+        -------
+        Conformance
+            WITHIN, OUTSIDE or UNDECIDED.
+        """
         return overall(v.state for v in self.verdicts(band))
 
     def within(self, band: float) -> bool:
-        """Conformance shown for every component (RMS + U <= band, ISO 14253-1)."""
+        """Conformance shown for every component (RMS + U <= band, ISO 14253-1).
+
+        Parameters
+        ----------
+        band : float
+            The limit [m] (or [rad]).
+
+        Returns
+        -------
+        bool
+            True only when every component is WITHIN.
+        """
         return self.conformance(band) is Conformance.WITHIN
 
 
