@@ -71,7 +71,18 @@ def conformance(rms: float, u_k2: float, limit: float) -> Conformance:
 
 def overall(states: Iterable[Conformance]) -> Conformance:
     """Several components judged together: OUTSIDE if any is, WITHIN only if all are,
-    UNDECIDED otherwise (and for no component at all: nothing was shown)."""
+    UNDECIDED otherwise (and for no component at all: nothing was shown).
+
+    Parameters
+    ----------
+    states : iterable of Conformance
+        Each component's state.
+
+    Returns
+    -------
+    Conformance
+        The state of all together.
+    """
     states = list(states)
     if any(s is Conformance.OUTSIDE for s in states):
         return Conformance.OUTSIDE
@@ -116,6 +127,30 @@ class Verdict:
 
 
 def judge(name: str, rms: float, u_k2: float, limit: float, unit: str) -> Verdict:
-    """A :class:`Verdict` of ``rms`` ± ``u_k2`` against ``limit`` (all in ``unit``)."""
+    """A :class:`Verdict` of ``rms`` ± ``u_k2`` against ``limit`` (all in ``unit``).
+
+    Parameters
+    ----------
+    name : str
+        The figure's name, e.g. ``e_x``.
+    rms : float
+        Its RMS, in ``unit``.
+    u_k2 : float
+        The RMS's expanded uncertainty (k = 2), in ``unit``, >= 0.
+    limit : float
+        The limit, in ``unit``, > 0.
+    unit : str
+        The display unit (any; the three numbers share it).
+
+    Returns
+    -------
+    Verdict
+        The verdict by ISO 14253-1.
+
+    Raises
+    ------
+    ParameterError
+        Numbers that are not finite, U < 0 or a limit <= 0.
+    """
     return Verdict(name, float(rms), float(u_k2), float(limit), unit,
                    conformance(float(rms), float(u_k2), float(limit)))
