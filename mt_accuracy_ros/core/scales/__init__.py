@@ -8,4 +8,6 @@
                      ISO 230-2 figures.
 * ``uncertainty``    type B budget of the yaw (Table 3.4, Kidani eq. 3.10).
 * ``deterioration``  alarm and command compensation (Kidani eqs. 2.1-2.2, 3.11-3.16).
+* ``yaw_diagnosis``  the scale pair's effects on its yaw against a reference yaw
+                     (Kidani eqs. 2.20, 3.5, 3.17), ranked by the workbench.
 """

@@ -30,6 +30,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..compensation.error_model import ErrorModel
+# The scale pair's yaw effects live with the scales; re-exported for their former users.
+from ..scales.yaw_diagnosis import (YAW_EXPLANATIONS, YawObservations,  # noqa: F401
+                                    yaw_corrections, yaw_regressors)
 from .statistics import DEFAULT_DIRECTION_UNCERTAINTY_RAD, stated_uncertainty
 from ..errors import InsufficientDataError, ParameterError
 from ..effects import Context, EffectFamily, families as catalogue_families, is_catalogue_entry
@@ -742,52 +745,6 @@ def blocked_cv(x: NDArray, offsets: NDArray, y: NDArray, sample_of_row: NDArray,
 
 
 # --------------------------------------------------------------------------- yaw
-@dataclass
-class YawObservations:
-    """Scale-pair yaw against a reference (laser) yaw at N readings of one axis.
-
-    ``thermal_per_c`` is (dL1 - dL2)/D computed from the thermocouples with C = 1
-    (Kidani eq. 3.17): the relative-expansion term per unit expansion coefficient.
-    All yaws relative to the same zero reference [rad].
-    """
-
-    axis: str
-    scale_yaw: NDArray[np.float64]
-    reference_yaw: NDArray[np.float64]
-    travel_m: NDArray[np.float64]
-    velocity: NDArray[np.float64]
-    thermal_per_c: NDArray[np.float64]
-    time_s: NDArray[np.float64]
-    distance_m: float
-    uncertainty_rad: float
-
-
-YAW_EXPLANATIONS = {
-    "scale_thermal_expansion": "the scale yaw drifts from the reference as the two scales' "
-                               "temperatures part - one scale expands more than the other "
-                               "(Kidani eq. 3.17); parameter: C [1/K]",
-    "timing_skew": "the difference is proportional to the feed - the two heads are sampled at "
-                   "different instants (Kidani eq. 2.20); parameter: skew [s]",
-    "scale_parallelism": "the difference grows linearly with travel - the scales are not "
-                         "parallel (Kidani eq. 3.5); parameter: 1/cos(delta) - 1",
-}
-
-
-def yaw_corrections(included: dict[str, float], obs: YawObservations) -> NDArray[np.float64]:
-    """The apparent yaw the estimator's corrections remove, for the included effects."""
-    out = np.zeros_like(obs.scale_yaw)
-    # The pair's linear difference from the laser found at installation (Kidani 3.3.1):
-    # relative graduation slope, indistinguishable from parallelism in one run.
-    out += included.get("installation_slope", 0.0) * obs.travel_m / obs.distance_m
-    if "scale_thermal_expansion" in included:
-        out += included["scale_thermal_expansion"] * obs.thermal_per_c
-    if "timing_skew" in included:
-        out += included["timing_skew"] * obs.velocity / obs.distance_m
-    if "scale_parallelism" in included:
-        out += included["scale_parallelism"] * obs.travel_m / obs.distance_m
-    return out
-
-
 def diagnose_yaw(included: dict[str, float], obs: YawObservations, *,
                  min_reduction: float = 0.1, folds: int = 5) -> Diagnosis:
     """Rank the scale effects missing from the yaw corrections (same rules as :func:`diagnose`)."""
@@ -801,9 +758,7 @@ def diagnose_yaw(included: dict[str, float], obs: YawObservations, *,
     baseline_cv = blocked_cv(np.zeros((n, 0)), offsets, residual, rows, n, folds)
     in_sample = float(np.sqrt(np.mean(residual ** 2)))
     noise_sigma = obs.uncertainty_rad / 2.0
-    regressors = {"scale_thermal_expansion": obs.thermal_per_c,
-                  "timing_skew": obs.velocity / obs.distance_m,
-                  "scale_parallelism": obs.travel_m / obs.distance_m}
+    regressors = yaw_regressors(obs)
     ranking = []
     for effect, column in regressors.items():
         if effect in included or not np.any(column):

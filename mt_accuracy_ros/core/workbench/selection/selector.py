@@ -55,8 +55,8 @@ from .designs import ReadingDesigns, Term, _BaseStatistics, penalty_of
 from .folds import time_blocks
 from .linalg import (penalise, penalised_fit, products_fit, solve_normal,
                      solve_normal_grouped)
-from .significance import (Evidence, PassRule, coefficient_p_value, gain_p_value,
-                           max_t_adjusted)
+from .significance import (Evidence, PassRule, block_gains, coefficient_p_value,
+                           gain_p_value, max_t_adjusted)
 
 
 @dataclass
@@ -442,48 +442,58 @@ class Selector(ReadingDesigns):
         return stats, base_sq, count, base_mse, base_mse - self.noise_sigma ** 2
 
     def step(self, terms: list[Term]) -> Step:
+        """One selection step over ``terms``: :meth:`score` each held out, :meth:`rank` them,
+        :meth:`test` the first.
+
+        Parameters
+        ----------
+        terms : list of Term
+            The candidates (any of them already selected must not be among them).
+
+        Returns
+        -------
+        Step
+            The current model's out-of-fold RMSE [m], the ranking (best first), and the
+            candidate added (None if the first did not pass).
+        """
         stats, base_sq, count, base_mse, _ = self._baseline()
-        base = stats.base
-        q = base.shape[1]
+        ranking, plausible_best = self.rank(self.score(terms, stats, base_sq, count))
+        added = self.test(ranking, plausible_best, terms, stats.base)
+        # Per-reading errors are kept only where a pair look-ahead may need them (N floats
+        # per candidate: GBs over a catalogue at 1e5 readings).
+        for s in ranking[self.keep_errors:]:
+            if s is not added:
+                s.per_sample_sq = None
+        return Step(float(np.sqrt(base_mse)), ranking, added)
+
+    def score(self, terms: list[Term], stats: _BaseStatistics, base_sq: NDArray[np.float64],
+              count: int) -> list[Scored]:
+        """Each candidate's held-out score against the current model.
+
+        Parameters
+        ----------
+        terms : list of Term
+            The candidates.
+        stats : _BaseStatistics
+            The current model's per-fold products (:meth:`base_statistics`).
+        base_sq : ndarray, shape (N, K)
+            Its out-of-fold squared errors per reading and component [m^2].
+        count : int
+            The components judged (the mean squares' denominator).
+
+        Returns
+        -------
+        list of Scored
+            In the order of ``terms``: out-of-fold RMSE, reduction and share on the
+            components each moves, its block test's p-value adjusted for every
+            candidate tried (Westfall-Young max-T), its full-data fit and whether
+            physics refuses it.
+        """
         scored, gains = [], []
-        measured_per_component = self.judged_mask.sum(axis=0)
-        base_per_component = base_sq.sum(axis=0)
         for term in terms:
-            per_sample, chosen = self.out_of_fold(stats, term)
-            mse = float(per_sample.sum() / count)
-            # Tested on the components it moves (the others' errors are the base's).
-            moved = self.components_of(term)
-            own_count = int(measured_per_component[moved].sum())
-            own_base = float(base_per_component[moved].sum()) / own_count
-            own_mse = float(per_sample[:, moved].sum()) / own_count
-            own_excess = own_base - self.noise_sigma ** 2
-            gain = self._block_gains(base_sq[:, moved].sum(axis=1),
-                                     per_sample[:, moved].sum(axis=1))
-            gains.append(gain)
-            p_value = gain_p_value(gain)
-            share = (own_base - own_mse) / own_excess if own_excess > 0 else \
-                (1.0 if own_mse < own_base else 0.0)
-            # The setting reported is the most frequent in-fold choice.
-            settings = [tuple(sorted(s.items())) for s in chosen.values()]
-            # Ties by the first fold to choose it: never by a set's (hash-seeded) order.
-            setting = dict(max(dict.fromkeys(settings), key=settings.count))
-            candidate = Scored(term, float(np.sqrt(mse)),
-                               1.0 - np.sqrt(own_mse / own_base) if own_base > 0 else 0.0,
-                               p_value, 1.0, float(share), setting, per_sample,
-                               components="".join(c for c, m in zip(self.components, moved)
-                                                  if m))
-            # Every candidate carries its full-data fit, so that a user may add any of them
-            # (judged by physics now, while its design is at hand).
-            products = self._products_of(stats, term, setting)
-            candidate.coefficients, candidate.standard_errors = (
-                a[q:] for a in self._fit_products(*products,
-                                                  penalty=(q, penalty_of(term, setting))))
-            candidate.parameter_names = term.family.parameter_names(term.variant, setting)
-            own = candidate.coefficients
-            candidate.refusal = self.physics_refusal(
-                term, setting, own,
-                own_square_sum=float(own @ products[0][:, q:, q:].sum(axis=0) @ own))
+            candidate, gain = self._score_one(term, stats, base_sq, count)
             scored.append(candidate)
+            gains.append(gain)
             if len(scored) % 8 == 0:
                 self._release_errors(scored)
         # The best of many candidates is no chance winner: each p-value is adjusted for
@@ -495,50 +505,124 @@ class Selector(ReadingDesigns):
         if scored:
             for s, adjusted in zip(scored, max_t_adjusted(np.array(gains))):
                 s.adjusted_p = float(adjusted)
-        scored.sort(key=lambda s: s.cv_rmse)
+        return scored
+
+    def _score_one(self, term: Term, stats: _BaseStatistics, base_sq: NDArray[np.float64],
+                   count: int) -> tuple[Scored, NDArray[np.float64]]:
+        """:meth:`score` of one candidate (its p-value not yet adjusted) and its gain per
+        test block (B,)."""
+        q = stats.base.shape[1]
+        per_sample, chosen = self.out_of_fold(stats, term)
+        mse = float(per_sample.sum() / count)
+        # Tested on the components it moves (the others' errors are the base's).
+        moved = self.components_of(term)
+        own_count = int(self.judged_mask.sum(axis=0)[moved].sum())
+        own_base = float(base_sq.sum(axis=0)[moved].sum()) / own_count
+        own_mse = float(per_sample[:, moved].sum()) / own_count
+        own_excess = own_base - self.noise_sigma ** 2
+        gain = self._block_gains(base_sq[:, moved].sum(axis=1),
+                                 per_sample[:, moved].sum(axis=1))
+        share = (own_base - own_mse) / own_excess if own_excess > 0 else \
+            (1.0 if own_mse < own_base else 0.0)
+        # The setting reported is the most frequent in-fold choice.
+        settings = [tuple(sorted(s.items())) for s in chosen.values()]
+        # Ties by the first fold to choose it: never by a set's (hash-seeded) order.
+        setting = dict(max(dict.fromkeys(settings), key=settings.count))
+        candidate = Scored(term, float(np.sqrt(mse)),
+                           1.0 - np.sqrt(own_mse / own_base) if own_base > 0 else 0.0,
+                           gain_p_value(gain), 1.0, float(share), setting, per_sample,
+                           components="".join(c for c, m in zip(self.components, moved) if m))
+        # Every candidate carries its full-data fit, so that a user may add any of them
+        # (judged by physics now, while its design is at hand).
+        products = self._products_of(stats, term, setting)
+        candidate.coefficients, candidate.standard_errors = (
+            a[q:] for a in self._fit_products(*products, penalty=(q, penalty_of(term, setting))))
+        candidate.parameter_names = term.family.parameter_names(term.variant, setting)
+        own = candidate.coefficients
+        candidate.refusal = self.physics_refusal(
+            term, setting, own,
+            own_square_sum=float(own @ products[0][:, q:, q:].sum(axis=0) @ own))
+        return candidate, gain
+
+    def rank(self, scored: list[Scored]) -> tuple[list[Scored], Scored | None]:
+        """The candidates best first: physics first, then by out-of-fold RMSE, the
+        simplest of those the held-out data cannot tell apart first (Occam).
+
+        Parameters
+        ----------
+        scored : list of Scored
+            From :meth:`score`.
+
+        Returns
+        -------
+        ranking : list of Scored
+            The plausible (physics does not refuse them) by out-of-fold RMSE, the
+            simplest of those within ``tie`` of the best (in mean square) moved first;
+            then the refused.
+        plausible_best : Scored or None
+            The plausible candidate with the least out-of-fold RMSE (None if none is).
+        """
+        scored = sorted(scored, key=lambda s: s.cv_rmse)
         # Physics first: a fit it refuses is no explanation, however well it scores.
         plausible = [s for s in scored if not s.refusal]
         scored = plausible + [s for s in scored if s.refusal]
+        if not plausible:
+            return scored, None
         # Occam: among candidates the held-out data cannot tell apart from the best
         # (out-of-fold MSE within ``tie``), the simplest explanation is named first.
-        plausible_best = plausible[0] if plausible else None
-        if plausible:
-            limit = scored[0].cv_rmse ** 2 * (1.0 + self.tie)
-            tied = [s for s in plausible if s.cv_rmse ** 2 <= limit]
-            simplest = min(tied, key=lambda s: (s.term.family.variant_complexity(s.term.variant),
-                                                 s.cv_rmse))
-            scored.remove(simplest)
-            scored.insert(0, simplest)
-        added = None
-        if plausible:
-            best = scored[0]
-            setting = self.choose_setting_all(best.term, base)
-            coefficients, standard, _ = self.fit_full(self.selected + [(best.term, setting)])
-            best.setting = setting
-            best.coefficients, best.standard_errors = coefficients[-1], standard[-1]
-            best.parameter_names = best.term.family.parameter_names(best.term.variant, setting)
-            best.refusal = self.physics_refusal(best.term, setting, best.coefficients)
-            # A weak effect spread evenly over the readings moves each block's error
-            # too little for the blocks' t-test; the candidate the held-out data rank
-            # first may then pass on its full-data coefficients instead, Bonferroni-
-            # adjusted over every candidate *and* setting tried (a 7 sigma
-            # straightness was named 7 times in 10). Its held-out reduction and share
-            # must still be there. Not on a log validated forward: its residual is a slow
-            # time series, whose full-data standard errors assume an independence the
-            # readings do not have (there, only predicting later blocks counts).
-            settings_tried = sum(max(1, len(t.settings)) for t in terms)
-            best.coefficient_p = min(1.0, coefficient_p_value(
-                coefficients[-1], standard[-1], self.y.size) * settings_tried)
-            best.significant = self.rule.passes(
-                best.evidence(on_coefficients=not self.forward and best is plausible_best))
-            if best.significant:
-                added = best
-        # Per-reading errors are kept only where a pair look-ahead may need them (N floats
-        # per candidate: GBs over a catalogue at 1e5 readings).
-        for s in scored[self.keep_errors:]:
-            if s is not added:
-                s.per_sample_sq = None
-        return Step(float(np.sqrt(base_mse)), scored, added)
+        limit = scored[0].cv_rmse ** 2 * (1.0 + self.tie)
+        tied = [s for s in plausible if s.cv_rmse ** 2 <= limit]
+        simplest = min(tied, key=lambda s: (s.term.family.variant_complexity(s.term.variant),
+                                             s.cv_rmse))
+        scored.remove(simplest)
+        scored.insert(0, simplest)
+        return scored, plausible[0]
+
+    def test(self, ranking: list[Scored], plausible_best: Scored | None, terms: list[Term],
+             base: NDArray[np.float64]) -> Scored | None:
+        """Fit the first of ``ranking`` on all readings and ask the acceptance rule.
+
+        Parameters
+        ----------
+        ranking : list of Scored
+            From :meth:`rank`; its first is refitted (setting chosen on all readings,
+            jointly with the selected terms) and marked ``significant`` if it passes.
+        plausible_best : Scored or None
+            From :meth:`rank`: the first by out-of-fold RMSE may pass on its full-data
+            coefficients instead of the block test.
+        terms : list of Term
+            Every candidate tried (the coefficients' test is adjusted for their settings).
+        base : ndarray, shape (R, q)
+            The current model's columns.
+
+        Returns
+        -------
+        Scored or None
+            The first candidate if it passes (:class:`.significance.PassRule`), else None.
+        """
+        if plausible_best is None:
+            return None
+        best = ranking[0]
+        setting = self.choose_setting_all(best.term, base)
+        coefficients, standard, _ = self.fit_full(self.selected + [(best.term, setting)])
+        best.setting = setting
+        best.coefficients, best.standard_errors = coefficients[-1], standard[-1]
+        best.parameter_names = best.term.family.parameter_names(best.term.variant, setting)
+        best.refusal = self.physics_refusal(best.term, setting, best.coefficients)
+        # A weak effect spread evenly over the readings moves each block's error
+        # too little for the blocks' t-test; the candidate the held-out data rank
+        # first may then pass on its full-data coefficients instead, Bonferroni-
+        # adjusted over every candidate *and* setting tried (a 7 sigma
+        # straightness was named 7 times in 10). Its held-out reduction and share
+        # must still be there. Not on a log validated forward: its residual is a slow
+        # time series, whose full-data standard errors assume an independence the
+        # readings do not have (there, only predicting later blocks counts).
+        settings_tried = sum(max(1, len(t.settings)) for t in terms)
+        best.coefficient_p = min(1.0, coefficient_p_value(
+            coefficients[-1], standard[-1], self.y.size) * settings_tried)
+        best.significant = self.rule.passes(
+            best.evidence(on_coefficients=not self.forward and best is plausible_best))
+        return best if best.significant else None
 
     def _release_errors(self, scored: list[Scored]) -> None:
         """Free the per-reading errors (N floats each) of candidates that can no longer be
@@ -572,13 +656,8 @@ class Selector(ReadingDesigns):
     def _block_gains(self, base_sq: NDArray[np.float64], per_sample: NDArray[np.float64]
                      ) -> NDArray[np.float64]:
         """Per held-out block, the fraction of its error that ``per_sample`` removes from
-        ``base_sq`` - scale-free, so a trend whose error sits in the end blocks counts as
-        much as a uniform one."""
-        blocks = self.n_test_blocks + 1
-        base_blocks = np.bincount(self.block_of_sample, weights=base_sq, minlength=blocks)
-        gain = 1.0 - np.bincount(self.block_of_sample, weights=per_sample, minlength=blocks) / \
-            np.maximum(base_blocks, 1e-300)
-        return gain[:self.n_test_blocks]
+        ``base_sq`` (:func:`.significance.block_gains`)."""
+        return block_gains(self.block_of_sample, self.n_test_blocks, base_sq, per_sample)
 
     def _block_test(self, base_sq: NDArray[np.float64], per_sample: NDArray[np.float64]
                     ) -> float:
