@@ -34,7 +34,18 @@ def _same_arrays(a: dict, b: dict) -> bool:
 
 def same_variables(a: Variables, b: Variables) -> bool:
     """Do ``a`` and ``b`` hold the same readings (every array equal, the same reference
-    temperatures and runs)? Live lag states are never shared."""
+    temperatures and runs)? Live lag states are never shared.
+
+    Parameters
+    ----------
+    a, b : Variables
+        The two sets of readings.
+
+    Returns
+    -------
+    bool
+        True when every array and setting is equal and neither keeps live lag states.
+    """
     if a is b:
         return a.lag_states is None
     return (a.lag_states is None and b.lag_states is None and a.n == b.n and
@@ -64,7 +75,31 @@ class ContextMemo:
                 work_point: NDArray[np.float64] | None,
                 zero_rows: NDArray[np.intp] | None) -> Context:
         """A :class:`Context` of these arguments: the kept one if they are the kept
-        context's (the machine the same object, every array equal), else a new one."""
+        context's (the machine the same object, every array equal), else a new one.
+
+        Parameters
+        ----------
+        machine : MachineDescription
+            The machine (compared by identity).
+        variables : Variables
+            The N readings.
+        kinematics : KinematicModel
+            The nominal chain of ``machine``.
+        orientation : ndarray, shape (N, 3), or None
+            The model's tool-orientation error [rad].
+        orientation_lever_m : float or None
+            Set when the readings measured the tool's direction: the instrument's
+            position noise over its direction noise [m per rad].
+        work_point : ndarray, shape (3,) or (N, 3), or None
+            Fixed target [m], workpiece frame.
+        zero_rows : ndarray of int, shape (N,), or None
+            The row each reading's instrument was zeroed at.
+
+        Returns
+        -------
+        Context
+            The kept context or a new one (then kept).
+        """
         if self._kept is not None:
             ctx = self._kept
             if (ctx.machine is machine and ctx.kinematics.machine is machine and
