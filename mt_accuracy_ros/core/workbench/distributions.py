@@ -21,7 +21,25 @@ def _gamma_prefactor(a: float, x: float) -> float:
 
 
 def regularized_gamma_q(a: float, x: float) -> float:
-    """Q(a, x) = Gamma(a, x) / Gamma(a), the upper regularised incomplete gamma function."""
+    """Q(a, x) = Gamma(a, x) / Gamma(a), the upper regularised incomplete gamma function.
+
+    Parameters
+    ----------
+    a : float
+        Shape, > 0.
+    x : float
+        Argument (1 for x <= 0).
+
+    Returns
+    -------
+    float
+        Q(a, x) in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        a <= 0.
+    """
     if a <= 0:
         raise ValueError(f"a must be > 0, got {a}")
     if x <= 0:
@@ -59,7 +77,25 @@ def regularized_gamma_q(a: float, x: float) -> float:
 
 
 def chi2_sf(value: float, dof: float) -> float:
-    """P(chi-square with ``dof`` degrees of freedom > ``value``)."""
+    """P(chi-square with ``dof`` degrees of freedom > ``value``).
+
+    Parameters
+    ----------
+    value : float
+        The chi-square statistic, dimensionless.
+    dof : float
+        Degrees of freedom, > 0.
+
+    Returns
+    -------
+    float
+        The upper tail probability.
+
+    Raises
+    ------
+    ValueError
+        dof <= 0.
+    """
     return regularized_gamma_q(0.5 * dof, 0.5 * value)
 
 
@@ -85,7 +121,25 @@ def _beta_fraction(a: float, b: float, x: float) -> float:
 
 
 def regularized_beta(a: float, b: float, x: float) -> float:
-    """I_x(a, b), the regularised incomplete beta function, 0 <= x <= 1."""
+    """I_x(a, b), the regularised incomplete beta function, 0 <= x <= 1.
+
+    Parameters
+    ----------
+    a, b : float
+        Shapes, > 0.
+    x : float
+        Argument in [0, 1].
+
+    Returns
+    -------
+    float
+        I_x(a, b) in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        x outside [0, 1].
+    """
     if not 0.0 <= x <= 1.0:
         raise ValueError(f"x must be in [0, 1], got {x}")
     if x in (0.0, 1.0):
@@ -98,7 +152,20 @@ def regularized_beta(a: float, b: float, x: float) -> float:
 
 
 def t_sf(value: float, dof: float) -> float:
-    """P(Student's t with ``dof`` degrees of freedom > ``value``)."""
+    """P(Student's t with ``dof`` degrees of freedom > ``value``).
+
+    Parameters
+    ----------
+    value : float
+        The t statistic, dimensionless.
+    dof : float
+        Degrees of freedom, > 0.
+
+    Returns
+    -------
+    float
+        The upper tail probability (NaN for a NaN value).
+    """
     if math.isnan(value):
         return math.nan
     if math.isinf(value):
