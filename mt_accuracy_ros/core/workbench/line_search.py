@@ -17,7 +17,29 @@ _GOLDEN = 0.5 * (3.0 - math.sqrt(5.0))
 
 def minimise_bounded(function: Callable[[float], float], low: float, high: float, *,
                      x_tolerance: float, max_evaluations: int = 100) -> tuple[float, float]:
-    """(x, f(x)) at a local minimum of ``function`` in [low, high], to ``x_tolerance``."""
+    """(x, f(x)) at a local minimum of ``function`` in [low, high], to ``x_tolerance``.
+
+    Parameters
+    ----------
+    function : callable
+        f(x) -> float, x in [low, high] (any unit; the result's unit is f's).
+    low, high : float
+        The interval, ``high`` > ``low``.
+    x_tolerance : float
+        Tolerance on x, in x's unit.
+    max_evaluations : int, optional
+        Most evaluations of ``function``.
+
+    Returns
+    -------
+    tuple of float
+        (x, f(x)).
+
+    Raises
+    ------
+    ValueError
+        An empty interval.
+    """
     if not high > low:
         raise ValueError(f"empty interval [{low}, {high}]")
     a, b = low, high
