@@ -49,6 +49,20 @@ def run_labels(values: ArrayLike, data_rows: ArrayLike | None = None,
     Rows of one run share a value and lie together. ``data_rows`` (N,) are the
     rows' numbers in the file, for the errors (default 1..N).
 
+    Parameters
+    ----------
+    values : array_like, shape (N,)
+        The run column (compared as stripped text).
+    data_rows : array_like of int, shape (N,), optional
+        The rows' numbers in the file, for the errors (default 1..N).
+    column : str, optional
+        The run column's name, for the errors.
+
+    Returns
+    -------
+    tuple of (ndarray of int, shape (N,), list of str)
+        Run index per row (from 0), and the runs' names in order.
+
     Raises
     ------
     InputDataError
@@ -83,7 +97,18 @@ def run_labels(values: ArrayLike, data_rows: ArrayLike | None = None,
 
 
 def run_starts(run_of_row: NDArray[np.intp]) -> NDArray[np.intp]:
-    """(R,) the first row of each run."""
+    """(R,) the first row of each run.
+
+    Parameters
+    ----------
+    run_of_row : ndarray of int, shape (N,)
+        Run index of each row (runs contiguous, from 0).
+
+    Returns
+    -------
+    ndarray of int, shape (R,)
+        Row index of each run's first row.
+    """
     run_of_row = np.asarray(run_of_row)
     return np.concatenate(([0], np.flatnonzero(np.diff(run_of_row) != 0) + 1)).astype(np.intp)
 
@@ -92,7 +117,29 @@ def stitched_time(time_s: NDArray[np.float64], run_of_row: NDArray[np.intp],
                   names: list[str], data_rows: ArrayLike | None = None) -> NDArray[np.float64]:
     """Runs laid end to end (N,) [s]: each starts one of its own median steps after the
     previous run's end, its time relative to its first row. A time that goes back inside
-    a run is refused, naming the row."""
+    a run is refused, naming the row.
+
+    Parameters
+    ----------
+    time_s : ndarray, shape (N,)
+        The log's time [s].
+    run_of_row : ndarray of int, shape (N,)
+        Run index of each row (runs contiguous, from 0).
+    names : list of str
+        The runs' names, in order.
+    data_rows : array_like of int, shape (N,), optional
+        The rows' numbers in the file, for the messages (default 1..N).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Stitched time [s], from 0.
+
+    Raises
+    ------
+    InputDataError
+        A time that goes back inside a run.
+    """
     t = np.asarray(time_s, dtype=np.float64)
     rows = np.arange(1, t.size + 1) if data_rows is None else np.asarray(data_rows)
     out = np.empty_like(t)
@@ -117,6 +164,18 @@ def split_at_run(run_of_row: NDArray[np.intp], fraction: float) -> NDArray[np.bo
     """(N,) training rows: the runs before the run boundary nearest ``fraction`` of the rows,
     at least one run on each side.
 
+    Parameters
+    ----------
+    run_of_row : ndarray of int, shape (N,)
+        Run index of each row (runs contiguous, from 0).
+    fraction : float
+        Share of the rows wanted for training, in (0, 1).
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        True on the training rows.
+
     Raises
     ------
     InputDataError
@@ -134,7 +193,20 @@ def split_at_run(run_of_row: NDArray[np.intp], fraction: float) -> NDArray[np.bo
 
 def run_blocks(run_of_row: NDArray[np.intp], max_blocks: int) -> NDArray[np.intp] | None:
     """(N,) forward-validation block of each row: whole runs, grouped into at most
-    ``max_blocks`` contiguous blocks of near-equal rows (None with one run)."""
+    ``max_blocks`` contiguous blocks of near-equal rows (None with one run).
+
+    Parameters
+    ----------
+    run_of_row : ndarray of int, shape (N,)
+        Run index of each row (runs contiguous, from 0).
+    max_blocks : int
+        Most blocks.
+
+    Returns
+    -------
+    ndarray of int, shape (N,), or None
+        Block of each row, 0, 1, ... in time order; None with one run.
+    """
     run_of_row = np.asarray(run_of_row)
     starts = run_starts(run_of_row)
     runs = starts.size
@@ -159,6 +231,25 @@ def mixed_units_problem(target: NDArray[np.float64], temperatures: dict[str, NDA
     whose readings, mapped by a unit slip's conversion (:func:`unit_slip_of_run`), match
     the other runs' while its raw readings do not - a different process (a hotter day)
     is not a unit slip.
+
+    Parameters
+    ----------
+    target : ndarray, shape (N,)
+        The measured error, in the log's unit (only ratios between runs are used).
+    temperatures : dict of str to ndarray, shape (N,)
+        Sensor name -> readings [degC].
+    run_of_row : ndarray of int, shape (N,)
+        Run index of each row (runs contiguous, from 0).
+    names : list of str
+        The runs' names, in order.
+    zeroed : bool
+        Whether the target was zeroed per run (not read: each run's range is compared
+        either way).
+
+    Returns
+    -------
+    str
+        The line, or "".
     """
     starts = list(run_starts(run_of_row)) + [run_of_row.size]
     slices = [slice(a, b) for a, b in zip(starts[:-1], starts[1:])]
@@ -191,7 +282,22 @@ def run_level_notes(temperatures: dict[str, NDArray], run_of_row: NDArray[np.int
                     names: list[str]) -> list[str]:
     """One note per sensor whose level in a run lies :data:`TEMPERATURE_SLIP_K` or more
     from the other runs' while no unit slip maps it onto them (:func:`unit_slip_of_run`):
-    a different process (a hotter day, a machine at work), said and kept."""
+    a different process (a hotter day, a machine at work), said and kept.
+
+    Parameters
+    ----------
+    temperatures : dict of str to ndarray, shape (N,)
+        Sensor name -> readings [degC].
+    run_of_row : ndarray of int, shape (N,)
+        Run index of each row (runs contiguous, from 0).
+    names : list of str
+        The runs' names, in order.
+
+    Returns
+    -------
+    list of str
+        The notes (at most one per sensor).
+    """
     starts = list(run_starts(run_of_row)) + [run_of_row.size]
     slices = [slice(a, b) for a, b in zip(starts[:-1], starts[1:])]
     notes = []
@@ -224,6 +330,20 @@ def unit_slip_of_run(run: NDArray[np.float64], rest: NDArray[np.float64],
     other runs' range (widened by :data:`TEMPERATURE_SLIP_K`/8), lie where only that unit
     puts a structure's temperature, and - converted - fall inside the others' range with
     a spread like theirs (when they spread by a kelvin or more).
+
+    Parameters
+    ----------
+    run : ndarray, shape (n,)
+        One run's readings of a sensor, as given (unit unknown; degC expected).
+    rest : ndarray, shape (m,)
+        The other runs' readings of that sensor [degC].
+    other_runs : list of ndarray
+        The other runs' readings, run by run [degC].
+
+    Returns
+    -------
+    tuple of (str, float) or None
+        (``"K"`` or ``"degF"``, the run's converted median [degC]), or None.
     """
     run, rest = run[np.isfinite(run)], rest[np.isfinite(rest)]
     if run.size < 2 or rest.size < 2:
@@ -258,7 +378,20 @@ def clock_breaks(time_s: NDArray[np.float64], data_rows: ArrayLike | None = None
 
     A jump: a forward step :data:`CLOCK_JUMP_FACTOR` times the median step and
     :data:`CLOCK_JUMP_MIN_S` or more. Equal stamps are named with their rows (a logger's
-    resolution: the lags hold still over them). A step back is the caller's to refuse."""
+    resolution: the lags hold still over them). A step back is the caller's to refuse.
+
+    Parameters
+    ----------
+    time_s : ndarray, shape (N,)
+        The log's time [s].
+    data_rows : array_like of int, shape (N,), optional
+        The rows' numbers in the file, for the messages (default 1..N).
+
+    Returns
+    -------
+    tuple of (ndarray of bool, shape (N,), list of str)
+        The rows after a jump, and the notes.
+    """
     t = np.asarray(time_s, dtype=np.float64)
     rows = np.arange(1, t.size + 1) if data_rows is None else np.asarray(data_rows)
     breaks = np.zeros(t.size, dtype=bool)
@@ -283,7 +416,18 @@ def clock_breaks(time_s: NDArray[np.float64], data_rows: ArrayLike | None = None
 
 
 def duration_text(seconds: float) -> str:
-    """A duration in the largest unit that keeps it above 1 (s, min, h, d)."""
+    """A duration in the largest unit that keeps it above 1 (s, min, h, d).
+
+    Parameters
+    ----------
+    seconds : float
+        The duration [s].
+
+    Returns
+    -------
+    str
+        E.g. ``"2.5 h"``.
+    """
     for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
         if seconds >= size:
             return f"{seconds / size:.3g} {unit}"
@@ -302,7 +446,26 @@ def leave_out_dead_sensors(temperatures: dict[str, NDArray[np.float64]],
     :data:`~..inputs.sensor_health.LEAVE_OUT_RUN_SHARE` of one run, or jumping, is left out
     of every model and its rows kept; a few bad rows are NaN in the sensor kept (the
     caller's complete-row rule leaves those rows out). ``data_rows`` (N,) number the rows
-    in the notes; ``breaks`` (N,) mark rows after a clock jump."""
+    in the notes; ``breaks`` (N,) mark rows after a clock jump.
+
+    Parameters
+    ----------
+    temperatures : dict of str to ndarray, shape (N,)
+        Sensor name -> readings [degC].
+    run_of_row : ndarray of int, shape (N,), or None
+        Run index of each row, or None for one run.
+    names : list of str or None
+        The runs' names, in order.
+    data_rows : ndarray of int, shape (N,), optional
+        The rows' numbers in the file (default 1..N).
+    breaks : ndarray of bool, shape (N,), optional
+        Rows right after a clock jump.
+
+    Returns
+    -------
+    tuple of (dict of str to ndarray, shape (N,), list of str)
+        The sensors kept [degC] (a few bad rows NaN), and the notes.
+    """
     from ..inputs.sensor_health import judge_sensors
 
     health = judge_sensors(temperatures, data_rows, run_of_row, names, breaks)
