@@ -28,7 +28,24 @@ DEFAULT_DIRECTION_UNCERTAINTY_RAD = 2e-6
 def stated_uncertainty(values: ArrayLike, default: float, what: str, unit: str
                        ) -> tuple[float, str]:
     """(the median of the readings' stated k = 2 uncertainties, "") - or, when they state
-    none (all zero, or none given), (``default``, the sentence that says it was assumed)."""
+    none (all zero, or none given), (``default``, the sentence that says it was assumed).
+
+    Parameters
+    ----------
+    values : array_like
+        The readings' stated expanded uncertainties (k = 2), any shape, in ``unit``.
+    default : float
+        The uncertainty assumed when none is stated, in ``unit``.
+    what : str
+        What was read, for the sentence.
+    unit : str
+        The unit, for the sentence.
+
+    Returns
+    -------
+    tuple of (float, str)
+        The uncertainty (k = 2) in ``unit``, and "" or the sentence saying it was assumed.
+    """
     everything = np.asarray(values, dtype=np.float64).ravel()
     positive = everything[np.isfinite(everything) & (everything > 0)]
     if positive.size:
@@ -50,7 +67,27 @@ class Figure:
 
 def rms_with_uncertainty(values: ArrayLike, instrument_u_k2: float, *, seed: int = 0
                          ) -> Figure:
-    """Figures of ``values`` (shape (N,)) read with an instrument of ``instrument_u_k2`` (k = 2)."""
+    """Figures of ``values`` (shape (N,)) read with an instrument of ``instrument_u_k2`` (k = 2).
+
+    Parameters
+    ----------
+    values : array_like, shape (N,)
+        The error at N readings, any unit (the figures keep it).
+    instrument_u_k2 : float
+        The instrument's expanded uncertainty per reading (k = 2), same unit.
+    seed : int, optional
+        Seed of the bootstrap (the figures are reproducible).
+
+    Returns
+    -------
+    Figure
+        RMS, its U (k = 2), max |value| (the values' unit) and N.
+
+    Raises
+    ------
+    InputDataError
+        Values not 1-D, empty or not finite.
+    """
     r = finite_array(values, "values", ndim=1)
     n = r.size
     rms = float(np.sqrt(np.mean(r ** 2)))
@@ -66,7 +103,22 @@ def rms_with_uncertainty(values: ArrayLike, instrument_u_k2: float, *, seed: int
 
 
 def format_with_uncertainty(value: float, u_k2: float, unit: str) -> str:
-    """``value ± U unit`` rounded to the uncertainty's two significant digits."""
+    """``value ± U unit`` rounded to the uncertainty's two significant digits.
+
+    Parameters
+    ----------
+    value : float
+        The value, in ``unit``.
+    u_k2 : float
+        Its expanded uncertainty (k = 2), in ``unit`` (none shown when not > 0).
+    unit : str
+        The unit written.
+
+    Returns
+    -------
+    str
+        The text.
+    """
     if not (np.isfinite(u_k2) and u_k2 > 0):
         return f"{value:.3g} {unit}"
     decimals = max(0, 1 - int(np.floor(np.log10(u_k2))))
