@@ -42,7 +42,23 @@ MIN_LOG_ROWS = 30
 
 def log_machine(structure_length_m: float = DEFAULT_STRUCTURE_LENGTH_M):
     """The machine of a thermal log: three standing axes, ``structure_length_m`` of
-    structure for the physics bounds."""
+    structure for the physics bounds.
+
+    Parameters
+    ----------
+    structure_length_m : float, optional
+        Structure between the sensors and the displacement sensor [m], > 0.
+
+    Returns
+    -------
+    MachineDescription
+        ``thermal_log``: X, Y, Z with zero strokes.
+
+    Raises
+    ------
+    InputDataError
+        A length that is not finite and > 0.
+    """
     if not (np.isfinite(structure_length_m) and structure_length_m > 0):
         raise InputDataError(f"structure length {structure_length_m!r} m: give a length > 0")
     machine = generic_cartesian({a: (0.0, 0.0) for a in "XYZ"}, name="thermal_log")
@@ -87,6 +103,20 @@ def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
 
     Rows with a non-finite time, target, temperature or speed are left out (the
     caller counts them); fewer than :data:`MIN_LOG_ROWS` left is an error.
+
+    Returns
+    -------
+    Observations
+        The complete rows at a standing position (X, Y, Z at 0 [m]), ``component``
+        measured [m], time from 0 [s], temperatures [degC], the uncertainty (k = 2) [m].
+
+    Raises
+    ------
+    InputDataError
+        A component not x, y or z, a time that goes back, a run left with one row, or
+        zeroed runs without a run column.
+    InsufficientDataError
+        Fewer than :data:`MIN_LOG_ROWS` complete rows.
     """
     if component not in ("x", "y", "z"):
         raise InputDataError(f"component {component!r}: one of x, y, z")
@@ -151,7 +181,25 @@ def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
 
 def log_model(obs: Observations, structure_length_m: float = DEFAULT_STRUCTURE_LENGTH_M
               ) -> ErrorModel:
-    """The empty model of a log: its machine, every temperature referenced to its first row."""
+    """The empty model of a log: its machine, every temperature referenced to its first row.
+
+    Parameters
+    ----------
+    obs : Observations
+        The log's N readings (:func:`log_observations`).
+    structure_length_m : float, optional
+        Structure for the physics bounds [m].
+
+    Returns
+    -------
+    ErrorModel
+        No effects; each sensor's reference its first reading [degC].
+
+    Raises
+    ------
+    InputDataError
+        A length that is not finite and > 0.
+    """
     model = ErrorModel(log_machine(structure_length_m), {})
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c[sensor] = float(values[0])
@@ -160,7 +208,20 @@ def log_model(obs: Observations, structure_length_m: float = DEFAULT_STRUCTURE_L
 
 def log_prediction(model: ErrorModel, obs: Observations) -> NDArray[np.float64]:
     """The model's displacement (N,) [m] in the measured component at every row (lags run
-    from the first row)."""
+    from the first row).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model (its thermal effects).
+    obs : Observations
+        The log's N readings (:func:`log_observations`).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Displacement [m], zeroed per run when the runs were zeroed.
+    """
     c = int(np.flatnonzero(obs.measured_mask[0])[0])
     return obs.zeroed(model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[0][:, c])
 
@@ -169,21 +230,64 @@ def held_out_residual(model: ErrorModel, obs: Observations, train: NDArray[np.bo
                       ) -> NDArray[np.float64]:
     """measured - model (N,) [m], its zero (a displacement sensor's own) set on the
     training rows only: the later rows judge the model as it would have predicted them.
-    Zeroed runs have their zero at each run's start already: none is set."""
+    Zeroed runs have their zero at each run's start already: none is set.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model (its thermal effects).
+    obs : Observations
+        The log's N readings (:func:`log_observations`).
+    train : ndarray of bool, shape (N,)
+        The training rows.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Residual [m].
+    """
     c = int(np.flatnonzero(obs.measured_mask[0])[0])
     residual = obs.measured_m[:, c] - log_prediction(model, obs)
     return residual if obs.zeroed_runs else residual - float(np.mean(residual[train]))
 
 
 def held_out_rmse(model: ErrorModel, obs: Observations, train: NDArray[np.bool_]) -> float:
-    """RMS of :func:`held_out_residual` over the rows after training [m]."""
+    """RMS of :func:`held_out_residual` over the rows after training [m].
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model (its thermal effects).
+    obs : Observations
+        The log's N readings (:func:`log_observations`).
+    train : ndarray of bool, shape (N,)
+        The training rows.
+
+    Returns
+    -------
+    float
+        RMS [m] (nan when every row is a training row).
+    """
     residual = held_out_residual(model, obs, train)[~train]
     return float(np.sqrt(np.mean(residual ** 2)))
 
 
 def all_inputs_least_squares(obs: Observations, train: NDArray[np.bool_]) -> float:
     """The plain baseline a user tries first: least squares on every temperature at once,
-    fitted on the training rows, its held-out RMSE [m] (nan without temperatures)."""
+    fitted on the training rows, its held-out RMSE [m] (nan without temperatures).
+
+    Parameters
+    ----------
+    obs : Observations
+        The log's N readings (:func:`log_observations`).
+    train : ndarray of bool, shape (N,)
+        The training rows.
+
+    Returns
+    -------
+    float
+        Held-out RMSE [m], or nan.
+    """
     if not obs.temperatures:
         return float("nan")
     rest = all_inputs_least_squares_residual(obs, train)
@@ -193,7 +297,20 @@ def all_inputs_least_squares(obs: Observations, train: NDArray[np.bool_]) -> flo
 def all_inputs_least_squares_residual(obs: Observations, train: NDArray[np.bool_]
                                       ) -> NDArray[np.float64]:
     """measured - least squares on every temperature (N,) [m], fitted on the training rows
-    (an offset too, unless the runs were zeroed: their zero is known)."""
+    (an offset too, unless the runs were zeroed: their zero is known).
+
+    Parameters
+    ----------
+    obs : Observations
+        The log's N readings (:func:`log_observations`).
+    train : ndarray of bool, shape (N,)
+        The training rows.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Residual [m] (gains [m/K] on the rises over each sensor's first reading).
+    """
     c = int(np.flatnonzero(obs.measured_mask[0])[0])
     x = np.column_stack([v - v[0] for v in obs.temperatures.values()])
     x = obs.zeroed(x) if obs.zeroed_runs else np.column_stack([np.ones(obs.n), x])
