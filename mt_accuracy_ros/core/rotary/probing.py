@@ -334,18 +334,28 @@ def identify_location_errors(machine: MachineDescription, positions: dict[str, A
 
     Parameters
     ----------
-    machine
+    machine : MachineDescription
         The machine description; its own errors are *not* used (the fit finds
         the location errors alone).
-    positions
-        axis -> (N,) commanded positions of every axis at each cycle [m, rad].
-    centre_deviation_m
-        (N, 3) found minus expected sphere centre, machine (bed) frame [m].
-    parameters
-        Location-error names to identify (default :func:`default_rotary_parameters`).
-    sphere_nominal_m
-        (3,) the sphere centre in the workpiece-end frame, as the cycle assumed
-        it (default: the machine's workpiece point).
+    positions : dict of str to array_like, shape (N,)
+        Axis letter -> commanded positions of every axis at each cycle [m] (rotary [rad]).
+    centre_deviation_m : array_like, shape (N, 3)
+        Found minus expected sphere centre, machine (bed) frame [m].
+    parameters : list of str, optional
+        Location-error names to identify (default :func:`default_rotary_parameters`,
+        those one sphere can separate: :func:`observable_parameters`).
+    sphere_nominal_m : array_like, shape (3,), optional
+        The sphere centre in the workpiece-end frame, as the cycle assumed
+        it (default: the machine's workpiece point) [m].
+    iterations : int, optional
+        Most Gauss-Newton iterations.
+
+    Returns
+    -------
+    LocationIdentification
+        Values [m] or [rad] with standard (k = 1) uncertainties, the sphere's offset
+        (3,) [m], residuals (N, 3) [m], the condition number and what was not
+        observable.
 
     Raises
     ------
