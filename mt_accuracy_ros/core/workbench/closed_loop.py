@@ -127,18 +127,33 @@ def loop_phases(time_s: ArrayLike, measured_m: ArrayLike, applied_m: ArrayLike,
 
     Parameters
     ----------
-    time_s : (N,) reading times [s], ascending.
-    measured_m, applied_m : (N, 3) [m] what the instrument read and what the CNC had added.
-    events : [(time [s], label of the phase that starts there)], the first phase's
-        label at time -inf included or not (then "start").
-    instrument_u_k2 : the reference instrument's expanded uncertainty [m].
-    settle_s : readings this close after an event are left out (the change settling).
-    end_window_s : the end state is the last this many seconds of the run.
+    time_s : array_like, shape (N,)
+        Reading times [s], ascending.
+    measured_m, applied_m : array_like, shape (N, 3)
+        What the instrument read and what the CNC had added [m].
+    events : list of tuple of (float, str)
+        (time [s], label of the phase that starts there); the first phase's label at
+        time -inf included or not (then "start").
+    instrument_u_k2 : float
+        The reference instrument's expanded uncertainty (k = 2) [m].
+    settle_s : float, optional
+        Readings this close after an event are left out (the change settling) [s].
+    end_window_s : float, optional
+        The end state is the last this many seconds of the run [s].
+    min_readings : int, optional
+        Fewest readings of a phase shown.
 
     Returns
     -------
-    The whole run without compensation, one phase per event with at least
-    ``min_readings`` readings, and the end state (label ``"end state"``).
+    list of Phase
+        The whole run without compensation, one phase per event with at least
+        ``min_readings`` readings, and the end state (label ``"end state"``); figures
+        [m].
+
+    Raises
+    ------
+    InputDataError
+        Lengths that differ, no readings, or NaN/inf.
     """
     t = np.asarray(time_s, dtype=np.float64).reshape(-1)
     measured = np.asarray(measured_m, dtype=np.float64).reshape(-1, 3)
@@ -208,11 +223,25 @@ def judge_version(before_m: ArrayLike, after_m: ArrayLike, instrument_u_k2: floa
 
     Parameters
     ----------
-    before_m : (N, 3) [m] compensated error the instrument measured under the previous
-        version (its last readings).
-    after_m : (M, 3) [m] the same under the new version (its first readings after it
-        settled).
-    instrument_u_k2 : the instrument's expanded uncertainty [m].
+    before_m : array_like, shape (N, 3)
+        Compensated error the instrument measured under the previous version (its last
+        readings) [m].
+    after_m : array_like, shape (M, 3)
+        The same under the new version (its first readings after it settled) [m].
+    instrument_u_k2 : float
+        The instrument's expanded uncertainty (k = 2) [m].
+    min_readings : int, optional
+        Fewest readings needed before and after.
+
+    Returns
+    -------
+    VersionJudgement
+        Figures before and after per component [m], and the component that got worse.
+
+    Raises
+    ------
+    InputDataError
+        Fewer than ``min_readings`` readings on a side, or NaN/inf.
     """
     before = np.asarray(before_m, dtype=np.float64).reshape(-1, 3)
     after = np.asarray(after_m, dtype=np.float64).reshape(-1, 3)
