@@ -32,18 +32,18 @@ def in_range(flag: str, value: float | int | None, *, low: float = -math.inf,
 
     Parameters
     ----------
-    flag
+    flag : str
         The option as typed (``--rate``).
-    value
-        Its value; None (not given) passes.
-    low, high
+    value : float or int or None
+        Its value, in the option's unit; None (not given) passes.
+    low, high : float, optional
         Bounds, in the option's own unit; infinite: none.
-    low_open, high_open
+    low_open, high_open : bool, optional
         The bound itself is outside the range.
-    what
+    what : str, optional
         What the option is (``"an integer"``, ``"a fraction"``; "" for a number), for the
         message.
-    unit
+    unit : str, optional
         The option's unit shown after the range (``"s"``), "" for none.
 
     Raises
