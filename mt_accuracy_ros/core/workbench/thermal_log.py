@@ -74,6 +74,9 @@ def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
                      data_rows: NDArray[np.intp] | None = None) -> Observations:
     """A thermal log as reference readings of one component at a standing position.
 
+    Rows with a non-finite time, target, temperature or speed are left out (the
+    caller counts them); fewer than :data:`MIN_LOG_ROWS` left is an error.
+
     Parameters
     ----------
     time_s : ndarray, shape (N,)
@@ -100,9 +103,6 @@ def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
         to its first (so are the model's, :meth:`~.diagnosis.Observations.zeroed`).
     data_rows : ndarray, shape (N,), optional
         Each row's number in the file, for the errors.
-
-    Rows with a non-finite time, target, temperature or speed are left out (the
-    caller counts them); fewer than :data:`MIN_LOG_ROWS` left is an error.
 
     Returns
     -------
