@@ -49,7 +49,19 @@ class ExpressionError(ParameterError):
 
 @dataclass(frozen=True)
 class Expression:
-    """A checked expression: its text, tree and the names it uses."""
+    """A checked expression: its text, tree and the names it uses.
+
+    Attributes
+    ----------
+    text : str
+        The expression, stripped.
+    tree : ast.AST
+        Its checked syntax tree (``mode="eval"``).
+    names : frozenset of str
+        The variables and parameters it names (constants left out).
+    lagged : tuple of tuple of (str, float)
+        (variable, tau [s]) of every ``lag()`` call.
+    """
 
     text: str
     tree: ast.AST
