@@ -166,7 +166,17 @@ def subset_run_starts(run_starts: NDArray[np.intp], n: int, rows) -> NDArray[np.
 
 @dataclass
 class LagState:
-    """Where a lag stood at its last sample, so that a stream continues it."""
+    """Where a lag stood at its last sample, so that a stream continues it.
+
+    Attributes
+    ----------
+    time_s : float
+        Time of the last sample [s].
+    signal : float
+        The input there, in the signal's unit.
+    value : float
+        The lag's output there, in the signal's unit.
+    """
 
     time_s: float
     signal: float
