@@ -84,6 +84,21 @@ class Bound:
     or ``"value"`` (low ≤ every x ≤ high). ``typical``: a central value of the measure,
     which decides between units that would all be plausible. ``family``: the unit table
     (a key of :data:`UNITS`, or ``"temperature"``). ``label``: how a message names it.
+
+    Attributes
+    ----------
+    measure : str
+        ``"magnitude"``, ``"span"`` or ``"value"``.
+    low, high : float
+        The plausible range of the measure, SI ([degC] for temperatures).
+    typical : float
+        A central value of the measure, SI.
+    family : str
+        The unit table.
+    label : str
+        How a message names the quantity.
+    shown : str
+        How the bound reads in a message.
     """
 
     measure: str
