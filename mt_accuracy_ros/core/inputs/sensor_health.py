@@ -130,7 +130,15 @@ class SensorFinding:
 
 @dataclasses.dataclass
 class SensorHealth:
-    """The sensors judged: those kept (their bad rows NaN), and every finding."""
+    """The sensors judged: those kept (their bad rows NaN), and every finding.
+
+    Attributes
+    ----------
+    kept : dict of str to ndarray, shape (N,)
+        The sensors used [degC], bad rows NaN.
+    findings : list of SensorFinding
+        One per problem, in sensor order.
+    """
 
     kept: dict[str, NDArray[np.float64]]
     findings: list[SensorFinding]
