@@ -106,6 +106,17 @@ class RotaryAxisErrors:
 
     ``radial_x_m``/``radial_y_m`` D_x, D_y; ``axial_m`` D_z [m];
     ``tilt_x_rad``/``tilt_y_rad`` E_x, E_y (wobble); ``positioning_rad`` E_z [rad].
+
+    Attributes
+    ----------
+    radial_x_m, radial_y_m : float
+        D_x, D_y, radial error motions [m].
+    axial_m : float
+        D_z, axial error motion [m].
+    tilt_x_rad, tilt_y_rad : float
+        E_x, E_y, tilt error motions (wobble) [rad].
+    positioning_rad : float
+        E_z, angular positioning error [rad].
     """
 
     radial_x_m: float = 0.0
@@ -263,7 +274,19 @@ def _check_pair(short: BallBarSetup, long: BallBarSetup) -> None:
 # ---------------------------------------------------------------------- estimation
 @dataclass(frozen=True)
 class NormFit:
-    """One estimate of (E_x, E_y, D_z) and its residuals e_i = y_i - J_i p (Table 5.3)."""
+    """One estimate of (E_x, E_y, D_z) and its residuals e_i = y_i - J_i p (Table 5.3).
+
+    Attributes
+    ----------
+    method : str
+        ``"l2"`` or ``"linf"``.
+    parameters : ndarray, shape (3,)
+        E_x [rad], E_y [rad], D_z [m].
+    residuals : ndarray, shape (n,)
+        e_i = y_i - J_i p [m^2].
+    uncertainties : ndarray, shape (3,), or None
+        Standard (k = 1) uncertainties [rad, rad, m]; l2 only.
+    """
 
     method: str                                 # "l2" or "linf"
     parameters: NDArray[np.float64]             # (3,) E_x [rad], E_y [rad], D_z [m]
@@ -405,6 +428,17 @@ class BallBarRun:
 
     ``angles_rad`` (n,) in the order the table indexed them; ``readings_m``
     (r, n) the bar's length change Delta_1 [m] at each angle of each repetition.
+
+    Attributes
+    ----------
+    setup : BallBarSetup
+        The setup's geometry.
+    angles_rad : ndarray, shape (n,)
+        Table angles [rad], in the order indexed (at least 5).
+    readings_m : ndarray, shape (r, n)
+        Length changes Delta_1 [m] per repetition and angle (one row may be given as (n,)).
+    label : str, optional
+        The run's name (default from the bar length).
     """
 
     setup: BallBarSetup
@@ -498,6 +532,17 @@ class SingleSetupFit:
     The coupled sums cannot be separated with one setup: a = -2 R_x H E_x +
     2 R_x (D_y - H_y), b = 2 R_x H E_y + 2 R_x (D_x - H_x). With the tilts known
     from the two-setup fit they give the radial error less the eccentricity.
+
+    Attributes
+    ----------
+    run : str
+        The run's name.
+    coefficients : ndarray, shape (3,)
+        (a, b, k) [m^2].
+    residuals : ndarray, shape (n,)
+        [m^2].
+    radial_less_eccentricity_m : ndarray, shape (2,)
+        (D_x - H_x, D_y - H_y) [m].
     """
 
     run: str
@@ -513,6 +558,15 @@ class ReversalJump:
     A rotary axis's lost motion shows here (Zhu Fig. 5.13): the first reading
     was approached from the other direction. ``jump`` in the residual's unit,
     ``noise`` the residuals' robust standard deviation without the two ends.
+
+    Attributes
+    ----------
+    run : str
+        The run's (or the difference's) name.
+    jump : float
+        First minus last residual, in the residual's unit ([m^2] here).
+    noise : float
+        Robust standard deviation of the other residuals, same unit.
     """
 
     run: str
@@ -526,7 +580,29 @@ class ReversalJump:
 
 @dataclass
 class BallBarCalibration:
-    """Result of :func:`calibrate` (Zhu section 5.4, Tables 5.2 and 5.3)."""
+    """Result of :func:`calibrate` (Zhu section 5.4, Tables 5.2 and 5.3).
+
+    Attributes
+    ----------
+    short, long : BallBarRun
+        The two runs (``short`` the shorter bar).
+    observed : ndarray, shape (n,)
+        Delta_2'(L1) - Delta_2'(L2) [m^2].
+    design : ndarray, shape (n, 3)
+        J of Zhu eq. 5.19 [m^2/rad, m^2/rad, m].
+    l2, linf : NormFit
+        The two estimates of (E_x, E_y, D_z).
+    condition_number : float
+        cond(J), Zhu eq. 5.20.
+    single_setups : list of SingleSetupFit
+        Zhu eq. 5.13 per run.
+    reversal : list of ReversalJump
+        The closing jumps of the runs and of the difference.
+    socket_change_m : float
+        The unseen socket change allowed for [m].
+    socket_u, drift_u : ndarray, shape (3,), or None
+        What it and the runs' drift add to the l2 standard uncertainties [rad, rad, m].
+    """
 
     short: BallBarRun
     long: BallBarRun
@@ -808,6 +884,19 @@ class AxisLineReading:
       fits' uncertainty, not the tilts' U.
 
     Angles [rad], lengths [m]; ``*_u_k2`` expanded uncertainties (k = 2).
+
+    Attributes
+    ----------
+    ea0c_rad, eb0c_rad : float
+        The C line's tilts about x and y [rad].
+    ea0c_u_k2, eb0c_u_k2 : float
+        Their expanded uncertainties (k = 2) [rad].
+    ball_height_offset_m : float
+        D_z - R_x E_y [m].
+    ball_height_offset_u_k2 : float
+        Its expanded uncertainty (k = 2) [m].
+    line_offset_from_spindle_ball_m : dict of str to tuple of float
+        Run name -> (EX0C - H_x, EY0C - H_y) [m].
     """
 
     ea0c_rad: float
