@@ -45,7 +45,17 @@ LETTERS = "XYZ"
 # ------------------------------------------------------------------- spheres
 @dataclass(frozen=True)
 class SphereFit:
-    """Centre (3,) [m], radius [m], and each point's distance from the surface (m,) [m]."""
+    """Centre (3,) [m], radius [m], and each point's distance from the surface (m,) [m].
+
+    Attributes
+    ----------
+    centre_m : ndarray, shape (3,)
+        Centre [m], the points' frame.
+    radius_m : float
+        Radius [m] (the given one when fixed).
+    residuals_m : ndarray, shape (m,)
+        Each point's distance from the surface [m], outward positive.
+    """
 
     centre_m: NDArray[np.float64]
     radius_m: float
@@ -161,7 +171,34 @@ def default_rotary_parameters(machine: MachineDescription) -> list[str]:
 
 @dataclass
 class LocationIdentification:
-    """Result of :func:`identify_location_errors`."""
+    """Result of :func:`identify_location_errors`.
+
+    Attributes
+    ----------
+    parameters : dict of str to float
+        Location error name -> value [m] or [rad].
+    uncertainties : dict of str to float
+        Name -> standard (k = 1) uncertainty [m] or [rad].
+    sphere_offset_m : ndarray, shape (3,)
+        The sphere's position error, workpiece frame [m].
+    residuals_m : ndarray, shape (N, 3)
+        Measured - modelled deviation [m].
+    measured_m : ndarray, shape (N, 3)
+        The deviations as measured [m].
+    condition_number : float
+        Of the scaled Jacobian.
+    repeatability_m : float or None
+        Pooled standard deviation of repeated cycles [m].
+    correlations : dict of str to float
+        ``"a~b"`` -> correlation of two parameters, where |r| > 0.9.
+    not_observable : list of str
+        Default parameters one sphere could not separate (left at zero).
+    aliases : dict of str to dict of str to float
+        What a fitted parameter stands for when others fold into it.
+    probe_length_aliases : dict of str to float
+        Tool-side line offsets that mimic a probe length change: name -> that change per
+        +1 of it.
+    """
 
     parameters: dict[str, float]                  # name -> value [m or rad]
     uncertainties: dict[str, float]               # name -> standard (k = 1) uncertainty
