@@ -33,7 +33,21 @@ END_WINDOW_S = 30.0
 
 @dataclass(frozen=True)
 class Phase:
-    """One stretch of the run. Figures per component x, y, z [m]."""
+    """One stretch of the run. Figures per component x, y, z [m].
+
+    Attributes
+    ----------
+    label : str
+        The phase's name.
+    start_s, end_s : float
+        Its first and last reading's time [s].
+    count : int
+        Readings.
+    without : tuple of Figure
+        x, y, z: measured - applied, no compensation [m].
+    with_compensation : tuple of Figure
+        x, y, z: as measured, the compensation live [m].
+    """
 
     label: str
     start_s: float
@@ -193,6 +207,13 @@ class VersionJudgement:
     ``before`` / ``after``: per component x, y, z, RMS of the compensated error with its
     k = 2 uncertainty (sampling and instrument). ``worse`` names the component whose
     error rose by more than the two uncertainties combined (``None`` if none did).
+
+    Attributes
+    ----------
+    before, after : tuple of Figure
+        x, y, z figures of the compensated error [m].
+    worse : str or None
+        The component that rose beyond both uncertainties.
     """
 
     before: tuple[Figure, Figure, Figure]
