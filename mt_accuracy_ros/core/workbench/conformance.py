@@ -96,6 +96,17 @@ class Verdict:
     """One figure judged against its limit, with the figures that decided it.
 
     ``rms``, ``u_k2`` and ``limit`` are in the display unit ``unit`` (e.g. µm).
+
+    Attributes
+    ----------
+    name : str
+        The figure, e.g. ``e_x``.
+    rms, u_k2, limit : float
+        RMS, its expanded uncertainty (k = 2) and the limit, in ``unit``.
+    unit : str
+        Display unit.
+    state : Conformance
+        The ISO 14253-1 outcome.
     """
 
     name: str
