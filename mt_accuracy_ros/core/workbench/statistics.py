@@ -57,7 +57,19 @@ def stated_uncertainty(values: ArrayLike, default: float, what: str, unit: str
 
 @dataclass(frozen=True)
 class Figure:
-    """RMS and max |value| of an error [unit of the input] with k = 2 uncertainties."""
+    """RMS and max |value| of an error [unit of the input] with k = 2 uncertainties.
+
+    Attributes
+    ----------
+    rms : float
+        RMS, the input's unit.
+    rms_u_k2 : float
+        Its expanded uncertainty (k = 2), same unit.
+    max_abs : float
+        Largest |value|, same unit.
+    count : int
+        Readings N.
+    """
 
     rms: float
     rms_u_k2: float
