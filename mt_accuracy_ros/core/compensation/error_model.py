@@ -1183,6 +1183,16 @@ def resolve_model(text: str, *, from_network: bool = False, model_dir: str | Pat
 
     Every file is read as a regular file of bounded size, and errors never quote
     a file's content (:mod:`mt_accuracy_ros.core.inputs.safe_files`).
+
+    Returns
+    -------
+    ErrorModel
+        The model, its machine resolved.
+
+    Raises
+    ------
+    ParameterError
+        No such model, or a path where a network-named model may give none.
     """
     text = str(text).strip()
     directory = Path(model_dir) if model_dir else None
