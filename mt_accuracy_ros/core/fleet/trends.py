@@ -65,6 +65,16 @@ def error_trend(day_numbers, rmse_m) -> Trend:
         undated files) [day]; need not be consecutive.
     rmse_m : array_like, shape (n,)
         That day's RMS error of the model against the readings [m].
+
+    Returns
+    -------
+    Trend
+        Slope [m/day] with its standard error, first and last error [m], drifting.
+
+    Raises
+    ------
+    ValueError
+        Lengths that differ, no day, or non-finite values.
     """
     days = np.asarray(day_numbers, dtype=np.float64)
     error = np.asarray(rmse_m, dtype=np.float64)
