@@ -71,6 +71,16 @@ def detect_deterioration(positions: ArrayLike, baseline: ArrayLike, current: Arr
         Systematic error e_1 and e_N [unit].
     tolerance : float
         de_TOL [unit], > 0.
+
+    Returns
+    -------
+    DeteriorationReport
+        The change de = current - baseline (n,) [unit] and where |de| >= tolerance.
+
+    Raises
+    ------
+    ParameterError
+        A tolerance that is not finite and > 0.
     """
     x = finite_array(positions, "positions", ndim=1)
     base = finite_array(baseline, "baseline", ndim=1)
