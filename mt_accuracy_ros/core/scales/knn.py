@@ -415,6 +415,21 @@ def cross_validate_k(positions: ArrayLike, values: ArrayLike, k_lim: int = 100,
         Seed of the shuffle (ignored when ``folds`` is given).
     folds : array_like of int, shape (N,), optional
         Explicit fold number 0 ... K-1 of each sample (e.g. time-blocked).
+
+    Returns
+    -------
+    CrossValidationResult
+        The chosen k, its mean fold RMSE [value unit] and the RMSE of every k and fold.
+
+    Raises
+    ------
+    ParameterError
+        k_lim < 1, or fewer than 2 folds.
+    InputDataError
+        Positions or values not finite, 1-D and of one length.
+    InsufficientDataError
+        Too few samples for the folds, an empty fold, or a training set smaller than
+        k_lim.
     """
     x = finite_array(positions, "positions", ndim=1)
     y = finite_array(values, "values", ndim=1)
