@@ -143,6 +143,16 @@ def iso230_2(targets: ArrayLike, deviations_up: ArrayLike,
     deviations_up, deviations_down : array_like, shape (m, n)
         Positional deviations x_ij (actual - target) approached in the positive
         and negative direction in n >= 2 runs.
+
+    Returns
+    -------
+    Iso2302Result
+        Per-target and axis figures, in the input's length unit.
+
+    Raises
+    ------
+    InputDataError
+        Shapes that do not agree.
     """
     p = finite_array(targets, "targets", ndim=1)
     up = finite_array(deviations_up, "deviations_up", ndim=2)
@@ -252,6 +262,16 @@ def corrected_to_20c(target_m: ArrayLike, deviation_m: ArrayLike, temperature_c:
         Target P [m] (from the axis' zero), deviation [m], material temperature [degC].
     expansion_per_k : float
         The material's expansion coefficient alpha [1/K].
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Deviation at 20 degC [m].
+
+    Raises
+    ------
+    InputDataError
+        Arrays not finite or of different lengths, or alpha not in (0, 1e-3).
     """
     p = finite_array(target_m, "targets", ndim=1)
     x = finite_array(deviation_m, "deviations", ndim=1)
