@@ -196,7 +196,8 @@ def sensors_needed(order: int, dimensions: int, position_dependent: bool = False
     dimensions : int
         Spatial dimensions d (>= 1).
     position_dependent : bool, optional
-        Weights that depend on the position (eq. 23) instead of fixed (eq. 22).
+        Weights that depend on the position (Krulewich eq. 23) instead of fixed (Krulewich
+        eq. 22).
 
     Returns
     -------
