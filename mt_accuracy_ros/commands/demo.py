@@ -11,8 +11,8 @@
    reference instrument measures the compensated machine: the loop is closed.
 3. This process runs the user, a node (:class:`..nodes.demo_user.DemoUser`) that
    listens like any ROS tool and acts: when the monitor names a missing effect, it
-   asks the monitor to add it (the ``add_effects`` parameter) and watches the
-   machine's error fall. :func:`run_demo` starts the graph, spins it and summarises.
+   asks the monitor to add it (its ``change_model`` service, answered once the
+   version is made) and watches the machine's error fall. :func:`run_demo` starts the graph, spins it and summarises.
 4. At the end: a printed summary - the TCP error per component without
    compensation, with the starting model's, after each model change, after the
    deterioration, and at the end of the run, each with its k = 2 uncertainty -
@@ -73,14 +73,6 @@ def _datum_uncertainty(calibration: dict, datum: dict) -> list[float]:
         return float(xm60_linear_accuracy_m(position - low)) + CALIBRATION_LINEAR_FLOOR_M
 
     return calibration_uncertainty_at(machine, datum, table, CALIBRATION_SQUARENESS_RAD).tolist()
-
-
-def _set_parameter(node, target: str, name: str, value, executor=None,
-                   timeout_s: float = 30.0) -> tuple[bool, str]:
-    """Set a parameter of another node through its set_parameters service."""
-    from .model_tools import set_remote_parameter
-
-    return set_remote_parameter(node, target, name, value, timeout_s, executor=executor)
 
 
 #: The CNC's controller at rate 1: interpolation cycle, fixed input delay, staleness
@@ -181,7 +173,9 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     nodes, encoder = _start_nodes(model, bag, scenario, compensation_mode, rate_factor,
                                   path_niceness, lockstep, five_axis)
     rclpy.init()
-    user = DemoUser(_set_parameter, parameter_overrides=[
+    # The user asks the monitor through its change_model service: answered once the
+    # effects are fitted and live, with the version made.
+    user = DemoUser(parameter_overrides=[
         Parameter("rate_factor", value=float(rate_factor)),
         Parameter("lockstep", value=bool(lockstep))])
     # The user's own executor for the whole run: rclpy.spin_once(user) would add and

@@ -1,12 +1,14 @@
 """``mt-accuracy model``: change the live model from a terminal (add, remove, refit, show).
 
-``add``, ``remove`` and ``refit`` set the model monitor's ``add_effects`` /
-``remove_effects`` / ``refit_effects`` parameter through its ``set_parameters``
-service, as ``ros2 param set`` would; the monitor fits what is added (or
-refits what it holds) to the readings it holds and publishes the new version on
-``model``, which the compensation broadcaster follows. A refusal (an unknown
-effect, one not in the model, too few readings) is the command's one-line error,
-exit status 2. ``show`` prints the live version from ``model``.
+``add``, ``remove`` and ``refit`` ask the model monitor through its ``change_model``
+service (:mod:`..nodes._model_client`) with the effects to add, remove or refit; the
+monitor fits what is added (or refits what it holds) to the readings it holds,
+gates it and publishes the new version on ``model``, which the compensation
+broadcaster follows, and answers once that is done. The command prints the version
+made; a refusal - at validation (an unknown effect, one not in the model, too few
+readings) or when the change could not be made (physics refuses the fit, the gate
+the fitted model) - is the command's one-line error, exit status 2. ``show`` prints
+the live version from ``model``.
 """
 from __future__ import annotations
 
@@ -15,6 +17,10 @@ import math
 import time
 
 from ..core.errors import ParameterError
+
+#: Default wall seconds ``add``/``remove``/``refit`` wait for the monitor's answer: it
+#: comes once the change is made, a five-axis fit taking seconds of CPU on a busy host.
+CHANGE_TIMEOUT_S = 120.0
 
 
 def set_remote_parameter(node, target: str, name: str, value, timeout_s: float = 30.0,
@@ -65,19 +71,21 @@ def set_remote_parameter(node, target: str, name: str, value, timeout_s: float =
 def _change(args: argparse.Namespace) -> int:
     import rclpy
 
-    parameter = f"{args.verb}_effects"
+    from ..nodes._model_client import change_model
+
     effects = list(args.effects) or ["all"]   # refit with no names: every fitted effect
     rclpy.init()
     node = rclpy.create_node("mt_accuracy_model_tool")
     try:
-        accepted, reason = set_remote_parameter(node, args.monitor, parameter, effects,
-                                                timeout_s=args.timeout)
+        outcome = change_model(node, args.monitor, timeout_s=args.timeout,
+                               **{f"{args.verb}_effects": effects})
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
-    if not accepted:
-        raise ParameterError(f"{args.verb} {' '.join(effects)} refused: {reason}")
-    print(f"{args.verb} {' '.join(effects)}: accepted by {args.monitor}")
+    if not outcome.accepted:
+        raise ParameterError(f"{args.verb} {' '.join(effects)} refused: {outcome.reason}")
+    print(f"{args.verb} {' '.join(effects)}: accepted by {args.monitor} - version "
+          f"{outcome.version} live ({outcome.reason})")
     return 0
 
 
@@ -132,7 +140,7 @@ def add_parser(commands) -> None:
         parser.add_argument("effects", nargs="*" if verb == "refit" else "+", metavar="EFFECT")
         parser.add_argument("--monitor", default="/model_monitor",
                             help="the model monitor node (default /model_monitor)")
-        parser.add_argument("--timeout", type=float, default=30.0, metavar="S")
+        parser.add_argument("--timeout", type=float, default=CHANGE_TIMEOUT_S, metavar="S")
         parser.set_defaults(handler=_change, validate=validate_args)
     show = verbs.add_parser("show", help="print the live model version")
     show.add_argument("--timeout", type=float, default=10.0, metavar="S")

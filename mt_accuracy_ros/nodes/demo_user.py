@@ -9,14 +9,19 @@ decision: once the machine has warmed for ``looks_after_s`` of data, at the firs
 that names effects, it asks the monitor to add every one of them (its ``add_effects``
 parameter), once.
 
+It asks through the monitor's ``change_model`` service (:mod:`._model_client`), which
+answers once the effects are fitted, gated and live - or why they could not be - with
+the version made: what the user keeps is the outcome, not merely the request's
+validation.
+
 With ``lockstep`` it is a participant of the lockstep gate (``demo_user:checks``): the
 machine streams on once the user has looked at each check, and, after adding effects,
-once the user has seen the model version they made.
+once the version they made is settled where it applies (the user reports it published).
+The machine waits for the user meanwhile, so however long the fit takes on a loaded
+host, it lands at the same data time.
 
 The user runs in the demo's process (``mt-accuracy demo``), which spins it and calls
-:meth:`DemoUser.act` after each wake-up. It takes the parameter client as ``ask`` (a node
-does not import the command line): ``ask(node, target, name, value, executor,
-timeout_s) -> (accepted, reason)``.
+:meth:`DemoUser.act` after each wake-up.
 """
 from __future__ import annotations
 
@@ -34,24 +39,25 @@ from mt_accuracy_msgs.msg import (ModelCheck, ModelVersion, ReferenceMeasurement
 from ._common import (COMPENSATION_QOS, LATCHED_QOS, RESULT_QOS, float_descriptor,
                       plain_descriptor, stamp_to_nanoseconds)
 from ._health import warnings_of
+from ._model_client import ChangeOutcome, ModelClient
 
 #: The statuses on ``/diagnostics`` the user keeps (the latest of each node's delivery
 #: counters and the alarms): reliable, 50 deep - one second of every node's statuses.
 DIAGNOSTICS_QOS = QoSProfile(depth=50)
 #: Data time [s] after which the user acts on the first check naming effects.
 LOOKS_AFTER_S = 30.0
-#: Wall seconds the user waits for the monitor to answer its request in real time.
+#: Wall seconds the user waits for the monitor to answer its request - made, or not -
+#: in real time.
 ANSWER_S = 30.0
 #: Wall seconds a lockstep run's user waits for that answer (a bound for a hung graph
 #: only: the machine waits for the user meanwhile).
 LOCKSTEP_ANSWER_S = 600.0
-#: Wall seconds a lockstep run's user waits to see the version its request made.
-VERSION_SEEN_S = 30.0
 #: The TCP error axes the estimator publishes a profile for.
 PROFILE_AXES = ("x", "y", "z")
 
-#: ``ask(node, target, name, value, executor, timeout_s) -> (accepted, reason)``.
-ParameterClient = Callable[..., tuple[bool, str]]
+#: What asks the monitor for a change: :meth:`._model_client.ModelClient.change`'s
+#: signature, ``ask(*, timeout_s, executor, add_effects) -> ChangeOutcome``.
+ChangeClient = Callable[..., ChangeOutcome]
 
 
 # ------------------------------------------------------------------ the user's rules
@@ -201,7 +207,7 @@ class DemoUser(Node):
         Each check's search, (wall, CPU) [s].
     """
 
-    def __init__(self, ask: ParameterClient, **kwargs) -> None:
+    def __init__(self, ask: ChangeClient | None = None, **kwargs) -> None:
         super().__init__("demo_user", **kwargs)
         self.declare_parameter("rate_factor", 1.0, float_descriptor(
             "Sim seconds per wall second of the run (1 in lockstep)", 0.01, 1000.0,
@@ -214,7 +220,9 @@ class DemoUser(Node):
         self.rate_factor = float(self.get_parameter("rate_factor").value)
         self.lockstep = bool(self.get_parameter("lockstep").value)
         self.looks_after_s = float(self.get_parameter("looks_after_s").value)
-        self._ask = ask
+        # The client is made with the node, so it has matched the monitor long before
+        # the user first asks (a request is sent once: a change is not idempotent).
+        self._ask = ask if ask is not None else ModelClient(self).change
         #: The run's time base [ns]: far ahead until the graph is ready (:meth:`start`).
         self.start_ns = time.time_ns() + 3600_000_000_000
         self.checks: list[tuple[float, ModelCheck]] = []
@@ -336,22 +344,16 @@ class DemoUser(Node):
 
     def _add(self, effects: list[str], latest: ModelCheck) -> dict:
         """Ask the monitor to add ``effects`` (all in one decision: its joint fit)."""
-        before = latest_version(self.models)
-        # The monitor fits and gates them before it answers (seconds of CPU on five axes):
-        # a lockstep run has no pace to keep, so the user waits as long as a slow host
-        # needs - the outcome must not depend on it.
-        ok, reason = self._ask(self, "/model_monitor", "add_effects", effects, self.executor,
-                               LOCKSTEP_ANSWER_S if self.lockstep else ANSWER_S)
-        action = action_entry(self.checks[-1][0], latest, effects, ok, reason)
+        # The monitor answers once it has fitted, gated and published them (seconds of
+        # CPU on five axes): a lockstep run has no pace to keep, so the user waits as
+        # long as a slow host needs - the outcome must not depend on it.
+        outcome = self._ask(add_effects=effects, executor=self.executor,
+                            timeout_s=LOCKSTEP_ANSWER_S if self.lockstep else ANSWER_S)
+        action = action_entry(self.checks[-1][0], latest, effects, outcome.accepted,
+                              outcome.reason)
         self.actions.append(action)
-        if ok and self.progress is not None:
-            self._see_version_after(before)
+        if outcome.accepted and self.progress is not None:
+            # The machine goes on once the version the request made is settled where it
+            # applies: the answer names it, made before the answer.
+            self.progress.report(published=outcome.version)
         return action
-
-    def _see_version_after(self, before: int) -> None:
-        """The machine goes on once the version the request made is settled where it
-        applies: the user waits to see it, then says which it is."""
-        seen_by = time.monotonic() + VERSION_SEEN_S
-        while latest_version(self.models) <= before and time.monotonic() < seen_by:
-            self.executor.spin_once(timeout_sec=0.05)
-        self.progress.report(published=latest_version(self.models))

@@ -1,6 +1,6 @@
 """The demo's user (nodes/demo_user.py): its rules against their closed forms, and the
 node's decision driven by synthetic messages (no graph: its callbacks are called
-directly, its parameter client is a stand-in)."""
+directly, its change_model client is a stand-in)."""
 from __future__ import annotations
 
 import pytest
@@ -9,6 +9,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from mt_accuracy_msgs.msg import (EffectScore, ModelCheck, ModelVersion, ReferenceMeasurement,
                                   SystematicProfile)
 from mt_accuracy_ros.nodes._common import nanoseconds_to_stamp
+from mt_accuracy_ros.nodes._model_client import ChangeOutcome
 from mt_accuracy_ros.nodes.demo_user import (ANSWER_S, LOCKSTEP_ANSWER_S, LOOKS_AFTER_S,
                                              action_entry, action_line, effects_to_add,
                                              hear_warnings, is_new_alarm, latest_version,
@@ -125,8 +126,8 @@ def test_the_progress_line_says_where_the_run_is():
 # ------------------------------------------------------------------ the node
 @pytest.fixture
 def user_node():
-    """A DemoUser on a private context, with a stand-in for the monitor's parameter
-    service that records each request and answers as told."""
+    """A DemoUser on a private context, with a stand-in for the monitor's change_model
+    service that records each request and answers as told (an outcome)."""
     import rclpy
     from rclpy.parameter import Parameter
 
@@ -137,16 +138,15 @@ def user_node():
     rclpy.init(context=context)
     made = []
 
-    def make(lockstep: bool, answer=(True, ""), publishes: int | None = None):
+    def make(lockstep: bool, answer=ChangeOutcome(True, "added (user)", 2), stand_in=True):
         asked = []
 
-        def ask(node, target, name, value, executor, timeout_s):
-            asked.append((target, name, list(value), executor is node.executor, timeout_s))
-            if publishes is not None:   # the monitor's new version, as it would publish it
-                node.models.append((0.0, version(publishes, "added (user)")))
+        def ask(*, add_effects, executor, timeout_s):
+            asked.append(("add_effects", list(add_effects), executor is node.executor,
+                          timeout_s))
             return answer
 
-        node = DemoUser(ask, context=context, parameter_overrides=[
+        node = DemoUser(ask if stand_in else None, context=context, parameter_overrides=[
             Parameter("lockstep", value=lockstep)])
         executor = node_executor(node)
         made.append((node, executor))
@@ -168,8 +168,7 @@ def test_the_node_adds_what_the_first_naming_check_names_once(user_node):
     assert user.act() is None and asked == []   # still warming
     user._on_check(check(33.3, "angular:EBX", "angular:EAY"))
     action = user.act()
-    assert asked == [("/model_monitor", "add_effects", ["angular:EBX", "angular:EAY"], True,
-                      ANSWER_S)]
+    assert asked == [("add_effects", ["angular:EBX", "angular:EAY"], True, ANSWER_S)]
     assert action == user.actions[0]
     assert (action["time_s"], action["added"], action["accepted"]) == \
         (pytest.approx(33.3, abs=1e-9), "angular:EBX, angular:EAY", True)
@@ -179,7 +178,8 @@ def test_the_node_adds_what_the_first_naming_check_names_once(user_node):
 
 
 def test_a_lockstep_user_says_each_check_looked_at_and_the_version_it_saw(user_node):
-    user, asked = user_node(lockstep=True, publishes=2)
+    # The answer names the version made; the user need not have seen it on 'model'.
+    user, asked = user_node(lockstep=True, answer=ChangeOutcome(True, "added (user)", 2))
     user._on_model(version(1))
     first = check(11.1)
     user._on_check(first)
@@ -189,13 +189,21 @@ def test_a_lockstep_user_says_each_check_looked_at_and_the_version_it_saw(user_n
     user._on_check(check(33.3, "angular:EBX"))
     user.act()
     # The lockstep bound on the answer; the version the request made, then the check.
-    assert asked[0][4] == LOCKSTEP_ANSWER_S
+    assert asked[0][3] == LOCKSTEP_ANSWER_S
     assert user.progress.state.model_version_published == 2
     assert user.progress.state.check_handled_ns == START_NS + 33_300_000_000
 
 
+def test_the_user_holds_its_change_model_client_from_its_start(user_node):
+    # Made with the node, so discovery has matched it long before the one request
+    # (sent once: a change is not idempotent).
+    user, _ = user_node(lockstep=False, stand_in=False)
+    assert [client.srv_name for client in user.clients] == ["/model_monitor/change_model"]
+
+
 def test_a_refused_request_is_kept_and_not_waited_on(user_node):
-    user, asked = user_node(lockstep=True, answer=(False, "no significant gain"))
+    user, asked = user_node(lockstep=True,
+                            answer=ChangeOutcome(False, "no significant gain", 1))
     user._on_check(check(33.3, "warp"))
     action = user.act()
     assert (action["accepted"], action["reason"]) == (False, "no significant gain")

@@ -28,9 +28,9 @@ def _scenario(tmp_path, seed=1, duration=4.0, name="s.yaml"):
 
 
 def _set(node, target, name, value):
-    from mt_accuracy_ros.commands.demo import _set_parameter
+    from mt_accuracy_ros.commands.model_tools import set_remote_parameter
 
-    return _set_parameter(node, target, name, value)
+    return set_remote_parameter(node, target, name, value)
 
 
 def test_graph_topics_types_and_refused_parameters(rclpy_context, tmp_path):
