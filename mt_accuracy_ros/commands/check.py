@@ -491,13 +491,18 @@ def arm_verdicts(named: list[dict], tool_offset_m: float | None) -> tuple[list[s
     """What the named ``angular_arm`` effects say about the tool offset.
 
     Returns (notes, refusal): a note per tilt whose arm was fitted, and a one-line
-    refusal when the map gave a tool offset the data contradict (the tilt's arm
-    differs from it by more than 3 standard uncertainties and 5 mm), naming the value
-    the data support. The tool points along +z for a positive or absent offset.
+    refusal when the map gave a tool offset the data contradict, naming the value the
+    data support. A tilt's arm reaches from its pivot to the tool tip, so one tilt whose
+    arm differs from the map's tool offset (by more than 3 standard uncertainties and
+    5 mm) says its pivot lies that far from the carriage's reference - or that the
+    offset is wrong: the readings cannot tell (the difference moves the tool as a
+    straightness of that axis would), and a note says both. The data contradict the
+    offset only when two or more tilts, whose pivots are unrelated, agree on one other
+    tool tip. The tool points along +z for a positive or absent offset.
     """
     from ..core.effects.geometric import AngularWithArm
 
-    notes, refusal = [], ""
+    notes, away = [], []
     given = tool_offset_m or 0.0
     along_z = -1.0 if given < 0 else 1.0
     supported_tools: list[tuple[str, float, float]] = []
@@ -520,16 +525,39 @@ def arm_verdicts(named: list[dict], tool_offset_m: float | None) -> tuple[list[s
                          f"± {2e3 * sigma:.1f} mm of arm along the tool beyond the surveyed "
                          f"axes' (k = 2): a tool offset of {supported * 1e3:.1f} mm; give it "
                          "as the map's tool_offset and the tilt is named with its arm known")
-        elif abs(extra) > max(3.0 * sigma, 5e-3) and not refusal:
-            refusal = (f"the column map's tool_offset {given * 1e3:.1f} mm contradicts the "
-                       f"data: {entry['variant']} acts through an arm that puts the tool tip "
-                       f"at {supported * 1e3:.1f} ± {2e3 * sigma:.1f} mm (k = 2); correct the "
-                       "map's tool_offset")
+        elif abs(extra) > max(3.0 * sigma, 5e-3):
+            away.append((entry["variant"], supported, sigma))
+            notes.append(f"{entry['name']}: the tilt acts through an arm that puts the tool "
+                         f"tip at {supported * 1e3:.1f} ± {2e3 * sigma:.1f} mm (k = 2), "
+                         f"{extra * 1e3:+.1f} mm from the map's tool_offset "
+                         f"{given * 1e3:.1f} mm: its pivot lies that far from the carriage's "
+                         "reference, or the tool_offset is wrong (the readings cannot tell: "
+                         "the difference moves the tool as a straightness of the axis would);"
+                         " the map's tool_offset is kept")
         else:
             notes.append(f"{entry['name']}: its arm agrees with the map's tool_offset within "
                          f"{abs(extra) * 1e3:.1f} mm")
+    refusal = contradicted_tool_offset(away, given)
     notes += one_tool_for_the_stack(supported_tools)
     return notes, refusal
+
+
+def contradicted_tool_offset(away: list[tuple[str, float, float]], given_m: float) -> str:
+    """A one-line refusal when two or more tilts whose arms miss the map's tool offset
+    ((variant, tool tip [m], its standard uncertainty [m]) each) agree on one other tool
+    tip, naming it; "" otherwise (one tilt's arm may as well say where its pivot is)."""
+    if len(away) < 2:
+        return ""
+    tips = np.array([tip for _, tip, _ in away])
+    sigmas = np.array([max(sigma, 1e-6) for _, _, sigma in away])
+    mean = float(np.sum(tips / sigmas ** 2) / np.sum(1.0 / sigmas ** 2))
+    sigma_mean = float(np.sqrt(1.0 / np.sum(1.0 / sigmas ** 2)))
+    if not np.all(np.abs(tips - mean) <= np.maximum(3.0 * sigmas, 5e-3)):
+        return ""
+    names = ", ".join(variant for variant, _, _ in away)
+    return (f"the column map's tool_offset {given_m * 1e3:.1f} mm contradicts the data: the "
+            f"tilts {names} act through arms that agree on a tool tip at {mean * 1e3:.1f} ± "
+            f"{2e3 * sigma_mean:.1f} mm (k = 2); correct the map's tool_offset")
 
 
 def one_tool_for_the_stack(supported: list[tuple[str, float, float]]) -> list[str]:

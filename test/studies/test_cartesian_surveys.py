@@ -109,21 +109,55 @@ def test_without_the_tool_offset_a_table_tilt_is_named_once_with_the_arm_the_dat
     assert abs(arm - (-120.0)) <= max(half_width, 5.0), line
 
 
-def test_a_tool_offset_the_data_contradict_is_refused_naming_the_value_they_support(tmp_path):
-    import re
-
+def _wrong_tool_offset(tmp_path, kind, seed):
     import yaml
 
-    csv, column_map, _ = single_effect_trial("vmc_500", "angular_table", 80_001, tmp_path,
+    csv, column_map, _ = single_effect_trial("vmc_500", kind, seed, tmp_path,
                                              readings=700, noise_m=0.4e-6)
     data = yaml.safe_load(column_map.read_text())
     data["tool_offset"]["value"] = -300.0          # the truth is -120 mm
     column_map.write_text(yaml.safe_dump(data))
-    code, out, err = _check(tmp_path, csv, column_map)
-    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    return _check(tmp_path, csv, column_map)
+
+
+def test_one_tilt_whose_arm_misses_the_tool_offset_says_where_its_pivot_or_the_tool_is(
+        tmp_path):
+    """One tilt's arm reaches from its pivot to the tool tip: 180 mm more than the map's
+    tool offset says the pivot lies 180 mm away or the offset is wrong - the readings
+    cannot tell, so the check goes on with the map's offset and says both, with the
+    tool tip the arm supports (the generator's -120 mm)."""
+    import re
+
+    code, out, err = _wrong_tool_offset(tmp_path, "angular_table", 80_001)
+    assert code == 0, err
+    line = next(t for t in out.splitlines() if "from the map's tool_offset -300.0 mm" in t)
+    supported = float(re.search(r"tool tip at ([-\d.]+) ±", line).group(1))
+    assert abs(supported - (-120.0)) < 15.0, line
+    assert "its pivot lies that far" in line and "the map's tool_offset is kept" in line
+
+
+def test_a_tool_offset_two_tilts_contradict_is_refused_naming_the_value_they_support(
+        tmp_path):
+    """Both tables tilt: two arms whose pivots are unrelated agree on one tool tip (the
+    generator's -120 mm), not the map's -300 mm - refused in one line naming it."""
+    import re
+
+    code, out, err = _wrong_tool_offset(tmp_path, "angular_tables", 90_012)
+    assert code == 2 and len(err.strip().splitlines()) == 1, (err, out[-2000:])
+    assert "tool_offset -300.0 mm contradicts the data: the tilts" in err
     supported = float(re.search(r"tool tip at ([-\d.]+) ±", err).group(1))
-    assert "tool_offset -300.0 mm contradicts the data" in err
     assert abs(supported - (-120.0)) < 15.0, err
+
+
+def test_the_tool_offset_is_refused_only_when_the_missing_arms_agree():
+    """Closed form: two arms 1 mm apart (sigma 1 mm) agree on their weighted mean; two
+    20 mm apart do not (each may be its own pivot); one alone never refuses."""
+    from mt_accuracy_ros.commands.check import contradicted_tool_offset
+
+    agree = contradicted_tool_offset([("EBX", -0.120, 1e-3), ("EAY", -0.121, 1e-3)], -0.3)
+    assert "tool tip at -120.5 ± 1.4 mm" in agree and "the tilts EBX, EAY" in agree
+    assert contradicted_tool_offset([("EBX", -0.120, 1e-3), ("EAY", -0.140, 1e-3)], -0.3) == ""
+    assert contradicted_tool_offset([("EBX", -0.120, 1e-3)], -0.3) == ""
 
 
 def test_work_axes_that_contradict_the_given_machine_are_refused_in_one_line(tmp_path):
