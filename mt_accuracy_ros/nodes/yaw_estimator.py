@@ -50,6 +50,11 @@ from ._common import (run_node, RESULT_QOS, SENSOR_QOS, accept, float_descriptor
                       unpack_float64)
 
 
+#: A reading may overshoot the stroke by this fraction of it (overtravel, the scales' own
+#: zero) before it is left out of the systematic profile.
+STROKE_MARGIN = 0.01
+
+
 class AxisState:
     """Everything the estimator keeps for one axis."""
 
@@ -64,6 +69,8 @@ class AxisState:
             memory_samples=params["memory_samples"], initial_k=min(20, params["k_lim"]))
         self.baseline: np.ndarray | None = None
         self.alarm = False
+        #: Readings left out because they lay outside the stroke (said on /diagnostics).
+        self.outside_stroke = 0
 
 
 class YawEstimator(Node):
@@ -293,7 +300,8 @@ class YawEstimator(Node):
         correction = self._thermal_term(state, first)
         yaw = raw - correction if correction is not None else raw
         positions = 0.5 * (first + second)
-        state.streaming.add(positions[good], yaw[good])
+        inside = good & self._within_stroke(state, positions, good)
+        state.streaming.add(positions[inside], yaw[inside])
         out = YawBatch()
         out.header = message.header
         out.axis = state.axis.lower()
@@ -304,6 +312,26 @@ class YawEstimator(Node):
         out.thermal_correction = pack_float64(correction if correction is not None
                                               else np.zeros(0))
         self._yaw_publishers[state.axis].publish(out)
+
+    def _within_stroke(self, state: AxisState, positions, good) -> np.ndarray:
+        """(n,) which readings lie on the axis' stroke (within 1 % of it): the others are
+        left out of the systematic profile, counted and said with the likely cause."""
+        margin = STROKE_MARGIN * (state.high - state.low)
+        inside = (positions >= state.low - margin) & (positions <= state.high + margin)
+        outside = good & ~inside
+        if outside.any():
+            state.outside_stroke += int(outside.sum())
+            read = positions[outside]
+            in_mm = bool(np.all((read / 1e3 >= state.low - margin) &
+                                (read / 1e3 <= state.high + margin)))
+            why = "the scales read in mm, not m?" if in_mm else \
+                "another machine's stroke, or a scale fault?"
+            self._report(DiagnosticStatus.WARN,
+                         f"axis {state.axis}: {int(outside.sum())} readings at "
+                         f"{read.min():.4g}..{read.max():.4g} m lie outside the stroke "
+                         f"{state.low:.4g}..{state.high:.4g} m and are left out of the "
+                         f"systematic profile ({why})")
+        return inside
 
     def _thermal_term(self, state: AxisState, first) -> np.ndarray | None:
         if not self.get_parameter("thermal_correction").value:
@@ -383,7 +411,8 @@ class YawEstimator(Node):
                 message="yaw deterioration beyond tolerance" if state.alarm else "ok")
             status.values = [KeyValue(key="samples", value=str(state.streaming.sample_count)),
                              KeyValue(key="k", value=str(state.streaming.k)),
-                             KeyValue(key="baseline", value=str(state.baseline is not None))]
+                             KeyValue(key="baseline", value=str(state.baseline is not None)),
+                             KeyValue(key="outside_stroke", value=str(state.outside_stroke))]
             statuses.append(status)
         worst = max((level for level, _ in self._problems), default=DiagnosticStatus.OK)
         statuses.append(DiagnosticStatus(

@@ -352,3 +352,59 @@ def test_an_input_that_stops_is_reported_and_its_last_value_held(rclpy_context):
     finally:
         broadcaster.stop()
         node.destroy_node()
+
+
+def test_scale_readings_outside_the_stroke_are_said_and_left_out_of_the_profile(
+        rclpy_context):
+    """X scales that read 100.0 for 0.1 m (mm published as m) lie outside kidani_hmc's X
+    stroke 0..0.39 m: the estimator keeps running, says on /diagnostics how many and that
+    they look like mm, and its profile takes none of them; readings on the stroke that
+    follow are taken."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    from mt_accuracy_msgs.msg import ScaleBatch
+    from mt_accuracy_ros.io.fields import pack_float64
+    from mt_accuracy_ros.nodes._common import SENSOR_QOS
+
+    node = rclpy.create_node("millimetre_scales")
+    diagnostics = []
+    node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 100)
+    scales = node.create_publisher(ScaleBatch, "scales", SENSOR_QOS)
+    estimator = start_node("yaw_estimator", {"input_delay_s": 0.0, "profile_period_s": 0.1},
+                           quiet=True)
+
+    def axis_x():
+        values = {}
+        for array in diagnostics:
+            for status in array.status:
+                if status.name.endswith(": axis X"):
+                    values = {v.key: v.value for v in status.values}
+        return values
+
+    try:
+        assert spin_until(node, lambda: scales.get_subscription_count() >= 1, 30)
+        sent = {"index": 0, "at": 0.0}
+
+        def send(reading_m, until):
+            if time.monotonic() - sent["at"] > 0.05:
+                sent["at"] = time.monotonic()
+                batch = _batch(sent["index"] * 50, 10**9 + sent["index"] * 50_000_000, 0.001)
+                batch.positions = pack_float64([reading_m] * 100)
+                scales.publish(batch)
+                sent["index"] += 1
+            return until()
+
+        assert spin_until(node, lambda: send(100.0, lambda: int(
+            axis_x().get("outside_stroke", 0)) >= 200), 60), axis_x()
+        assert axis_x()["samples"] == "0"
+        said = [s.message for array in diagnostics for s in array.status
+                if s.name.endswith(": input") and "outside the stroke" in s.message]
+        assert said and "readings at 100..100 m lie outside the stroke 0..0.39 m" in said[0]
+        assert "the scales read in mm, not m?" in said[0]
+        assert spin_until(node, lambda: send(0.1, lambda: int(
+            axis_x().get("samples", 0)) >= 100), 60), axis_x()
+        assert estimator.popen.poll() is None
+    finally:
+        estimator.stop()
+        node.destroy_node()
