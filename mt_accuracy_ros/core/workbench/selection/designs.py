@@ -37,13 +37,40 @@ class Term:
 
 
 def penalty_of(term: "Term", setting: dict) -> float:
-    """The ridge strength ``setting`` gives ``term`` (0 for a family without one)."""
+    """The ridge strength ``setting`` gives ``term``.
+
+    Parameters
+    ----------
+    term : Term
+        The candidate.
+    setting : dict
+        One of its settings.
+
+    Returns
+    -------
+    float
+        lambda, relative to each column's sum of squares (:func:`.linalg.penalise`); 0 for
+        a family without one.
+    """
     key = getattr(term.family, "penalty_setting", None)
     return float(setting.get(key, 0.0)) if key else 0.0
 
 
 def design_setting(term: "Term", setting: dict) -> tuple:
-    """The part of ``setting`` that makes the design (a penalty does not): a cache key."""
+    """The part of ``setting`` that makes the design (a penalty does not): a cache key.
+
+    Parameters
+    ----------
+    term : Term
+        The candidate.
+    setting : dict
+        One of its settings.
+
+    Returns
+    -------
+    tuple
+        Its (name, value) pairs but the penalty's, sorted, lists made tuples (hashable).
+    """
     key = getattr(term.family, "penalty_setting", None)
 
     def frozen(value):
@@ -119,8 +146,22 @@ def _largest_magnitude_per_row(design: NDArray[np.float64]) -> NDArray[np.float6
 
 def per_target(offsets: NDArray[np.float64], groups: NDArray[np.intp] | None,
                sample_of_row: NDArray[np.intp]) -> NDArray[np.float64]:
-    """The offsets' columns (rows, 3) split by target (rows, 3 G): one zero per located
-    target (``groups`` (N,) of :attr:`Context.target_groups`), or as they are (None)."""
+    """The instrument's offsets split by target: one zero per located target.
+
+    Parameters
+    ----------
+    offsets : ndarray, shape (R, 3)
+        One free offset per position component (1 on the rows of that component).
+    groups : ndarray of int, shape (N,), or None
+        Each reading's target (:attr:`Context.target_groups`); None: one target.
+    sample_of_row : ndarray of int, shape (R,)
+        Each row's reading.
+
+    Returns
+    -------
+    ndarray, shape (R, 3 G)
+        The offsets' columns per target (``offsets`` itself when ``groups`` is None).
+    """
     if groups is None:
         return offsets
     group = groups[sample_of_row]
@@ -197,6 +238,21 @@ class ReadingDesigns:
         self._own_products = caches.own_products.setdefault(tuple(self.fold_bounds), {})
 
     def design_rows(self, term: Term, setting: dict) -> NDArray[np.float64]:
+        """``term``'s design at ``setting`` on the rows fitted, from the cache or made.
+
+        Parameters
+        ----------
+        term : Term
+            The candidate.
+        setting : dict
+            One of its settings (a smaller setting nested in its largest is a view of
+            the largest's columns).
+
+        Returns
+        -------
+        ndarray, shape (R, P)
+            Its columns [m per unit parameter] at the measured rows, in time order.
+        """
         key = (term.name, design_setting(term, setting))
         design = self._designs.get(key)
         if design is None:
@@ -222,8 +278,21 @@ class ReadingDesigns:
         return term.family.nested_columns(term.variant, setting, term.settings[-1])
 
     def basis_rows(self, term: Term, setting: dict) -> NDArray[np.float64] | None:
-        """The scalar columns (S, P) of a separable design at the readings that measured
-        anything (None when the family's design is not separable)."""
+        """The scalar columns of a separable design at the readings that measured anything.
+
+        Parameters
+        ----------
+        term : Term
+            The candidate.
+        setting : dict
+            One of its settings.
+
+        Returns
+        -------
+        ndarray, shape (S, P), or None
+            The columns (the design is these times :meth:`sensitivity` along each row);
+            None when the family's design is not separable.
+        """
         key = ("basis", term.name, design_setting(term, setting))
         basis = self._designs.get(key)
         if basis is None:
@@ -254,9 +323,21 @@ class ReadingDesigns:
         return np.concatenate([flat, np.add.reduceat(flat * flat, self.row_starts)])
 
     def sensitivity(self, term: Term) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """(along each measured row (R,), its square summed per reading (S,)) of a separable
-        ``term``, from the cache or made again (its sensitivity is the same at every
-        setting)."""
+        """A separable ``term``'s sensitivity, from the cache or made again.
+
+        Parameters
+        ----------
+        term : Term
+            A candidate whose design is separable (its sensitivity is the same at every
+            setting).
+
+        Returns
+        -------
+        along_rows : ndarray, shape (R,)
+            Its sensitivity along each measured row [dimensionless].
+        squared : ndarray, shape (S,)
+            Its square summed per reading that measured anything.
+        """
         both = self._sensitivities.get(term.name)
         if both is None:
             sensitivity, _ = self.ctx.measured_separable(term.family, term.variant,
@@ -279,19 +360,46 @@ class ReadingDesigns:
         return along_rows * values[self.present_of_row[a:b] - start]
 
     def full_design(self, term: Term, setting: dict) -> NDArray[np.float64]:
+        """``term``'s design at ``setting`` at every reading and component.
+
+        Parameters
+        ----------
+        term : Term
+            The candidate.
+        setting : dict
+            One of its settings.
+
+        Returns
+        -------
+        ndarray, shape (N, K, P)
+            Its columns [m per unit parameter], measured or not.
+        """
         return self.ctx.measured_design(term.family, term.variant, setting)
 
     def base_columns(self) -> NDArray[np.float64]:
+        """(R, q) the current model's columns: the offsets, then each selected term's."""
         columns = [self.offsets] + [self.design_rows(t, s) for t, s in self.selected]
         return np.column_stack(columns)
 
     def components_of(self, term: Term) -> NDArray[np.bool_]:
-        """(K,) the measured components ``term``'s design moves (its largest setting's).
+        """The measured components ``term``'s design moves (its largest setting's).
 
         A candidate changes the held-out prediction only where its columns are non-zero,
         so its error there is the base model's: pooling those components into its test
         dilutes an effect that lives in one component - it is judged on the
-        components it moves."""
+        components it moves.
+
+        Parameters
+        ----------
+        term : Term
+            The candidate.
+
+        Returns
+        -------
+        ndarray of bool, shape (K,)
+            Per component (x, y, z, then a, b, c): measured and moved (all measured ones
+            when it moves none).
+        """
         # Three booleans per term: kept apart from the designs' cache, whose evictions
         # would otherwise make a design again only to know where it acts.
         known = self._components.get(term.name)
@@ -317,7 +425,18 @@ class ReadingDesigns:
         return self.cv.block_products(left, right)
 
     def base_statistics(self, base: NDArray[np.float64]) -> _BaseStatistics:
-        """The selected model's per-fold products (its columns with themselves and y)."""
+        """The selected model's per-fold products (its columns with themselves and y).
+
+        Parameters
+        ----------
+        base : ndarray, shape (R, q)
+            The model's columns (:meth:`base_columns`).
+
+        Returns
+        -------
+        _BaseStatistics
+            [base, y]'s products per fold, (F, q + 1, q + 1), and the columns.
+        """
         with_y = np.column_stack([base, self.y])
         products = self._block_products(with_y, with_y)
         # The columns once (at 1e5 readings a model of a few terms is tens of MB): the

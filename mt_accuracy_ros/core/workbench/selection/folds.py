@@ -113,14 +113,41 @@ class Folds:
     @classmethod
     def of_readings(cls, n: int, count: int, sample_of_row: NDArray[np.intp] | None = None,
                     cut: str = "even", forward: bool = False) -> "Folds":
-        """The readings 0..n-1 cut into ``count`` blocks (:func:`time_blocks`), each row
-        in its reading's (``sample_of_row`` (R,) non-decreasing; default: one row each)."""
+        """The readings 0..n-1 cut into blocks, each row in its reading's.
+
+        Parameters
+        ----------
+        n : int
+            The readings.
+        count : int
+            K, the blocks asked for (:func:`time_blocks`).
+        sample_of_row : ndarray of int, shape (R,), optional
+            Each row's reading, non-decreasing (default: one row per reading).
+        cut : {"even", "ceil"}
+            How the readings are cut (:func:`time_blocks`).
+        forward : bool
+            Validated forward.
+
+        Returns
+        -------
+        Folds
+        """
         blocks = time_blocks(n, count, cut)
         fold_of_row = blocks if sample_of_row is None else blocks[sample_of_row]
         return cls(fold_of_row, int(blocks[-1]) + 1 if n else count, forward)
 
     def training_sums(self, per_fold: NDArray[np.float64]) -> NDArray[np.float64]:
-        """:func:`training_sums` of ``per_fold`` (F, ...) for these folds."""
+        """Each fold's training sums (:func:`training_sums`, forward if these folds are).
+
+        Parameters
+        ----------
+        per_fold : ndarray, shape (F, ...)
+            A sum over each fold's rows.
+
+        Returns
+        -------
+        ndarray, shape (F, ...)
+        """
         return training_sums(per_fold, self.forward)
 
     def block_products(self, left: NDArray[np.float64], right: NDArray[np.float64]
@@ -139,8 +166,18 @@ class Folds:
         return np.stack([left[a:b].T @ right[a:b] for a, b in self.bounds])
 
     def training_rows(self, fold: int) -> NDArray[np.bool_]:
-        """(R,) the rows ``fold`` is fitted on: every other fold's, or (forward) the
-        earlier folds'."""
+        """The rows ``fold`` is fitted on.
+
+        Parameters
+        ----------
+        fold : int
+            0..F-1.
+
+        Returns
+        -------
+        ndarray of bool, shape (R,)
+            Every other fold's rows, or (forward) the earlier folds'.
+        """
         a, b = self.bounds[fold]
         rows = np.zeros(self.fold_of_row.size, dtype=bool)
         if self.forward:

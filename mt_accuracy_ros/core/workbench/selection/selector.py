@@ -86,9 +86,18 @@ class Scored:
     coefficient_p: float = 1.0
 
     def evidence(self, on_coefficients: bool = False) -> Evidence:
-        """What :class:`.significance.PassRule` reads of this candidate; with
-        ``on_coefficients`` it may pass on its full-data coefficients (:attr:`coefficient_p`)
-        instead of the held-out block test."""
+        """What :class:`.significance.PassRule` reads of this candidate.
+
+        Parameters
+        ----------
+        on_coefficients : bool
+            It may pass on its full-data coefficients (:attr:`coefficient_p`) instead of
+            the held-out block test.
+
+        Returns
+        -------
+        Evidence
+        """
         return Evidence(self.refusal, self.adjusted_p, self.reduction, self.share_of_excess,
                         self.coefficients, self.standard_errors,
                         self.coefficient_p if on_coefficients else 1.0)
@@ -163,12 +172,28 @@ class Selector(ReadingDesigns):
 
     def physics_refusal(self, term: Term, setting: dict, coefficients: NDArray[np.float64],
                         own_square_sum: float | None = None) -> str:
-        """Why physics refuses ``term`` fitted with ``coefficients`` ("" if it may stand).
+        """Why physics refuses ``term`` fitted with ``coefficients``.
 
-        ``own_square_sum``: c'X'Xc, the sum of the term's own contribution squared over
-        the rows fitted (from the products at hand). Every component's spread is at most
-        sqrt(that / its rows); when that bound lies within every allowance, no spread can
-        exceed one and the contribution itself is not made."""
+        Parameters
+        ----------
+        term : Term
+            The candidate.
+        setting : dict
+            Its setting.
+        coefficients : ndarray, shape (P,)
+            Its fitted parameters (SI).
+        own_square_sum : float, optional
+            c'X'Xc, the sum of the term's own contribution squared over the rows fitted
+            [m^2] (from the products at hand). Every component's spread is at most
+            sqrt(that / its rows); when that bound lies within every allowance, no
+            spread can exceed one and the contribution itself is not made.
+
+        Returns
+        -------
+        str
+            Its limits, its family's own checks and its spread per component against
+            the residual's allowances, "; "-joined; "" if it may stand.
+        """
         names = term.family.parameter_names(term.variant, setting)
         problems = limit_problems(names, coefficients,
                                   term.family.parameter_limits(self.ctx, term.variant, setting))
@@ -242,7 +267,23 @@ class Selector(ReadingDesigns):
 
     def out_of_fold(self, stats: _BaseStatistics, term: Term | None
                     ) -> tuple[NDArray[np.float64], dict]:
-        """Per-sample out-of-fold squared errors of base (+ term, setting chosen in-fold)."""
+        """Out-of-fold squared errors of the current model (+ ``term``).
+
+        Parameters
+        ----------
+        stats : _BaseStatistics
+            The current model's per-fold products (:meth:`base_statistics`).
+        term : Term or None
+            A candidate, its setting chosen inside each fold (:meth:`choose_settings`);
+            None: the current model alone.
+
+        Returns
+        -------
+        per_sample : ndarray, shape (N, K)
+            Squared held-out errors per reading and component [m^2] (0 where not judged).
+        settings : dict
+            Fold -> the setting it chose (empty for None).
+        """
         if term is None:
             q = stats.base.shape[1]
             coefficients = solve_normal(self._train(stats.products[:, :q, :q]),
@@ -267,7 +308,21 @@ class Selector(ReadingDesigns):
         return self._per_sample(squared), dict(enumerate(settings))
 
     def choose_settings(self, term: Term, stats: _BaseStatistics) -> list[dict]:
-        """The setting each fold's training blocks choose (preselection or BIC)."""
+        """The setting each fold's training blocks choose (preselection or BIC).
+
+        Parameters
+        ----------
+        term : Term
+            The candidate.
+        stats : _BaseStatistics
+            The current model's per-fold products.
+
+        Returns
+        -------
+        list of dict, length F
+            One of ``term.settings`` per fold; a penalised family's strength is
+            validated inside the fold (:meth:`_choose_penalty`).
+        """
         if len(term.settings) == 1:
             return [term.settings[0]] * self.folds
         if getattr(term.family, "penalty_setting", None):
@@ -356,8 +411,21 @@ class Selector(ReadingDesigns):
         return term.settings[int(np.argmin(errors.sum(axis=0)))]
 
     def choose_setting_all(self, term: Term, base: NDArray[np.float64]) -> dict:
-        """The setting all readings choose (preselection or BIC), refined continuously
-        where the family has a continuous setting (a period, a time constant)."""
+        """The setting all readings choose (preselection or BIC).
+
+        Parameters
+        ----------
+        term : Term
+            The candidate.
+        base : ndarray, shape (R, q)
+            The current model's columns.
+
+        Returns
+        -------
+        dict
+            One of ``term.settings``, refined continuously where the family has a
+            continuous setting (a period, a time constant: :meth:`refine_setting`).
+        """
         setting = term.settings[0]
         if getattr(term.family, "penalty_setting", None) and len(term.settings) > 1:
             return self._choose_penalty_all(term, base)
@@ -381,9 +449,26 @@ class Selector(ReadingDesigns):
         return self.refine_setting(term, base, setting)
 
     def refine_setting(self, term: Term, base: NDArray[np.float64], setting: dict) -> dict:
-        """Polish a grid setting's continuous parameter between its grid neighbours by
-        minimising the residual sum of squares (variable projection: the linear
-        coefficients are solved for at each trial value; Brent's method)."""
+        """Polish a grid setting's continuous parameter between its grid neighbours.
+
+        The residual sum of squares is minimised by variable projection (the linear
+        coefficients solved for at each trial value; Brent's method).
+
+        Parameters
+        ----------
+        term : Term
+            The candidate.
+        base : ndarray, shape (R, q)
+            The current model's columns.
+        setting : dict
+            A grid setting of ``term``.
+
+        Returns
+        -------
+        dict
+            ``setting`` with its continuous value polished (unchanged when the family has
+            none, the grid one point, or no value between the neighbours fits better).
+        """
         key = term.family.continuous_setting
         if key is None or len(term.settings) < 2 or key not in setting:
             return setting
@@ -411,7 +496,20 @@ class Selector(ReadingDesigns):
     def fit_full(self, terms: list[tuple[Term, dict]]):
         """Joint least-squares fit of the offsets and ``terms`` on every reading.
 
-        Returns (coefficients per term, standard errors per term, residual rows)."""
+        Parameters
+        ----------
+        terms : list of (Term, dict)
+            The terms and their settings (a penalised one with its ridge).
+
+        Returns
+        -------
+        coefficients : list of ndarray, each shape (P_i,)
+            Per term (SI).
+        standard_errors : list of ndarray, each shape (P_i,)
+            Per term.
+        residual : ndarray, shape (R,)
+            What the fit leaves on the rows [m].
+        """
         blocks = [self.design_rows(t, s) for t, s in terms]
         x = np.column_stack([self.offsets] + blocks)
         penalties, start = [], self.offsets.shape[1]
@@ -667,9 +765,22 @@ class Selector(ReadingDesigns):
 
     def held_out_p_value(self, base_sq: NDArray[np.float64], per_sample: NDArray[np.float64]
                          ) -> float:
-        """One-sided p-value that the out-of-fold squared errors per sample ``per_sample``
-        (N,) are below ``base_sq`` (N,): the test a selected term passes, for any two
-        predictions of the same readings (e.g. a refit against the live model)."""
+        """The block test a selected term passes, for any two predictions of the readings.
+
+        Parameters
+        ----------
+        base_sq : ndarray, shape (N,)
+            One prediction's out-of-fold squared errors per reading [m^2] (e.g. the live
+            model's).
+        per_sample : ndarray, shape (N,)
+            The other's (e.g. a refit's).
+
+        Returns
+        -------
+        float
+            One-sided p-value that ``per_sample`` is below ``base_sq`` (t-test over the
+            test blocks' gains).
+        """
         return self._block_test(base_sq, per_sample)
 
     def above_noise(self) -> bool:
@@ -684,10 +795,29 @@ class Selector(ReadingDesigns):
 
     def pair_lookahead(self, step: Step, remaining: list[Term], beam: int
                        ) -> tuple[Scored, Scored] | None:
-        """Two effects at once: when no single candidate passes (each leaves the other's
-        error in its held-out blocks), try each of the ``beam`` best as a first term and
-        the best second term after it; the pair must pass the block test against the
-        current model (Bonferroni over every pair tried) and the second its own test."""
+        """Two effects at once, when no single candidate passes.
+
+        Each may leave the other's error in its held-out blocks: each of the ``beam``
+        best is tried as a first term with the best second term after it; the first
+        must pass the acceptance rule for the pair against the current model (block
+        test Bonferroni over every pair tried, twice the share) and the second its own
+        step.
+
+        Parameters
+        ----------
+        step : Step
+            The step where nothing passed.
+        remaining : list of Term
+            The candidates not selected.
+        beam : int
+            How many of its ranking are tried first.
+
+        Returns
+        -------
+        (Scored, Scored) or None
+            The first and second terms of the pair with the least out-of-fold error, or
+            None when no pair passes.
+        """
         stats, base_sq, count, base_mse, excess = self._baseline()
         pair_rule = replace(self.rule, min_share=2 * self.rule.min_share)
         options = []
@@ -725,13 +855,28 @@ class Selector(ReadingDesigns):
         return first, second
 
     def no_longer_needed(self, steps: list[Step], newest: Scored) -> list[Scored]:
-        """After ``newest`` was added: each earlier term re-tested held out, as if it were
-        a candidate now, against the terms selected before it *and* ``newest``; one that
-        no longer passes the selection's tests (its out-of-fold gain, block test, share
-        and strength) is explained by ``newest`` and taken out of :attr:`selected` and
-        its step (a product first named as a simpler stand-in keeps none of
-        them once it is in). Only what the newest term explains is dropped: a term that
-        several later ones explain together stays (they may be stand-ins of it)."""
+        """The earlier terms ``newest`` explains, taken out.
+
+        Each earlier term is re-tested held out, as if it were a candidate now, against
+        the terms selected before it *and* ``newest``; one that no longer passes the
+        selection's tests (its out-of-fold gain, block test, share and strength) is
+        explained by ``newest`` and taken out of :attr:`selected` and its step (a product
+        first named as a simpler stand-in keeps none of them once it is in). Only what
+        the newest term explains is dropped: a term that several later ones explain
+        together stays (they may be stand-ins of it).
+
+        Parameters
+        ----------
+        steps : list of Step
+            The steps so far (a dropped term's step is left with ``added`` None).
+        newest : Scored
+            The term just added.
+
+        Returns
+        -------
+        list of Scored
+            The terms dropped (also recorded in :attr:`dropped`).
+        """
         dropped = []
         for step in steps:
             earlier = step.added
@@ -778,11 +923,28 @@ class Selector(ReadingDesigns):
                        for (term, setting), c in zip(without, coefficients))
 
     def run(self, terms: list[Term], max_terms: int = 4, beam: int = 3) -> list[Step]:
-        """Steps until nothing passes or ``max_terms`` were added; every added term refit
-        jointly at the end (``Scored.coefficients`` of the added ones are the joint fit).
-        A step where no single term passes tries pairs (:meth:`pair_lookahead`). After
-        each addition every earlier term must still earn its place
-        (:meth:`no_longer_needed`); one that does not is dropped (:attr:`dropped`)."""
+        """The forward selection: steps until nothing passes or ``max_terms`` were added.
+
+        A first step where no single term passes tries pairs (:meth:`pair_lookahead`).
+        After each addition every earlier term must still earn its place
+        (:meth:`no_longer_needed`); one that does not is dropped (:attr:`dropped`).
+        Every added term is refit jointly at the end; one physics then refuses is taken
+        out again, with the reason.
+
+        Parameters
+        ----------
+        terms : list of Term
+            The candidates.
+        max_terms : int
+            The most terms selected.
+        beam : int
+            Candidates tried as a pair's first term (0: no pairs).
+
+        Returns
+        -------
+        list of Step
+            In order; ``Scored.coefficients`` of the added ones are the joint fit.
+        """
         steps = []
         self.keep_errors = max(1, beam)
         remaining = list(terms)

@@ -250,5 +250,16 @@ class PassRule:
         return ""
 
     def passes(self, candidate: Evidence) -> bool:
-        """Does ``candidate`` pass every test (:meth:`refusal` is "")?"""
+        """Does ``candidate`` pass every test?
+
+        Parameters
+        ----------
+        candidate : Evidence
+            What the candidate's fit showed.
+
+        Returns
+        -------
+        bool
+            :meth:`refusal` is "".
+        """
         return not self.refusal(candidate)
