@@ -181,6 +181,14 @@ class DemoUser(Node):
 
     Each list holds what came in the order it came.
 
+    Parameters
+    ----------
+    ask : callable, optional
+        What asks the monitor for a change (:data:`ChangeClient`); None: a
+        :class:`._model_client.ModelClient` of ``/model_monitor``, made with the node.
+    **kwargs
+        Passed to :class:`rclpy.node.Node` (``parameter_overrides``, ``context``).
+
     Attributes
     ----------
     checks : list of (float, ModelCheck)
