@@ -12,7 +12,8 @@
 3. This process runs the user, a node (:class:`..nodes.demo_user.DemoUser`) that
    listens like any ROS tool and acts: when the monitor names a missing effect, it
    asks the monitor to add it (its ``change_model`` service, answered once the
-   version is made) and watches the machine's error fall. :func:`run_demo` starts the graph, spins it and summarises.
+   version is made) and watches the machine's error fall. :func:`run_demo` starts the
+   graph, spins it and summarises.
 4. At the end: a printed summary - the TCP error per component without
    compensation, with the starting model's, after each model change, after the
    deterioration, and at the end of the run, each with its k = 2 uncertainty -
