@@ -98,7 +98,6 @@ def main(argv: list[str] | None = None) -> int:
         with quiet:
             result = check_csv(log, "growth_um", "time_s", ["t*_C"], [], [], 3, 0.5, 0.05,
                                [])
-        result.pop("_plot")
     drawn = [t for t in trials if "not_drawn" not in t]
     table_tilts = [t for t in drawn if t["kind"].startswith("angular_table")]
     effects = [t for t in drawn if t["kind"] != "nothing"]
