@@ -31,6 +31,10 @@ from .selection import Selector, Term
 
 #: The families whose effects move a located target along the rotary axes' circles.
 FAMILIES = ("rotary_location", "setup_location", "squareness")
+#: The families of one linear axis' error motions that a survey can leave alike: where the
+#: tool stays at a target the tables bring under it, a tilt's arm is the axis' own travel,
+#: and the tilt moves the target as a straightness of that axis does.
+AXIS_FAMILIES = ("straightness", "angular")
 #: The probability below which a difference of the fits' sums of squares would be
 #: chance: above the bound it is not (chi-square, 95 %).
 LEVEL = 0.95
@@ -47,6 +51,10 @@ _WHY = {
         "the target alike",
     frozenset({"rotary_location"}):
         "on these poses the lines of different rotary axes move the target alike",
+    frozenset({"straightness", "angular"}):
+        "on these poses the tool stays where the tables bring the target, so the tilt's "
+        "arm is the axis' own travel and the tilt moves the target as a straightness of "
+        "that axis does",
     frozenset({"squareness"}):
         "the same pair out of square with the other axis as the reference (ISO 230-1), "
         "the rest of the difference a turn the other named effects hold",
@@ -61,6 +69,18 @@ def chi2_quantile(level: float, dof: int) -> float:
         middle = 0.5 * (low + high)
         low, high = (middle, high) if chi2_sf(middle, dof) > 1.0 - level else (low, middle)
     return 0.5 * (low + high)
+
+
+def _comparable(named: Term, other: Term) -> bool:
+    """Whether ``other`` is judged as another explanation of ``named``: both move a located
+    target along the rotary axes' circles, or they are a straightness and a tilt of one
+    linear axis (the axis is the variant's last letter: EXY, ECY)."""
+    if other.name == named.name:
+        return False
+    if named.family.name in FAMILIES and other.family.name in FAMILIES:
+        return not _same_lines(named, other)
+    return {named.family.name, other.family.name} == set(AXIS_FAMILIES) and \
+        named.variant[-1:] == other.variant[-1:]
 
 
 def _same_lines(named: Term, other: Term) -> bool:
@@ -96,36 +116,39 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
         base = np.column_stack(others)
         own, *_ = np.linalg.lstsq(base, contribution, rcond=None)
         unique = contribution - base @ own
-        if term.family.name in FAMILIES and float(unique @ unique) > limit:
+        if term.family.name in FAMILIES + AXIS_FAMILIES and float(unique @ unique) > limit:
             for other in terms:
-                if other.family.name not in FAMILIES or other.name == term.name or \
-                        _same_lines(term, other):
-                    continue
-                found += _reproduces(selector, base, contribution, term, other, limit)
+                if _comparable(term, other):
+                    found += _reproduces(selector, base, contribution, term, other, limit)
         out.append(found)
     return out
 
 
 def _reproduces(selector: Selector, base: NDArray[np.float64], contribution: NDArray[np.float64],
                 term: Term, other: Term, limit: float) -> list[dict]:
-    """[the statement] when ``other`` (with ``base``) fits ``contribution`` within ``limit``."""
-    setting = other.settings[0] if len(other.settings) == 1 else None
-    if setting is None:
-        return []
-    columns = selector.design_rows(other, setting)
-    if not np.any(columns):
-        return []
-    x = np.column_stack([base, columns])
-    solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
-    rest = contribution - x @ solution
-    if float(rest @ rest) > limit:
-        return []
-    own = solution[base.shape[1]:]
+    """[the statement] when ``other`` (with ``base``) fits ``contribution`` within
+    ``limit``: a located family's alternative at its one setting, an axis' tilt or
+    straightness at the first of its settings (the simplest) that does."""
+    axis_pair = other.family.name in AXIS_FAMILIES
+    for setting in other.settings if axis_pair or len(other.settings) == 1 else ():
+        columns = selector.design_rows(other, setting)
+        if not np.any(columns):
+            continue
+        x = np.column_stack([base, columns])
+        solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
+        rest = contribution - x @ solution
+        if float(rest @ rest) <= limit:
+            return [_statement(term, other, setting, solution[base.shape[1]:])]
+    return []
+
+
+def _statement(term: Term, other: Term, setting, own: NDArray[np.float64]) -> dict:
+    """The alternative ``other`` at ``setting`` with its coefficients ``own``, and why."""
     names = other.family.parameter_names(other.variant, setting)
     why = _WHY.get(frozenset({term.family.name, other.family.name}),
                    "these poses cannot part them")
-    return [{"name": other.name, "parameters": dict(zip(names, map(float, own))),
-             "reason": why}]
+    return {"name": other.name, "parameters": dict(zip(names, map(float, own))),
+            "reason": why}
 
 
 def sentence(name: str, found: list[dict]) -> str:

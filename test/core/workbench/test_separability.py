@@ -192,3 +192,32 @@ def test_several_spheres_located_one_by_one_each_keep_their_own_zero():
     assert [s.name for s in diagnosis.selected] == ["rotary_location:C"], diagnosis.text()
     assert diagnosis.selected[0].parameters["EX0C"] == pytest.approx(14e-6, abs=1e-6)
     assert diagnosis.final_cv_rmse < 3 * NOISE
+
+
+def test_a_table_yaw_and_a_straightness_of_its_axis_are_said_alike_where_the_tool_stays():
+    """An R-test on a trunnion: the tables bring the sphere under a tool that stays, so the
+    Y table's yaw E_CY(y) = c1 y turns the sphere about an arm that is Y's own travel, and
+    moves it in x by about c1 y^2 - a straightness EXY of Y. Whichever is named, the other
+    is said, with its own fit; a yaw of 300 urad/m is c1 itself."""
+    work = [cs._ax("Y", -1, [0, 0, 0.092]), cs._ax("X", -1, [0, 0, 0.324]),
+            cs._ax("A", -1, [0, 0, -0.049]), cs._ax("C", -1, [0, 0, 0])]
+    generator, described = _machines(work, [cs._ax("Z", -1, [0, 0, 0.632])], [0, 0, -0.199],
+                                     {"A": 0, "C": 0}, {"A": (-30, 110), "C": (-360, 360)})
+    poses = [{"A": math.radians(a), "C": math.radians(c)}
+             for a in np.arange(-30, 111, 10) for c in np.arange(0, 360, 15)]
+    yaw = {"iso_name": "ECY", "kind": "table_tilt", "axis": "Y", "value_si": [0.0, 300e-6, 0.0],
+           "pivot_m": [0.0, 0.0, 0.0]}
+    obs = _survey(generator, described, poses, [yaw])
+    diagnosis = diagnose(ErrorModel(described), obs)
+    named = diagnosis.selected[0]
+    said = {a["name"]: a for a in named.inseparable}
+    # The yaw's Legendre P1 over the stroke -0.6..0.9 m: c1 x the half stroke, 225 urad
+    # (its fit of the straightness' contribution, noise and all: within 35 %).
+    if named.name == "angular:ECY":
+        assert "straightness:EXY" in said, diagnosis.text()
+        p1 = named.parameters["P1"]
+    else:
+        assert named.name == "straightness:EXY" and "angular:ECY" in said, diagnosis.text()
+        p1 = said["angular:ECY"]["parameters"]["P1"]
+    assert abs(p1 - 225e-6) < 0.35 * 225e-6, (p1, said)
+    assert "the tilt's arm is the axis' own travel" in named.explanation
