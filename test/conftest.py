@@ -7,6 +7,14 @@ from pathlib import Path
 
 import pytest
 
+#: Two workers on two cores: each worker's linear algebra on one thread (OpenBLAS' pool
+#: of one thread per core in each worker spun against the other's, a third of the
+#: suite's CPU). Read by numpy when it loads, which no plugin has done yet: a user's
+#: choice is kept. The node processes take one already (mt_accuracy_ros/nodes).
+BLAS_IMPORTED_BEFORE = "numpy" in sys.modules
+for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
 
 
 def _domain_of_this_run() -> int:
@@ -72,3 +80,10 @@ SLOWEST_FILES = (
 def pytest_collection_modifyitems(session, config, items):
     rank = {name: i for i, name in enumerate(SLOWEST_FILES)}
     items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
+
+
+def pytest_report_header(config):
+    """Say the test processes' BLAS threads, and whether numpy loaded before they were
+    set (then the setting came too late for this process)."""
+    late = " (numpy was loaded before: not applied here)" if BLAS_IMPORTED_BEFORE else ""
+    return f"BLAS threads per test process: {os.environ['OPENBLAS_NUM_THREADS']}{late}"
