@@ -63,7 +63,20 @@ _WHY = {
 
 def chi2_quantile(level: float, dof: int) -> float:
     """x with P(chi-square(dof) <= x) = ``level``, by bisection on the survival function
-    (to 1e-9 relative; scipy.stats is not imported for one number)."""
+    (to 1e-9 relative; scipy.stats is not imported for one number).
+
+    Parameters
+    ----------
+    level : float
+        The probability, in (0, 1) (:data:`LEVEL` for the bound), dimensionless.
+    dof : int
+        Degrees of freedom, >= 1.
+
+    Returns
+    -------
+    float
+        The quantile x, dimensionless (a chi-square statistic).
+    """
     low, high = 0.0, float(dof) + 10.0 * np.sqrt(2.0 * dof) + 10.0
     while high - low > 1e-9 * high:
         middle = 0.5 * (low + high)
@@ -96,15 +109,22 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
 
     Parameters
     ----------
-    selector : the selection that named ``selected`` (its rows, offsets and noise)
-    selected : (term, setting) of each named effect, in order
-    coefficients : each named effect's joint-fit coefficients
-    terms : the candidates the selection considered
+    selector : Selector
+        The selection that named ``selected`` (its rows, offsets and noise; the noise
+        sigma in the readings' unit, [m] or [rad]).
+    selected : list of tuple of (Term, dict)
+        (term, setting) of each named effect, in order.
+    coefficients : list of ndarray, shape (p_k,)
+        Each named effect's joint-fit coefficients, in SI (each in its parameter's own
+        unit, as the family names them), in the order of ``selected``.
+    terms : list of Term
+        The candidates the selection considered.
 
     Returns
     -------
-    Per selected term, a list of ``{"name", "parameters" (SI, the alternative's fit of
-    the named contribution), "reason"}``; empty for terms outside :data:`FAMILIES`.
+    list of list of dict
+        Per selected term, a list of ``{"name", "parameters" (SI, the alternative's fit of
+        the named contribution), "reason"}``; empty for terms outside :data:`FAMILIES`.
     """
     blocks = [selector.design_rows(t, s) for t, s in selected]
     out: list[list[dict]] = []
@@ -152,7 +172,21 @@ def _statement(term: Term, other: Term, setting, own: NDArray[np.float64]) -> di
 
 
 def sentence(name: str, found: list[dict]) -> str:
-    """One sentence naming what the poses cannot part ``name`` from ("" for none)."""
+    """One sentence naming what the poses cannot part ``name`` from ("" for none).
+
+    Parameters
+    ----------
+    name : str
+        The named effect (``family:variant``, or the family alone).
+    found : list of dict
+        Its alternatives, as one entry of :func:`alternatives` gives them (``"name"`` and
+        ``"reason"`` are read).
+
+    Returns
+    -------
+    str
+        The sentence, or "" when ``found`` is empty.
+    """
     if not found:
         return ""
     listed = "; ".join(f"{f['name']} ({f['reason']})" for f in found)
