@@ -85,7 +85,21 @@ REFIT_ALPHA = 0.01
 
 @dataclass
 class ParameterChange:
-    """One coefficient, before and after the refit (SI; uncertainties k = 1)."""
+    """One coefficient, before and after the refit (SI; uncertainties k = 1).
+
+    Attributes
+    ----------
+    effect : str
+        The refitted effect's name in the model (``family:variant`` as the workbench
+        adds it).
+    parameter : str
+        The coefficient's name, as its family names it.
+    old, new : float
+        Its value in the live model and refitted, SI (the parameter's own unit, e.g.
+        [m/K], [rad]).
+    old_uncertainty, new_uncertainty : float
+        Their standard uncertainties (k = 1), same unit.
+    """
 
     effect: str
     parameter: str
@@ -102,7 +116,22 @@ class ParameterChange:
         return difference / combined if combined > 0 else (np.inf if difference else 0.0)
 
     def text(self, family: str, variant: str) -> str:
-        """``bx 1.29 -> 1.02 ± 0.12 µm/K`` in the parameter's physical unit (U, k = 2)."""
+        """``bx 1.29 -> 1.02 ± 0.12 µm/K`` in the parameter's physical unit (U, k = 2).
+
+        Parameters
+        ----------
+        family : str
+            The effect's family, e.g. ``structural_thermal_drift`` (it sets the unit:
+            :func:`..effects.display.parameter_unit`).
+        variant : str
+            Its variant, e.g. ``EXB``.
+
+        Returns
+        -------
+        str
+            The parameter's name, its old value, and the new one ± U (k = 2), both to the
+            new value's decimal place, in the physical unit.
+        """
         from ..effects.display import format_measured, parameter_unit
 
         unit, factor = parameter_unit(family, variant, self.parameter)
@@ -184,7 +213,29 @@ def prior_fit(x: NDArray[np.float64], y: NDArray[np.float64],
     """Least squares y ~ x (minimum norm) with the ridge ``penalties`` (as
     :func:`.selection.penalised_fit`) and a Gaussian ``prior`` ((precision (P,), mean
     (P,)) on the first P columns, in y's units): (coefficients, standard errors - the
-    sandwich where anything is penalised)."""
+    sandwich where anything is penalised).
+
+    Parameters
+    ----------
+    x : ndarray, shape (R, p)
+        The design, y's unit per coefficient's unit.
+    y : ndarray, shape (R,)
+        The readings (the refit's: [m], directions scaled to metres).
+    penalties : list of (start, stop, strength)
+        Ridge strengths of column ranges (:func:`.selection.penalise`).
+    prior : (ndarray, ndarray) or None, optional
+        (precision, mean), each shape (P,), P <= p: precision added to the diagonal of
+        X'X, in its unit (y's noise variance over the prior's; dimensionless for the
+        refit's offset columns of 0 and 1: so many readings' weight), mean in the first P
+        coefficients' unit. None: no prior.
+
+    Returns
+    -------
+    coefficients : ndarray, shape (p,)
+        The fit, each in its column's coefficient unit.
+    standard_errors : ndarray, shape (p,)
+        Their standard errors (k = 1), same units.
+    """
     if prior is None:
         coefficients, standard, _ = penalised_fit(x, y, penalties)
         return coefficients, standard
@@ -248,7 +299,23 @@ class Refit:
             self.p_value < self.alpha
 
     def apply(self, model: ErrorModel, obs: Observations) -> ErrorModel:
-        """The next version of ``model``: every refitted effect with its new numbers."""
+        """The next version of ``model``: every refitted effect with its new numbers.
+
+        Parameters
+        ----------
+        model : ErrorModel
+            The model the refit was made of (the live one).
+        obs : Observations
+            The readings refitted; their temperature sensors absent from the model's
+            reference temperatures are referenced to the first reading [degC]
+            (:func:`.diagnosis.add_effect`).
+
+        Returns
+        -------
+        ErrorModel
+            ``model.version + 1`` with the refitted effects' coefficients and
+            uncertainties (SI) and, where one was fitted, the datum correction [m].
+        """
         new = model
         for candidate in self.candidates:
             new = add_effect(new, candidate, obs)
@@ -304,7 +371,18 @@ class Refit:
 
 def refittable_effects(model: ErrorModel) -> list[str]:
     """The model's fitted catalogue effects (family, variant, setting and coefficients):
-    those a refit can renew. Built-in effects and user expressions stay as given."""
+    those a refit can renew. Built-in effects and user expressions stay as given.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose effects are read.
+
+    Returns
+    -------
+    list of str
+        The effects' names, in the model's order.
+    """
     return [name for name, entry in model.effects.items()
             if isinstance(entry, dict) and "family" in entry and "coefficients" in entry]
 
@@ -388,7 +466,23 @@ def held_parameters(model: ErrorModel, name: str, parameter_names: list[str]
                     ) -> NDArray[np.bool_]:
     """(P,) which parameters of effect ``name`` its live fit could not tell from zero:
     |value| below twice its stated standard uncertainty (within its U, k = 2). A refit
-    takes them as zero unless the readings show them (:func:`refit_effects`)."""
+    takes them as zero unless the readings show them (:func:`refit_effects`).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The live model.
+    name : str
+        One of its fitted catalogue effects (:func:`refittable_effects`); a coefficient
+        or uncertainty it does not state counts as 0 (not held).
+    parameter_names : list of str, length P
+        The effect's parameters, in the order wanted.
+
+    Returns
+    -------
+    ndarray of bool, shape (P,)
+        True where |value| < 2 u (value and u in the parameter's SI unit).
+    """
     entry = model.effects[name]
     values = entry.get("coefficients") or {}
     uncertainties = entry.get("uncertainties") or {}
@@ -478,16 +572,36 @@ def refit_effects(model: ErrorModel, obs: Observations, names: list[str] | None 
 
     Parameters
     ----------
-    model : the live model; its other effects (and profiles) stay as they are.
-    obs : N readings in time order (``predicted_m`` / ``predicted_orientation``, when
+    model : ErrorModel
+        the live model; its other effects (and profiles) stay as they are.
+    obs : Observations
+        N readings in time order (``predicted_m`` / ``predicted_orientation``, when
         set, are the live model's predictions and are kept for everything else).
-    names : effects of ``model`` to refit (each a fitted catalogue entry).
-    folds : K of the time-blocked cross-validation.
+    names : list of str or None, optional
+        effects of ``model`` to refit (each a fitted catalogue entry).
+    folds : int, optional
+        K of the time-blocked cross-validation.
+    min_reduction : float, optional
+        The fraction of the live model's held-out RMSE the refit must remove to be
+        recommended (and a held parameter's release must remove), dimensionless.
+    alpha : float, optional
+        One-sided level of the held-out block tests.
+    moved_sigma : float, optional
+        Combined standard uncertainties beyond which a coefficient is said to have moved.
+
+    Returns
+    -------
+    Refit
+        The refitted effects, each coefficient's change (SI), the held-out RMSEs (live and
+        refitted; position [m], tool direction [rad]), the p-value and the verdict.
 
     Raises
     ------
-    ParameterError : a name that is not a fitted catalogue effect of the model.
-    InsufficientDataError : fewer than 4 * folds readings.
+    ParameterError
+        a name that is not a fitted catalogue effect of the model; or none to refit (the
+        model holds no fitted catalogue effect).
+    InsufficientDataError
+        fewer than 4 * folds readings.
     """
     names = _checked_request(model, obs, names, folds)
     absolute = bool(model.datum)
