@@ -43,6 +43,21 @@ SHARE_READINGS = 2500
 
 @dataclass
 class Share:
+    """How much of one component's residual one variable explains.
+
+    Attributes
+    ----------
+    variable : str
+        The variable's name (:func:`candidate_variables`), e.g. ``x``, ``T_spindle@20min``.
+    component : str
+        The TCP component, ``x``, ``y`` or ``z``.
+    share : float
+        Its cross-validated share of the component's residual variance, dimensionless (at
+        most 1; about zero, or below, for a variable that only fits noise).
+    explained_rms : float
+        RMS of the part it explains [m].
+    """
+
     variable: str
     component: str
     share: float          # of the component's residual variance, cross-validated [0..1]
@@ -51,6 +66,23 @@ class Share:
 
 @dataclass
 class Peak:
+    """The strongest periodic component of one TCP component along one linear axis.
+
+    Attributes
+    ----------
+    axis : str
+        The linear axis' letter (``X``, ``Y``, ``Z``).
+    component : str
+        The TCP component, ``x``, ``y`` or ``z``.
+    period_m : float
+        The period along the axis' position [m].
+    amplitude : float
+        The fundamental's amplitude [m], at most what ``share`` supports.
+    share : float
+        Of the component's variance the sinusoid explains, dimensionless: the lesser of
+        the in-sample share and the share held-out time blocks give.
+    """
+
     axis: str
     component: str
     period_m: float
@@ -60,6 +92,20 @@ class Peak:
 
 @dataclass
 class Localisation:
+    """Where the residual lives: each variable's share and each axis' periodogram peak.
+
+    Attributes
+    ----------
+    shares : list of Share
+        Every variable's share of every measured component, best first.
+    peaks : list of Peak
+        Every linear axis' strongest period per component, strongest first.
+    component_rms : dict of str to float
+        Component (``x``, ``y``, ``z``) -> RMS of its residual about its mean [m].
+    noise_sigma : float
+        The instrument's standard (k = 1) noise [m].
+    """
+
     shares: list[Share]                       # best first
     peaks: list[Peak]                         # strongest first
     component_rms: dict[str, float] = field(default_factory=dict)
@@ -71,7 +117,20 @@ class Localisation:
     def top_group(self, within: float = 0.005) -> list[Share]:
         """The top share and every other variable the data cannot rank below it (within
         ``within`` of its share, the resolution of the cross-validation): slow
-        temperatures and their lags often explain a warm-up's drift equally well."""
+        temperatures and their lags often explain a warm-up's drift equally well.
+
+        Parameters
+        ----------
+        within : float, optional
+            How far below the top share a variable may lie and still be in the group,
+            dimensionless (a share).
+
+        Returns
+        -------
+        list of Share
+            The top share first, then the others in the group (one per variable); empty
+            when there are no shares.
+        """
         best = self.top()
         if best is None:
             return []
@@ -123,7 +182,23 @@ class Localisation:
         """What a chart of where the residual lives should show: per component, the few
         variables that differ. Temperatures that explain about the same (within ``alike``
         of the best of them - a warm-up seen by every sensor) are one bar, "all N
-        temperatures alike", not a dozen bars of 92 % that tell the reader nothing."""
+        temperatures alike", not a dozen bars of 92 % that tell the reader nothing.
+
+        Parameters
+        ----------
+        per_component : int, optional
+            The most bars each component shows.
+        alike : float, optional
+            How far below the best temperature's share another's may lie and still be
+            counted alike, dimensionless (a share); three or more alike make one bar.
+
+        Returns
+        -------
+        list of dict
+            One per bar, largest share first: ``{"label", "component", "share"
+            (dimensionless), "variables" (the names it stands for)}``; only positive
+            shares.
+        """
         rows = []
         for component in COMPONENTS:
             mine = [s for s in self.shares if s.component == component and s.share > 0]
@@ -145,6 +220,21 @@ class Localisation:
         return sorted(rows, key=lambda r: -r["share"])
 
     def as_dict(self, top: int = 12) -> dict:
+        """The localisation as plain data (SI: metres, shares dimensionless).
+
+        Parameters
+        ----------
+        top : int, optional
+            How many of the best shares to give.
+
+        Returns
+        -------
+        dict
+            ``shares`` (the ``top`` best: ``variable``, ``component``, ``share``,
+            ``explained_rms_m``), ``chart`` (:meth:`chart`), ``peaks`` (the six strongest:
+            ``axis``, ``component``, ``period_m``, ``amplitude_m``, ``share``),
+            ``top_group`` (the variables' names) and ``sentence``.
+        """
         return {"shares": [{"variable": s.variable, "component": s.component,
                             "share": s.share, "explained_rms_m": s.explained_rms}
                            for s in self.shares[:top]],
@@ -199,7 +289,28 @@ def _describe(variable: str) -> str:
 
 def candidate_variables(variables: Variables, structure_sensors: list[str]) -> dict[str, NDArray]:
     """Every scalar variable to localise on (temperatures: structure sensors and their
-    differences; constant variables are left out)."""
+    differences; constant variables are left out).
+
+    Parameters
+    ----------
+    variables : Variables
+        The machine's state at the N readings.
+    structure_sensors : list of str
+        The sensors on the structure: their rises, lags and differences are localised on
+        (other temperatures are left out).
+
+    Returns
+    -------
+    dict of str to ndarray, shape (N,)
+        Name -> values, each in its own unit: the :class:`~..effects.variables.Variables`
+        ones (positions [m] or [rad], feeds [m/s], accelerations [m/s^2], directions +-1,
+        ``t`` [s] - ``t_run`` since each run's start when there are runs -, spindle speed
+        [rad/s], temperatures' rises ``T_<sensor>`` [K]); the lags of each structure
+        sensor's rise ``T_<sensor>@<min>min`` [K] and of the spindle speed and each
+        linear axis' |feed| from rest ``<name>@<min>min`` ([rad/s], [m/s]), at the
+        :data:`LOCALISATION_LAGS_S` the record spans; products of two linear axes'
+        centred positions ``x*y`` [m^2]; differences of two sensors' rises ``T_a-b`` [K].
+    """
     out = {}
     for name in variables.names():
         if name.startswith("T_") and name[2:] not in structure_sensors:
@@ -331,7 +442,35 @@ def localise(residual: NDArray[np.float64], mask: NDArray[np.bool_], variables: 
              zero_rows: NDArray[np.intp] | None = None) -> Localisation:
     """Shares of the residual (N, 3) explained by each variable, and periodogram peaks.
     ``zero_rows`` (N,): readings of an instrument zeroed at those rows (a log of zeroed
-    runs) - every variable is referred to them as the residual is."""
+    runs) - every variable is referred to them as the residual is.
+
+    Parameters
+    ----------
+    residual : ndarray, shape (N, 3)
+        The TCP position residual [m], by component x, y, z.
+    mask : ndarray of bool, shape (N, 3)
+        Which components each reading measured; a component with fewer than
+        ``4 * folds`` is left out.
+    variables : Variables
+        The machine's state at the N readings.
+    structure_sensors : list of str
+        The sensors on the structure (:func:`candidate_variables`).
+    noise_sigma : float
+        The instrument's standard (k = 1) noise [m], kept for the sentence.
+    strokes : dict of str to (float, float), optional
+        Axis letter -> (low, high) stroke [m]: the linear axes named here get a
+        periodogram (2-50 mm periods); None: none does.
+    folds : int, optional
+        K of the cross-validations.
+    zero_rows : ndarray of int, shape (N,), optional
+        Each reading's zero row; None when the readings are absolute.
+
+    Returns
+    -------
+    Localisation
+        The shares (best first; time after a physical variable within 5 % of it) and the
+        peaks (strongest first).
+    """
     shares, peaks = [], []
     candidates = candidate_variables(variables, structure_sensors)
     if zero_rows is not None:
@@ -413,6 +552,14 @@ class LocalisationMemo:
     equal to a kept one - on the same rows, with the same settings, each component
     within ``relative_tolerance`` of its RMS about its mean (the mean is no part of a
     localisation) - gets the kept localisation. One memo serves one set of readings.
+
+    Parameters
+    ----------
+    relative_tolerance : float, optional
+        How far (max |difference|) a component's centred residual may lie from a kept
+        one's, relative to the kept one's RMS, to be taken as equal; dimensionless.
+    size : int, optional
+        How many localisations are kept (the latest).
     """
 
     def __init__(self, relative_tolerance: float = 1e-9, size: int = 4) -> None:
@@ -426,7 +573,33 @@ class LocalisationMemo:
                  variables: Variables, structure_sensors: list[str], noise_sigma: float,
                  strokes: dict[str, tuple[float, float]] | None = None, folds: int = 5,
                  zero_rows: NDArray[np.intp] | None = None) -> Localisation:
-        """:func:`localise`, or the kept result of an equal residual."""
+        """:func:`localise`, or the kept result of an equal residual.
+
+        Parameters
+        ----------
+        residual : ndarray, shape (N, 3)
+            The TCP position residual [m].
+        mask : ndarray of bool, shape (N, 3)
+            Which components each reading measured.
+        variables : Variables
+            The machine's state at the N readings.
+        structure_sensors : list of str
+            The sensors on the structure.
+        noise_sigma : float
+            The instrument's standard (k = 1) noise [m].
+        strokes : dict of str to (float, float), optional
+            Axis letter -> (low, high) stroke [m] (:func:`localise`).
+        folds : int, optional
+            K of the cross-validations.
+        zero_rows : ndarray of int, shape (N,), optional
+            Each reading's zero row; None when the readings are absolute.
+
+        Returns
+        -------
+        Localisation
+            As :func:`localise` gives it (the kept object itself when reused: do not
+            change it).
+        """
         settings = (variables.n, tuple(variables.names()), tuple(structure_sensors),
                     float(noise_sigma), tuple(sorted((strokes or {}).items())), int(folds),
                     None if zero_rows is None else np.asarray(zero_rows).tobytes())
