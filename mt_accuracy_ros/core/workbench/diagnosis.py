@@ -90,6 +90,45 @@ class Observations:
     it. ``zeroed_runs``: the instrument was zeroed at each run's first reading, so
     every run has its own zero - measured and model are then both referred to it
     (:meth:`zeroed`); otherwise the readings are absolute across runs.
+
+    Parameters
+    ----------
+    positions : dict of str to ndarray, shape (N,)
+        Axis letter -> command position [m] (rotary [rad]).
+    measured_m : ndarray, shape (N, 3)
+        The measured TCP position error [m] (x, y, z).
+    measured_mask : ndarray of bool, shape (N, 3)
+        Which components each reading measured.
+    time_s : ndarray, shape (N,)
+        Reading times [s], non-decreasing.
+    velocities : dict of str to ndarray, shape (N,), optional
+        Axis letter -> command velocity [m/s] (rotary [rad/s]).
+    temperatures : dict of str to ndarray, shape (N,), optional
+        Sensor name -> temperature [degC].
+    uncertainty_m : float, optional
+        The instrument's expanded position uncertainty (k = 2) [m].
+    predicted_m : ndarray, shape (N, 3), optional
+        Position predictions made elsewhere [m], used instead of the model's.
+    predicted_orientation : ndarray, shape (N, 3), optional
+        Tool-direction predictions made elsewhere [rad], used instead of the model's.
+    directions : dict of str to ndarray, shape (N,), optional
+        Axis letter -> direction of the last motion (+1 / -1, 0 unknown).
+    accelerations : dict of str to ndarray, shape (N,), optional
+        Axis letter -> command acceleration [m/s^2] (rotary [rad/s^2]).
+    spindle_speed_rad_s : ndarray, shape (N,), optional
+        Spindle speed [rad/s].
+    measured_orientation_rad : ndarray, shape (N, 3), optional
+        The measured tool-direction error [rad] (rotation about x, y, z, bed frame).
+    orientation_measured : ndarray of bool, shape (N,), optional
+        Which readings measured the tool's direction.
+    orientation_uncertainty_rad : float, optional
+        The instrument's expanded tool-direction uncertainty (k = 2) [rad].
+    work_point : ndarray, shape (3,) or (N, 3), optional
+        The instrument's target [m], workpiece frame; None: the machining point.
+    run_of_row : ndarray of int, shape (N,), optional
+        Each reading's run (contiguous runs); None: one run.
+    zeroed_runs : bool, optional
+        The instrument was zeroed at each run's first reading.
     """
 
     positions: dict[str, NDArray[np.float64]]
@@ -131,11 +170,36 @@ class Observations:
         return starts[np.searchsorted(starts, np.arange(self.n), side="right") - 1]
 
     def zeroed(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``values`` (N, ...) referred to each run's zero row (unchanged when absolute)."""
+        """``values`` (N, ...) referred to each run's zero row (unchanged when absolute).
+
+        Parameters
+        ----------
+        values : ndarray, shape (N, ...)
+            A quantity at the N readings, any unit.
+
+        Returns
+        -------
+        ndarray, shape (N, ...)
+            ``values`` minus its value at each reading's zero row, same unit (``values``
+            itself when the readings are absolute).
+        """
         zero = self.zero_rows
         return values if zero is None else values - values[zero]
 
     def subset(self, rows) -> "Observations":
+        """The readings ``rows`` alone, every per-reading field picked alike.
+
+        Parameters
+        ----------
+        rows : slice, ndarray of int or ndarray of bool, shape (N,)
+            The readings kept, as numpy indexes them (keep the time order).
+
+        Returns
+        -------
+        Observations
+            The picked readings (units unchanged); a single work point and the
+            uncertainties are shared.
+        """
         pick = lambda d: {k: np.asarray(v)[rows] for k, v in d.items()}  # noqa: E731
         return Observations(pick(self.positions), self.measured_m[rows], self.measured_mask[rows],
                             self.time_s[rows], pick(self.velocities), pick(self.temperatures),
@@ -161,7 +225,22 @@ class Observations:
         """Take the tool direction of the readings that measured it: ``errors`` (N,) of a
         (3,) error [rad] or None (not measured), ``uncertainties`` (N,) k = 2 [rad]
         (those of unmeasured readings are ignored). Nothing measured: nothing is set.
-        Returns "" or the sentence saying the documented default uncertainty was taken."""
+        Returns "" or the sentence saying the documented default uncertainty was taken.
+
+        Parameters
+        ----------
+        errors : list, length N
+            Per reading, the measured tool-direction error, a (3,) [rad] (about x, y, z),
+            or None where not measured.
+        uncertainties : list of float, length N
+            Per reading, its expanded uncertainty (k = 2) [rad]; all zero for none stated
+            (:data:`.statistics.DEFAULT_DIRECTION_UNCERTAINTY_RAD` is then taken).
+
+        Returns
+        -------
+        str
+            "" or the sentence saying the default uncertainty was taken.
+        """
         measured = np.array([e is not None for e in errors], dtype=bool)
         if not measured.any():
             return ""
@@ -194,6 +273,19 @@ class Observations:
         return self.measured_m.shape[0]
 
     def variables(self, reference_temperatures_c: dict[str, float] | None = None) -> Variables:
+        """The readings' machine state as the effects read it.
+
+        Parameters
+        ----------
+        reference_temperatures_c : dict of str to float, optional
+            Sensor name -> reference of its rise [degC] (default: its first reading).
+
+        Returns
+        -------
+        Variables
+            Positions, velocities, accelerations, directions, temperatures, time and
+            spindle speed of the N readings (their units as here), with the runs' starts.
+        """
         return Variables(dict(self.positions), self.time_s, dict(self.velocities),
                          dict(self.accelerations), dict(self.directions),
                          dict(self.temperatures), dict(reference_temperatures_c or {}),
@@ -216,7 +308,24 @@ def work_points(kinematics, positions: dict[str, NDArray[np.float64]], targets: 
                 ) -> NDArray[np.float64] | None:
     """(N, 3) [m] the point each reading was taken at, workpiece frame: its instrument's
     fixed target, or - for a reading without one (None) - the machining point. None when
-    no reading names a target (every reading at the machining point)."""
+    no reading names a target (every reading at the machining point).
+
+    Parameters
+    ----------
+    kinematics : KinematicModel
+        The machine's kinematic model (its ``machining_point`` gives the point of a reading
+        without a target).
+    positions : dict of str to ndarray, shape (N,)
+        Axis letter -> command position [m] (rotary [rad]), every axis of the machine.
+    targets : list, length N
+        Per reading, its instrument's target, a (3,) [m] in the workpiece frame, or None.
+
+    Returns
+    -------
+    ndarray, shape (N, 3) or (3,), or None
+        The points [m], workpiece frame: (3,) when every reading names the same target;
+        None when none names one.
+    """
     if all(t is None for t in targets):
         return None
     if all(t is not None and np.array_equal(t, targets[0]) for t in targets):
@@ -370,6 +479,20 @@ def residuals(model: ErrorModel, obs: Observations, *, absolute: bool = False
     constant offset per component carries no information about the model -
     unless the instrument was zeroed at the model's datum (``absolute``: the
     model's error is referred to the same pose, and the mean is kept).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model (its ``tcp_error`` is evaluated unless ``obs.predicted_m`` is set).
+    obs : Observations
+        The N readings.
+    absolute : bool, optional
+        The instrument was zeroed at the model's datum: the means are kept.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        measured - model [m], zero where a component was not measured.
     """
     predicted = obs.predicted_m if obs.predicted_m is not None else \
         model.tcp_error(obs.positions, **obs.model_inputs(), fresh=True)[0]
@@ -388,14 +511,43 @@ def residuals(model: ErrorModel, obs: Observations, *, absolute: bool = False
 
 
 def user_effects_to_fit(model: ErrorModel) -> dict[str, dict]:
-    """Declared user effects of the model that have no fitted values yet."""
+    """Declared user effects of the model that have no fitted values yet.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose effects are read.
+
+    Returns
+    -------
+    dict of str to dict
+        Effect name -> its declaration (``expression``, ...), in the model's order.
+    """
     return {name: p for name, p in model.effects.items()
             if isinstance(p, dict) and "expression" in p and "values" not in p}
 
 
 def candidate_terms(model: ErrorModel, ctx: Context,
                     family_list: list[EffectFamily] | None = None) -> list[Term]:
-    """Every catalogue term not already in the model."""
+    """Every catalogue term not already in the model.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model; its built-in and fitted effects cover the terms they hold.
+    ctx : Context
+        The readings' context (it sets each family's variants and settings).
+    family_list : list of EffectFamily, optional
+        The families to draw from; None: the whole catalogue with the model's user
+        effects yet to fit, log-only families left out. ``geometric`` is never drawn
+        from.
+
+    Returns
+    -------
+    list of Term
+        Each variant with its settings (a variant with none is left out); a user effect
+        is kept even when the model holds it.
+    """
     covered = set(model.effects)
     for name, parameters in model.effects.items():
         if name in _COVERED and not is_catalogue_entry(parameters):
@@ -490,7 +642,58 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     same readings again (a residual seen before is not localised again); ``contexts``:
     a memo of their context, for the same caller (the candidates' designs are not made
     again); ``residual``: :func:`residuals` of ``model`` at ``obs``, if the caller has it
-    (it is not changed)."""
+    (it is not changed).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model whose residual is diagnosed.
+    obs : Observations
+        The N reference readings, in time order.
+    min_reduction : float, optional
+        Least fraction of the held-out RMSE an effect must cut, dimensionless.
+    folds : int, optional
+        K of the time-blocked cross-validation (ignored when ``blocks`` is given).
+    max_effects : int, optional
+        The most effects named.
+    alpha : float, optional
+        Level of the held-out test (p-values adjusted for every candidate tried).
+    min_share : float, optional
+        Least fraction of the error above the noise an effect must remove.
+    family_list : list of EffectFamily, optional
+        The families to draw from (:func:`candidate_terms`); None: the catalogue.
+    localise_residual : bool, optional
+        Localise the residual before and after (:mod:`.localisation`).
+    forward : bool, optional
+        See above.
+    blocks : ndarray of int, shape (N,), optional
+        See above: non-decreasing 0, 1, ... with at least two blocks.
+    pair_lookahead : bool, optional
+        See above.
+    localisations : LocalisationMemo, optional
+        See above.
+    contexts : ContextMemo, optional
+        See above.
+    residual : ndarray, shape (N, 3), optional
+        See above [m].
+
+    Returns
+    -------
+    Diagnosis
+        The residual's figures [m] (and tool direction [rad]), the first step's
+        ranking, the effects named (SI parameters), where the residual lives before and
+        after, what remains above the noise and the effects dropped again.
+
+    Raises
+    ------
+    InsufficientDataError
+        Fewer than ``4 * folds`` readings (without ``blocks``).
+    ParameterError
+        A user effect zero on every reading or collinear with the model's own effects;
+        a tool-direction uncertainty not finite, positive and below 0.1 rad.
+    ValueError
+        ``blocks`` not of shape (N,), non-decreasing 0, 1, ... with at least two.
+    """
     if blocks is None and obs.n < 4 * folds:
         raise InsufficientDataError(f"{obs.n} reference readings; need >= {4 * folds}")
     frame = residual_frame(model, obs, contexts=contexts, residual=residual)
@@ -568,7 +771,19 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
 def say_inseparable(selector: Selector, added: list, selected: list[Candidate],
                     terms: list[Term]) -> None:
     """Each named candidate with what the readings cannot part it from (in place: its
-    ``inseparable`` list, and a sentence ending its explanation)."""
+    ``inseparable`` list, and a sentence ending its explanation).
+
+    Parameters
+    ----------
+    selector : Selector
+        The selection that named them.
+    added : list of Scored
+        The selection's named terms, in order (term, setting and coefficients, SI).
+    selected : list of Candidate
+        The same as candidates, in the same order; changed in place.
+    terms : list of Term
+        The candidates the selection considered.
+    """
     if not added:
         return
     found = alternatives(selector, [(s.term, s.setting) for s in added],
@@ -585,7 +800,21 @@ class ResidualFrame:
 
     K = 3 (the TCP position [m]) or 6 when the instrument measured the tool's direction
     too (its residual across the tool axis, times ``lever`` [m/rad]: every row then has
-    the position's noise). ``position_residual`` (N, 3) is the first part alone."""
+    the position's noise). ``position_residual`` (N, 3) is the first part alone.
+
+    Attributes
+    ----------
+    ctx : Context
+        The readings' context.
+    residual : ndarray, shape (N, K)
+        The residual [m] (the direction's part scaled by ``lever``).
+    mask : ndarray of bool, shape (N, K)
+        Which rows each reading measured.
+    position_residual : ndarray, shape (N, 3)
+        The position residual [m].
+    lever : float or None
+        [m/rad] the direction's scale; None when the direction was not measured.
+    """
 
     ctx: Context
     residual: NDArray[np.float64]
@@ -600,7 +829,32 @@ def residual_frame(model: ErrorModel, obs: Observations, *, absolute: bool = Fal
     """The residual of ``model`` at ``obs`` as the selection sees it (see ResidualFrame;
     ``absolute``: the position's mean kept, see :func:`residuals`; ``contexts``: a memo
     that hands out an earlier look's context of the same readings; ``residual``:
-    :func:`residuals` of ``model`` at ``obs``, when the caller has it already)."""
+    :func:`residuals` of ``model`` at ``obs``, when the caller has it already).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model.
+    obs : Observations
+        The N readings.
+    absolute : bool, optional
+        See above.
+    contexts : ContextMemo, optional
+        See above.
+    residual : ndarray, shape (N, 3), optional
+        See above [m].
+
+    Returns
+    -------
+    ResidualFrame
+        The context, the residual (N, K) [m] with its mask, the position residual and
+        the lever [m/rad].
+
+    Raises
+    ------
+    ParameterError
+        A tool-direction uncertainty not finite, positive and below 0.1 rad.
+    """
     if residual is None:
         residual = residuals(model, obs, absolute=absolute)
     mask = obs.measured_mask
@@ -628,7 +882,22 @@ def direction_residuals(ctx: Context, obs: Observations, predicted: NDArray[np.f
                         ) -> NDArray[np.float64]:
     """(N, 3) measured - model tool direction across the tool axis, times
     ``ctx.orientation_lever_m`` [m]; zero where the direction was not measured. Absolute,
-    unlike the position (:class:`~.selection.Selector`): a constant tilt is the machine's."""
+    unlike the position (:class:`~.selection.Selector`): a constant tilt is the machine's.
+
+    Parameters
+    ----------
+    ctx : Context
+        The readings' context (its tool axis and ``orientation_lever_m`` [m/rad]).
+    obs : Observations
+        The N readings, with the measured tool direction.
+    predicted : ndarray, shape (N, 3)
+        The model's tool-direction error [rad] (about x, y, z).
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        The difference across the tool axis times the lever [m].
+    """
     axis = ctx.tool_axis()
     difference = np.asarray(obs.measured_orientation_rad, dtype=np.float64) - predicted
     across = difference - axis * np.einsum("nc,nc->n", difference, axis)[:, None]
@@ -639,7 +908,20 @@ def direction_residuals(ctx: Context, obs: Observations, predicted: NDArray[np.f
 def effect_name_problem(name: str, model: ErrorModel) -> str:
     """Why ``name`` cannot be asked for ("" if it can): a catalogue name
     (``family:variant``), a family (its best variant is meant), a user effect
-    declared in the model, or a built-in model effect."""
+    declared in the model, or a built-in model effect.
+
+    Parameters
+    ----------
+    name : str
+        The name asked for.
+    model : ErrorModel
+        The model (its declared user effects).
+
+    Returns
+    -------
+    str
+        "" or the sentence saying what can be asked for.
+    """
     from ..compensation.error_model import MODEL_EFFECTS
 
     if name in MODEL_EFFECTS or (name in model.effects and "expression" in model.effects[name]):
@@ -654,7 +936,20 @@ def effect_name_problem(name: str, model: ErrorModel) -> str:
 
 def pick_candidate(diagnosis: Diagnosis, name: str) -> Candidate | None:
     """The candidate ``name`` asks for: exact catalogue name, else the best of a family
-    (jointly fitted selections first)."""
+    (jointly fitted selections first).
+
+    Parameters
+    ----------
+    diagnosis : Diagnosis
+        The diagnosis whose selected and ranked candidates are searched.
+    name : str
+        A catalogue name (``family:variant``), a user effect's name or a family.
+
+    Returns
+    -------
+    Candidate or None
+        The candidate; None when none matches.
+    """
     for pool in (diagnosis.selected, diagnosis.ranking):
         for candidate in pool:
             if candidate.name == name or (candidate.declaration is not None and
@@ -668,7 +963,19 @@ def pick_candidate(diagnosis: Diagnosis, name: str) -> Candidate | None:
 
 
 def model_entry(candidate: Candidate) -> dict:
-    """The error-model effect entry of a fitted candidate."""
+    """The error-model effect entry of a fitted candidate.
+
+    Parameters
+    ----------
+    candidate : Candidate
+        The fitted candidate.
+
+    Returns
+    -------
+    dict
+        A user effect's declaration with its ``values``; else ``family``, ``variant``,
+        ``setting``, ``coefficients`` and ``uncertainties`` (k = 1), SI.
+    """
     if candidate.declaration is not None:
         return {**candidate.declaration, "values": dict(candidate.parameters)}
     return {"family": candidate.effect, "variant": candidate.variant,
@@ -677,7 +984,24 @@ def model_entry(candidate: Candidate) -> dict:
 
 
 def add_effect(model: ErrorModel, candidate: Candidate, obs: Observations) -> ErrorModel:
-    """The next model version holding the fitted candidate (temperatures referenced as in obs)."""
+    """The next model version holding the fitted candidate (temperatures referenced as in obs).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model.
+    candidate : Candidate
+        The fitted candidate (a user effect is named by its variant, else
+        ``family:variant``).
+    obs : Observations
+        The readings it was fitted on: a sensor the model has no reference temperature
+        for is referenced to its first reading [degC].
+
+    Returns
+    -------
+    ErrorModel
+        The new version.
+    """
     name = candidate.variant if candidate.declaration is not None else candidate.name
     new = model.with_effect(name, model_entry(candidate))
     for sensor, values in obs.temperatures.items():
@@ -687,7 +1011,22 @@ def add_effect(model: ErrorModel, candidate: Candidate, obs: Observations) -> Er
 
 def add_effects(model: ErrorModel, candidates: list[Candidate], obs: Observations
                 ) -> ErrorModel:
-    """The model with every candidate of a joint fit added (one version each, in order)."""
+    """The model with every candidate of a joint fit added (one version each, in order).
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The model.
+    candidates : list of Candidate
+        The joint fit's candidates, in order.
+    obs : Observations
+        The readings they were fitted on (:func:`add_effect`).
+
+    Returns
+    -------
+    ErrorModel
+        The model after the last one is added.
+    """
     for candidate in candidates:
         model = add_effect(model, candidate, obs)
     return model
@@ -747,7 +1086,31 @@ def blocked_cv(x: NDArray, offsets: NDArray, y: NDArray, sample_of_row: NDArray,
 # --------------------------------------------------------------------------- yaw
 def diagnose_yaw(included: dict[str, float], obs: YawObservations, *,
                  min_reduction: float = 0.1, folds: int = 5) -> Diagnosis:
-    """Rank the scale effects missing from the yaw corrections (same rules as :func:`diagnose`)."""
+    """Rank the scale effects missing from the yaw corrections (same rules as :func:`diagnose`).
+
+    Parameters
+    ----------
+    included : dict of str to float
+        The effects the estimator already corrects -> their values
+        (:func:`..scales.yaw_diagnosis.yaw_corrections`).
+    obs : YawObservations
+        The N yaw readings [rad].
+    min_reduction : float, optional
+        Least fraction of the held-out RMSE an effect must cut, dimensionless.
+    folds : int, optional
+        K of the time-blocked cross-validation.
+
+    Returns
+    -------
+    Diagnosis
+        Its ranking only, best first (each candidate's ``value`` in the effect's unit:
+        :data:`YAW_EXPLANATIONS`); the figures in [rad], not [m].
+
+    Raises
+    ------
+    InsufficientDataError
+        Fewer than ``2 * folds`` readings, or too few for the cross-validation.
+    """
     n = obs.scale_yaw.size
     if n < 2 * folds:
         raise InsufficientDataError(f"{n} yaw readings; need >= {2 * folds}")
@@ -784,7 +1147,32 @@ def selection_refusal(candidate: Candidate, min_reduction: float, alpha: float =
     """Which of the selection's tests refuses ``candidate`` on its own against the current
     model, with its numbers; "" when it passes them all (the one acceptance rule,
     :class:`.selection.significance.PassRule`). ``block_test=False`` leaves the held-out
-    block test out (a log's caller judges on whole later runs instead)."""
+    block test out (a log's caller judges on whole later runs instead).
+
+    Parameters
+    ----------
+    candidate : Candidate
+        The candidate, with its refusal, adjusted p-value, reduction, share of the
+        excess and parameters with their standard uncertainties.
+    min_reduction : float
+        Least fraction of the held-out RMSE it must cut, >= 0.
+    alpha : float, optional
+        Level of the held-out test (adjusted p-values).
+    min_share : float, optional
+        Least fraction of the error above the noise it must remove.
+    block_test : bool, optional
+        See above.
+
+    Returns
+    -------
+    str
+        "" or the test that refuses it, with its numbers.
+
+    Raises
+    ------
+    ParameterError
+        ``min_reduction`` below 0.
+    """
     values = np.array(list(candidate.parameters.values()), dtype=float)
     errors = np.array([candidate.parameter_uncertainties.get(k, np.nan)
                        for k in candidate.parameters], dtype=float)
