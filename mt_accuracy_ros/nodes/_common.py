@@ -121,17 +121,32 @@ def node_executor(node, *, events: bool = False):
     return executor
 
 
+#: How long a finished node waits at most for its reliable readers to acknowledge
+#: everything it published [s]: a reader that died must not hold it for ever.
+ACK_WAIT_S = 10.0
+
+
 def linger(node, seconds: float = 0.5, executor=None) -> None:
-    """Keep a finished node alive briefly: DDS delivers the last (best-effort) messages
-    from the writer's history only while the writer exists."""
+    """Keep a finished node alive until its last messages are out: DDS delivers them from
+    the writer's history only while the writer exists. ``seconds`` of spinning (best
+    effort has no acknowledgement to wait for), then until every reliable reader has
+    acknowledged every message (at most :data:`ACK_WAIT_S`): on a loaded host a reader
+    may be seconds behind a player at ``--rate 1000``."""
     import time
 
     import rclpy
+    from rclpy.duration import Duration
 
     executor = executor or node_executor(node)
     end = time.monotonic() + seconds
     while rclpy.ok() and time.monotonic() < end:
         executor.spin_once(timeout_sec=0.05)
+    deadline = time.monotonic() + ACK_WAIT_S
+    for publisher in list(node.publishers):
+        left = deadline - time.monotonic()
+        if not rclpy.ok() or left <= 0:
+            break
+        publisher.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9)))
 
 
 @contextmanager

@@ -252,7 +252,10 @@ def test_player_plays_rosbag2_written_bags(rclpy_context, data_dir, sample, topi
     process = _player(bag, "--rate", "1000", "--topics", topic)
     try:
         assert spin_until(node, lambda: process.poll() is not None, timeout_s=60)
-        spin_for(node, 0.5)
+        # The player left once every message was acknowledged: the listener's queue holds
+        # them all, however far behind a loaded host keeps its callbacks.
+        spin_until(node, lambda: len(received) >= len(expected), timeout_s=30)
+        spin_for(node, 0.2)
     finally:
         process.kill()
         process.communicate()
