@@ -78,8 +78,8 @@ def test_the_command_floor_is_one_room():
     assert top == ["__init__.py", "allocator.py", "cli.py"]
     commands = sorted(p.stem for p in (PACKAGE / "commands").glob("*.py"))
     assert commands == ["__init__", "bags", "check", "check_log", "check_result",
-                        "check_timing", "demo", "fleet", "iso230", "model_tools", "play",
-                        "processes", "record", "rotary_tools", "simulate", "topic_tools"]
+                        "check_timing", "check_walk", "demo", "fleet", "iso230", "model_tools",
+                        "play", "processes", "record", "rotary_tools", "simulate", "topic_tools"]
     # Nodes run on real machines: none of them imports a command.
     assert _offending(_sources("nodes"), ("mt_accuracy_ros.commands", "mt_accuracy_ros.cli")) \
         == {}

@@ -27,7 +27,7 @@ def _fl_runs(data_dir: Path, out: Path, zeroed: bool, hours: float = 8.0) -> Pat
     return cut_into_runs(data_dir / "fl_thermal" / "fl_thermal.csv", out, hours, zeroed)
 
 
-@pytest.mark.parametrize("zeroed, expected_um", [(False, 4.41), (True, 7.46)])
+@pytest.mark.parametrize("zeroed, expected_um", [(False, 4.11), (True, 7.46)])
 def test_fl_thermal_in_runs_beats_a_constant_and_least_squares_held_out(
         data_dir, tmp_path, capsys, zeroed, expected_um):
     log = _fl_runs(data_dir, tmp_path / "runs.csv", zeroed)
@@ -57,10 +57,18 @@ def test_fl_thermal_in_runs_beats_a_constant_and_least_squares_held_out(
     # Every whole model contested, with its forward and (deciding nothing) held-out figure.
     (chosen,) = [e for e in summary["model_contest"] if e["chosen"]]
     assert chosen["held_out_rmse"] == pytest.approx(baselines["model"], rel=1e-9)
-    assert "whole models contested (forward over the training blocks -> held out" in out
-    assert chosen["name"] == "step by step" and chosen["terms"] == summary["added"]
-    label = f"step by step ({', '.join(summary['added'])})"
-    assert f"  * {label[:60]:60s} {chosen['forward_rmse'] * 1e6:.4g} -> " \
+    # Runs are regimes: each training run is also predicted from the other two, and the
+    # worse of the two figures decides.
+    assert "whole models contested (forward over the training blocks / each training " \
+        "regime from the others, the worse decides" in out
+    assert [b["regime"] for b in chosen["cross_regime_blocks"]] == \
+        ["run 'day1'", "run 'day2'", "run 'day3'"]
+    assert chosen["score"] == max(chosen["forward_rmse"], chosen["cross_regime_rmse"])
+    assert chosen["name"] == summary["model_chosen"] and chosen["terms"] == summary["added"]
+    label = f"step by step ({', '.join(summary['added'])})" if chosen["name"] == \
+        "step by step" else chosen["name"]
+    assert f"  * {label[:60]:60s} {chosen['forward_rmse'] * 1e6:.4g} / " \
+        f"{chosen['cross_regime_rmse'] * 1e6:.4g} (x{chosen['range_excess']:.2g}) -> " \
         f"{chosen['held_out_rmse'] * 1e6:.4g} um" in out
     assert "Whole models contested by forward validation" in \
         (tmp_path / "r.html").read_text()
@@ -114,9 +122,18 @@ def test_a_candidate_refused_on_the_last_training_run_gives_way_to_the_next(tmp_
     assert first["test"] == "predicting run r6 from the training rows before them"
     assert first["after"] > first["before"]
     assert summary["step_by_step_added"] == ["thermal_lag:tA_C"]
-    # Whole models then contest by forward validation over every training run.
+    # Whole models then contest by forward validation over every training run and by each
+    # training run predicted from the others; the worse of the two decides, and among
+    # models within 10 % of the best the one whose inputs left their fitted range least.
     contest = summary["model_contest_forward_rmse"]
-    assert summary["model_chosen"] == min(contest, key=contest.get)
+    scores = {e["name"]: e["score"] for e in summary["model_contest"]}
+    for entry in summary["model_contest"]:
+        assert len(entry["cross_regime_blocks"]) == 6
+        assert entry["score"] == max(entry["forward_rmse"], entry["cross_regime_rmse"])
+    alike = [k for k, v in scores.items() if v <= 1.1 * min(scores.values())]
+    excess = {e["name"]: e["range_excess"] for e in summary["model_contest"]}
+    assert summary["model_chosen"] == min(alike, key=lambda k: (round(excess[k], 2), scores[k],
+                                                                k != "step by step"))
     assert summary["added"] == (["thermal_lag:tA_C"] if summary["model_chosen"] ==
                                 "step by step" else [summary["model_chosen"]])
     assert summary["train_rows"] == 6 * 80
@@ -125,7 +142,7 @@ def test_a_candidate_refused_on_the_last_training_run_gives_way_to_the_next(tmp_
     # the runs before it); its held-out figure is given after the decision.
     entries = {e["name"]: e for e in summary["model_contest"]}
     assert set(entries) == set(contest) and \
-        [e["forward_rmse"] for e in summary["model_contest"]] == sorted(contest.values())
+        [e["score"] for e in summary["model_contest"]] == sorted(scores.values())
     for name, entry in entries.items():
         blocks = entry["forward_blocks"]
         assert [b["trained_rows"] for b in blocks] == [80 * k for k in range(1, 6)]

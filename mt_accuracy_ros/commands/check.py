@@ -13,6 +13,7 @@ falling.
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -735,7 +736,7 @@ CHECK_OPTION_SCOPES = {
     "term": ("--term", ("log",)), "component": ("--component", ("log",)),
     "structure_length": ("--structure-length", ("log",)),
     "train_fraction": ("--train-fraction", ("log",)), "run": ("--run", ("log",)),
-    "zeroed_runs": ("--zeroed-runs", ("log",))}
+    "zeroed_runs": ("--zeroed-runs", ("log",)), "walk_forward": ("--walk-forward", ("log",))}
 #: Suffixes of table files; other text files are tables too, unless they are descriptions.
 TABLE_SUFFIXES = (".csv", ".tsv", ".txt", ".dat")
 DESCRIPTION_SUFFIXES = (".yaml", ".yml", ".json", ".xml", ".html")
@@ -792,6 +793,10 @@ def validate_check(args) -> None:
         if args.zeroed_runs and not args.run:
             raise ParameterError("--zeroed-runs needs --run COLUMN (the instrument was zeroed "
                                  "at each run's start)")
+        if args.walk_forward:
+            from ..core.workbench.walk_forward import parse_period
+
+            parse_period(args.walk_forward)
     in_range("--auto", args.auto, low=0, what="an integer")
     in_range("--min-reduction", args.min_reduction, low=0, high=1, high_open=True,
              what="a fraction")
@@ -851,9 +856,15 @@ def check_data(args) -> CheckResult:
             component=args.component or LOG_COMPONENT,
             uncertainty_m=None if args.uncertainty_um is None else args.uncertainty_um * 1e-6,
             structure_length_m=args.structure_length, run_column=args.run,
-            zeroed_runs=args.zeroed_runs)
+            zeroed_runs=args.zeroed_runs, walk_forward_period=args.walk_forward,
+            progress=_progress_line)
     return check_bag(data, args.model or "demo", args.add or [], args.auto,
                      args.namespace or "", args.min_reduction)
+
+
+def _progress_line(line: str) -> None:
+    """A long job's progress, on stderr (stdout holds the result)."""
+    print(line, file=sys.stderr, flush=True)
 
 
 def check_command(args) -> int:
@@ -929,6 +940,11 @@ def _add_log_options(check) -> None:
                        help="CSV log of many runs: rows of one run share this column's value "
                             "(time restarts or jumps between runs; lags restart each run; "
                             "whole runs judge one another)")
+    check.add_argument("--walk-forward", metavar="PERIOD",
+                       help="CSV log: also replay it in time - at each PERIOD's end (4h, "
+                            "30min, 900s, or 'run') the model is made again from every row so "
+                            "far and judged on the next period, beside a constant, least "
+                            "squares on every input and no model")
     check.add_argument("--zeroed-runs", action="store_true",
                        help="CSV log with --run: the instrument was zeroed at each run's "
                             "start (each run has its own zero; default: absolute readings)")

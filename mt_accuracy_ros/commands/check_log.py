@@ -118,6 +118,50 @@ def pooled_rmse(per_block: list[dict]) -> float:
     return float(np.sqrt(squared / max(count, 1)))
 
 
+def regime_blocks(terms, frame, component: int, regimes, zeroed: bool) -> list[dict]:
+    """Each regime group of the training rows (:class:`~..core.workbench.regimes.Regimes`)
+    predicted by ``terms`` fitted jointly on the other groups' rows - a model judged on a
+    working condition it was not fitted on, Zhu's robustness test (Zhu 2008 ch. 3). One
+    dict per judged group: its name, the rows fitted and judged, the RMS error on the
+    judged ones [m] and how far the terms' inputs left their fitted range there (a share
+    of the span, :func:`~..core.workbench.regimes.range_excess`)."""
+    from ..core.workbench.regimes import range_excess
+    from ..core.workbench.selection import penalised_fit
+
+    y = frame.residual[:, component]
+    x, penalties, _ = joint_design(terms, frame, component, zeroed)
+    out = []
+    for g, name in enumerate(regimes.group_names):
+        judge = regimes.group_of_row == g
+        fit = ~judge
+        if judge.sum() < 2 or fit.sum() < max(4, x.shape[1] + 1):
+            continue
+        if x.shape[1] == 0:
+            rmse, excess = float(np.sqrt(np.mean(y[judge] ** 2))), 0.0
+        else:
+            coefficients, _, _ = penalised_fit(x[fit], y[fit], penalties)
+            rmse = float(np.sqrt(np.mean((y[judge] - x[judge] @ coefficients) ** 2)))
+            excess = range_excess(x[fit], x[judge])
+        out.append({"regime": name, "trained_rows": int(fit.sum()),
+                    "judged_rows": int(judge.sum()), "rmse": rmse, "range_excess": excess})
+    return out
+
+
+#: Whole models whose decisive errors lie this close to the best one's are alike: the one
+#: whose inputs left their fitted range least, across regimes, is the model.
+ALIKE_SHARE = 0.1
+
+
+def contest_winner(scores: dict[str, float], excess: dict[str, float]) -> str:
+    """The model of a contest: the lowest score, unless others within :data:`ALIKE_SHARE`
+    of it extrapolated less (then the one that extrapolated least; the step-by-step model
+    first on a tie)."""
+    best = min(scores.values())
+    alike = [k for k, v in scores.items() if v <= best * (1.0 + ALIKE_SHARE)]
+    return min(alike, key=lambda k: (round(excess.get(k, 0.0), 2), scores[k],
+                                     k != "step by step"))
+
+
 def joint_refit(candidates, terms, frame, component: int, zeroed: bool) -> list:
     """The ``candidates`` with their parameters (and k = 1 uncertainties) refitted jointly
     on every training row of ``frame`` (their ``terms`` as in :func:`validation_rmse`)."""
@@ -233,12 +277,20 @@ def _in_celsius(temperatures: dict[str, np.ndarray], units: dict[str, str] | Non
     """Temperatures in °C (as sensor_msgs/Temperature), each from the unit a units row
     (``units``) or its column's name gives (``T1_K``, ``T2 [°F]``; °C when neither
     does), and a note of those converted."""
+    from ..core.inputs.sensor_health import coolest_reading
     from ..io.column_map import TEMPERATURE, column_unit
 
     out, converted = {}, []
+    declared = {name: column_unit(name, "temperature", units) or "degC"
+                for name in temperatures}
+    coolest = {name: coolest_reading(values * TEMPERATURE[declared[name]][0] +
+                              TEMPERATURE[declared[name]][1])
+               for name, values in temperatures.items()}
     for name, values in temperatures.items():
-        unit = column_unit(name, "temperature", units) or "degC"
-        check_temperature_units(name, values, unit)
+        unit = declared[name]
+        others = [c for other, c in coolest.items() if other != name and np.isfinite(c)]
+        check_temperature_units(name, values, unit,
+                                float(np.median(others)) if others else None)
         scale, offset = TEMPERATURE[unit]
         out[name] = values * scale + offset if (scale, offset) != (1.0, 0.0) else values
         if unit not in ("degC", "C"):
@@ -355,6 +407,13 @@ def check_target(column: str, values: np.ndarray, unit: str) -> None:
     if finite.size >= 2 and np.ptp(finite) == 0.0:
         raise InputDataError(f"target {column} is constant ({finite[0]:g} {unit} on all "
                              f"{finite.size} rows): nothing to model")
+    to_mm = {"um": 1e-3, "µm": 1e-3, "mm": 1.0, "nm": 1e-6, "m": 1e3, "in": 25.4}.get(unit)
+    if to_mm and finite.size and np.ptp(finite) * to_mm <= 5.0 < \
+            np.max(np.abs(finite)) * to_mm:
+        raise InputDataError(
+            f"target {column} sits {np.median(finite) * to_mm:.4g} mm from zero but spans "
+            f"{np.ptp(finite) * to_mm:.3g} mm: a position, not a displacement? Give its "
+            "change from a reference (subtract its first reading) as the target")
     for quantity in ("error", "deviation_spread"):
         guess = likely_unit(finite, quantity, unit)
         check_plausible(finite, quantity, unit, f"target {column}",
@@ -362,11 +421,14 @@ def check_target(column: str, values: np.ndarray, unit: str) -> None:
                         error=InputDataError)
 
 
-def check_temperature_units(name: str, values: np.ndarray, declared: str) -> None:
+def check_temperature_units(name: str, values: np.ndarray, declared: str,
+                            others_coolest_c: float | None = None) -> None:
     """Refuse a sensor whose readings, in their ``declared`` unit, lie mostly where no
     machine's temperature does and another unit would put them (kelvin declared as degC).
     Readings beyond any unit (a dead sensor's -180) are the sensors' judge's, row by row.
     The surveys' rule too (:func:`~..core.inputs.sensor_health.refuse_wrong_temperature_unit`).
+    ``others_coolest_c``: the other sensors' coolest reading [degC]; a sensor that starts
+    where they start is in their unit, however hot it is held (a heater).
 
     Raises
     ------
@@ -377,7 +439,7 @@ def check_temperature_units(name: str, values: np.ndarray, declared: str) -> Non
 
     refuse_wrong_temperature_unit(name, values, declared, f"sensor {name}",
                                   f"give its unit in its name ({name}_{{guess}}) or a units row",
-                                  InputDataError)
+                                  InputDataError, others_coolest_c)
 
 
 def _complete_rows(temperatures: dict[str, np.ndarray]) -> np.ndarray:
@@ -514,6 +576,13 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
         time_s, time_column if time_column in names else "", table.data_rows, run_of_row,
         run_names, row_period_s)
     notes += clock_notes
+    if run_of_row is not None:
+        # A run in another unit is refused before the sensors' judge sees it: a run of
+        # kelvin reads like a dead sensor's run, and would be left out as one.
+        problem = mixed_units_problem(target_m, temperatures, run_of_row, run_names,
+                                      zeroed_runs)
+        if problem:
+            raise InputDataError(problem)
     complete_before = _complete_rows(temperatures)
     temperatures, health_notes = leave_out_dead_sensors(temperatures, run_of_row, run_names,
                                                         table.data_rows, breaks)
@@ -529,10 +598,6 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
         raise InputDataError(f"{path}: every input sensor is left out ({'; '.join(health_notes)})"
                              [:400] + " - give live sensors with --inputs")
     if run_of_row is not None:
-        problem = mixed_units_problem(target_m, temperatures, run_of_row, run_names,
-                                      zeroed_runs)
-        if problem:
-            raise InputDataError(problem)
         notes += run_level_notes(temperatures, run_of_row, run_names)
     obs = log_observations(time_s, target_m, temperatures, spindle_speed_rad_s=speed,
                            component=component, uncertainty_m=uncertainty_m,
@@ -564,6 +629,7 @@ class _LogSearch:
     to_unit: float
     family_of: dict
     diagnose: object            # model -> Diagnosis on the training rows
+    regimes: object             # Regimes of the training rows (runs, heating, cooling ...)
 
     def term(self, candidate) -> tuple:
         """(family, variant, setting) of a candidate."""
@@ -602,8 +668,13 @@ class _Progress:
 
 
 def _judged_candidate(search: _LogSearch, progress: _Progress, min_reduction: float):
-    """(the first candidate that predicts the last training block better, its error there)
-    or (None, the error as it stands); each one judged worse is recorded as not added."""
+    """(the candidate to add, its error on the last training block) or (None, the error as
+    it stands). Each of the first :data:`MAX_JUDGED` usable candidates must predict the last
+    training block better than the model without it (each one worse is recorded as not
+    added); of those that do, the one whose worse error - on that block, or on each regime
+    of the training rows predicted from the others (:func:`regime_blocks`) - is least is
+    added, those the block test confirms first. A term chosen forward in time alone may
+    fail the first time the machine does what the training rows did elsewhere."""
     from ..core.workbench.diagnosis import selection_refusal
 
     # Those the block test confirms first, then - on a log whose runs differ so much that
@@ -612,10 +683,18 @@ def _judged_candidate(search: _LogSearch, progress: _Progress, min_reduction: fl
               not selection_refusal(o, min_reduction, block_test=False)]
     usable.sort(key=lambda o: bool(selection_refusal(o, min_reduction)))
     before, unit, to_unit = progress.validation, search.unit, search.to_unit
+    passing = []
     for option in usable[:MAX_JUDGED]:
-        value = search.validation(progress.accepted_terms + [search.term(option)])
+        terms = progress.accepted_terms + [search.term(option)]
+        value = search.validation(terms)
         if value < before:
-            return option, value
+            across = regime_blocks(terms, search.frame, search.component, search.regimes,
+                                   search.obs.zeroed_runs) \
+                if search.regimes.by != "one regime" else []
+            robust = max(value, pooled_rmse(across)) if across else value
+            passing.append((bool(selection_refusal(option, min_reduction)), robust,
+                            len(passing), option, value))
+            continue
         progress.refused_names.add(option.name)
         test = f"predicting {search.judged_what} from the training rows before them"
         progress.not_added.append(NotAdded(option.name, option.error_reduction, test,
@@ -623,7 +702,10 @@ def _judged_candidate(search: _LogSearch, progress: _Progress, min_reduction: fl
         progress.refusals.append(f"not added: {option.name} (CV {100 * option.error_reduction:.0f}"
                                  f" % better) - {test}, its error would rise from "
                                  f"{before * to_unit:.4g} to {value * to_unit:.4g} {unit}")
-    return None, before
+    if not passing:
+        return None, before
+    _, _, _, option, value = min(passing)
+    return option, value
 
 
 def _step_by_step(search: _LogSearch, start_model, add: list[str], auto: int,
@@ -672,54 +754,89 @@ def _contest(search: _LogSearch, progress: _Progress, first, start_model, blocks
              validation_blocks, rivals_too: bool, notes: list[str]
              ) -> tuple[list[ContestEntry], dict[str, float]]:
     """Whole models against one another, by the same forward validation over every
-    training block: the step-by-step model, and (``rivals_too``) each model a thermal
-    engineer fits in one go (least squares or ridge on every sensor, principal
-    components). A rival that wins becomes the model (``progress`` takes it, said in
-    ``notes``). Returns (the contest, best first; each model's pooled forward error [m],
-    the step-by-step model's first)."""
+    training block and, when the training rows hold several regimes, each regime
+    predicted from the others (:func:`regime_blocks`): the step-by-step model, and
+    (``rivals_too``) each model a thermal engineer fits in one go (least squares or ridge
+    on every sensor, principal components). The worse of a model's two errors decides
+    (:func:`contest_winner`); a rival that wins becomes the model (``progress`` takes it,
+    said in ``notes``). Returns (the contest, best first; each model's pooled forward
+    error [m], the step-by-step model's first)."""
     from ..core.workbench.diagnosis import add_effect
     from ..core.workbench.thermal_log import held_out_rmse
 
     c, zeroed = search.component, search.obs.zeroed_runs
-    per_block = {"step by step": forward_blocks(progress.accepted_terms, search.frame, c,
-                                                validation_blocks, zeroed)}
+    terms_of = {"step by step": progress.accepted_terms}
     rivals = {}
     for option in first.ranking if rivals_too else []:
         # (A rival the step-by-step model consists of is that model: not run twice.)
         if option.effect in WHOLE_MODELS and not option.refusal and \
-                option.name not in per_block and progress.accepted_terms != [search.term(option)]:
-            per_block[option.name] = forward_blocks([search.term(option)], search.frame, c,
-                                                    validation_blocks, zeroed)
+                option.name not in terms_of and progress.accepted_terms != [search.term(option)]:
+            terms_of[option.name] = [search.term(option)]
             rivals[option.name] = option
+    per_block = {name: forward_blocks(terms, search.frame, c, validation_blocks, zeroed)
+                 for name, terms in terms_of.items()}
+    across = {name: (regime_blocks(terms, search.frame, c, search.regimes, zeroed)
+                     if search.regimes.by != "one regime" else [])
+              for name, terms in terms_of.items()}
     contest = {name: pooled_rmse(blocks_of) for name, blocks_of in per_block.items()}
-    winner = min(contest, key=lambda k: (contest[k], k != "step by step"))
-    # Each contestant's figure on the held-out rows, for the reader only: it is computed
-    # after the decision and decides nothing (how well forward validation chose).
+    score = {name: max(contest[name], pooled_rmse(across[name])) if across[name] else
+             contest[name] for name in terms_of}
+    excess = {name: max((b["range_excess"] for b in across[name]), default=0.0)
+              for name in terms_of}
+    winner = contest_winner(score, excess)
+    # Each contestant's figures on the held-out rows, for the reader only: computed after
+    # the decision, they decide nothing (how well the contest chose).
     held_out = {"step by step": progress.steps[-1].held_out_rmse}
     rival_models = {}
     for name, option in rivals.items():
         (refitted,) = joint_refit([option], [search.term(option)], search.frame, c, zeroed)
         rival_models[name] = (refitted, add_effect(start_model, refitted, search.training))
         held_out[name] = held_out_rmse(rival_models[name][1], search.obs, search.train)
+    held_excess = _held_out_excess(search, start_model, terms_of)
     step_by_step = [name for s in progress.steps for name in s.added or []]
     if winner != "step by step":
-        unit, to_unit = search.unit, search.to_unit
-        notes.append(f"{winner} predicts the training {'runs' if blocks is not None else 'rows'} "
-                     "forward better "
-                     f"({contest[winner] * to_unit:.4g} {unit}) than the step-by-step model "
-                     f"({contest['step by step'] * to_unit:.4g} {unit}): it is the model")
-        refitted, progress.model = rival_models[winner]
-        progress.steps = progress.steps[:1]
-        first_step = progress.steps[0]
-        first_step.added = [winner]
-        first_step.parameters = {winner: refitted.parameters}
-        first_step.parameter_uncertainties = {winner: refitted.parameter_uncertainties}
-        progress.diagnosis = search.diagnose(progress.model)
-        progress.steps.append(search.step(progress.model, progress.diagnosis,
-                                          search.validation([search.term(rivals[winner])])))
+        _take_rival(search, progress, winner, rival_models[winner], rivals[winner],
+                    score, across, blocks, notes)
     return [ContestEntry(name, step_by_step if name == "step by step" else [name],
-                         contest[name], per_block[name], held_out[name], name == winner)
-            for name in sorted(contest, key=contest.get)], contest
+                         contest[name], per_block[name], held_out[name], name == winner,
+                         pooled_rmse(across[name]) if across[name] else None, across[name],
+                         score[name], excess[name], held_excess[name])
+            for name in sorted(score, key=score.get)], contest
+
+
+def _held_out_excess(search: _LogSearch, start_model, terms_of: dict) -> dict[str, float]:
+    """How far each contestant's inputs leave their training range on the held-out rows,
+    a share of the span (:func:`~..core.workbench.regimes.range_excess`)."""
+    from ..core.workbench.diagnosis import residual_frame
+    from ..core.workbench.regimes import range_excess
+
+    if search.train.all():
+        return {name: 0.0 for name in terms_of}
+    whole = residual_frame(start_model, search.obs)
+    out = {}
+    for name, terms in terms_of.items():
+        x = joint_design(terms, whole, search.component, True)[0]
+        out[name] = range_excess(x[search.train], x[~search.train]) if x.shape[1] else 0.0
+    return out
+
+
+def _take_rival(search: _LogSearch, progress: _Progress, winner: str, rival, option,
+                score: dict, across: dict, blocks, notes: list[str]) -> None:
+    """The contest's winner, a whole-model rival, becomes the model (said in ``notes``)."""
+    unit, to_unit = search.unit, search.to_unit
+    how = "forward and across regimes (the worse of the two)" if across[winner] else "forward"
+    notes.append(f"{winner} predicts the training {'runs' if blocks is not None else 'rows'} "
+                 f"{how} better ({score[winner] * to_unit:.4g} {unit}) than the step-by-step "
+                 f"model ({score['step by step'] * to_unit:.4g} {unit}): it is the model")
+    refitted, progress.model = rival
+    progress.steps = progress.steps[:1]
+    first_step = progress.steps[0]
+    first_step.added = [winner]
+    first_step.parameters = {winner: refitted.parameters}
+    first_step.parameter_uncertainties = {winner: refitted.parameter_uncertainties}
+    progress.diagnosis = search.diagnose(progress.model)
+    progress.steps.append(search.step(progress.model, progress.diagnosis,
+                                      search.validation([search.term(option)])))
 
 
 def _sensor_weights(first, steps: list[ModelStep], added: list[str], temperatures
@@ -747,7 +864,8 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
               model_terms: list[str], row_period_s: float | None = None,
               component: str = "z", uncertainty_m: float | None = None,
               structure_length_m: float | None = None, run_column: str | None = None,
-              zeroed_runs: bool = False) -> CheckResult:
+              zeroed_runs: bool = False, walk_forward_period: str | None = None,
+              progress=None) -> CheckResult:
     """A thermal log (one displacement column, temperature inputs, a spindle speed; one run
     or many) on the survey engine (:mod:`~mt_accuracy_ros.core.workbench.thermal_log`).
 
@@ -756,46 +874,107 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
     jumps between runs; lags restart each run); ``zeroed_runs``: the instrument was
     zeroed at each run's start. Decisions are made on the training rows only (module
     docstring); everything is SI in the JSON (metres); printed lines speak the target
-    column's unit.
+    column's unit. ``walk_forward_period`` ("4h", "run"): the log is also replayed in
+    time, the model made again at each period's end from every row so far and judged on
+    the next period (:mod:`.check_walk`); ``progress`` is called with a line per period.
     """
-    from ..core.workbench.diagnosis import add_effect, diagnose, residual_frame
-    from ..core.workbench.log_runs import run_blocks, split_at_run
-    from ..core.workbench.thermal_log import DEFAULT_STRUCTURE_LENGTH_M, log_model
-    from .check import candidate_named
+    from ..core.workbench.log_runs import split_at_run
+    from ..core.workbench.walk_forward import parse_period
 
     validate_log_options(auto, train_fraction)
+    period_s = parse_period(walk_forward_period) if walk_forward_period else None
     if zeroed_runs and not run_column:
         raise InputDataError("--zeroed-runs needs --run COLUMN (the instrument was zeroed at "
                              "each run's start)")
     log = read_log(path, target, time_column, inputs, drivers, row_period_s, component,
                    uncertainty_m, run_column, zeroed_runs)
-    obs, run_names = log.obs, log.run_names
-    runs = obs.run_of_row is not None
-    if runs:
+    obs = log.obs
+    if obs.run_of_row is not None:
         train = split_at_run(obs.run_of_row, train_fraction)
     else:
         train = np.arange(obs.n) < int(train_fraction * obs.n)
+    options = SearchOptions(add, auto, min_reduction, model_terms,
+                            structure_length_m, component)
+    searched = search_log(log, train, options)
+    result = _log_result(path, log, searched)
+    if walk_forward_period:
+        from .check_walk import walk_forward_of_log
+
+        result.log.walk_forward = walk_forward_of_log(log, period_s, walk_forward_period,
+                                                      options, progress)
+    return result
+
+
+@dataclasses.dataclass(frozen=True)
+class SearchOptions:
+    """What the user asked the search of a log: the effects to add first (``add``), how
+    many the selection may add (``auto``), its least CV reduction, the starting model's
+    terms, the structure's length for the physics bounds [m] (None: the default) and the
+    measured component."""
+
+    add: list[str]
+    auto: int
+    min_reduction: float
+    model_terms: list[str]
+    structure_length_m: float | None
+    component: str
+
+
+@dataclasses.dataclass
+class LogSearched:
+    """A log's search done on its training rows: the search's frame, its progress (the
+    model), the starting and empty models, the forward blocks and the contest of whole
+    models (best first) with each one's pooled forward error [m]."""
+
+    search: _LogSearch
+    progress: _Progress
+    start_model: object
+    empty: object
+    blocks: object
+    contest: list[ContestEntry]
+    forward: dict[str, float]
+    options: SearchOptions
+
+
+def search_log(log: LogData, train: np.ndarray, options: SearchOptions) -> LogSearched:
+    """The model of a log made from its ``train`` rows (N,) bool alone: the starting terms,
+    the effects asked for, the selection's steps, the contest of whole models (forward and
+    across the training rows' regimes). What it decides is said in ``log.notes``.
+
+    Raises
+    ------
+    InputDataError
+        Fewer than 8 training rows without runs.
+    """
+    from ..core.workbench.diagnosis import add_effect, diagnose, residual_frame
+    from ..core.workbench.log_runs import run_blocks
+    from ..core.workbench.regimes import find_regimes
+    from ..core.workbench.thermal_log import DEFAULT_STRUCTURE_LENGTH_M, log_model
+    from .check import candidate_named
+
+    obs, run_names = log.obs, log.run_names
+    runs = obs.run_of_row is not None
     training = obs.subset(np.flatnonzero(train))
     blocks = run_blocks(training.run_of_row, MAX_BLOCKS) if runs else None
     if blocks is not None and blocks[-1] < 1:
         blocks = None
-    empty = model = log_model(obs, structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
+    empty = model = log_model(obs, options.structure_length_m or DEFAULT_STRUCTURE_LENGTH_M)
     if runs and blocks is None:
         log.notes.append("one training run: forward validation cuts it into blocks of rows")
     folds = min(5, training.n // 4)
     if blocks is None and folds < 2:
-        raise InputDataError(f"{training.n} training rows (--train-fraction {train_fraction:g} "
-                             f"of {obs.n}): the selection needs at least 8")
-    c = "xyz".index(component)
+        raise InputDataError(f"{training.n} training rows (of {obs.n}): the selection needs "
+                             "at least 8")
+    c = "xyz".index(options.component)
     structure = sorted(n for n, v in training.temperatures.items()
                        if np.ptp(v) > 1e-3)
     family_list = _log_families(training, structure, training.measured_m[:, c])
 
     def diagnosis_of(current):
-        return diagnose(current, training, min_reduction=min_reduction, forward=True,
+        return diagnose(current, training, min_reduction=options.min_reduction, forward=True,
                         folds=folds, blocks=blocks, family_list=family_list)
 
-    for name in model_terms:   # the starting model's terms, fitted on the training rows
+    for name in options.model_terms:   # the starting model's terms, on the training rows
         model = add_effect(model, candidate_named(diagnosis_of(model), name, "start with",
                                                   "log"), training)
     fit_rows, judge_rows = _validation_split(training, blocks)
@@ -805,29 +984,63 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
                          key=run_names.index) if runs else []
     judged_what = (f"run{'s' if len(judged_runs) > 1 else ''} {', '.join(judged_runs)}"
                    if runs else f"the last {int(judge_rows.sum())} training rows")
+    regimes = find_regimes(training.time_s, training.temperatures, training.run_of_row,
+                           [run_names[k] for k in np.unique(training.run_of_row)]
+                           if runs else None, training.spindle_speed_rad_s)
     search = _LogSearch(obs, train, training, residual_frame(model, training), c, fit_rows,
                         judge_rows, judged_what, log.unit, log.to_unit,
-                        {f.name: f for f in family_list}, diagnosis_of)
-    progress = _step_by_step(search, model, add, auto, min_reduction)
-    return _log_result(path, log, search, progress, model, empty, blocks, validation_blocks,
-                       auto, add, min_reduction)
+                        {f.name: f for f in family_list}, diagnosis_of, regimes)
+    progress = _step_by_step(search, model, options.add, options.auto, options.min_reduction)
+    contest, forward = _contest(search, progress, progress.first, model, blocks,
+                                validation_blocks, bool(options.auto and not options.add),
+                                log.notes)
+    return LogSearched(search, progress, model, empty, blocks, contest, forward, options)
 
 
-def _log_result(path: Path, log: LogData, search: _LogSearch, progress: _Progress, start_model,
-                empty, blocks, validation_blocks, auto: int, add: list[str],
-                min_reduction: float) -> CheckResult:
-    """The contest of whole models, the large gains not added, the held-out figures and
-    the result of a thermal log's check."""
+def extrapolation_lines(log: LogData, obs, train: np.ndarray) -> tuple[str, str]:
+    """(the regimes the held-out rows hold that the training rows never held, the sensors
+    read beyond their training range there), each "" when there is none: why a model may
+    predict the held-out rows worse than it predicted its training rows."""
+    from ..core.workbench.regimes import find_regimes, sensors_leaving_range
+
+    rows = log.table.data_rows
+    rows = np.asarray(rows) if rows is not None and len(rows) == obs.n else None
+    regimes = find_regimes(obs.time_s, obs.temperatures, obs.run_of_row, log.run_names,
+                           obs.spindle_speed_rad_s)
+    held = ~train
+    parts = []
+    for what, of, side in (("", regimes.trends_in, 0),
+                           ("spindle programs ", regimes.programs_in, 1)):
+        trained = of(train)
+        new = [k for k in of(held) if k not in trained]
+        if not new:
+            continue
+        where = [f"{s.kind} {s.rows_text(rows)}" for s in regimes.stretches
+                 if held[s.start:s.stop].any() and (s.kind.split(" at ") + [""])[side] in new]
+        parts.append(f"{what}{', '.join(new)} ({', '.join(where[:2])}), which the training "
+                     f"rows never held (they held {', '.join(trained)})")
+    regime_line = ("the held-out rows hold " + "; and ".join(parts)) if parts else ""
+    leaving = sensors_leaving_range(obs.temperatures, train, held)
+    sensor_line = ("on the held-out rows " + "; ".join(e.text() for e in leaving[:3])
+                   if leaving else "")
+    return regime_line, sensor_line
+
+
+def _log_result(path: Path, log: LogData, searched: LogSearched) -> CheckResult:
+    """The large gains not added, the held-out figures and the result of a thermal log's
+    check (its search done: :func:`search_log`)."""
     from ..core.workbench.thermal_log import (all_inputs_least_squares_residual,
                                               held_out_residual, held_out_rmse)
     from .check import _model_yaml, error_figures
 
+    search, progress, start_model, empty = searched.search, searched.progress, \
+        searched.start_model, searched.empty
+    contest, forward = searched.contest, searched.forward
+    auto, min_reduction = searched.options.auto, searched.options.min_reduction
     obs, train, first, to_unit, unit = search.obs, search.train, progress.first, log.to_unit, \
         log.unit
     notes, warnings, not_added, refusals = log.notes, progress.warnings, progress.not_added, \
         progress.refusals
-    contest, forward = _contest(search, progress, first, start_model, blocks,
-                                validation_blocks, bool(auto and not add), notes)
     steps, model = progress.steps, progress.model
     added = [name for s in steps for name in s.added or []]
     # Every large CV gain not added, with the test that refused it and its numbers.
@@ -844,14 +1057,29 @@ def _log_result(path: Path, log: LogData, search: _LogSearch, progress: _Progres
     squares_residual = all_inputs_least_squares_residual(obs, train)
     squares = float(np.sqrt(np.mean(squares_residual[judge] ** 2)))
     final = steps[-1].held_out_rmse
+    regime_line, sensor_line = extrapolation_lines(log, obs, train)
+    chosen = next(entry for entry in contest if entry.chosen)
+    if regime_line:
+        notes.append(f"{regime_line}: the model is judged on a regime it was not fitted on "
+                     f"(its inputs leave their training range by {chosen.held_out_range_excess:.2g}"
+                     " of its span there)" + (f"; {sensor_line}" if sensor_line else ""))
+    bounded = next((e for e in not_added if e.name.startswith("sensor_least_squares") and
+                    e.test.startswith("physics refuses")), None)
+    # "physics refuses its fit (WHY)": WHY alone.
+    reason = bounded.test.split("(", 1)[-1][:-1] if bounded else ""
+    bound_line = (f"{bounded.name} was refused by the physics bound ({reason}): if the "
+                  "structure between the sensors and the tool is longer than the bound "
+                  "assumes, give --structure-length METRES" if bounded else "")
+    why = "; ".join(x for x in (regime_line, sensor_line, bound_line) if x) or \
+        "no regime the training rows lacked and no sensor beyond its training range explain it"
     if final > constant:
         warnings.append(f"warning: the model's held-out RMSE {final * to_unit:.4g} {unit} is "
-                        f"worse than a constant's ({constant * to_unit:.4g} {unit})")
+                        f"worse than a constant's ({constant * to_unit:.4g} {unit}) - {why}")
     if final > squares * (1.0 + 1e-9):
         warnings.append(f"warning: least squares on every input ({squares * to_unit:.4g} "
-                        f"{unit}) beats the model ({final * to_unit:.4g} {unit}) held out")
+                        f"{unit}) beats the model ({final * to_unit:.4g} {unit}) held out - "
+                        f"{why}")
     carried, carrier = _sensor_weights(first, steps, added, obs.temperatures)
-    chosen = next(entry for entry in contest if entry.chosen)
     thermal = ThermalLog(
         target=log.target_column, target_unit=unit, target_unit_per_m=to_unit,
         component="xyz"[search.component], rows=obs.n, train_rows=int(train.sum()),
@@ -885,7 +1113,7 @@ def _log_result(path: Path, log: LogData, search: _LogSearch, progress: _Progres
                           rows_note=table.summary()),
         log=thermal, warnings=warnings,
         validation=("forward by whole runs: each block of runs predicted by a fit on the "
-                    "runs before it" if blocks is not None else
+                    "runs before it" if searched.blocks is not None else
                     "forward: each block predicted by a fit on the blocks before it"),
         plot={"time": obs.time_s, "target": obs.measured_m[:, c],
               "before": obs.measured_m[:, c] - before_residual,

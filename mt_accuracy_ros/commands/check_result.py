@@ -56,18 +56,18 @@ JSON_KEYS = {
                     "model_chosen", "model_contest", "judged_on",
                     "all_inputs_least_squares_held_out_rmse", "baselines_held_out_m",
                     "sensors_carrying_weight", "sensors_carrying_weight_of", "model_yaml",
-                    "runs", "zeroed_runs")}
+                    "runs", "zeroed_runs", "walk_forward")}
 #: Keys a summary leaves out when there is nothing to say (None); every other key is
 #: always there (a thermal log's ``runs`` is null without runs).
 OPTIONAL_KEYS = {"bag": {"warnings"},
                  "survey_csv": {"runs", "validation", "warnings", "sensor_notes"},
-                 "thermal_log": set()}
+                 "thermal_log": {"walk_forward"}}
 
 
 def _plain(value):
     """``value`` as JSON holds it: dataclasses as dicts (their None fields left out)."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return value.as_dict()
+        return value.as_dict() if hasattr(value, "as_dict") else dataclasses.asdict(value)
     if isinstance(value, list):
         return [_plain(v) for v in value]
     return value
@@ -190,6 +190,19 @@ class ContestEntry(_AsDict):
         Its error on the held-out rows [m], computed after the decision (decides nothing).
     chosen : bool
         Whether it is the model.
+    cross_regime_rmse : float or None
+        Its error on each regime of the training rows predicted by a fit on the others,
+        pooled [m]; None when the training rows hold one regime.
+    cross_regime_blocks : list of dict
+        Per regime: ``regime``, ``trained_rows``, ``judged_rows``, ``rmse`` [m] and
+        ``range_excess`` (how far its inputs left the fitted range, a share of the span).
+    score : float
+        What decides: the worse of the forward and the cross-regime errors [m].
+    range_excess : float
+        How far its inputs left their fitted range on the regimes it was judged on (the
+        largest over them), a share of the range's span.
+    held_out_range_excess : float
+        The same on the held-out rows against every training row (decides nothing).
     """
 
     name: str
@@ -198,6 +211,11 @@ class ContestEntry(_AsDict):
     forward_blocks: list[dict]
     held_out_rmse: float
     chosen: bool
+    cross_regime_rmse: float | None = None
+    cross_regime_blocks: list[dict] = field(default_factory=list)
+    score: float = float("nan")
+    range_excess: float = 0.0
+    held_out_range_excess: float = 0.0
 
 
 @dataclass
@@ -279,6 +297,10 @@ class ThermalLog(_AsDict):
         Whose weights those are: ``name``, ``sensors``, ``in_model`` and ``words``.
     zeroed_runs : bool
         Whether the instrument was zeroed at each run's start.
+    walk_forward : WalkForward or None
+        The log replayed in time (``--walk-forward``): each period predicted by the model
+        made from every row before it, and by the baselines
+        (:class:`~mt_accuracy_ros.core.workbench.walk_forward.WalkForward`).
     """
 
     target: str
@@ -305,6 +327,7 @@ class ThermalLog(_AsDict):
     sensors_carrying_weight: dict
     sensors_carrying_weight_of: dict
     zeroed_runs: bool
+    walk_forward: object = None
 
 
 @dataclass(eq=False)
@@ -528,14 +551,24 @@ def _log_lines(result: CheckResult) -> list[str]:
                  f"{log.constant_held_out_rmse * scale:.4g} {unit}; least squares on every "
                  f"input {log.all_inputs_least_squares_held_out_rmse * scale:.4g} {unit}")
     if len(log.model_contest) > 1:
-        lines.append("whole models contested (forward over the training blocks -> held out; "
-                     "the held-out figure decided nothing):")
+        across = any(e.cross_regime_rmse is not None for e in log.model_contest)
+        lines.append("whole models contested (forward over the training blocks"
+                     + (" / each training regime from the others, the worse decides;"
+                        " inputs beyond their fitted range" if across else "")
+                     + " -> held out; the held-out figure decided nothing):")
         for entry in log.model_contest[:SHOWN_CONTESTANTS]:
             name = entry.name if entry.name != "step by step" else \
                 f"step by step ({', '.join(entry.terms) or 'nothing added'})"
+            regimes = (f" / {entry.cross_regime_rmse * scale:.4g} "
+                       f"(x{entry.range_excess:.2g})" if entry.cross_regime_rmse is not None
+                       else "")
             lines.append(f"  {'*' if entry.chosen else ' '} {name[:60]:60s} "
-                         f"{entry.forward_rmse * scale:.4g} -> "
+                         f"{entry.forward_rmse * scale:.4g}{regimes} -> "
                          f"{entry.held_out_rmse * scale:.4g} {unit}")
+    if log.walk_forward is not None:
+        from .check_walk import walk_forward_lines
+
+        lines += walk_forward_lines(log.walk_forward, unit, scale)
     for run in result.runs or []:
         lines.append(f"  run {run.run:>12s} ({run.part}, {run.rows} rows): constant "
                      f"{run.constant_rmse * scale:.4g}, least squares "

@@ -41,8 +41,11 @@ DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d*,\d+([eE][+-]?\d+)?\s*$")
 ENCODING_NOTES = {"cp1252": "in Windows-1252 (not UTF-8)", "utf-16": "UTF-16 (BOM)",
                   "utf-32": "UTF-32 (BOM)"}
 #: Date-time layouts beyond ISO 8601 (which :meth:`datetime.fromisoformat` reads).
+#: (A date and a time joined by a dash is a printer's and a logger's script's way.)
 DATE_TIME_LAYOUTS = ("%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M:%S,%f",
-                     "%d.%m.%Y %H:%M", "%Y/%m/%d %H:%M:%S", "%Y/%m/%d %H:%M")
+                     "%d.%m.%Y %H:%M", "%Y/%m/%d %H:%M:%S", "%Y/%m/%d %H:%M",
+                     "%Y/%m/%d %H:%M:%S.%f", "%Y/%m/%d-%H:%M:%S", "%Y/%m/%d-%H:%M:%S.%f",
+                     "%Y-%m-%d-%H:%M:%S", "%Y-%m-%d-%H:%M:%S.%f")
 
 
 @dataclass(frozen=True)

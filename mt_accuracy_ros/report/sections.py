@@ -695,6 +695,10 @@ def csv_report_sections(check: CheckResult, directory: Path, stem: str) -> list[
     sections = [source, _log_headline(check, directory, stem),
                 localisation_section(check, directory, stem), _evidence_section(check),
                 _log_versions_section(check)]
+    if log.walk_forward is not None:
+        from .walk import walk_forward_section
+
+        sections.append(walk_forward_section(log.walk_forward, unit, scale, directory, stem))
     if check.runs:
         runs = Table(["run", "part", "rows", f"constant [{unit}]",
                       f"least squares, every input [{unit}]", f"model [{unit}]"],
@@ -786,14 +790,22 @@ def _log_versions_section(check: CheckResult) -> Section:
             test += f": {entry.before * scale:.4g} -> {entry.after * scale:.4g} {unit}"
         refused.add(entry.name, f"{100 * entry.cv_reduction:.0f} %", test)
     contest = Table(["whole model", f"forward, training blocks [{unit}]",
-                     f"each block [{unit}] (rows fitted)", f"held out [{unit}]", "chosen"],
+                     f"each block [{unit}] (rows fitted)",
+                     f"each training regime from the others [{unit}]",
+                     "inputs beyond their fitted range", f"held out [{unit}]", "chosen"],
                     caption="Whole models contested by forward validation over the training "
-                            "blocks; the held-out column is computed after the decision and "
-                            "decided nothing.")
+                            "blocks and by each regime of the training rows predicted from "
+                            "the others (the worse of the two decides; within 10 % of the "
+                            "best, the model whose inputs left their range least); the "
+                            "held-out column is computed after the decision and decided "
+                            "nothing.")
     for entry in log.model_contest:
         contest.add(entry.name, entry.forward_rmse * scale,
                     ", ".join(f"{b['rmse'] * scale:.3g} ({b['trained_rows']})"
                               for b in entry.forward_blocks),
+                    ", ".join(f"{b['regime']} {b['rmse'] * scale:.3g}"
+                              for b in entry.cross_regime_blocks) or "one regime",
+                    f"{entry.range_excess:.2g} of the span",
                     entry.held_out_rmse * scale, "yes" if entry.chosen else "")
     return Section("Model versions", tables=[versions] + ([refused] if refused.rows else []) +
                    ([contest] if len(contest.rows) > 1 else []))

@@ -418,6 +418,59 @@ class TemperatureComponents(EffectFamily):
         return {name: (bound, "free expansion of the structure over the component's "
                        "temperature spread") for name in self.parameter_names(variant, setting)}
 
+    def implied_gains(self, setting: dict, coefficients) -> NDArray[np.float64]:
+        """Each sensor's gain the components' fit amounts to (S, 3) [m/K]: a score is the
+        standardised temperatures times the loadings, so a gain per unit score b_j gives
+        each sensor s the gain sum_j b_j loading_js / scale_s.
+
+        Parameters
+        ----------
+        setting : dict
+            The setting (one of :meth:`settings`).
+        coefficients : sequence of float, length 3k
+            The fitted gains, in :meth:`parameter_names` order [m per unit score].
+
+        Returns
+        -------
+        ndarray, shape (S, 3)
+            Gain of each sensor on x, y, z [m/K].
+        """
+        per_component = np.asarray(coefficients, float).reshape(-1, 3)      # (k, 3)
+        loadings = np.asarray(setting["loadings"], float)                  # (k, S)
+        return (loadings.T @ per_component) / np.asarray(setting["scale"], float)[:, None]
+
+    def fit_problems(self, ctx, variant, setting, coefficients):
+        """The per-sensor gains the fit amounts to, held to the bound a least-squares fit on
+        those sensors is held to (:class:`SensorLeastSquares`): a statistical model may not
+        pass where the sensors' own gains would be refused.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+        coefficients : sequence of float, length 3k
+            The fitted gains [m per unit score].
+
+        Returns
+        -------
+        list of str
+            One sentence per sensor beyond the bound (empty: none).
+        """
+        bound = thermal_gain_limit_m_per_k(ctx.machine)
+        gains = self.implied_gains(setting, coefficients)
+        problems = []
+        for sensor, row in zip(setting["sensors"].split("+"), gains):
+            for axis, gain in zip("xyz", row):
+                if abs(gain) > bound:
+                    problems.append(f"its gain on {sensor} amounts to b{axis} = {gain:.3g} m/K, "
+                                    f"beyond +-{bound:.3g} (free expansion of the structure "
+                                    "per K)")
+        return problems
+
     def describe_setting(self, setting):
         """The setting in words: ``"k of S"``.
 

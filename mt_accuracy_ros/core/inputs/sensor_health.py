@@ -112,7 +112,8 @@ class SensorFinding:
     sensor : str
         The sensor (column) name.
     kind : str
-        "dead", "out_of_range", "stuck", "dropout" or "jumping".
+        "dead", "out_of_range", "stuck", "dropout", "jumping", or "heated" (a note: readings
+        above a workshop's range taken as a heated part's and kept, no rows).
     rows : tuple of int
         Its bad rows' numbers (the caller's ``data_rows``: 1-based rows of the file's data).
     text : str
@@ -470,6 +471,71 @@ def judge_sensors(temperatures: dict[str, ArrayLike], data_rows: ArrayLike | Non
     return SensorHealth(kept, findings)
 
 
+#: A heated part's coolest readings lie this close to the other sensors' coolest [K]: it
+#: starts where the machine does, so its unit is theirs.
+HEATED_START_K = 5.0
+
+
+def coolest_reading(values: NDArray[np.float64]) -> float:
+    """The lowest reading that is not a dead sensor's [degC] (a heater's first reading,
+    before it rises: even its second may lie kelvins above)."""
+    alive = values[np.isfinite(values) & ~dead_rows(values)]
+    return float(alive.min()) if alive.size else float("nan")
+
+
+def heated_part(values: NDArray[np.float64], outside: NDArray[np.bool_],
+                others: list[NDArray[np.float64]],
+                workshop_c: tuple[float, float]) -> str:
+    """Why a sensor whose readings rise above a workshop's range is a heated part (a
+    heater, a bed, a hot end) in degC, or "" when it is not.
+
+    A unit slip (degF declared degC) moves every reading, its coolest too; a heated part
+    starts where the machine does. So readings above the range are a heated part's when
+    none lies below it or beyond physics, each stretch above it is entered and left
+    gradually, and the sensor's coolest reading lies within :data:`HEATED_START_K` of the
+    other sensors' coolest.
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        The sensor's readings [degC as declared].
+    outside : ndarray of bool, shape (N,)
+        Its rows outside ``workshop_c``.
+    others : list of ndarray, shape (N,)
+        The other sensors' sane readings [degC].
+    workshop_c : tuple of float
+        The sensor's workshop range [degC].
+
+    Returns
+    -------
+    str
+        The note's words, or "".
+    """
+    finite = values[np.isfinite(values)]
+    if not outside.any() or not others or finite.size < 2:
+        return ""
+    seen = values[outside]
+    if np.any(seen <= workshop_c[1]) or np.any(seen > PHYSICAL_RANGE_C[1]):
+        return ""
+    coolest = coolest_reading(values)
+    rise = float(np.nanmax(values)) - coolest
+    # Heating moves: each stretch above the range lasts, varies, and is entered and left
+    # by steps far smaller than the whole rise (a glitch, a wrong channel: one step).
+    for start, stop in _stretches(outside):
+        entry = abs(values[start] - values[start - 1]) if start > 0 else 0.0
+        exit_ = abs(values[stop] - values[stop - 1]) if stop < values.size else 0.0
+        if stop - start < 3 or np.ptp(values[start:stop]) == 0.0 or \
+                max(entry, exit_) > 0.5 * rise:
+            return ""
+    starts = [coolest_reading(o) for o in others if np.isfinite(o).sum() >= 3]
+    if not starts or abs(coolest - float(np.median(starts))) > HEATED_START_K:
+        return ""
+    return (f"reads up to {seen.max():.4g} degC, above a structure's {workshop_c[1]:g} degC, "
+            f"from {coolest:.4g} degC at its coolest as the other sensors "
+            f"({np.median(starts):.4g} degC): taken as a heated part (a heater, a bed, a "
+            "spindle) and kept - give its unit if it is not degC")
+
+
 def _judge_one(name: str, values: NDArray[np.float64], others: list[NDArray[np.float64]],
                rows: NDArray, runs: NDArray[np.intp] | None, run_names: list[str] | None,
                breaks: NDArray[np.bool_], row_label: str = "data row"
@@ -478,6 +544,9 @@ def _judge_one(name: str, values: NDArray[np.float64], others: list[NDArray[np.f
     workshop_c = workshop_range_c(name)
     dead = dead_rows(values)
     outside = out_of_range_rows(values, workshop_c)
+    heated = heated_part(values, outside, others, workshop_c)
+    if heated:
+        outside = np.zeros_like(outside)
     missing = ~np.isfinite(values)
     sane = np.where(dead | outside, np.nan, values)
     stuck = stuck_rows(sane, others) & ~missing
@@ -492,11 +561,19 @@ def _judge_one(name: str, values: NDArray[np.float64], others: list[NDArray[np.f
     unit_s = f"{row_label.split()[-1]}s"            # "rows" of a file, "readings" of a bag
     action = f"left out of every model (its {unit_s} kept)" if leave_out else \
         f"those {unit_s} left out"
-    findings = []
+    findings = [SensorFinding(name, "heated", (), f"sensor {name}: {heated}", False)] \
+        if heated else []
     for kind, mask in bad_kinds:
         if not mask.any():
             continue
         count = int(mask.sum())
+        # The runs a finding names are those its own rows lie in.
+        if runs is not None and mostly_bad_runs:
+            own = {(run_names or [str(k) for k in range(int(runs.max()) + 1)])[k]
+                   for k in np.unique(runs[mask])}
+            kind_runs = [r for r in mostly_bad_runs if r in own]
+            where = (f" (run{'s' if len(kind_runs) > 1 else ''} {', '.join(kind_runs)})"
+                     if kind_runs else "")
         if kind == "dropout" and leave_out and count == int(bad.sum()):
             # The wording a dead thermocouple's gaps have always had.
             text = (f"sensor {name}: no reading in {count} of {values.size} {unit_s}{where} - "
@@ -519,7 +596,8 @@ def _judge_one(name: str, values: NDArray[np.float64], others: list[NDArray[np.f
 
 
 def refuse_wrong_temperature_unit(name: str, values: ArrayLike, declared: str, where: str,
-                                  mend: str, error: type[Exception]) -> None:
+                                  mend: str, error: type[Exception],
+                                  others_coolest_c: float | None = None) -> None:
     """Refuse a sensor whose readings, in their ``declared`` unit, lie mostly where no
     machine's temperature does and another unit would put them (kelvin declared as degC).
 
@@ -544,6 +622,10 @@ def refuse_wrong_temperature_unit(name: str, values: ArrayLike, declared: str, w
         in ``mend`` becomes the likely unit.
     error : type
         The exception raised (the caller's: ParameterError, InputDataError).
+    others_coolest_c : float, optional
+        The other sensors' coolest reading [degC]: a sensor whose coolest reading lies
+        within :data:`HEATED_START_K` of it is in their unit however hot it runs (a heater
+        held at 100 degC), and is left to :func:`judge_sensors` (:func:`heated_part`).
 
     Raises
     ------
@@ -559,6 +641,9 @@ def refuse_wrong_temperature_unit(name: str, values: ArrayLike, declared: str, w
     quantity = temperature_quantity(name)
     middle = float(np.median(to_si(finite, "temperature", declared)))
     if BOUNDS[quantity].low <= middle <= BOUNDS[quantity].high:
+        return
+    coolest = coolest_reading(to_si(raw, "temperature", declared))
+    if others_coolest_c is not None and abs(coolest - others_coolest_c) <= HEATED_START_K:
         return
     low, high = np.percentile(finite, [5, 95])
     core = finite[(finite >= low) & (finite <= high)]

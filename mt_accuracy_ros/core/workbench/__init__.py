@@ -10,4 +10,9 @@
                  periodograms, the plain sentence.
 * ``thermal_log`` a thermal log (CSV: one displacement, temperatures, a spindle)
                  as a survey of a standing machine, on the same engine.
+* ``regimes``    a log's operating regimes from its data (runs, heating, dwell,
+                 cooling, spindle programs) and how far inputs leave their
+                 training range.
+* ``walk_forward`` a log replayed in time: each period predicted by a fit on
+                 every row before it.
 """

@@ -329,7 +329,9 @@ def unit_slip_of_run(run: NDArray[np.float64], rest: NDArray[np.float64],
     A unit slip is an affine map over a whole run: the run's raw readings lie outside the
     other runs' range (widened by :data:`TEMPERATURE_SLIP_K`/8), lie where only that unit
     puts a structure's temperature, and - converted - fall inside the others' range with
-    a spread like theirs (when they spread by a kelvin or more).
+    a spread like theirs (when they spread by a kelvin or more) and their coolest readings
+    nearer the others' coolest than the raw ones (a run that ran hotter starts where the
+    others start).
 
     Parameters
     ----------
@@ -361,7 +363,12 @@ def unit_slip_of_run(run: NDArray[np.float64], rest: NDArray[np.float64],
         converted = to_celsius(run)
         inside = low <= np.percentile(converted, 5) and np.percentile(converted, 95) <= high
         alike = usual_spread < 1.0 or 0.5 <= np.ptp(converted) / usual_spread <= 2.0
-        if inside and alike:
+        # The map holds over the whole run, its coolest readings too: a run that only ran
+        # hotter (or cooler) starts where the others start, as read.
+        coolest = float(np.percentile(rest, 5))
+        starts_alike = abs(np.percentile(converted, 5) - coolest) < \
+            abs(np.percentile(run, 5) - coolest)
+        if inside and alike and starts_alike:
             return unit, float(np.median(converted))
     return None
 

@@ -162,3 +162,36 @@ def test_a_fast_warm_up_of_one_sensor_alone_is_no_jump():
     spindle[200:] += 3.0
     finding = _only(_judge(spindle))
     assert finding.kind == "jumping" and finding.rows[0] == 201
+
+
+def test_a_heated_part_above_a_structure_s_range_is_kept_and_said():
+    """A printer's bed heater rising from the room's 20 degC to 105 degC: above a structure's
+    80 degC but starting where the other sensors start, so in their unit - kept, said.
+    A degF sensor (68 ... 221 as declared degC) starts 48 K above them: left out, named."""
+    t = np.arange(ROWS)
+    rng = np.random.default_rng(4)
+    heater = 20 + 85 * (1 - np.exp(-t / 30)) + rng.normal(0, 0.05, ROWS)
+    health = _judge(heater)
+    finding = _only(health)
+    assert (finding.kind, finding.left_out, finding.rows) == ("heated", False, ())
+    assert finding.text.startswith("sensor c: reads up to 10") and \
+        "above a structure's 80 degC, from 19.9" in finding.text and \
+        finding.text.endswith("taken as a heated part (a heater, a bed, a spindle) and kept - "
+                              "give its unit if it is not degC")
+    assert list(health.kept) == ["a", "b", "c"] and np.isfinite(health.kept["c"]).all()
+    in_fahrenheit = _judge(heater * 1.8 + 32.0)
+    kinds = [f.kind for f in in_fahrenheit.findings]
+    assert "out_of_range" in kinds and "heated" not in kinds       # (above 200: dead too)
+    assert in_fahrenheit.left_out == ["c"]
+
+
+def test_a_finding_names_only_the_runs_its_own_rows_lie_in():
+    """Out of range in run x, silent in run y: each line names its own run."""
+    values = _third(lambda v: None)
+    values[:120] = 95.0 + np.linspace(0, 1, 120)          # run x: a wrong channel
+    values[200:] = np.nan                                 # run y: no reading
+    runs = np.repeat([0, 1], [150, 150])
+    health = _judge(values, run_of_row=runs, run_names=["x", "y"])
+    texts = {f.kind: f.text for f in health.findings}
+    assert "(run x)" in texts["out_of_range"] and "(run y)" not in texts["out_of_range"]
+    assert "(run y)" in texts["dropout"] and "(run x)" not in texts["dropout"]
