@@ -895,12 +895,15 @@ def check_csv(path: Path, target: str, time_column: str, inputs: list[str], driv
         train = np.arange(obs.n) < int(train_fraction * obs.n)
     options = SearchOptions(add, auto, min_reduction, model_terms,
                             structure_length_m, component)
+    if walk_forward_period:
+        from .check_walk import walk_forward_of_log, walk_periods_of_log
+
+        # A period that leaves too little to walk is refused before any search.
+        periods = walk_periods_of_log(log, period_s)
     searched = search_log(log, train, options)
     result = _log_result(path, log, searched)
     if walk_forward_period:
-        from .check_walk import walk_forward_of_log
-
-        result.log.walk_forward = walk_forward_of_log(log, period_s, walk_forward_period,
+        result.log.walk_forward = walk_forward_of_log(log, periods, walk_forward_period,
                                                       options, progress)
     return result
 

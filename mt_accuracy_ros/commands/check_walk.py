@@ -36,7 +36,21 @@ def no_model_residual(obs) -> np.ndarray:
     return measured if obs.zeroed_runs else measured - measured[0]
 
 
-def walk_forward_of_log(log, period_s: float | None, period_text: str, options,
+def walk_periods_of_log(log, period_s: float | None) -> list:
+    """The periods a walk-forward of the read ``log`` predicts (``period_s`` [s], None:
+    each run), once :data:`MIN_TRAIN_ROWS` rows (a tenth of a short log) lie before them.
+
+    Raises
+    ------
+    InputDataError
+        A period that leaves fewer than two periods to predict; ``run`` without runs.
+    """
+    obs = log.obs
+    return walk_periods(obs.time_s, period_s, obs.run_of_row,
+                        min(MIN_TRAIN_ROWS, max(8, obs.n // 10)), log.run_names)
+
+
+def walk_forward_of_log(log, periods: list, period_text: str, options,
                         progress=None) -> WalkForward:
     """The walk-forward of a read log (:class:`~.check_log.LogData`) with the search
     ``options`` (:class:`~.check_log.SearchOptions`).
@@ -45,8 +59,8 @@ def walk_forward_of_log(log, period_s: float | None, period_text: str, options,
     ----------
     log : LogData
         The log, read and judged (:func:`~.check_log.read_log`).
-    period_s : float or None
-        The period [s]; None: each run.
+    periods : list of Period
+        The periods to predict (:func:`walk_periods_of_log`).
     period_text : str
         The period as asked, for the output.
     options : SearchOptions
@@ -58,19 +72,12 @@ def walk_forward_of_log(log, period_s: float | None, period_text: str, options,
     -------
     WalkForward
         Per period and pooled, for :data:`METHODS`.
-
-    Raises
-    ------
-    InputDataError
-        A period that leaves fewer than two periods to predict; ``run`` without runs.
     """
     from ..core.workbench.thermal_log import (all_inputs_least_squares_residual,
                                               held_out_residual, log_model)
     from .check_log import search_log
 
     obs = log.obs
-    periods = walk_periods(obs.time_s, period_s, obs.run_of_row,
-                           min(MIN_TRAIN_ROWS, max(8, obs.n // 10)), log.run_names)
     empty = log_model(obs)
     untouched = no_model_residual(obs)
 

@@ -111,6 +111,17 @@ CLASSES = [
     ("log_every_sensor_dead",
      "a log whose only sensor reads -180 degC on every row",
      "refused: every input sensor is left out"),
+    ("log_bed_heater_above_a_structure_s_range",
+     "a log's bed heater t3_C rising from the room's 20 degC to 105 degC (above a "
+     "structure's 80)",
+     "announced: sensor t3_C: reads up to 105 degC, above a structure's 80 degC, from 20 "
+     "degC at its coolest as the other sensors (20 degC): taken as a heated part (a heater, "
+     "a bed, a spindle) and kept"),
+    ("log_kelvin_day_after_a_clock_jump",
+     "a log of two days parted only by a clock jump of two days; on the second day its "
+     "sensor was logged in kelvin",
+     "refused: run '2': sensor t1_C reads 296.2 where the other runs read 22.08 - mixed "
+     "units across runs? (K: converted it reads 23.08 degC, as the others do)"),
 ]
 
 ROWS = 150
@@ -248,6 +259,14 @@ def _build(name: str, tmp_path) -> tuple[dict[str, np.ndarray], list[str]]:
         log["T_motor_C"] = log.pop("t1_C")
         return log, ["--target", "growth_um", "--inputs", "T_motor_C", "--run", "run",
                      "--auto", "1"]
+    if name == "log_bed_heater_above_a_structure_s_range":
+        return _third_sensor(lambda v: _set(v, slice(None), 20.0 + 85.0 * (
+            1 - np.exp(-np.arange(ROWS) / 20.0)) + rng.normal(0, 0.05, ROWS))), base
+    if name == "log_kelvin_day_after_a_clock_jump":
+        log = _runs([20.0, 21.0], slip=(1, lambda v: v + 273.15))
+        log["time_s"][60:] += 2 * 86400.0
+        del log["run"]
+        return log, ["--target", "growth_um", "--inputs", "t1_C", "--auto", "1"]
     if name == "log_every_sensor_dead":
         log = _warm_up()
         del log["t2_C"]
