@@ -328,6 +328,7 @@ def temperature_look(name: str, values: np.ndarray, units: dict[str, str]) -> st
     units row, a temperature's name - T3, temp_bed -, or readings a temperature of a
     machine would have), else why not ("spindle_rpm (rpm)")."""
     from ..core.inputs.plausibility import likely_unit
+    from ..core.inputs.sensor_health import dead_rows
     from ..io.column_map import column_unit
 
     if column_unit(name, "temperature", units):
@@ -339,6 +340,10 @@ def temperature_look(name: str, values: np.ndarray, units: dict[str, str]) -> st
     if TEMPERATURE_NAME.search(name):
         return ""
     finite = values[np.isfinite(values)]
+    # A dead thermocouple's one value (-180, -273) on every row is a temperature column
+    # whose sensor is absent: the sensors' judge names it and leaves it out.
+    if finite.size and dead_rows(finite).all():
+        return ""
     if finite.size and likely_unit(np.percentile(finite, [5, 95]), "temperature_hot", "") \
             is not None:
         return ""

@@ -111,6 +111,11 @@ CLASSES = [
     ("log_every_sensor_dead",
      "a log whose only sensor reads -180 degC on every row",
      "refused: every input sensor is left out"),
+    ("log_absent_thermistor_asked_for_by_name",
+     "a log's chamber sensor reads exactly -180 on every row (absent: the logger's "
+     "default), asked for by name in --inputs",
+     "announced: sensor chamber: reads -180 degC, a physically absent value (dead) at data "
+     "rows 1-150 (150 of 150 rows) - left out of every model (its rows kept)"),
     ("log_bed_heater_above_a_structure_s_range",
      "a log's bed heater t3_C rising from the room's 20 degC to 105 degC (above a "
      "structure's 80)",
@@ -259,6 +264,10 @@ def _build(name: str, tmp_path) -> tuple[dict[str, np.ndarray], list[str]]:
         log["T_motor_C"] = log.pop("t1_C")
         return log, ["--target", "growth_um", "--inputs", "T_motor_C", "--run", "run",
                      "--auto", "1"]
+    if name == "log_absent_thermistor_asked_for_by_name":
+        log = _warm_up()
+        log["chamber"] = np.full(ROWS, -180.0)
+        return log, ["--target", "dz_um", "--inputs", "t1_C", "t2_C", "chamber", "--auto", "1"]
     if name == "log_bed_heater_above_a_structure_s_range":
         return _third_sensor(lambda v: _set(v, slice(None), 20.0 + 85.0 * (
             1 - np.exp(-np.arange(ROWS) / 20.0)) + rng.normal(0, 0.05, ROWS))), base
