@@ -184,10 +184,14 @@ def run_demo(out_dir: str = "demo_output", rate_factor: float = 1.0,
     # outlives a context - in a process that ran rclpy before (a test worker) it woke
     # only on its timeout, and the lockstep machine went 7 times slower.
     executor = node_executor(user)
+    console = _Console(user, started)
     try:
-        _drive(user, executor, encoder, lockstep, _Console(user, started))
+        # The corrections go to the CNC (when it takes them in real time) and the recorder:
+        # the run counts them from the bag.
+        _drive(user, executor, encoder, lockstep, console,
+               1 + (compensation_mode in ("realtime", "hybrid")))
     finally:
-        dead_nodes = _stop_graph(encoder, nodes)
+        dead_nodes = _stop_graph(encoder, nodes, console)
         executor.shutdown()
         user.destroy_node()
         rclpy.try_shutdown()
@@ -269,14 +273,16 @@ class _Console:
                                 "/encoder_publisher:compensation", {})), flush=True)
 
 
-def _drive(user, executor, encoder, lockstep: bool, console: _Console) -> None:
+def _drive(user, executor, encoder, lockstep: bool, console: _Console,
+           compensation_consumers: int) -> None:
     """Start the machine once the graph is up; spin until it has streamed its scenario,
     then until the monitor has judged every reading - the user looking after each
     wake-up."""
     from .model_tools import set_remote_parameter
 
     def graph_ready() -> bool:
-        return user.sees_graph_ready(SCALES_CONSUMERS, TEMPERATURE_CONSUMERS)
+        return user.sees_graph_ready(SCALES_CONSUMERS, TEMPERATURE_CONSUMERS,
+                                     compensation_consumers)
 
     ready_by = time.monotonic() + GRAPH_READY_TIMEOUT_S
     while not graph_ready() and time.monotonic() < ready_by:
@@ -317,8 +323,9 @@ def _wake(user, executor, console: _Console) -> None:
         print(action_line(action), flush=True)
 
 
-def _stop_graph(encoder, nodes: list) -> list[str]:
-    """Stop every process of the graph; returns the nodes that died during the run."""
+def _stop_graph(encoder, nodes: list, console: _Console | None = None) -> list[str]:
+    """Stop every process of the graph; returns the nodes that died during the run. The
+    progress line goes on meanwhile (a loaded host's recorder may take a while)."""
     # A node that died during the run (killed, crashed) is named: its absence explains
     # frozen profiles or a silent monitor, and the run cannot be called a success.
     # (The virtual machine's publishers end by themselves, with 0, when the scenario
@@ -329,7 +336,8 @@ def _stop_graph(encoder, nodes: list) -> list[str]:
     for process in nodes:
         # The recorder may still be writing a backlog on a loaded host: time to close
         # its file rather than a kill that leaves it unreadable.
-        process.stop(timeout_s=60.0 if process.name == "recorder" else 10.0)
+        process.stop(timeout_s=60.0 if process.name == "recorder" else 10.0,
+                     while_waiting=None if console is None else console.tick)
     return dead_nodes
 
 
@@ -373,7 +381,13 @@ def _conclude(out: Path, user, scenario: str, compensation_mode: str, five_axis:
     if timing is not None:
         timing["search_wall_s"] = [round(w, 3) for w, _ in user.searches]
         timing["search_cpu_s"] = [round(c, 3) for _, c in user.searches]
-    summary = _summarise(out, user.checks, user.alarms, user.actions, user.compensation,
+    try:
+        compensation = _recorded_compensation(bag)
+    except Exception as exc:  # noqa: BLE001 - an unreadable bag: said, none counted
+        losses.append(f"the bag's compensation messages could not be read "
+                      f"({type(exc).__name__}: {exc}): none are counted")
+        compensation = []
+    summary = _summarise(out, user.checks, user.alarms, user.actions, compensation,
                          wall_s, references, losses, story, user.delivery, scenario,
                          [text for _, text in user.model_alarms], start_ns=user.start_ns,
                          dead_nodes=dead_nodes, check_timing=timing, warnings=warnings)
@@ -441,6 +455,21 @@ def _recorded_references(bag: Path, start_ns: int) -> tuple[list[tuple], list[tu
         references.append(reading)
         orientations.append(orientation)
     return references, orientations
+
+
+def _recorded_compensation(bag: Path) -> list[tuple[int, float]]:
+    """The bag's compensation messages: (stamp [ns], the model's TCP error norm [m]) each.
+
+    Read after the run rather than heard one by one (100 a second) by the user in this
+    process: the recorder was subscribed before the machine streamed (the graph's
+    readiness), so the bag holds every message a listener would have had.
+    """
+    from ..io.bag_reader import decode, read_messages
+    from ..nodes._common import stamp_to_nanoseconds
+
+    return [(stamp_to_nanoseconds(m.header.stamp),
+             float(np.linalg.norm([m.error.x, m.error.y, m.error.z])))
+            for m in (decode(m) for m in read_messages(bag, ["/compensation"]))]
 
 
 def _exit_text(code: int | None) -> str:

@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -57,15 +58,25 @@ class NodeProcess:
     popen: subprocess.Popen
     command: list[str] = field(default_factory=list)
 
-    def stop(self, timeout_s: float = 10.0) -> int:
-        """SIGINT, then SIGKILL after ``timeout_s``; returns the exit code."""
+    def stop(self, timeout_s: float = 10.0, while_waiting=None) -> int:
+        """SIGINT, then SIGKILL after ``timeout_s``; returns the exit code.
+        ``while_waiting()``, when given, is called every 0.05 s until the process ends
+        (a command's progress line while a node writes its backlog)."""
         if self.popen.poll() is None:
             self.popen.send_signal(signal.SIGINT)
-            try:
-                self.popen.wait(timeout=timeout_s)
-            except subprocess.TimeoutExpired:
-                self.popen.kill()
-                self.popen.wait()
+            deadline = time.monotonic() + timeout_s
+            while True:
+                step = timeout_s if while_waiting is None else 0.05
+                try:
+                    self.popen.wait(timeout=max(0.0, min(step, deadline - time.monotonic())))
+                    break
+                except subprocess.TimeoutExpired:
+                    if time.monotonic() >= deadline:
+                        self.popen.kill()
+                        self.popen.wait()
+                        break
+                    if while_waiting is not None:
+                        while_waiting()
         return self.popen.returncode
 
 

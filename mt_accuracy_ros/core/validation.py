@@ -130,3 +130,38 @@ def sample_period(value: float, name: str = "sample_period") -> float:
         raise InputDataError(f"{name} {value!r} s: must be finite, within [{low:g}, {high:g}] s "
                              "(seconds, not ms)")
     return value
+
+
+def as_samples(values: ArrayLike, n: int) -> NDArray[np.float64]:
+    """``values`` as a read-only (n,) float64 array, a one-value input repeated n times.
+
+    What ``np.broadcast_to(np.asarray(values, float).ravel(), (n,))`` gives (the caller's
+    data cannot be written through it), without that call's cost when the values
+    already are n: a view of them. A node evaluates a model at one row per message,
+    and there the broadcast cost more than the arithmetic.
+
+    Parameters
+    ----------
+    values : array_like
+        n values (any shape of that size, read flat) or one value.
+    n : int
+        Number of samples.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Read-only.
+
+    Raises
+    ------
+    ValueError
+        Neither n values nor one.
+    """
+    array = np.asarray(values, dtype=np.float64)
+    if array.size != 1:
+        array = array.ravel()
+    if array.shape == (n,):
+        view = array.view()
+        view.flags.writeable = False
+        return view
+    return np.broadcast_to(array, (n,))

@@ -68,6 +68,11 @@ class CompensationInput:
         self.tables = TableCompensation(machine, max_correction_m=max_correction_m)
         self._reported = (0, 0)
         self.newest_stamp_ns = -1
+        #: Where the node already has the tables' correction at a command (a virtual CNC
+        #: computes it for its whole window): ``(stamp [ns], axis -> (1,) command) ->
+        #: (3,) [m]`` at the tables' current revision, or None when it has not.
+        self.known_table_correction: Callable[[int, dict[str, np.ndarray]],
+                                              np.ndarray | None] | None = None
         self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", 10)
         if mode in ("realtime", "hybrid"):
             node.create_subscription(VolumetricCompensation, "compensation",
@@ -103,8 +108,11 @@ class CompensationInput:
             position = {"X": message.command_position.x, "Y": message.command_position.y,
                         "Z": message.command_position.z}
             position.update(zip(rotary, message.rotary_positions))
-            correction = correction - self.tables.correction(
-                {a: np.array([position.get(a, 0.0)]) for a in self.machine.axis_order})[0]
+            command = {a: np.array([position.get(a, 0.0)]) for a in self.machine.axis_order}
+            known = None if self.known_table_correction is None else \
+                self.known_table_correction(stamp_to_nanoseconds(message.header.stamp), command)
+            correction = correction - (known if known is not None
+                                       else self.tables.correction(command)[0])
         reason = self.offset.offer(stamp_to_nanoseconds(message.header.stamp), arrival,
                                    correction, int(message.model_version),
                                    rotary_rad=np.asarray(message.rotary_corrections, float))
@@ -132,12 +140,24 @@ class CompensationInput:
         applied, _, versions = self.corrections_with_rotary(stamps_ns, positions)
         return applied, versions
 
-    def corrections_with_rotary(self, stamps_ns: np.ndarray, positions: dict[str, np.ndarray]
+    def corrections_with_rotary(self, stamps_ns: np.ndarray, positions: dict[str, np.ndarray],
+                                table_correction: np.ndarray | None = None
                                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """TCP correction (N, 3) [m], rotary-axis corrections (N, R) [rad], model version (N,).
 
         The rotary part (the tool's direction, from the real-time input) is
         added to the rotary commands; the tables carry position only.
+
+        Parameters
+        ----------
+        stamps_ns : ndarray of int, shape (N,)
+            The samples' controller times [ns].
+        positions : dict of str to ndarray, shape (N,)
+            Axis commands [m] (rotary [rad]) at those samples.
+        table_correction : ndarray, shape (N, 3), optional
+            What ``self.tables.correction(positions)`` gives [m], when the caller
+            computed it at once for a longer stretch of commands (at the tables'
+            current :attr:`~TableCompensation.revision`); None: computed here.
         """
         n = np.size(stamps_ns)
         rotary = np.zeros((n, len(self.rotary_axes)))
@@ -147,12 +167,19 @@ class CompensationInput:
             self.offset.forget_before(int(np.min(stamps_ns)) - 2 * self.offset.max_age_ns)
             applied, rotary = values[:, :3], values[:, 3:]
             if self.mode == "hybrid":
-                applied = self.tables.correction(positions) + applied
+                applied = self._table_part(positions, table_correction) + applied
             return applied, rotary, versions
         if self.mode == "table":
-            return self.tables.correction(positions), rotary, np.full(n, self.tables.version,
-                                                                        dtype=np.int64)
+            return (self._table_part(positions, table_correction), rotary,
+                    np.full(n, self.tables.version, dtype=np.int64))
         return np.zeros((n, 3)), rotary, np.zeros(n, dtype=np.int64)
+
+    def _table_part(self, positions: dict[str, np.ndarray],
+                    table_correction: np.ndarray | None) -> np.ndarray:
+        """The tables' correction (N, 3) [m] at ``positions``: the caller's, if it has it."""
+        if table_correction is not None:
+            return table_correction
+        return self.tables.correction(positions)
 
     def publish_status(self) -> None:
         stats = self.offset.statistics

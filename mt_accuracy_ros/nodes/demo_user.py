@@ -2,9 +2,10 @@
 
 It subscribes to what a user sees - the model monitor's checks (``model_check``), the
 estimator's profiles and their deterioration alarms (``systematic/<axis>``), the
-compensation (``compensation``), the reference instrument's readings
-(``reference/tcp_error``), the model versions (``model``) and every node's status
-(``/diagnostics``) - and keeps them, in the order they came, as its attributes. Its one
+reference instrument's readings (``reference/tcp_error``), the model versions
+(``model``) and every node's status (``/diagnostics``) - and keeps them, in the order
+they came, as its attributes. The corrections (``compensation``, 100 a second) it does
+not take one by one: the run counts them from the bag afterwards. Its one
 decision: once the machine has warmed for ``looks_after_s`` of data, at the first check
 that names effects, it asks the monitor to add every one of them (its ``add_effects``
 parameter), once.
@@ -33,11 +34,10 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 
-from mt_accuracy_msgs.msg import (ModelCheck, ModelVersion, ReferenceMeasurement,
-                                  SystematicProfile, VolumetricCompensation)
+from mt_accuracy_msgs.msg import ModelCheck, ModelVersion, ReferenceMeasurement, SystematicProfile
 
-from ._common import (COMPENSATION_QOS, LATCHED_QOS, RESULT_QOS, float_descriptor,
-                      plain_descriptor, stamp_to_nanoseconds)
+from ._common import (LATCHED_QOS, RESULT_QOS, float_descriptor, plain_descriptor,
+                      stamp_to_nanoseconds)
 from ._health import warnings_of
 from ._model_client import ChangeOutcome, ModelClient
 
@@ -197,8 +197,6 @@ class DemoUser(Node):
         When each check came [s], wall clock x ``rate_factor`` since the start.
     alarms : list of (float, str)
         Data time [s] and axis of each axis' first deterioration alarm.
-    compensation : list of (int, float)
-        Stamp [ns] and the TCP error norm [m] of each compensation message.
     references : list of tuple
         The reference readings (:func:`reference_entry`); ``orientations`` beside them.
     models : list of (float, ModelVersion)
@@ -236,7 +234,6 @@ class DemoUser(Node):
         self.checks: list[tuple[float, ModelCheck]] = []
         self.check_arrivals: list[float] = []
         self.alarms: list[tuple[float, str]] = []
-        self.compensation: list[tuple[int, float]] = []
         self.references: list[tuple] = []
         self.orientations: list[tuple | None] = []
         self.models: list[tuple[float, ModelVersion]] = []
@@ -258,8 +255,6 @@ class DemoUser(Node):
         for axis in PROFILE_AXES:
             self.create_subscription(SystematicProfile, f"systematic/{axis}", self._on_profile,
                                      RESULT_QOS)
-        self.create_subscription(VolumetricCompensation, "compensation",
-                                 self._on_compensation, COMPENSATION_QOS)
         self.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics,
                                  DIAGNOSTICS_QOS)
         self.create_subscription(ReferenceMeasurement, "reference/tcp_error",
@@ -289,11 +284,6 @@ class DemoUser(Node):
     def _on_profile(self, message: SystematicProfile) -> None:
         if is_new_alarm(self.alarms, message.axis, message.deterioration):
             self.alarms.append((self.data_s(message.header.stamp), message.axis))
-
-    def _on_compensation(self, message: VolumetricCompensation) -> None:
-        error = message.error
-        self.compensation.append((stamp_to_nanoseconds(message.header.stamp),
-                                  float(np.linalg.norm([error.x, error.y, error.z]))))
 
     def _on_reference(self, message: ReferenceMeasurement) -> None:
         reading, orientation = reference_entry(message, self.start_ns)
@@ -326,13 +316,17 @@ class DemoUser(Node):
             self.model_alarms.append((self.now_s(), status.message))
 
     # ------------------------------------------------------------------ what it sees
-    def sees_graph_ready(self, scales_consumers: int, temperature_consumers: int) -> bool:
-        """Every consumer subscribed, the broadcaster's compensation matched by the CNC
-        (and this user), the monitor constructed (its latched version 1)."""
+    def sees_graph_ready(self, scales_consumers: int, temperature_consumers: int,
+                         compensation_consumers: int = 2) -> bool:
+        """Every consumer subscribed, the broadcaster's compensation matched by its
+        ``compensation_consumers`` (the CNC that takes it in real time, and the recorder:
+        the run counts the corrections from the bag), the monitor constructed (its latched
+        version 1)."""
         return (self.count_subscribers("/scales") >= scales_consumers and
                 self.count_subscribers("/temperatures") >= temperature_consumers and
                 self.count_publishers("/compensation") >= 1 and
-                self.count_subscribers("/compensation") >= 2 and bool(self.models))
+                self.count_subscribers("/compensation") >= compensation_consumers and
+                bool(self.models))
 
     def monitor_done(self) -> bool:
         """Every reference reading the machine made has been judged by the monitor."""

@@ -34,7 +34,7 @@ from rclpy.node import Node
 from mt_accuracy_msgs.msg import ScaleBatch, SystematicProfile, TemperatureArray, YawBatch
 
 from ..core.scales.deterioration import detect_deterioration
-from ..core.scales.dual_scale import (SQ57_EXPANSION_PER_K, YAW_COMPONENT, scale_expansion,
+from ..core.scales.dual_scale import (SQ57_EXPANSION_PER_K, YAW_COMPONENT, ExpansionProfile,
                                       thermal_yaw_error, thermocouple_positions,
                                       yaw_from_scales)
 from ..core.inputs.stream_history import StreamHistory
@@ -71,6 +71,8 @@ class AxisState:
         self.alarm = False
         #: Readings left out because they lay outside the stroke (said on /diagnostics).
         self.outside_stroke = 0
+        #: (what they were made from, the two scales' prepared expansion profiles).
+        self.expansion: tuple[tuple, list[ExpansionProfile]] | None = None
 
 
 class YawEstimator(Node):
@@ -347,8 +349,12 @@ class YawEstimator(Node):
             rises.append(np.array([self._rises[n] for n in names]))
         travel = np.clip(np.nan_to_num(first - state.low), 0.0, length)
         c = float(self.get_parameter("expansion_per_k").value)
-        dl1 = scale_expansion(travel, rises[0], c, sensor_positions_m=positions)
-        dl2 = scale_expansion(travel, rises[1], c, sensor_positions_m=positions)
+        # The rises change with each temperature reading (2 Hz), the batches come at
+        # 100 Hz: each scale's profile is integrated once per reading (the same numbers).
+        key = (c, positions.tobytes(), rises[0].tobytes(), rises[1].tobytes())
+        if state.expansion is None or state.expansion[0] != key:
+            state.expansion = (key, [ExpansionProfile(positions, rise, c) for rise in rises])
+        dl1, dl2 = (profile(travel) for profile in state.expansion[1])
         return thermal_yaw_error(travel, dl1, dl2, state.distance)
 
     # ---------------------------------------------------------------- outputs

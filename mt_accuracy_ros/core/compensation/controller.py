@@ -300,6 +300,15 @@ class TableCompensation:
         what a CNC's volumetric-compensation package is configured with.
     max_correction_m : float, optional
         Largest translational table value taken [m] (angular values: 10 mrad).
+
+    Attributes
+    ----------
+    version : int
+        Model version of the live tables (0 before any).
+    revision : int
+        Counts every change of the live tables or squareness (a new version or a
+        refinement of the live one): a correction computed at an unchanged revision
+        is still the one :meth:`correction` would give.
     """
 
     def __init__(self, machine: MachineDescription,
@@ -311,6 +320,7 @@ class TableCompensation:
         self.tables: dict[str, AxisTable] = {}
         self.squareness: dict[str, float] = {}
         self.version = 0
+        self.revision = 0
         self.linear_axes = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
         # Tables of a version not yet live, per version: (axis -> table, squareness).
         self._staged: dict[int, tuple[dict[str, AxisTable], dict[str, float]]] = {}
@@ -410,6 +420,7 @@ class TableCompensation:
             # A refinement of the live version (a new measured profile): per axis, at once.
             self.tables[axis] = table
             self.squareness = squareness
+            self.revision += 1
             return None
         # A new version goes live as a whole: once every linear axis' table of it is in.
         # Switched axis by axis, the CNC would apply X's new table with Y's old one (or
@@ -426,6 +437,7 @@ class TableCompensation:
             self.tables.update(staged[0])
             self.squareness = dict(staged[1])
             self.version = version
+            self.revision += 1
             self._staged = {v: t for v, t in self._staged.items() if v > version}
         return None
 

@@ -51,6 +51,7 @@ from ..effects.variables import Variables
 from ..kinematics.error_functions import ErrorFunction
 from ..errors import InputDataError, MachineDescriptionError, ParameterError, reraise_as
 from ..kinematics.chain import ErrorOverrides, KinematicModel
+from ..kinematics.htm import cross
 from ..kinematics.machine import checked_datum  # noqa: F401 (its home; used below)
 from ..kinematics.machine import MachineDescription, load_machine
 from ..inputs.safe_files import load_yaml, plain_name, read_description
@@ -654,7 +655,7 @@ class ErrorModel:
         position, orientation = result["position"], result["orientation"]
         if "abbe_offset" in self.effects:
             offset = np.asarray(self.effects["abbe_offset"]["offset_m"], dtype=np.float64)
-            position = position + np.cross(orientation, offset)
+            position = position + cross(orientation, offset)
         drive = np.zeros_like(position)
         for name, sign_of in (("reversal", True), ("servo_lag", False)):
             if name not in self.effects:

@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 
 from ..errors import InputDataError
 from ..kinematics.chain import KinematicModel
+from ..kinematics.htm import cross
 from ..kinematics.machine import COMPONENTS, MachineDescription
 from .lru import ByteBoundedCache
 from .variables import Variables
@@ -170,7 +171,7 @@ class Context:
                 if component < 3:
                     sensitivity = rotation[:, :, component]
                 else:
-                    sensitivity = np.cross(rotation[:, :, component - 3], lever)
+                    sensitivity = cross(rotation[:, :, component - 3], lever)
                 self._jacobians[error_name] = sign * np.ascontiguousarray(sensitivity)
         return self._jacobians[error_name]
 
@@ -188,7 +189,8 @@ class Context:
         it: the body turning about its actual line, the target (and a head's tool) located
         by a translation at the set-up pose
         (:meth:`~..kinematics.chain.KinematicModel.located_sensitivities`). Computed for
-        the axis' four line errors at once.
+        the four line errors of every rotary axis at once: the chain's frames they share
+        are most of the cost (a five-axis model asks for both axes' at every evaluation).
 
         Parameters
         ----------
@@ -204,9 +206,11 @@ class Context:
         """
         key = "located:" + error_name
         if key not in self._jacobians:
-            axis = error_name[3]
-            along_axis = "XYZ"["ABC".index(axis)]
-            names = [f"E{c}0{axis}" for c in "XYZABC" if c not in (along_axis, axis)]
+            rotary = [a for a in self.machine.axis_order if self.machine.axes[a].is_rotary]
+            if error_name[3] not in rotary:
+                rotary.append(error_name[3])
+            names = [f"E{c}0{axis}" for axis in rotary for c in "XYZABC"
+                     if c not in ("XYZ"["ABC".index(axis)], axis)]
             positions = {a: self.variables.positions[a] for a in self.machine.axis_order}
             found = self.kinematics.located_sensitivities(positions, names,
                                                           work_point=self.work_point)
@@ -242,7 +246,7 @@ class Context:
         turn = self._jacobians.get("orientation:" + error_name)
         if turn is None:
             turn = self._orientation_sensitivity(error_name)
-        return np.cross(turn, self.tool_axis())
+        return cross(turn, self.tool_axis())
 
     def arm_moves(self, error_name: str) -> bool:
         """Does an extra arm along the tool carry the rotation ``error_name`` to the TCP

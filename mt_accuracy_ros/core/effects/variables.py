@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputDataError
+from ..validation import as_samples
 from .lru import ByteBoundedCache
 
 AXIS_LETTERS = "XYZABC"
@@ -240,9 +241,7 @@ class Variables:
         if not self.positions:
             raise InputDataError("variables: no axis positions")
         self.n = int(np.size(next(iter(self.positions.values()))))
-        cast = lambda d: {k: np.broadcast_to(np.asarray(v, dtype=np.float64).ravel()  # noqa: E731
-                                             if np.size(v) != 1 else np.asarray(v, float),
-                                             (self.n,)) for k, v in d.items()}
+        cast = lambda d: {k: as_samples(v, self.n) for k, v in d.items()}  # noqa: E731
         self.positions = cast(self.positions)
         self.velocities = cast(self.velocities)
         self.accelerations = cast(self.accelerations)

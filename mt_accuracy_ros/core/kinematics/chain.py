@@ -58,7 +58,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MachineDescriptionError
-from .htm import (identity, rotation, rotation_matrix_first_order, rotation_matrix_xyz,
+from ..validation import as_samples
+from .htm import (cross, identity, rotation, rotation_matrix_first_order, rotation_matrix_xyz,
                   rotation_vector, translation)
 from .machine import COMPONENTS, MachineDescription, location_error_name, motion_error_name
 
@@ -126,8 +127,7 @@ class KinematicModel:
             if unknown:
                 raise MachineDescriptionError(f"unknown axis {sorted(unknown)[0]!r}")
         n = self._n(positions)
-        return {a: np.broadcast_to(np.asarray(positions[a], dtype=np.float64).ravel(), (n,))
-                for a in self.machine.axis_order}, n
+        return {a: as_samples(positions[a], n) for a in self.machine.axis_order}, n
 
     def motion_errors(self, axis: str, q: NDArray, overrides: ErrorOverrides) -> NDArray:
         """(N, 6) error motions (dx, dy, dz, ex, ey, ez) of ``axis`` at positions ``q``.
@@ -151,7 +151,8 @@ class KinematicModel:
         for i, component in enumerate(COMPONENTS):
             name = motion_error_name(component, axis)
             if name in overrides.motion:
-                out[:, i] = np.broadcast_to(np.asarray(overrides.motion[name], float), (q.size,))
+                # A value or an (N,) array: the assignment broadcasts (and refuses others).
+                out[:, i] = np.asarray(overrides.motion[name], float)
             elif overrides.use_description:
                 out[:, i] = spec.motion_errors[component](q)
         return out * overrides.scale
@@ -178,7 +179,7 @@ class KinematicModel:
         for i, component in enumerate(COMPONENTS):
             name = location_error_name(component, axis)
             if name in overrides.location:
-                out[:, i] = np.broadcast_to(np.asarray(overrides.location[name], float), (n,))
+                out[:, i] = np.asarray(overrides.location[name], float)
             elif overrides.use_description:
                 out[:, i] = spec.location_errors.get(component, 0.0)
         return out * overrides.scale
@@ -260,7 +261,8 @@ class KinematicModel:
             end_point = self.machine.tool if which == "tool" else self.machine.workpiece
         end = np.asarray(end_point, dtype=np.float64)
         rotation_of = rotation_matrix_first_order if first_order else rotation_matrix_xyz
-        rot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+        rot = np.zeros((n, 3, 3))
+        rot[:, (0, 1, 2), (0, 1, 2)] = 1.0
         pos = np.zeros((n, 3))
 
         def apply_error(twist):
@@ -490,7 +492,7 @@ class KinematicModel:
                 d = np.einsum("nij,nj->ni", rot, twist[:, :3])
                 eps = np.einsum("nij,nj->ni", rot, twist[:, 3:])
                 lever = end - frame[:, :3, 3]
-                position += sign * (d + np.cross(eps, lever))
+                position += sign * (d + cross(eps, lever))
                 orientation += sign * eps
         return {"position": position, "orientation": orientation}
 
@@ -635,8 +637,8 @@ class KinematicModel:
             # the tool axis comes off the body's own turn (kept whole: at a set-up where the
             # line errors move nothing, the chain's).
             located = np.einsum("nij,nj->ni", turned[side],
-                                np.cross(moved_then[1], tool_axis_setup))
-            out[name] = (position, moved[1] - np.cross(tool_axis, located))
+                                cross(moved_then[1], tool_axis_setup))
+            out[name] = (position, moved[1] - cross(tool_axis, located))
         return out
 
     def _turn_from_setup(self, axis: str, q: NDArray) -> NDArray:
@@ -856,7 +858,7 @@ def _unit_motion(frame: tuple[float, NDArray, NDArray], name: str) -> tuple[NDAr
     if component < 3:
         return sign * rotation[:, :, component], np.zeros_like(lever)
     turn = sign * rotation[:, :, component - 3]
-    return np.cross(turn, lever), turn
+    return cross(turn, lever), turn
 
 
 def volumetric_map(model: KinematicModel, positions: Positions, *, chunk: int = 100_000,

@@ -98,37 +98,94 @@ def scale_expansion(travel_m: ArrayLike, temperature_rise_k: ArrayLike | float,
     if sensor_positions_m is None:
         rise = finite_array(temperature_rise_k, "temperature_rise_k", allow_empty=False)
         return coefficient * travel * rise
-    sensors = finite_array(sensor_positions_m, "sensor_positions_m", ndim=1)
-    if np.any(np.diff(sensors) <= 0):
-        raise InputDataError("sensor_positions_m must be strictly ascending")
-    rise = finite_array(temperature_rise_k, "temperature_rise_k")
-    if rise.ndim == 1:
-        rise = np.broadcast_to(rise, (travel.size, sensors.size))
-    if rise.shape != (travel.size, sensors.size):
-        raise InputDataError(
-            f"temperature_rise_k has shape {rise.shape}, expected ({travel.size}, {sensors.size})")
-    return coefficient * _integral_of_interpolant(sensors, rise, travel)
+    return ExpansionProfile(sensor_positions_m, temperature_rise_k, coefficient)(travel)
 
 
-def _integral_of_interpolant(knots: NDArray, rises: NDArray, upper: NDArray) -> NDArray:
-    """Row-wise integral from 0 to ``upper[i]`` of the linear interpolant of ``rises[i]``."""
-    # Extend the profile flat to both sides so every travel is covered.
-    span = max(float(np.max(np.abs(upper), initial=0.0)), float(np.max(np.abs(knots)))) + 1.0
-    grid = np.concatenate(([-span], knots, [span]))
-    values = np.concatenate((rises[:, :1], rises, rises[:, -1:]), axis=1)
-    # Cumulative trapezoid from the grid start, then subtract the part up to 0.
-    cumulative = np.concatenate(
-        (np.zeros((values.shape[0], 1)),
-         np.cumsum(0.5 * (values[:, 1:] + values[:, :-1]) * np.diff(grid), axis=1)), axis=1)
+class ExpansionProfile:
+    """A scale's measured temperature rises, prepared for the expansion at many travels.
 
-    def integral_to(points: NDArray) -> NDArray:
+    The expansion between the zero reference and a travel L0 is ``C * int_0^L0 dT(s) ds``
+    of the piecewise-linear interpolated rise, constant beyond the end sensors (Kidani
+    eq. 3.17). The cumulative integral over the sensors is computed once, at the first
+    call (again only for a travel beyond the span it covers), so a node that corrects
+    every batch with the rises of the latest temperature reading integrates them once
+    per reading. :func:`scale_expansion` with ``sensor_positions_m`` is this.
+
+    Parameters
+    ----------
+    sensor_positions_m : array_like, shape (K,)
+        Sensor positions along the scale from the zero reference [m], strictly ascending.
+    temperature_rise_k : array_like, shape (K,) or (n, K)
+        The rise at each sensor [K]: for one instant, or one row per travel.
+    expansion_per_k : float
+        C [1/K], > 0.
+
+    Raises
+    ------
+    InputDataError
+        Values not finite, sensors not ascending, or a rise of the wrong shape.
+    ParameterError
+        ``expansion_per_k`` not positive.
+    """
+
+    def __init__(self, sensor_positions_m: ArrayLike, temperature_rise_k: ArrayLike,
+                 expansion_per_k: float) -> None:
+        self.coefficient = positive(expansion_per_k, "expansion_per_k")
+        self.sensors = finite_array(sensor_positions_m, "sensor_positions_m", ndim=1)
+        if np.any(np.diff(self.sensors) <= 0):
+            raise InputDataError("sensor_positions_m must be strictly ascending")
+        rise = finite_array(temperature_rise_k, "temperature_rise_k")
+        if rise.ndim not in (1, 2) or rise.shape[-1] != self.sensors.size:
+            raise InputDataError(f"temperature_rise_k has shape {rise.shape}, expected "
+                                 f"({self.sensors.size},) or (n, {self.sensors.size})")
+        #: (1, K) for one instant's rises, else (n, K).
+        self.rises = rise.reshape(-1, self.sensors.size)
+        #: (span [m], grid (K + 2,), values (R, K + 2), cumulative (R, K + 2)).
+        self._table: tuple[float, NDArray, NDArray, NDArray] | None = None
+        #: (1,) the one instant's integral from the grid's start to 0 (None: per row).
+        self._to_zero: NDArray | None = None
+
+    def __call__(self, travel_m: ArrayLike) -> NDArray[np.float64]:
+        """Expansion dL (n,) [m] between the zero reference and each travel (n,) [m].
+
+        Raises
+        ------
+        InputDataError
+            Travels not finite, or not one per row of per-travel rises.
+        """
+        travel = finite_array(travel_m, "travel_m", ndim=1)
+        if self.rises.shape[0] not in (1, travel.size):
+            raise InputDataError(f"temperature_rise_k has shape {self.rises.shape}, expected "
+                                 f"({travel.size}, {self.sensors.size})")
+        # Extend the profile flat to both sides so every travel is covered.
+        span = max(float(np.max(np.abs(travel), initial=0.0)),
+                   float(np.max(np.abs(self.sensors)))) + 1.0
+        if self._table is None or self._table[0] < span:
+            grid = np.concatenate(([-span], self.sensors, [span]))
+            values = np.concatenate((self.rises[:, :1], self.rises, self.rises[:, -1:]), axis=1)
+            # Cumulative trapezoid from the grid start; the part up to 0 is subtracted.
+            cumulative = np.concatenate(
+                (np.zeros((values.shape[0], 1)),
+                 np.cumsum(0.5 * (values[:, 1:] + values[:, :-1]) * np.diff(grid), axis=1)),
+                axis=1)
+            self._table = (span, grid, values, cumulative)
+            # One instant's rises: the integral up to the zero reference is one number.
+            self._to_zero = None if self.rises.shape[0] > 1 else \
+                self._integral_to(np.zeros(1), np.zeros(1, dtype=np.intp))
+        if self._to_zero is None:
+            rows = np.arange(travel.size)
+            to_zero = self._integral_to(np.zeros_like(travel), rows)
+        else:
+            rows, to_zero = np.zeros(travel.size, dtype=np.intp), self._to_zero
+        return self.coefficient * (self._integral_to(travel, rows) - to_zero)
+
+    def _integral_to(self, points: NDArray, rows: NDArray) -> NDArray:
+        """Integral of row ``rows[i]``'s interpolant from the grid's start to ``points[i]``."""
+        _, grid, values, cumulative = self._table
         index = np.clip(np.searchsorted(grid, points, side="right") - 1, 0, grid.size - 2)
-        rows = np.arange(points.size)
         width = points - grid[index]
         slope = (values[rows, index + 1] - values[rows, index]) / (grid[index + 1] - grid[index])
         return cumulative[rows, index] + width * (values[rows, index] + 0.5 * slope * width)
-
-    return integral_to(upper) - integral_to(np.zeros_like(upper))
 
 
 def thermal_yaw_error(travel_m: ArrayLike, expansion_1_m: ArrayLike, expansion_2_m: ArrayLike,

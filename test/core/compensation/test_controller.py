@@ -203,6 +203,61 @@ def test_a_new_version_of_the_tables_goes_live_whole():
     assert len(tables._staged) <= 4 and tables.version == 2
 
 
+def test_the_revision_counts_every_change_of_what_is_live_and_nothing_else():
+    """A correction kept from an unchanged revision is the one the tables give now: the
+    revision moves when a version goes live or the live one is refined, and not for a
+    version still incomplete or a refused table."""
+    machine = load_machine("kidani_hmc")
+    tables = TableCompensation(machine)
+    middle = {a: np.array([0.5 * sum(machine.axes[a].stroke)]) for a in machine.axis_order}
+    grid = np.linspace(*machine.axes["X"].stroke, 11)
+
+    def x_table(value):
+        return "X", ["X_m", "EXX_m"], np.column_stack([grid, np.full(11, value)]).ravel()
+    assert tables.revision == 0
+    assert tables.offer(*x_table(5e-6), [], [], 1) is None
+    assert tables.revision == 0                                   # v1 incomplete
+    _offer_other_axes(tables, machine, 1)
+    assert tables.revision == 1 and tables.version == 1
+    kept = (tables.revision, tables.correction(middle))
+    assert tables.offer(*x_table(9e-6), [], [], 2) is None         # v2 staged
+    assert tables.offer("X", ["X_m", "EXQ_m"], x_table(1e-6)[2], [], [], 1) is not None
+    assert tables.revision == kept[0]
+    np.testing.assert_array_equal(tables.correction(middle), kept[1])
+    assert tables.offer(*x_table(7e-6), [], [], 1) is None         # v1 refined
+    assert tables.revision == 2
+    assert not np.array_equal(tables.correction(middle), kept[1])
+    _offer_other_axes(tables, machine, 2)                           # v2 live
+    assert tables.revision == 3 and tables.version == 2
+
+
+def test_the_tables_correct_each_command_on_its_own_whatever_the_batch():
+    """The virtual CNC evaluates the tables once per 2 s window of commands and hands
+    each 10-sample batch its rows: the same numbers as evaluating every batch apart."""
+    from mt_accuracy_ros.nodes._scenario import resolve_scenario
+    from mt_accuracy_ros.sim.machine_tool import simulate
+
+    for scenario in ("demo", "demo_trunnion"):
+        machine = resolve_scenario(scenario).machine
+        tables = TableCompensation(machine)
+        rng = np.random.default_rng(5)
+        linear = [a for a in machine.axis_order if not machine.axes[a].is_rotary]
+        for axis in linear:
+            grid = np.linspace(*machine.axes[axis].stroke, 21)
+            columns = [f"{axis}_m"] + [f"E{c}{axis}_{'m' if c in 'XYZ' else 'rad'}"
+                                       for c in "XYZABC"]
+            values = np.column_stack([grid] + [rng.normal(0, 5e-6, 21) for _ in range(6)])
+            assert tables.offer(axis, columns, values.ravel(), ["EC0Y"], [4e-6], 1) is None
+        window = simulate(resolve_scenario(scenario), start_index=0, stop_index=2000)
+        commands = {a: window.command[a] for a in machine.axis_order}
+        whole = tables.correction(commands)
+        batches = np.concatenate([tables.correction({a: q[i:i + 10] for a, q in
+                                                     commands.items()})
+                                  for i in range(0, 2000, 10)])
+        np.testing.assert_array_equal(whole, batches)
+        assert np.max(np.abs(whole)) > 1e-6   # the tables do something there
+
+
 def test_loop_phases_split_a_run_and_judge_the_end_state():
     """Closed form: a constant error 4 um removed by a constant correction from t = 10 s."""
     from mt_accuracy_ros.core.workbench.closed_loop import loop_phases

@@ -130,3 +130,24 @@ def test_a_translation_or_a_user_expression_turns_nothing(five_axis):
              "coefficients": {"bx": 1e-6, "by": 0.0, "bz": 0.0}}
     assert not np.any(catalogue_orientation("drift", drift, ctx))
     assert not np.any(catalogue_orientation("mine", {"expression": "k * x"}, ctx))
+
+
+def test_every_rotary_axis_located_at_once_gives_each_axis_its_own_numbers(five_axis):
+    """A context asks the chain for the line errors of every rotary axis in one call
+    (their shared frames are most of the cost): the same numbers, bit for bit, as asking
+    for one axis' four alone, and the cross products are numpy's."""
+    from mt_accuracy_ros.core.kinematics.htm import cross
+
+    machine, kinematics, q, _ = five_axis
+    ctx = Context(machine, Variables(q), kinematics)
+    for axis in ("A", "B"):
+        along = "XYZ"["ABC".index(axis)]
+        names = [f"E{c}0{axis}" for c in "XYZABC" if c not in (along, axis)]
+        alone = kinematics.located_sensitivities(q, names)
+        for name in names:
+            for got, expected in zip(ctx.located(name), alone[name]):
+                np.testing.assert_array_equal(got, expected)
+    rng = np.random.default_rng(7)
+    a, b = rng.normal(size=(40, 3)), rng.normal(size=(40, 3))
+    np.testing.assert_array_equal(cross(a, b), np.cross(a, b))
+    np.testing.assert_array_equal(cross(a, b[0]), np.cross(a, b[0]))

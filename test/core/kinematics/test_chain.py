@@ -408,3 +408,20 @@ def test_a_knn_profile_feeds_the_model_as_an_error_function():
     e = model.tcp_error(pos)["position"]
     lever_y = machine.axes["X"].offset[1] + machine.axes["Y"].offset[1]
     np.testing.assert_allclose(e[:, 0], -profile.systematic * lever_y, rtol=1e-6, atol=1e-13)
+
+
+def test_samples_are_read_only_views_or_one_value_repeated():
+    """The chain and the model's variables take each axis' values as a read-only (n,)
+    array: what np.broadcast_to gave, the caller's data never written through it."""
+    from mt_accuracy_ros.core.validation import as_samples
+
+    data = np.arange(4.0)
+    samples = as_samples(data, 4)
+    np.testing.assert_array_equal(samples, data)
+    assert np.shares_memory(samples, data) and not samples.flags.writeable
+    with pytest.raises(ValueError):
+        samples[0] = 1.0
+    np.testing.assert_array_equal(as_samples(2.5, 3), [2.5, 2.5, 2.5])
+    np.testing.assert_array_equal(as_samples([[1.0, 2.0], [3.0, 4.0]], 4), data + 1.0)
+    with pytest.raises(ValueError):
+        as_samples(data, 3)

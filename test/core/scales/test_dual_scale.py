@@ -67,6 +67,36 @@ def test_profile_expansion_integrates_the_interpolated_rise():
                                scale_expansion(travel, 2.0), rtol=1e-12)
 
 
+def test_a_prepared_profile_gives_the_integral_for_every_batch_of_travels():
+    """The estimator integrates one temperature reading's rises once and corrects the
+    batches until the next with it: the closed form of the linear profile above, and
+    the numbers scale_expansion gives each batch."""
+    from mt_accuracy_ros.core.scales.dual_scale import ExpansionProfile
+
+    sensors = np.arange(5) * 0.11
+    rises = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
+    profile = ExpansionProfile(sensors, rises, 12e-6)
+    rng = np.random.default_rng(2)
+    for _ in range(20):
+        travel = rng.uniform(0.0, 0.44, 10)
+        np.testing.assert_allclose(profile(travel), 12e-6 * (travel + travel ** 2 / 0.22),
+                                   rtol=1e-12)
+        np.testing.assert_array_equal(
+            profile(travel), scale_expansion(travel, rises, sensor_positions_m=sensors))
+    # Beyond the last sensor (a wider span than the one prepared): flat, as before.
+    np.testing.assert_allclose(profile(np.array([1.5])),
+                               12e-6 * (0.44 + 0.44 ** 2 / 0.22 + (1.5 - 0.44) * 5.0),
+                               rtol=1e-12)
+    # One row of rises per travel; a row count that fits neither is refused.
+    per_sample = np.vstack([rises, 2.0 * rises])
+    np.testing.assert_allclose(ExpansionProfile(sensors, per_sample, 12e-6)(
+        np.array([0.22, 0.22])), [12e-6 * 0.44, 24e-6 * 0.44], rtol=1e-12)
+    with pytest.raises(InputDataError):
+        ExpansionProfile(sensors, per_sample, 12e-6)(np.zeros(3))
+    with pytest.raises(InputDataError):
+        ExpansionProfile(sensors, rises[:4], 12e-6)
+
+
 def test_thermal_term_is_relative_expansion_over_distance():
     travel = np.array([0.1, 0.2])
     dl1 = scale_expansion(travel, 3.0)
