@@ -13,6 +13,7 @@ falling.
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 
 import numpy as np
@@ -268,6 +269,7 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     # at the model with them added: one localisation serves both. Both looks see the
     # readings through the same chain: one context (and its designs) serves both.
     localisations, contexts = LocalisationMemo(), ContextMemo()
+    started = time.perf_counter()
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c.setdefault(sensor, float(values[0]))
 
@@ -305,7 +307,8 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
         diagnosis = evaluate(model)
     # The model did not change after the last residual was taken.
     residual_before, residual = step_residuals[0], step_residuals[-1]
-    return CheckResult(
+    searched = time.perf_counter() - started
+    result = CheckResult(
         kind=kind, data=data, machine=model.machine.name, readings=obs.n,
         band=obs.uncertainty_m, baseline_rmse=first.baseline_rmse,
         baseline_cv_rmse=first.baseline_cv_rmse,
@@ -324,6 +327,8 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
               "mask": obs.measured_mask, "step_residuals": step_residuals,
               "velocities": obs.velocities, "directions": obs.directions,
               "model": model, "localisation": first.localisation})
+    result.seconds["search"] = searched
+    return result
 
 
 def _model_yaml(model) -> str:
