@@ -27,8 +27,23 @@ surveys of 1k, 10k, 100k readings). Every run is printed, not the best.
      search; its time is reported beside ours.
    Ours and the naive loop must choose the same blocks with the same scores.
 
+3. **panel** (``--panel``): ``check`` on every shape of survey the issue names, at
+   every size, each run a child process on one core: its CPU time (user + system,
+   from ``wait4``: the host may be shared) and peak RSS, beside the goal for its size
+   (500 readings 0.2 s, 3,000 0.4 s, 10,000 1 s, 100,000 10 s and 500 MB). Shapes:
+   ``positions`` (time, X Y Z and the errors), ``full`` (with velocities,
+   accelerations, the spindle speed and four temperatures), ``machine_3axis`` (the
+   same with ``--model "{machine: kidani_hmc}"``), ``machine_5axis`` (a five-axis
+   machine's survey with its description, ``khan_chen_rpppr``), ``thermal_log`` (the
+   first N rows of ``data/fl_thermal``: 16 sensors, ``--target ch5_um``; the log holds
+   11,115 rows). ``--baseline TREE`` runs the same commands on another checkout's
+   code (``PYTHONPATH=TREE``) in alternation: the ratio of CPU times is measured in the
+   same run, and the two JSON outputs are compared byte for byte.
+
 Usage: ``python -m bench.engine_speed [--sizes 1000 10000 100000] [--repeats 3]
-[--no-sklearn] [--sklearn-max 10000]``
+[--no-sklearn] [--sklearn-max 10000]``;
+``python -m bench.engine_speed --panel [--sizes 500 3000 10000 100000] [--shapes ...]
+[--baseline TREE] [--repeats 2]``
 """
 from __future__ import annotations
 
@@ -275,6 +290,127 @@ def engine_runs(readings: int, repeats: int, with_sklearn: bool) -> list[dict]:
     return runs
 
 
+# ---------------------------------------------------------------- the panel
+ROOT = Path(__file__).resolve().parents[1]
+#: The issue's goals on one core: readings -> (CPU seconds, peak RSS MB or None).
+GOALS = {500: (0.2, None), 3000: (0.4, None), 10000: (1.0, None), 100000: (10.0, 500.0)}
+PANEL_SHAPES = ("positions", "full", "machine_3axis", "machine_5axis", "thermal_log")
+THERMAL_LOG = ROOT / "data" / "fl_thermal" / "fl_thermal.csv"
+
+
+def panel_command(shape: str, readings: int, folder: Path) -> list[str] | None:
+    """``check``'s arguments for ``shape`` at ``readings`` (its data written into
+    ``folder`` once); None when the shape has fewer rows than asked (the thermal log)."""
+    from studies.foreign_machine import make_trial
+    from studies.survey_files import PANEL_SHAPES as SHAPES
+    from studies.survey_files import write_panel_survey
+
+    if shape == "thermal_log":
+        log = folder / f"log_{readings}.csv"
+        if not log.exists():
+            lines = THERMAL_LOG.read_text().splitlines()
+            if readings > len(lines) - 1:
+                return None
+            log.write_text("\n".join(lines[:readings + 1]) + "\n")
+        return ["check", str(log), "--target", "ch5_um", "--inputs", "t*_C", "--driver",
+                "spindle_rpm", "--auto", "3"]
+    spec = SHAPES[shape]
+    data = "full" if shape == "machine_3axis" else shape
+    csv, mapping = folder / f"{data}_{readings}.csv", folder / f"{data}_{readings}.yaml"
+    if not csv.exists():
+        trial = make_trial(spec["machine"], ("ballscrew_pitch",), 1000, readings=readings)
+        write_panel_survey(trial, csv, mapping, motion=spec["motion"],
+                           temperatures=spec["temperatures"])
+    model = ["--model", spec["model"]] if spec["model"] else []
+    return ["check", str(csv), "--columns", str(mapping), *model, "--auto", "3"]
+
+
+def _cpu_child(command: list[str], tree: Path) -> tuple[float, float, str]:
+    """CPU time [s] (user + system), peak RSS [MB] and stdout of a child on one core that
+    imports the package from ``tree``."""
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                             text=True, preexec_fn=_pin, env=env, cwd=tempfile.gettempdir())
+    output = child.stdout.read()
+    _, status, usage = os.wait4(child.pid, 0)
+    if os.waitstatus_to_exitcode(status) != 0:
+        raise RuntimeError(f"{' '.join(command)} failed:\n{output}")
+    return usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0, output
+
+
+def _package_file(tree: Path) -> str:
+    """Where a child with ``PYTHONPATH=tree`` imports the package from."""
+    return _cpu_child([sys.executable, "-c", "import mt_accuracy_ros; "
+                       "print(mt_accuracy_ros.__file__)"], tree)[2].strip()
+
+
+def panel_runs(shapes: list[str], sizes: list[int], folder: Path, repeats: int,
+               baseline: Path | None) -> list[dict]:
+    """Every (shape, size) ``repeats`` times, this tree and ``baseline`` alternating."""
+    trees = {"after": ROOT} | ({"before": baseline} if baseline else {})
+    for label, tree in trees.items():
+        print(json.dumps({"tree": label, "imports": _package_file(tree)}), flush=True)
+    runs = []
+    for readings in sizes:
+        for shape in shapes:
+            arguments = panel_command(shape, readings, folder)
+            if arguments is None:
+                print(json.dumps({"shape": shape, "readings": readings,
+                                  "skipped": "the log holds fewer rows"}), flush=True)
+                continue
+            goal_s, goal_mb = GOALS.get(readings, (None, None))
+            for _ in range(repeats):
+                outputs = {}
+                for label, tree in trees.items():
+                    out = folder / f"{label}.json"
+                    cpu, rss, text = _cpu_child([sys.executable, "-m", "mt_accuracy_ros.cli",
+                                                 *arguments, "--json", str(out)], tree)
+                    outputs[label] = out.read_bytes()
+                    named = [line.split()[1] for line in text.splitlines()
+                             if line.startswith("named:")]
+                    run = {"shape": shape, "readings": readings, "tree": label,
+                           "cpu_s": round(cpu, 3), "peak_rss_mb": round(rss),
+                           "goal_s": goal_s, "goal_mb": goal_mb,
+                           "met": cpu <= goal_s and (goal_mb is None or rss <= goal_mb)
+                           if goal_s else None, "named": named[:1]}
+                    if label == "before":
+                        run["same_json"] = outputs["before"] == outputs["after"]
+                    runs.append(run)
+                    print(json.dumps(run), flush=True)
+    return runs
+
+
+def panel_table(runs: list[dict]) -> str:
+    """The panel as a markdown table: every run's CPU time, the ratio of medians."""
+    import statistics
+
+    def seconds(rows: list[dict]) -> str:
+        return ", ".join(f"{r['cpu_s']:.2f}" for r in rows) or "-"
+
+    lines = ["| shape | readings | after: CPU [s], every run | before [s] | before / after "
+             "| peak RSS after [MB] | goal | met | same JSON |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    keys = list(dict.fromkeys((r["shape"], r["readings"]) for r in runs))
+    for shape, readings in keys:
+        mine = [r for r in runs if (r["shape"], r["readings"]) == (shape, readings)]
+        after = [r for r in mine if r["tree"] == "after"]
+        before = [r for r in mine if r["tree"] == "before"]
+        goal_s, goal_mb = after[0]["goal_s"], after[0]["goal_mb"]
+        goal = "-" if goal_s is None else f"{goal_s:g} s" + (f", {goal_mb:g} MB" if goal_mb
+                                                             else "")
+        met = "-" if goal_s is None else ("yes" if all(r["met"] for r in after) else "no")
+        ratio, same = "-", "-"
+        if before:
+            ratio = statistics.median(r["cpu_s"] for r in before) / \
+                statistics.median(r["cpu_s"] for r in after)
+            ratio = f"{ratio:.2f}x"
+            same = "yes" if all(r["same_json"] for r in before) else "NO"
+        rss = [r["peak_rss_mb"] for r in after]
+        lines.append(f"| {shape} | {readings:,} | {seconds(after)} | {seconds(before)} | "
+                     f"{ratio} | {min(rss)}-{max(rss)} | {goal} | {met} | {same} |")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000, 100000])
@@ -286,11 +422,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--skip-engine", action="store_true")
     parser.add_argument("--diagnosis-child", nargs=2, metavar=("CSV", "MAP"),
                         help=argparse.SUPPRESS)
+    parser.add_argument("--panel", action="store_true",
+                        help="check on every shape of survey at every size (CPU time, peak RSS)")
+    parser.add_argument("--shapes", nargs="+", choices=PANEL_SHAPES, default=list(PANEL_SHAPES))
+    parser.add_argument("--baseline", type=Path, default=None, metavar="TREE",
+                        help="--panel: also run another checkout's code, alternating")
     args = parser.parse_args(argv)
     if args.diagnosis_child:
         diagnosis_child(*args.diagnosis_child)
         return 0
     _pin()
+    if args.panel:
+        with tempfile.TemporaryDirectory() as folder:
+            runs = panel_runs(args.shapes, args.sizes, Path(folder), args.repeats,
+                              args.baseline)
+        print(panel_table(runs))
+        return 0
     report = {"machine": f"{platform.machine()}, {platform.python_version()}, 1 core",
               "startup_s": [], "diagnosis": [], "check": [], "engine": []}
     if not args.skip_check:

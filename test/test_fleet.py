@@ -161,3 +161,28 @@ def test_the_command_says_bad_input_in_one_line_and_fails_when_nothing_was_read(
     assert code == 1, err
     assert "fleet: 1 machines, 1 machine-days on 1 workers" in out
     assert "refused: cell-9 " in out and "no /reference/tcp_error topic" in out
+
+
+def test_a_task_says_where_its_time_went(plant):
+    """A machine-day run in this process (the worker's function, no cluster): its figures
+    are ``check``'s on the same bag, and its time split - reading, search, result - are
+    parts of the task's own time, the search measured by the check itself."""
+    from mt_accuracy_ros.commands.check import check_bag
+    from mt_accuracy_ros.commands.fleet import diagnose_day
+
+    _, bags = plant
+    bag = bags[0]
+    task = {"machine": "hmc-a", "day": "d0", "day_number": 0.0, "auto": 3,
+            "min_reduction": 0.05,
+            "datasets": [{"path": str(bag), "kind": "bag", "model": None, "columns": None,
+                          "machine_file": None}]}
+    day = diagnose_day(task)
+    expected = check_bag(bag, "demo", [], 3, "", 0.05)
+    assert day["files"][0]["ok"] and day["rmse_m"] == pytest.approx(expected.baseline_rmse,
+                                                                   rel=1e-12)
+    split = day["split"]
+    assert set(split) == {"reading_s", "search_s", "result_s"}
+    assert all(value >= 0.0 for value in split.values())
+    assert split["search_s"] > 0.0 and expected.seconds["search"] > 0.0
+    assert sum(split.values()) <= day["seconds"]
+    assert "seconds" not in expected.to_json()

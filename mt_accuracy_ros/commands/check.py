@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -269,6 +270,7 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
     # at the model with them added: one localisation serves both. Both looks see the
     # readings through the same chain: one context (and its designs) serves both.
     localisations, contexts = LocalisationMemo(), ContextMemo()
+    started = time.perf_counter()
     for sensor, values in obs.temperatures.items():
         model.reference_temperatures_c.setdefault(sensor, float(values[0]))
 
@@ -306,7 +308,8 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
         diagnosis = evaluate(model)
     # The model did not change after the last residual was taken.
     residual_before, residual = step_residuals[0], step_residuals[-1]
-    return CheckResult(
+    searched = time.perf_counter() - started
+    result = CheckResult(
         kind=kind, data=data, machine=model.machine.name, readings=obs.n,
         band=obs.uncertainty_m, baseline_rmse=first.baseline_rmse,
         baseline_cv_rmse=first.baseline_cv_rmse,
@@ -325,6 +328,8 @@ def check_observations(model, obs, add: list[str], auto: int, min_reduction: flo
               "mask": obs.measured_mask, "step_residuals": step_residuals,
               "velocities": obs.velocities, "directions": obs.directions,
               "model": model, "localisation": first.localisation})
+    result.seconds["search"] = searched
+    return result
 
 
 def _model_yaml(model) -> str:

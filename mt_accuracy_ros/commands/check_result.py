@@ -393,6 +393,9 @@ class CheckResult(Mapping):
         The arrays the report plots (not in the JSON).
     report : dict or None
         The report's content once written (:meth:`~..report.Report.as_dict`).
+    seconds : dict
+        Where the check's time went (not in the JSON): ``search``, the diagnoses' wall
+        time [s] (what ``mt-accuracy fleet`` reports per task beside reading the data).
     """
 
     kind: str
@@ -423,6 +426,7 @@ class CheckResult(Mapping):
     validation: str | None = None
     plot: dict = field(default_factory=dict, repr=False)
     report: dict | None = None
+    seconds: dict = field(default_factory=dict, repr=False)
 
     def _value(self, key: str):
         """The field named ``key``: this result's, its source's or its log's."""

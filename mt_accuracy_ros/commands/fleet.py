@@ -92,18 +92,29 @@ def diagnose_day(task: dict) -> dict:
         ``machine``, ``day``, ``day_number``, ``files`` (one entry per file: ``ok``
         with its figures [m] and named effects, or ``reason``), the day's RMS error
         over every reading of its good files (``rmse_m``, ``final_rmse_m``, None if
-        none was good), the ``worker`` (host:pid) and the ``seconds`` it took.
+        none was good), the ``worker`` (host:pid), the ``seconds`` it took (wall), its
+        ``cpu_s`` (the worker process's CPU time) and its ``split`` [s]: ``reading_s``
+        (the files, the models, the check's assembly), ``search_s`` (the diagnoses),
+        ``result_s`` (the compact result).
     """
     from ..allocator import keep_freed_arrays
 
     keep_freed_arrays()
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), time.process_time()
     files = []
+    split = {"reading_s": 0.0, "search_s": 0.0, "result_s": 0.0}
     for dataset in task["datasets"]:
         entry = {"file": dataset["path"], "kind": dataset["kind"]}
         try:
-            entry.update(ok=True, **_compact(_check_dataset(dataset, task["auto"],
-                                                             task["min_reduction"])))
+            begun = time.perf_counter()
+            result = _check_dataset(dataset, task["auto"], task["min_reduction"])
+            checked = time.perf_counter()
+            entry.update(ok=True, **_compact(result))
+            search = result.seconds.get("search", 0.0)
+            # Reading: the file, the model and the check's own assembly around its search.
+            split["reading_s"] += checked - begun - search
+            split["search_s"] += search
+            split["result_s"] += time.perf_counter() - checked
         except (MtAccuracyError, OSError, ValueError, KeyError) as exc:
             entry.update(ok=False, reason=_one_line(exc))
         files.append(entry)
@@ -120,7 +131,8 @@ def diagnose_day(task: dict) -> dict:
             "final_rmse_m": pooled("final_rmse_m"),
             "named": sorted({n["name"] for f in good for n in f["named"]}),
             "worker": f"{socket.gethostname()}:{os.getpid()}",
-            "seconds": time.perf_counter() - started}
+            "seconds": time.perf_counter() - started,
+            "cpu_s": time.process_time() - cpu, "split": split}
 
 
 def summarise(days: list[dict]) -> dict:
@@ -233,7 +245,7 @@ def run_days(tasks: list[dict], *, scheduler: str | None = None, workers: int = 
                 results[k] = {"machine": task["machine"], "day": task["day"],
                               "day_number": task["day_number"], "readings": 0,
                               "rmse_m": None, "final_rmse_m": None, "named": [],
-                              "worker": "", "seconds": 0.0,
+                              "worker": "", "seconds": 0.0, "cpu_s": 0.0, "split": {},
                               "files": [{"file": d["path"], "kind": d["kind"], "ok": False,
                                          "reason": f"the task failed: {_one_line(exc)}"}
                                         for d in task["datasets"]]}

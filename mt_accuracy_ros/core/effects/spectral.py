@@ -28,6 +28,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from .lru import ByteBoundedCache
+
 #: Periods the periodic families search [m]: 2-50 mm.
 PERIOD_RANGE_M = (0.002, 0.05)
 #: Lattice points per shortest period (of the harmonic, 2 f_max) of the grid periodogram:
@@ -241,7 +243,27 @@ def direct_basis(q, frequencies) -> NDArray[np.complex128] | None:
     frequencies = np.asarray(frequencies, float)
     if q.size * frequencies.size > _DIRECT_MAX_PRODUCT:
         return None
-    return np.exp(-2j * np.pi * frequencies[:, None] * q[None, :])
+    key = _basis_key(q, frequencies)
+    basis = _BASES.get(key)
+    if basis is None:
+        basis = np.exp(-2j * np.pi * frequencies[:, None] * q[None, :])
+        basis.flags.writeable = False
+        _BASES.put(key, basis)
+    return basis
+
+
+#: The exponentials of :func:`direct_basis` by the positions' and frequencies' bytes, for
+#: the whole process: a check's selection and both its localisations ask for the same
+#: axis' exponentials, and at a few hundred readings making them (complex exponentials
+#: of up to 400,000 phases) is a large part of a check. Bounded: seven of the largest
+#: (6.4 MB each), enough for three axes' selection grids and their localisations'.
+_BASES = ByteBoundedCache(max_bytes=45_000_000)
+
+
+def _basis_key(q: NDArray[np.float64], frequencies: NDArray[np.float64]) -> tuple:
+    """What an exponential basis depends on: the positions and frequencies, bit for bit."""
+    return (np.ascontiguousarray(q, dtype=np.float64).tobytes(),
+            np.ascontiguousarray(frequencies, dtype=np.float64).tobytes())
 
 
 def _sums_at(q, values, frequencies, harmonic: bool, basis=None):

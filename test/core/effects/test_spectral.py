@@ -107,3 +107,23 @@ def test_legendre_columns_by_recurrence_equal_numpy_legval():
     expected = np.column_stack([legendre.legval(u, np.eye(8)[k]) for k in range(2, 8)])
     np.testing.assert_allclose(_legendre_columns(u, 2, 7), expected, rtol=0, atol=1e-14)
     assert _legendre_columns(u, 1, 1).shape == (101, 1)
+
+
+def test_a_basis_asked_again_is_the_kept_one_and_equals_a_fresh_one():
+    """The process keeps an axis' exponentials by its positions' and frequencies' bytes:
+    asked again (a check's second localisation, a selection's preselection) the kept
+    array comes back, read-only, equal to exp(-2 pi i f q) made afresh; other positions
+    get their own."""
+    rng = np.random.default_rng(4)
+    q = rng.uniform(0.0, 0.3, 200)
+    frequencies = frequency_grid(0.3)
+    first = direct_basis(q, frequencies)
+    again = direct_basis(q.copy(), frequencies.copy())
+    assert again is first and not first.flags.writeable
+    np.testing.assert_array_equal(first, np.exp(-2j * np.pi * frequencies[:, None] * q[None, :]))
+    moved = q.copy()
+    moved[0] += 1e-9
+    other = direct_basis(moved, frequencies)
+    assert other is not first
+    np.testing.assert_array_equal(other[:, 1:], first[:, 1:])
+    assert not np.array_equal(other[:, 0], first[:, 0])

@@ -156,3 +156,52 @@ def test_normal_equations_solved_in_groups_are_each_their_own_solution():
         rhs.append(rng.normal(size=(5, p)))
     for grouped, gram, r in zip(solve_normal_grouped(grams, rhs), grams, rhs):
         np.testing.assert_array_equal(grouped, solve_normal(gram, r))
+
+
+def test_held_out_fits_reused_from_the_choice_of_settings_are_the_fits_made_afresh(
+        monkeypatch):
+    """A candidate's folds are fitted once: the fits its settings were compared with (BIC)
+    serve its held-out errors. Bit for bit what solving them again gives."""
+    selector, terms = _selector()
+    stats = selector.base_statistics(selector.base_columns())
+    compared = [t for t in terms if len(t.settings) > 1 and not t.family.preselects
+                and not getattr(t.family, "penalty_setting", None)]
+    assert compared      # not vacuous: candidates whose settings BIC compares
+    reused = [selector.out_of_fold(stats, term) for term in compared]
+    assert any(selector._settings_and_fits(term, stats)[1] for term in compared)
+    fresh_choice = selection.Selector._settings_and_fits
+    monkeypatch.setattr(selection.Selector, "_settings_and_fits",
+                        lambda self, term, s: (fresh_choice(self, term, s)[0], {}))
+    for term, (squared, settings) in zip(compared, reused):
+        again, settings_again = selector.out_of_fold(stats, term)
+        np.testing.assert_array_equal(squared, again)
+        assert settings == settings_again
+
+
+def test_a_fit_and_its_standard_errors_from_one_decomposition_are_the_two_made_apart():
+    """``products_fit`` decomposes X'X once for its coefficients and their covariance:
+    the same numbers, bit for bit, as :func:`solve_normal` and :func:`normal_inverse`
+    (and the ridge sandwich) each on its own."""
+    from mt_accuracy_ros.core.workbench.selection.linalg import (normal_inverse, penalise,
+                                                                 products_fit,
+                                                                 ridge_standard_errors,
+                                                                 solve_normal)
+
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(5, 40, 6))
+    x[..., 5] = x[..., 1]                 # a repeated column: a dropped direction
+    y = rng.normal(size=(5, 40))
+    gram, rhs = np.einsum("fni,fnj->fij", x, x), np.einsum("fni,fn->fi", x, y)
+    yy = np.einsum("fn,fn->f", y, y)
+    for penalty in ((0, 0.0), (3, 0.4)):
+        coefficients, standard = products_fit(gram, rhs, yy, 200, penalty)
+        whole, moment = gram.sum(axis=0), rhs.sum(axis=0)
+        penalised = penalise(whole, penalty[0], 6, penalty[1])
+        expected = solve_normal(penalised, moment)
+        np.testing.assert_array_equal(coefficients, expected)
+        rss = float(yy.sum()) - 2.0 * float(expected @ moment) + \
+            float(expected @ whole @ expected)
+        sigma2 = max(rss, 0.0) / (200 - 6)
+        apart = ridge_standard_errors(whole, penalised, sigma2) if penalty[1] else \
+            np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(whole)), 0.0, None))
+        np.testing.assert_array_equal(standard, apart)

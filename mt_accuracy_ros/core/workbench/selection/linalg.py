@@ -42,7 +42,13 @@ def solve_normal(gram: NDArray[np.float64], rhs: NDArray[np.float64]) -> NDArray
         Columns are equilibrated first (a zero column gets coefficient 0), so the
         cut-off does not depend on the columns' units.
     """
-    scale, vectors, inverse = _equilibrated_eigen(gram)
+    return _solve_with(_equilibrated_eigen(gram), rhs)
+
+
+def _solve_with(eigen, rhs: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:func:`solve_normal` from X'X's :func:`_equilibrated_eigen` (made once for a fit
+    that also needs :func:`normal_inverse` of the same matrix)."""
+    scale, vectors, inverse = eigen
     projected = np.einsum("...ji,...j->...i", vectors, rhs * scale)
     return scale * np.einsum("...ij,...j->...i", vectors, inverse * projected)
 
@@ -95,7 +101,12 @@ def normal_inverse(gram: NDArray[np.float64]) -> NDArray[np.float64]:
         The coefficients' covariance per unit variance [1 / (column unit)^2]; the
         directions :func:`solve_normal` drops get zero variance.
     """
-    scale, vectors, inverse = _equilibrated_eigen(gram)
+    return _inverse_with(_equilibrated_eigen(gram))
+
+
+def _inverse_with(eigen) -> NDArray[np.float64]:
+    """:func:`normal_inverse` from X'X's :func:`_equilibrated_eigen`."""
+    scale, vectors, inverse = eigen
     return scale[:, None] * ((vectors * inverse) @ vectors.T) * scale[None, :]
 
 
@@ -127,7 +138,8 @@ def penalise(gram: NDArray[np.float64], start: int, stop: int, strength: float
 
 
 def ridge_standard_errors(gram: NDArray[np.float64], penalised: NDArray[np.float64],
-                          sigma2: float) -> NDArray[np.float64]:
+                          sigma2: float, inverse: NDArray[np.float64] | None = None
+                          ) -> NDArray[np.float64]:
     """Standard errors of A^-1 X'y, A the penalised X'X (the sandwich).
 
     Parameters
@@ -138,6 +150,8 @@ def ridge_standard_errors(gram: NDArray[np.float64], penalised: NDArray[np.float
         A, X'X with its ridge (:func:`penalise`).
     sigma2 : float
         The residual variance [unit of y squared].
+    inverse : ndarray, shape (p, p), optional
+        :func:`normal_inverse` of ``penalised``, when already made.
 
     Returns
     -------
@@ -145,7 +159,8 @@ def ridge_standard_errors(gram: NDArray[np.float64], penalised: NDArray[np.float
         sqrt(sigma^2 diag(A^-1 X'X A^-1)) [unit of y / column unit]; equal to least
         squares' when nothing is penalised.
     """
-    inverse = normal_inverse(penalised)
+    if inverse is None:
+        inverse = normal_inverse(penalised)
     return np.sqrt(sigma2 * np.clip(np.einsum("ij,jk,ki->i", inverse, gram, inverse), 0.0, None))
 
 
@@ -175,11 +190,13 @@ def penalised_fit(x: NDArray[np.float64], y: NDArray[np.float64],
     penalised = gram
     for start, stop, strength in penalties:
         penalised = penalise(penalised, start, stop, strength)
-    coefficients = solve_normal(penalised, x.T @ y)
+    eigen = _equilibrated_eigen(penalised)
+    coefficients = _solve_with(eigen, x.T @ y)
     residual = y - x @ coefficients
     sigma2 = float(residual @ residual) / max(1, y.size - x.shape[1])
-    standard = ridge_standard_errors(gram, penalised, sigma2) if penalised is not gram \
-        else np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
+    inverse = _inverse_with(eigen)
+    standard = ridge_standard_errors(gram, penalised, sigma2, inverse) \
+        if penalised is not gram else np.sqrt(sigma2 * np.clip(np.diag(inverse), 0.0, None))
     return coefficients, standard, residual
 
 
@@ -210,11 +227,14 @@ def products_fit(gram: NDArray[np.float64], rhs: NDArray[np.float64], yy: NDArra
     """
     gram, rhs, yy = gram.sum(axis=0), rhs.sum(axis=0), float(yy.sum())
     penalised = penalise(gram, penalty[0], gram.shape[0], penalty[1])
-    coefficients = solve_normal(penalised, rhs)
+    # The coefficients and their covariance from one decomposition of the same matrix.
+    eigen = _equilibrated_eigen(penalised)
+    coefficients = _solve_with(eigen, rhs)
     dof = max(1, readings - gram.shape[0])
     # yy - 2 c'r + c'Gc: the residual sum of squares of any coefficients.
     rss = yy - 2.0 * float(coefficients @ rhs) + float(coefficients @ gram @ coefficients)
     sigma2 = max(rss, 0.0) / dof
-    standard = ridge_standard_errors(gram, penalised, sigma2) if penalised is not gram \
-        else np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(gram)), 0.0, None))
+    inverse = _inverse_with(eigen)
+    standard = ridge_standard_errors(gram, penalised, sigma2, inverse) \
+        if penalised is not gram else np.sqrt(sigma2 * np.clip(np.diag(inverse), 0.0, None))
     return coefficients, standard

@@ -289,7 +289,7 @@ class Selector(ReadingDesigns):
             coefficients = solve_normal(self._train(stats.products[:, :q, :q]),
                                         self._train(stats.products[:, :q, q]))
             return self._per_sample(self._held_out_errors(stats.base, coefficients)), {}
-        settings = self.choose_settings(term, stats)
+        settings, fitted = self._settings_and_fits(term, stats)
         squared = np.empty(self.y.size)
         q = stats.base.shape[1]
         for key in {tuple(sorted(s.items())) for s in settings}:
@@ -297,8 +297,13 @@ class Selector(ReadingDesigns):
             basis = self.basis_rows(term, setting)
             design = self.design_rows(term, setting) if basis is None else None
             gram, rhs, _ = self._products_of(stats, term, setting)
-            coefficients = solve_normal(penalise(self._train(gram), q, gram.shape[1],
-                                                 penalty_of(term, setting)), self._train(rhs))
+            # The folds' fits the choice of settings made already (the same products,
+            # unpenalised) are these folds' fits.
+            coefficients = fitted.get(key)
+            if coefficients is None:
+                coefficients = solve_normal(penalise(self._train(gram), q, gram.shape[1],
+                                                     penalty_of(term, setting)),
+                                            self._train(rhs))
             for fold, (a, b) in enumerate(self.fold_bounds):
                 if settings[fold] == setting:
                     own = design[a:b] @ coefficients[fold, q:] if basis is None else \
@@ -323,10 +328,17 @@ class Selector(ReadingDesigns):
             One of ``term.settings`` per fold; a penalised family's strength is
             validated inside the fold (:meth:`_choose_penalty`).
         """
+        return self._settings_and_fits(term, stats)[0]
+
+    def _settings_and_fits(self, term: Term, stats: _BaseStatistics
+                           ) -> tuple[list[dict], dict[tuple, NDArray[np.float64]]]:
+        """:meth:`choose_settings`, and each fold's fit (F, p) of the settings compared by
+        BIC, by the setting's sorted items (empty when none was compared: one setting, a
+        preselection for every fold, a penalised family)."""
         if len(term.settings) == 1:
-            return [term.settings[0]] * self.folds
+            return [term.settings[0]] * self.folds, {}
         if getattr(term.family, "penalty_setting", None):
-            return self._choose_penalty(term, stats)
+            return self._choose_penalty(term, stats), {}
         chosen: list[dict | None] = [None] * self.folds
         if term.family.preselects:
             if stats.after_base is None:
@@ -351,7 +363,7 @@ class Selector(ReadingDesigns):
             chosen = term.family.preselect_folds(self.ctx, term.variant, term.settings,
                                                  after_base[:, :, :3], self.mask[:, :3], trains)
         if all(c is not None for c in chosen):
-            return chosen
+            return chosen, {}
         counts = np.array([max(a, 1) if self.forward else self.y.size - (b - a)
                            for a, b in self.fold_bounds], float)
         best_bic = np.full(self.folds, np.inf)
@@ -360,12 +372,15 @@ class Selector(ReadingDesigns):
                    for setting in term.settings]
         solved = solve_normal_grouped([gram for gram, _, _ in trained],
                                       [rhs for _, rhs, _ in trained])
+        fits = {}
         for setting, (gram, rhs, yy), coefficients in zip(term.settings, trained, solved):
             rss = np.maximum(yy - np.einsum("fi,fi->f", coefficients, rhs), 1e-300)
             bic = counts * np.log(rss / counts) + gram.shape[1] * np.log(counts)
             for fold in np.flatnonzero(bic < best_bic):
                 best_bic[fold], best[fold] = bic[fold], setting
-        return [c if c is not None else b for c, b in zip(chosen, best)]
+            if penalty_of(term, setting) <= 0:
+                fits[tuple(sorted(setting.items()))] = coefficients
+        return [c if c is not None else b for c, b in zip(chosen, best)], fits
 
     def _validation_errors(self, term: Term, stats: _BaseStatistics,
                            pairs: list[tuple[int, int, NDArray[np.float64]]]
