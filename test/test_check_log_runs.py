@@ -328,3 +328,33 @@ def test_a_whole_model_the_step_by_step_model_is_made_of_is_contested_once(tmp_p
         "name": both, "sensors": 2, "in_model": True,
         "words": "the model sensor_least_squares over 2 sensors"}
     assert "the model sensor_least_squares over 2 sensors leans on: tA_C" in out
+
+
+def test_the_contest_takes_the_lowest_score_unless_a_near_one_extrapolated_less():
+    """The worse of forward and cross-regime errors decides; within 10 % of the best, the
+    model whose inputs left their fitted range least wins; the step-by-step model on a
+    tie."""
+    from mt_accuracy_ros.commands.check_log import contest_winner
+
+    scores = {"step by step": 1.0, "a": 1.08, "b": 1.5}
+    assert contest_winner(scores, {"step by step": 0.5, "a": 0.5, "b": 0.0}) == \
+        "step by step"                                    # b is 50 % worse: not alike
+    assert contest_winner(scores, {"step by step": 0.5, "a": 0.1, "b": 0.0}) == "a"
+    assert contest_winner({"step by step": 1.0, "a": 1.0}, {}) == "step by step"
+    assert contest_winner({"step by step": 2.0, "a": 1.0}, {}) == "a"
+
+
+def test_a_least_squares_fit_the_physics_bound_refused_is_said_with_its_mend():
+    """The selection's own refusal text, read back into the warning's reason."""
+    from mt_accuracy_ros.commands.check_log import physics_bound_line
+    from mt_accuracy_ros.commands.check_result import NotAdded
+
+    why = "bz_frame_t = -3.31e-05 exceeds +-3e-05 (free expansion of the structure per K)"
+    refused = [NotAdded("thermal_lag:t1", 0.5, "after x: it raises the CV error by 3 %"),
+               NotAdded("sensor_least_squares:bed_t+frame_t", 0.9,
+                        f"physics refuses its fit ({why})")]
+    assert physics_bound_line(refused) == (
+        f"sensor_least_squares:bed_t+frame_t was refused by the physics bound ({why}): if "
+        "the structure between the sensors and the tool is longer than the bound assumes, "
+        "give --structure-length METRES")
+    assert physics_bound_line(refused[:1]) == ""

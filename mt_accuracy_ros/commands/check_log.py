@@ -128,6 +128,8 @@ def regime_blocks(terms, frame, component: int, regimes, zeroed: bool) -> list[d
     from ..core.workbench.regimes import range_excess
     from ..core.workbench.selection import penalised_fit
 
+    if regimes.by == "one regime":
+        return []
     y = frame.residual[:, component]
     x, penalties, _ = joint_design(terms, frame, component, zeroed)
     out = []
@@ -412,7 +414,9 @@ def check_target(column: str, values: np.ndarray, unit: str) -> None:
     if finite.size >= 2 and np.ptp(finite) == 0.0:
         raise InputDataError(f"target {column} is constant ({finite[0]:g} {unit} on all "
                              f"{finite.size} rows): nothing to model")
-    to_mm = {"um": 1e-3, "µm": 1e-3, "mm": 1.0, "nm": 1e-6, "m": 1e3, "in": 25.4}.get(unit)
+    from ..core.inputs.plausibility import UNITS
+
+    to_mm = UNITS["length"].get(unit, 0.0) * 1e3
     if to_mm and finite.size and np.ptp(finite) * to_mm <= 5.0 < \
             np.max(np.abs(finite)) * to_mm:
         raise InputDataError(
@@ -694,8 +698,7 @@ def _judged_candidate(search: _LogSearch, progress: _Progress, min_reduction: fl
         value = search.validation(terms)
         if value < before:
             across = regime_blocks(terms, search.frame, search.component, search.regimes,
-                                   search.obs.zeroed_runs) \
-                if search.regimes.by != "one regime" else []
+                                   search.obs.zeroed_runs)
             robust = max(value, pooled_rmse(across)) if across else value
             passing.append((bool(selection_refusal(option, min_reduction)), robust,
                             len(passing), option, value))
@@ -780,8 +783,7 @@ def _contest(search: _LogSearch, progress: _Progress, first, start_model, blocks
             rivals[option.name] = option
     per_block = {name: forward_blocks(terms, search.frame, c, validation_blocks, zeroed)
                  for name, terms in terms_of.items()}
-    across = {name: (regime_blocks(terms, search.frame, c, search.regimes, zeroed)
-                     if search.regimes.by != "one regime" else [])
+    across = {name: regime_blocks(terms, search.frame, c, search.regimes, zeroed)
               for name, terms in terms_of.items()}
     contest = {name: pooled_rmse(blocks_of) for name, blocks_of in per_block.items()}
     score = {name: max(contest[name], pooled_rmse(across[name])) if across[name] else
@@ -801,7 +803,7 @@ def _contest(search: _LogSearch, progress: _Progress, first, start_model, blocks
     step_by_step = [name for s in progress.steps for name in s.added or []]
     if winner != "step by step":
         _take_rival(search, progress, winner, rival_models[winner], rivals[winner],
-                    score, across, blocks, notes)
+                    score, excess, across, blocks, notes)
     return [ContestEntry(name, step_by_step if name == "step by step" else [name],
                          contest[name], per_block[name], held_out[name], name == winner,
                          pooled_rmse(across[name]) if across[name] else None, across[name],
@@ -826,13 +828,23 @@ def _held_out_excess(search: _LogSearch, start_model, terms_of: dict) -> dict[st
 
 
 def _take_rival(search: _LogSearch, progress: _Progress, winner: str, rival, option,
-                score: dict, across: dict, blocks, notes: list[str]) -> None:
-    """The contest's winner, a whole-model rival, becomes the model (said in ``notes``)."""
+                score: dict, excess: dict, across: dict, blocks, notes: list[str]) -> None:
+    """The contest's winner, a whole-model rival, becomes the model (said in ``notes``, with
+    the rule that chose it: a lower score, or one within :data:`ALIKE_SHARE` whose inputs
+    left their fitted range less)."""
     unit, to_unit = search.unit, search.to_unit
     how = "forward and across regimes (the worse of the two)" if across[winner] else "forward"
-    notes.append(f"{winner} predicts the training {'runs' if blocks is not None else 'rows'} "
-                 f"{how} better ({score[winner] * to_unit:.4g} {unit}) than the step-by-step "
-                 f"model ({score['step by step'] * to_unit:.4g} {unit}): it is the model")
+    rows = "runs" if blocks is not None else "rows"
+    mine, theirs = score[winner] * to_unit, score["step by step"] * to_unit
+    if score[winner] <= score["step by step"]:
+        notes.append(f"{winner} predicts the training {rows} {how} better ({mine:.4g} {unit}) "
+                     f"than the step-by-step model ({theirs:.4g} {unit}): it is the model")
+    else:
+        notes.append(f"{winner} predicts the training {rows} {how} within "
+                     f"{100 * ALIKE_SHARE:.0f} % of the step-by-step model ({mine:.4g} against "
+                     f"{theirs:.4g} {unit}) and its inputs left their fitted range less "
+                     f"({excess[winner]:.2g} against {excess['step by step']:.2g} of the "
+                     "span): it is the model")
     refitted, progress.model = rival
     progress.steps = progress.steps[:1]
     first_step = progress.steps[0]
@@ -1017,14 +1029,13 @@ def extrapolation_lines(log: LogData, obs, train: np.ndarray) -> tuple[str, str]
                            obs.spindle_speed_rad_s)
     held = ~train
     parts = []
-    for what, of, side in (("", regimes.trends_in, 0),
-                           ("spindle programs ", regimes.programs_in, 1)):
-        trained = of(train)
-        new = [k for k in of(held) if k not in trained]
+    for what, part in (("", "trend"), ("spindle programs ", "program")):
+        trained = regimes.labels_in(train, part)
+        new = [k for k in regimes.labels_in(held, part) if k not in trained]
         if not new:
             continue
         where = [f"{s.kind} {s.rows_text(rows)}" for s in regimes.stretches
-                 if held[s.start:s.stop].any() and (s.kind.split(" at ") + [""])[side] in new]
+                 if held[s.start:s.stop].any() and getattr(s, part) in new]
         parts.append(f"{what}{', '.join(new)} ({', '.join(where[:2])}), which the training "
                      f"rows never held (they held {', '.join(trained)})")
     regime_line = ("the held-out rows hold " + "; and ".join(parts)) if parts else ""
@@ -1032,6 +1043,21 @@ def extrapolation_lines(log: LogData, obs, train: np.ndarray) -> tuple[str, str]
     sensor_line = ("on the held-out rows " + "; ".join(e.text() for e in leaving[:3])
                    if leaving else "")
     return regime_line, sensor_line
+
+
+def physics_bound_line(not_added: list[NotAdded]) -> str:
+    """The first least-squares fit on sensors the physics bound refused, in words with the
+    mend (``--structure-length``), or "": why least squares on every input may beat the
+    model held out while the model could not be it."""
+    bounded = next((e for e in not_added if e.name.startswith("sensor_least_squares") and
+                    e.test.startswith("physics refuses its fit (")), None)
+    if bounded is None:
+        return ""
+    # "physics refuses its fit (WHY)": WHY alone.
+    reason = bounded.test[len("physics refuses its fit ("):-1]
+    return (f"{bounded.name} was refused by the physics bound ({reason}): if the structure "
+            "between the sensors and the tool is longer than the bound assumes, give "
+            "--structure-length METRES")
 
 
 def _log_result(path: Path, log: LogData, searched: LogSearched) -> CheckResult:
@@ -1071,13 +1097,7 @@ def _log_result(path: Path, log: LogData, searched: LogSearched) -> CheckResult:
         notes.append(f"{regime_line}: the model is judged on a regime it was not fitted on "
                      f"(its inputs leave their training range by {chosen.held_out_range_excess:.2g}"
                      " of its span there)" + (f"; {sensor_line}" if sensor_line else ""))
-    bounded = next((e for e in not_added if e.name.startswith("sensor_least_squares") and
-                    e.test.startswith("physics refuses")), None)
-    # "physics refuses its fit (WHY)": WHY alone.
-    reason = bounded.test.split("(", 1)[-1][:-1] if bounded else ""
-    bound_line = (f"{bounded.name} was refused by the physics bound ({reason}): if the "
-                  "structure between the sensors and the tool is longer than the bound "
-                  "assumes, give --structure-length METRES" if bounded else "")
+    bound_line = physics_bound_line(not_added)
     why = "; ".join(x for x in (regime_line, sensor_line, bound_line) if x) or \
         "no regime the training rows lacked and no sensor beyond its training range explain it"
     if final > constant:

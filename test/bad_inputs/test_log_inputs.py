@@ -111,6 +111,11 @@ CLASSES = [
     ("log_every_sensor_dead",
      "a log whose only sensor reads -180 degC on every row",
      "refused: every input sensor is left out"),
+    ("log_target_is_a_position",
+     "a log's target is an axis position read by re-homing (-224.8 mm, moving 0.36 mm)",
+     "refused: target z_um sits -224.5 mm from zero but spans 0.36 mm: a position, not a "
+     "displacement? Give its change from a reference (subtract its first reading) as the "
+     "target"),
     ("log_absent_thermistor_asked_for_by_name",
      "a log's chamber sensor reads exactly -180 on every row (absent: the logger's "
      "default), asked for by name in --inputs",
@@ -264,6 +269,11 @@ def _build(name: str, tmp_path) -> tuple[dict[str, np.ndarray], list[str]]:
         log["T_motor_C"] = log.pop("t1_C")
         return log, ["--target", "growth_um", "--inputs", "T_motor_C", "--run", "run",
                      "--auto", "1"]
+    if name == "log_target_is_a_position":
+        log = _warm_up()
+        growth = log.pop("dz_um")
+        log["z_um"] = -224.8e3 + 360.0 * (growth - growth.min()) / np.ptp(growth)
+        return log, ["--target", "z_um", "--inputs", "t*_C"]
     if name == "log_absent_thermistor_asked_for_by_name":
         log = _warm_up()
         log["chamber"] = np.full(ROWS, -180.0)

@@ -61,6 +61,16 @@ class Regime:
     stop: int
     run: int
 
+    @property
+    def trend(self) -> str:
+        """"heating", "dwell" or "cooling"."""
+        return self.kind.split(" at ")[0]
+
+    @property
+    def program(self) -> str:
+        """The spindle program ("3000 rpm"), "" without a speed."""
+        return self.kind.split(" at ")[1] if " at " in self.kind else ""
+
     def rows_text(self, data_rows: NDArray[np.intp] | None = None) -> str:
         """"rows 12-340" in the file's numbering (``data_rows``, default 1..N)."""
         first, last = (self.start + 1, self.stop) if data_rows is None else \
@@ -96,19 +106,11 @@ class Regimes:
         """The kinds present, in order of first appearance."""
         return list(dict.fromkeys(s.kind for s in self.stretches))
 
-    def kinds_in(self, rows: NDArray[np.bool_]) -> list[str]:
-        """The kinds of the stretches that hold any of ``rows`` (N,) bool."""
-        return list(dict.fromkeys(s.kind for s in self.stretches if rows[s.start:s.stop].any()))
-
-    def trends_in(self, rows: NDArray[np.bool_]) -> list[str]:
-        """The trends (heating, dwell, cooling) of the stretches that hold any of ``rows``."""
-        return list(dict.fromkeys(s.kind.split(" at ")[0] for s in self.stretches
-                                  if rows[s.start:s.stop].any()))
-
-    def programs_in(self, rows: NDArray[np.bool_]) -> list[str]:
-        """The spindle programs ("3000 rpm") of the stretches that hold any of ``rows``."""
-        return list(dict.fromkeys(s.kind.split(" at ")[1] for s in self.stretches
-                                  if " at " in s.kind and rows[s.start:s.stop].any()))
+    def labels_in(self, rows: NDArray[np.bool_], part: str) -> list[str]:
+        """The ``part`` ("trend" or "program") of the stretches that hold any of ``rows``
+        (N,) bool, in order of first appearance (no empty program)."""
+        return [label for label in dict.fromkeys(getattr(s, part) for s in self.stretches
+                                                 if rows[s.start:s.stop].any()) if label]
 
     def text(self, data_rows: NDArray[np.intp] | None = None, shown: int = 8) -> str:
         """"heating rows 1-300, dwell rows 301-420, ..." (the first ``shown``)."""
@@ -188,8 +190,7 @@ def _stretches_of(labels: list[str], run_of_row: NDArray[np.intp], min_rows: int
         if final and final[-1].run == stretch.run and \
                 final[-1].stop - final[-1].start < min_rows:
             last = final.pop()
-            kind = stretch.kind
-            final.append(Regime(kind, last.start, stretch.stop, stretch.run))
+            final.append(Regime(stretch.kind, last.start, stretch.stop, stretch.run))
         else:
             final.append(stretch)
     return final
