@@ -157,3 +157,24 @@ def test_a_model_trained_on_heating_alone_and_judged_on_cooling_says_so(tmp_path
     assert "on the held-out rows t3_C reached" in note
     # Inside the training rows, each regime was predicted from the other.
     assert [b["regime"] for b in chosen["cross_regime_blocks"]] == ["heating", "dwell"]
+
+
+def test_a_regimes_rows_are_named_as_the_file_numbers_them_when_rows_were_left_out(tmp_path):
+    """Twenty rows early in the log read an impossible temperature: the sensors' judge sets
+    those readings aside and the observations leave the rows out, and the cooling that
+    starts at the file's data row 301 is still named from there (not twenty rows early,
+    as counting the rows kept would)."""
+    n = 500
+    power = (np.arange(n) < 0.6 * n).astype(float)
+    log = _log(tmp_path / "log.csv", power, seed=3)
+    lines = log.read_text().splitlines()
+    for k in range(50, 70):     # data rows 51-70 (file line k + 1 after the header)
+        values = lines[k + 1].split(",")
+        values[1] = "300.0"     # t1_C
+        lines[k + 1] = ",".join(values)
+    log.write_text("\n".join(lines) + "\n")
+    result = check_csv(log, "d_um", "time_s", ["*"], [], [], 2, 0.5, 0.05, [],
+                       uncertainty_m=0.6e-6)
+    (note,) = [n for n in result["notes"] if n.startswith("the held-out rows hold")]
+    start = int(note.split("(cooling rows ", 1)[1].split("-", 1)[0])
+    assert abs(start - 301) <= 10, note

@@ -260,6 +260,9 @@ class LogData:
     to_unit: float
     run_names: list[str] | None
     notes: list[str]
+    #: (N,) each observation's row in the file (1-based after the header), so that what is
+    #: said of the rows names them as the user's editor numbers them.
+    file_rows: np.ndarray | None = None
 
 
 def _in_seconds(name: str, values: np.ndarray, units: dict[str, str]
@@ -522,6 +525,28 @@ def _table_notes(table, time_column: str, split_time: list[str]) -> list[str]:
     return notes
 
 
+def _without_failed_readings(table, target_column: str, target_scale: float, unit: str,
+                             run_of_row: np.ndarray | None) -> tuple[np.ndarray, str]:
+    """The target [m] with its failed readings (:mod:`~..core.inputs.target_outliers`, each
+    run judged alone) NaN, counted among the table's dropped rows, and the note naming them
+    ("" when none); a target with more spikes than failed readings make is refused."""
+    from ..core.inputs.target_outliers import MAX_SPIKE_SHARE, target_spikes
+
+    values = table.columns[target_column]
+    starts = None if run_of_row is None else np.r_[True, np.diff(run_of_row) != 0]
+    spikes = target_spikes(values, starts)
+    if not spikes.count:
+        return values * target_scale, ""
+    text = spikes.text(target_column, unit, table.data_rows)
+    if spikes.count > MAX_SPIKE_SHARE * values.size:
+        raise InputDataError(f"{text.split(' - ')[0]}: {spikes.count} of {values.size} "
+                             "readings, too many to be failed readings - is the target the "
+                             "displacement (a position, a noisy channel)?")
+    table.drop_rows(spikes.count, f"{spikes.count} with a failed target reading (see the "
+                    "notes)")
+    return np.where(spikes.rows, np.nan, values) * target_scale, text
+
+
 def read_log(path: Path, target: str, time_column: str, inputs: list[str],
              drivers: list[str], row_period_s: float | None, component: str,
              uncertainty_m: float | None, run_column: str | None, zeroed_runs: bool
@@ -530,7 +555,7 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     one-line errors naming the row, run or column (see :func:`check_csv`)."""
     from ..core.workbench.log_runs import (leave_out_dead_sensors, mixed_units_problem,
                                            run_labels, run_level_notes, run_starts)
-    from ..core.workbench.thermal_log import log_observations
+    from ..core.workbench.thermal_log import complete_log_rows, log_observations
     from ..io.csv_table import csv_header, joined_columns, read_csv_table
     from .check import _column_and_unit
 
@@ -573,8 +598,6 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
                                  "catalogue models, heat_source:spindle_speed)")
         speed = columns[column] * scale
     run_of_row, run_names = None, None
-    check_target(target_column, columns[target_column], unit)
-    target_m = columns[target_column] * target_scale
     temperatures, notes = _in_celsius({n: columns[n] for n in selected}, table.units)
     notes += input_notes
     notes += [time_note] if time_note else []
@@ -585,6 +608,12 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
         time_s, time_column if time_column in names else "", table.data_rows, run_of_row,
         run_names, row_period_s)
     notes += clock_notes
+    # Failed readings first, each run alone: a missed homing's few millimetres must not
+    # read as a unit, a zeroed gauge's morning ramp not as a failed reading.
+    target_m, spike_note = _without_failed_readings(table, target_column, target_scale, unit,
+                                                    run_of_row)
+    check_target(target_column, target_m / target_scale, unit)
+    notes += [spike_note] if spike_note else []
     if run_of_row is not None:
         # A run in another unit is refused before the sensors' judge sees it: a run of
         # kelvin reads like a dead sensor's run, and would be left out as one.
@@ -601,8 +630,7 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     table.drop_gaps_of(set(temperatures))
     judged_out = int(np.sum(complete_before & ~_complete_rows(temperatures)))
     if judged_out:
-        table.rows_dropped += judged_out
-        table.drop_reasons.append(f"{judged_out} with a bad sensor reading (see the notes)")
+        table.drop_rows(judged_out, f"{judged_out} with a bad sensor reading (see the notes)")
     if not temperatures:
         raise InputDataError(f"{path}: every input sensor is left out ({'; '.join(health_notes)})"
                              [:400] + " - give live sensors with --inputs")
@@ -612,12 +640,15 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
                            component=component, uncertainty_m=uncertainty_m,
                            run_of_row=run_of_row, run_names=run_names, zeroed_runs=zeroed_runs,
                            data_rows=table.data_rows)
+    complete = complete_log_rows(time_s, target_m, temperatures, speed)
     if obs.run_of_row is not None:
         # Rows with a hole in a sensor (not dead) are left out: the runs that remain.
-        complete = np.all([np.isfinite(v) for v in temperatures.values()], axis=0)
         kept_runs = np.asarray(run_of_row)[complete]
         run_names = [run_names[k] for k in kept_runs[run_starts(obs.run_of_row)]]
-    return LogData(table, obs, target_column, unit, 1.0 / target_scale, run_names, notes)
+    file_rows = (np.arange(1, complete.size + 1) if table.data_rows is None
+                 else np.asarray(table.data_rows))[complete]
+    return LogData(table, obs, target_column, unit, 1.0 / target_scale, run_names, notes,
+                   file_rows)
 
 
 @dataclasses.dataclass
@@ -1023,8 +1054,8 @@ def extrapolation_lines(log: LogData, obs, train: np.ndarray) -> tuple[str, str]
     predict the held-out rows worse than it predicted its training rows."""
     from ..core.workbench.regimes import find_regimes, sensors_leaving_range
 
-    rows = log.table.data_rows
-    rows = np.asarray(rows) if rows is not None and len(rows) == obs.n else None
+    rows = log.file_rows if log.file_rows is not None and len(log.file_rows) == obs.n \
+        else None
     regimes = find_regimes(obs.time_s, obs.temperatures, obs.run_of_row, log.run_names,
                            obs.spindle_speed_rad_s)
     held = ~train

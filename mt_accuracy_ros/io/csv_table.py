@@ -49,6 +49,18 @@ class CsvTable:
     clock_columns: tuple[str, ...] = ()
     #: Column -> unit, from a row of units under the header (a logger's export), if any.
     units: dict[str, str] = field(default_factory=dict)
+    #: Dropped rows a reason of :attr:`drop_reasons` names: the others are the "..." the
+    #: summary says (None: one row a reason).
+    rows_explained: int | None = None
+
+    def drop_rows(self, count: int, reason: str) -> None:
+        """Count ``count`` more rows as dropped, all for ``reason`` (the caller leaves them
+        out)."""
+        explained = len(self.drop_reasons) if self.rows_explained is None \
+            else self.rows_explained
+        self.rows_dropped += int(count)
+        self.drop_reasons.append(reason)
+        self.rows_explained = explained + int(count)
 
     def drop_gaps_of(self, columns: set[str]) -> None:
         """Count the rows with a missing value in ``columns`` as dropped, with reasons (the
@@ -58,7 +70,10 @@ class CsvTable:
             if column in columns:
                 rows.setdefault(row, reason)
         self.rows_dropped += len(rows)
-        for row in sorted(rows)[:max(0, KEPT_REASONS - len(self.drop_reasons))]:
+        kept = sorted(rows)[:max(0, KEPT_REASONS - len(self.drop_reasons))]
+        if self.rows_explained is not None:
+            self.rows_explained += len(kept)
+        for row in kept:
             self.drop_reasons.append(rows[row])
 
     @property
@@ -73,7 +88,9 @@ class CsvTable:
             text += f" ({self.dialect.note()})"
         if self.rows_dropped:
             text += f"; {self.rows_dropped} dropped ({'; '.join(self.drop_reasons)}"
-            text += ", ...)" if self.rows_dropped > len(self.drop_reasons) else ")"
+            explained = len(self.drop_reasons) if self.rows_explained is None \
+                else self.rows_explained
+            text += ", ...)" if self.rows_dropped > explained else ")"
         return text
 
 

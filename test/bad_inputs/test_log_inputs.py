@@ -116,6 +116,12 @@ CLASSES = [
      "refused: target z_um sits -224.5 mm from zero but spans 0.36 mm: a position, not a "
      "displacement? Give its change from a reference (subtract its first reading) as the "
      "target"),
+    ("log_target_failed_readings",
+     "a log's target (re-homed every reading) misses its switch on data rows 30 and 95: "
+     "+4300 um for one reading each, then back",
+     "announced: target dz_um: 2 readings far from the readings either side and back (up to "
+     "+4300 um beyond the nearer side's median; its noise 0.07 um) at data rows 30, 95 - "
+     "failed readings (a missed homing or touch?), those rows left out"),
     ("log_absent_thermistor_asked_for_by_name",
      "a log's chamber sensor reads exactly -180 on every row (absent: the logger's "
      "default), asked for by name in --inputs",
@@ -274,6 +280,10 @@ def _build(name: str, tmp_path) -> tuple[dict[str, np.ndarray], list[str]]:
         growth = log.pop("dz_um")
         log["z_um"] = -224.8e3 + 360.0 * (growth - growth.min()) / np.ptp(growth)
         return log, ["--target", "z_um", "--inputs", "t*_C"]
+    if name == "log_target_failed_readings":
+        log = _warm_up()
+        log["dz_um"][[29, 94]] += 4300.0
+        return log, base
     if name == "log_absent_thermistor_asked_for_by_name":
         log = _warm_up()
         log["chamber"] = np.full(ROWS, -180.0)

@@ -65,6 +65,35 @@ def log_machine(structure_length_m: float = DEFAULT_STRUCTURE_LENGTH_M):
     return dataclasses.replace(machine, structure_length_m=float(structure_length_m))
 
 
+def complete_log_rows(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
+                      temperatures: dict[str, NDArray[np.float64]],
+                      spindle_speed_rad_s: NDArray[np.float64] | None = None
+                      ) -> NDArray[np.bool_]:
+    """The rows a log's observations keep: time, target, every temperature and the speed
+    finite (:func:`log_observations` keeps these, in order).
+
+    Parameters
+    ----------
+    time_s, target_m : ndarray, shape (N,)
+        Time [s] and target [m].
+    temperatures : dict of str to ndarray, shape (N,)
+        Input temperatures [degC].
+    spindle_speed_rad_s : ndarray, shape (N,), optional
+        The spindle speed [rad/s].
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        True where every value of the row is finite.
+    """
+    good = np.isfinite(np.asarray(time_s, dtype=np.float64)) & \
+        np.isfinite(np.asarray(target_m, dtype=np.float64))
+    for values in list(temperatures.values()) + ([spindle_speed_rad_s]
+                                                  if spindle_speed_rad_s is not None else []):
+        good &= np.isfinite(np.asarray(values, dtype=np.float64))
+    return good
+
+
 def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
                      temperatures: dict[str, NDArray[np.float64]], *,
                      spindle_speed_rad_s: NDArray[np.float64] | None = None,
@@ -122,10 +151,7 @@ def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
         raise InputDataError(f"component {component!r}: one of x, y, z")
     t = np.asarray(time_s, dtype=np.float64)
     y = np.asarray(target_m, dtype=np.float64)
-    good = np.isfinite(t) & np.isfinite(y)
-    for values in list(temperatures.values()) + ([spindle_speed_rad_s]
-                                                  if spindle_speed_rad_s is not None else []):
-        good &= np.isfinite(np.asarray(values, dtype=np.float64))
+    good = complete_log_rows(t, y, temperatures, spindle_speed_rad_s)
     if int(good.sum()) < MIN_LOG_ROWS:
         raise InsufficientDataError(f"only {int(good.sum())} complete rows; a thermal log "
                                     f"needs >= {MIN_LOG_ROWS}")
