@@ -358,3 +358,35 @@ def test_a_least_squares_fit_the_physics_bound_refused_is_said_with_its_mend():
         "the structure between the sensors and the tool is longer than the bound assumes, "
         "give --structure-length METRES")
     assert physics_bound_line(refused[:1]) == ""
+
+
+def test_a_regime_no_model_predicts_better_than_a_constant_does_not_decide():
+    """Three regimes judged from the others: heating, where both models beat the constant;
+    dwell, where neither does (one fitted on heating alone extrapolates nowhere); cooling,
+    where one does. The regimes that tell are heating and cooling; the note names the
+    dwell."""
+    from mt_accuracy_ros.commands.check_log import _say_untold_regimes, telling_regimes
+
+    def blocks(**rmse):
+        return [{"regime": r, "trained_rows": 10, "judged_rows": 10, "rmse": v,
+                 "range_excess": 0.0} for r, v in rmse.items()]
+
+    across = {"step by step": blocks(heating=1.0, dwell=9.0, cooling=4.0),
+              "pcs": blocks(heating=2.0, dwell=8.0, cooling=6.0)}
+    constant = blocks(heating=5.0, dwell=7.0, cooling=5.0)
+    assert telling_regimes(across, constant) == {"heating", "cooling"}
+    notes: list[str] = []
+    _say_untold_regimes(across, {"heating", "cooling"}, notes)
+    assert notes == ["no model predicts the training regime dwell from the others better "
+                     "than a constant: it does not decide between the models (the forward "
+                     "figure and the other regimes do)"]
+    # No regime tells: the forward figure alone decides, and the note says so.
+    assert telling_regimes(across, blocks(heating=0.5, dwell=1.0, cooling=1.0)) == set()
+    notes = []
+    _say_untold_regimes(across, set(), notes)
+    assert notes[0].endswith("they do not decide between the models (the forward figure "
+                             "does)")
+    # Without regimes: nothing to say.
+    notes = []
+    _say_untold_regimes({"step by step": []}, set(), notes)
+    assert notes == []

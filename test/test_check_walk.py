@@ -178,3 +178,44 @@ def test_a_regimes_rows_are_named_as_the_file_numbers_them_when_rows_were_left_o
     (note,) = [n for n in result["notes"] if n.startswith("the held-out rows hold")]
     start = int(note.split("(cooling rows ", 1)[1].split("-", 1)[0])
     assert abs(start - 301) <= 10, note
+
+
+def test_when_no_regime_tells_the_models_apart_the_forward_figure_decides(tmp_path,
+                                                                          monkeypatch):
+    """The heating-then-cooling log: every regime tells models apart, and the cross-regime
+    figure pools them all. With a constant made to predict every regime perfectly, no
+    regime tells: the note says so, no regime decides, each contestant's score is its
+    forward figure, and the contest's winner is the one the forward figures choose."""
+    import mt_accuracy_ros.commands.check_log as check_log
+
+    n = 500
+    log = _log(tmp_path / "log.csv", (np.arange(n) < 0.6 * n).astype(float), seed=3)
+    args = (log, "d_um", "time_s", ["*"], [], [], 3, 0.5, 0.05, [])
+    telling = check_csv(*args, uncertainty_m=0.6e-6)
+    assert not any(n.startswith("no model predicts") for n in telling["notes"])
+    for entry in telling["model_contest"]:
+        told = [b for b in entry["cross_regime_blocks"] if b["decides"]]
+        assert told and len(told) == len(entry["cross_regime_blocks"])
+        pooled = np.sqrt(sum(b["rmse"] ** 2 * b["judged_rows"] for b in told) /
+                         sum(b["judged_rows"] for b in told))
+        assert entry["cross_regime_rmse"] == pytest.approx(pooled, rel=1e-12)
+
+    blocks = check_log.regime_blocks
+
+    def perfect_constant(terms, *rest):
+        out = blocks(terms, *rest)
+        return [dict(b, rmse=0.0) for b in out] if not terms else out
+
+    monkeypatch.setattr(check_log, "regime_blocks", perfect_constant)
+    untold = check_csv(*args, uncertainty_m=0.6e-6)
+    assert any(n.startswith("no model predicts the training regimes heating, dwell") and
+               n.endswith("(the forward figure does)") for n in untold["notes"])
+    scores = {}
+    for entry in untold["model_contest"]:
+        assert entry.get("cross_regime_rmse") is None
+        assert not any(b["decides"] for b in entry["cross_regime_blocks"])
+        assert entry["score"] == entry["forward_rmse"]
+        scores[entry["name"]] = entry["score"]
+    excess = {e["name"]: e["range_excess"] for e in untold["model_contest"]}
+    chosen = next(e["name"] for e in untold["model_contest"] if e["chosen"])
+    assert chosen == check_log.contest_winner(scores, excess)

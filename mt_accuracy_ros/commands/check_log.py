@@ -149,6 +149,50 @@ def regime_blocks(terms, frame, component: int, regimes, zeroed: bool) -> list[d
     return out
 
 
+def telling_regimes(across: dict[str, list[dict]], constant: list[dict]) -> set[str]:
+    """The training regimes that tell whole models apart: those on which some contestant,
+    fitted on the other regimes, predicts better than a constant fitted there too.
+
+    A regime no model predicts better than a constant (a log of one heating, judged on its
+    dwell from a fit on the heating alone) says that nothing extrapolates there, not which
+    model extrapolates better: every contestant's figure on it is set by the missing
+    regime, and letting it decide would choose at random among failures.
+
+    Parameters
+    ----------
+    across : dict of str to list of dict
+        Each contestant's :func:`regime_blocks`.
+    constant : list of dict
+        The same blocks of a constant (:func:`regime_blocks` of no terms).
+
+    Returns
+    -------
+    set of str
+        The regimes that decide.
+    """
+    constant_rmse = {b["regime"]: b["rmse"] for b in constant}
+    best: dict[str, float] = {}
+    for blocks_of in across.values():
+        for b in blocks_of:
+            best[b["regime"]] = min(best.get(b["regime"], np.inf), b["rmse"])
+    return {r for r, v in best.items() if v < constant_rmse.get(r, np.inf)}
+
+
+def _say_untold_regimes(across: dict[str, list[dict]], compared: set[str],
+                        notes: list[str]) -> None:
+    """A note naming the training regimes no contestant predicted better than a constant
+    (left out of the cross-regime figures), when there are any."""
+    judged = list(dict.fromkeys(b["regime"] for blocks_of in across.values()
+                                for b in blocks_of))
+    untold = [r for r in judged if r not in compared]
+    if untold:
+        notes.append(f"no model predicts the training regime{'s' if len(untold) > 1 else ''} "
+                     f"{', '.join(untold)} from the others better than a constant: "
+                     f"{'they do' if len(untold) > 1 else 'it does'} not decide between the "
+                     "models (the forward figure"
+                     f"{' and the other regimes do' if len(untold) < len(judged) else ' does'})")
+
+
 #: Whole models whose decisive errors lie this close to the best one's are alike: the one
 #: whose inputs left their fitted range least, across regimes, is the model.
 ALIKE_SHARE = 0.1
@@ -712,9 +756,10 @@ def _judged_candidate(search: _LogSearch, progress: _Progress, min_reduction: fl
     it stands). Each of the first :data:`MAX_JUDGED` usable candidates must predict the last
     training block better than the model without it (each one worse is recorded as not
     added); of those that do, the one whose worse error - on that block, or on each regime
-    of the training rows predicted from the others (:func:`regime_blocks`) - is least is
-    added, those the block test confirms first. A term chosen forward in time alone may
-    fail the first time the machine does what the training rows did elsewhere."""
+    of the training rows predicted from the others (:func:`regime_blocks`, those that
+    :func:`telling_regimes`) - is least is added, those the block test confirms first. A
+    term chosen forward in time alone may fail the first time the machine does what the
+    training rows did elsewhere."""
     from ..core.workbench.diagnosis import selection_refusal
 
     # Those the block test confirms first, then - on a log whose runs differ so much that
@@ -728,11 +773,9 @@ def _judged_candidate(search: _LogSearch, progress: _Progress, min_reduction: fl
         terms = progress.accepted_terms + [search.term(option)]
         value = search.validation(terms)
         if value < before:
-            across = regime_blocks(terms, search.frame, search.component, search.regimes,
-                                   search.obs.zeroed_runs)
-            robust = max(value, pooled_rmse(across)) if across else value
-            passing.append((bool(selection_refusal(option, min_reduction)), robust,
-                            len(passing), option, value))
+            passing.append((option, value, regime_blocks(
+                terms, search.frame, search.component, search.regimes,
+                search.obs.zeroed_runs)))
             continue
         progress.refused_names.add(option.name)
         test = f"predicting {search.judged_what} from the training rows before them"
@@ -743,7 +786,17 @@ def _judged_candidate(search: _LogSearch, progress: _Progress, min_reduction: fl
                                  f"{before * to_unit:.4g} to {value * to_unit:.4g} {unit}")
     if not passing:
         return None, before
-    _, _, _, option, value = min(passing)
+    # The regimes some candidate predicts better than a constant decide with the block.
+    compared = telling_regimes({o.name: across for o, _, across in passing}, regime_blocks(
+        [], search.frame, search.component, search.regimes, search.obs.zeroed_runs))
+
+    def order(entry):
+        option, value, across = entry
+        told = [b for b in across if b["regime"] in compared]
+        return (bool(selection_refusal(option, min_reduction)),
+                max(value, pooled_rmse(told)) if told else value)
+
+    option, value, _ = min(passing, key=order)
     return option, value
 
 
@@ -817,7 +870,15 @@ def _contest(search: _LogSearch, progress: _Progress, first, start_model, blocks
     across = {name: regime_blocks(terms, search.frame, c, search.regimes, zeroed)
               for name, terms in terms_of.items()}
     contest = {name: pooled_rmse(blocks_of) for name, blocks_of in per_block.items()}
-    score = {name: max(contest[name], pooled_rmse(across[name])) if across[name] else
+    compared = telling_regimes(across, regime_blocks([], search.frame, c, search.regimes,
+                                                     zeroed))
+    _say_untold_regimes(across, compared, notes)
+    for blocks_of in across.values():
+        for b in blocks_of:
+            b["decides"] = b["regime"] in compared
+    told = {name: [b for b in blocks_of if b["regime"] in compared]
+            for name, blocks_of in across.items()}
+    score = {name: max(contest[name], pooled_rmse(told[name])) if told[name] else
              contest[name] for name in terms_of}
     excess = {name: max((b["range_excess"] for b in across[name]), default=0.0)
               for name in terms_of}
@@ -834,10 +895,10 @@ def _contest(search: _LogSearch, progress: _Progress, first, start_model, blocks
     step_by_step = [name for s in progress.steps for name in s.added or []]
     if winner != "step by step":
         _take_rival(search, progress, winner, rival_models[winner], rivals[winner],
-                    score, excess, across, blocks, notes)
+                    score, excess, told, blocks, notes)
     return [ContestEntry(name, step_by_step if name == "step by step" else [name],
                          contest[name], per_block[name], held_out[name], name == winner,
-                         pooled_rmse(across[name]) if across[name] else None, across[name],
+                         pooled_rmse(told[name]) if told[name] else None, across[name],
                          score[name], excess[name], held_excess[name])
             for name in sorted(score, key=score.get)], contest
 

@@ -192,10 +192,14 @@ class ContestEntry(_AsDict):
         Whether it is the model.
     cross_regime_rmse : float or None
         Its error on each regime of the training rows predicted by a fit on the others,
-        pooled [m]; None when the training rows hold one regime.
+        pooled over the regimes that tell models apart (some model predicts them better
+        than a constant, :func:`~.check_log.telling_regimes`) [m]; None when the training
+        rows hold one regime or none tells.
     cross_regime_blocks : list of dict
-        Per regime: ``regime``, ``trained_rows``, ``judged_rows``, ``rmse`` [m] and
-        ``range_excess`` (how far its inputs left the fitted range, a share of the span).
+        Per regime: ``regime``, ``trained_rows``, ``judged_rows``, ``rmse`` [m],
+        ``range_excess`` (how far its inputs left the fitted range, a share of the span)
+        and ``decides`` (the regime tells models apart: some model predicts it better than
+        a constant).
     score : float
         What decides: the worse of the forward and the cross-regime errors [m].
     range_excess : float
