@@ -65,3 +65,15 @@ def test_a_target_that_spikes_on_many_rows_is_refused_in_one_line(tmp_path, caps
     assert main(["check", str(noisy), "--target", "d_um", "--auto", "2"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "too many to be failed readings" in err
+
+
+def test_a_failed_reading_on_a_row_with_a_sensor_gap_is_one_row_dropped(tmp_path):
+    """Data row 40 reads a failed target and lacks t2_C: one row left out, not two."""
+    failed, _ = _with_failed_readings(tmp_path)
+    lines = failed.read_text().splitlines()
+    values = lines[40].split(",")
+    values[2] = ""                                     # t2_C
+    lines[40] = ",".join(values)
+    failed.write_text("\n".join(lines) + "\n")
+    result = check_csv(failed, **ARGS)
+    assert result["rows_dropped"] == 4 and result["rows"] == 600 - 4

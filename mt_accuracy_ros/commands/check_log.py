@@ -684,6 +684,9 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
                            component=component, uncertainty_m=uncertainty_m,
                            run_of_row=run_of_row, run_names=run_names, zeroed_runs=zeroed_runs,
                            data_rows=table.data_rows)
+    # Each row left out counted once (a failed target reading on a row with a sensor's gap
+    # has two reasons).
+    table.rows_dropped = table.rows_read - obs.n
     complete = complete_log_rows(time_s, target_m, temperatures, speed)
     if obs.run_of_row is not None:
         # Rows with a hole in a sensor (not dead) are left out: the runs that remain.
