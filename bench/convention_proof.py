@@ -18,7 +18,8 @@ Scoring, per trial (every identifiable effect of the truth):
   with or without its arm), and - for a tilt with a constant part - the constant part
   may be named as the squareness of its plane (ISO 230-1; its two forms together are
   one rotation of the body) or carried by the tilt; a pivot away from the carriage's
-  origin may add a straightness of the same axis or a slope along it;
+  origin may add a straightness of the same axis, a slope along it, or - where the
+  pivot's offset turns along the axis' own travel - its positioning error (ISO 230-1);
 * a zero-angle error the poses can see (an outer axis' zero: a located sphere sees it as
   the tilt of the axis it carries) is right as that tilt;
 * a squareness is right when a squareness of its plane is named;
@@ -55,6 +56,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+import numpy as np
 
 from studies.convention_surveys import generate
 
@@ -226,6 +229,12 @@ def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = No
         # axis, or - for the tilt's linear part - a slope (a squareness along the axis).
         pivoted = effect.get("pivot_m") and any(effect["pivot_m"])
         if pivoted and family.startswith("straightness") and variant[2] == axis:
+            return "pivot"
+        # Its part along the axis' own travel is that axis' positioning error (ISO 230-1):
+        # a yaw of Y about a pivot off in x moves the work along y by p_x eps(y).
+        if pivoted and family.startswith("positioning") and variant == f"E{axis}{axis}" and \
+                abs(np.cross(np.eye(3)["ABC".index(iso[1])], effect["pivot_m"])[
+                    "XYZ".index(axis)]) > 1e-3:
             return "pivot"
         if pivoted and family == "squareness" and len(variant) == 3 and variant[2] == axis:
             return "pivot"

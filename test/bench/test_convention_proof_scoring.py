@@ -71,3 +71,16 @@ def test_a_tilts_constant_part_as_a_rotary_lines_tilt_within_thirty_percent():
         line = _named("rotary_location:C", {"EX0C": -7e-6, "EY0C": 0.0, "EA0C": 0.0,
                                             "EB0C": value})
         assert score(_truth(tilt), {"named": [angular, line]})["right"] is right, value
+
+
+def test_a_pivots_part_along_the_axis_is_its_positioning_error_only_where_it_turns_there():
+    """A yaw of Y about a pivot 0.124 m off in x moves the work along y by -0.124 eps(y):
+    Y's positioning error (ISO 230-1), no extra; a pivot off in z turns nothing along y."""
+    def yaw(pivot):
+        return {"iso_name": "ECY", "kind": "table_tilt", "axis": "Y", "side": "work",
+                "value_si": [0.0, 1.0e-4, 0.0], "constant_part_si": 0.0, "pivot_m": pivot,
+                "identifiable": True}
+    named = [_named("angular:ECY", {"P1": 20e-6}), _named("positioning:EYY", {"P1": 2e-6})]
+    assert score(_truth(yaw([0.124, -0.34, 0.079])), {"named": named})["right"]
+    verdict = score(_truth(yaw([0.0, 0.0, 0.2])), {"named": named})
+    assert not verdict["right"] and "extra: positioning:EYY" in verdict["why"]

@@ -11,7 +11,10 @@
   - smooth: Legendre polynomials P_k(u), u = q mapped to [-1, 1] over the
     stroke; k from 1 (positioning, angular: the constant is an offset or a
     location error) or 2 (straightness: its linear part is a squareness,
-    ISO 230-1 3.4.8), up to an order chosen in-fold by BIC;
+    ISO 230-1 3.4.8), up to an order chosen in-fold by BIC; a table's tilt
+    (a work-side carriage carrying no rotary axis) may also take its constant
+    P_0, chosen the same way: one rotation of the table, its constant the
+    squareness of its plane (ISO 230-1);
   - periodic: cos/sin of 2 pi q / lambda and its second harmonic, the period
     lambda searched from 2 to 50 mm (ball-screw pitch, rack, guideway waviness)
     by a weighted least-squares periodogram of the training readings.
@@ -80,6 +83,27 @@ def component_names(ctx: Context, kind: str) -> list[str]:
     return names
 
 
+def carries_rotary(machine, axis: str) -> bool:
+    """Whether ``axis`` carries a rotary axis on its branch of the chain.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine (its workpiece and tool branches, from the bed outwards).
+    axis : str
+        A linear axis' letter.
+
+    Returns
+    -------
+    bool
+        True when an axis further out on the same branch is rotary.
+    """
+    for branch in (machine.workpiece_branch, machine.tool_branch):
+        if axis in branch:
+            return any(machine.axes[a].is_rotary for a in branch[branch.index(axis) + 1:])
+    return False
+
+
 class ComponentError(EffectFamily):
     """Positioning / straightness / angular error of a linear axis, smooth or periodic.
 
@@ -139,7 +163,8 @@ class ComponentError(EffectFamily):
         Returns
         -------
         list of dict
-            ``{"period_m": lambda}`` [m] on a resolvable frequency grid, or ``{"order": k}``.
+            ``{"period_m": lambda}`` [m] on a resolvable frequency grid, or ``{"order": k}``;
+            a table's tilt also ``{"order": k, "constant": True}`` (P1 .. Pk and P0).
         """
         if self.periodic:
             low, high = ctx.machine.axes[variant[2]].stroke
@@ -148,7 +173,45 @@ class ComponentError(EffectFamily):
             grid = resolvable(frequency_grid(high - low), ctx.variables.positions[variant[2]])
             return [{"period_m": float(1.0 / f)} for f in grid]
         first = 2 if self.kind == "straightness" else 1
-        return [{"order": k} for k in range(first, first + _ORDERS)]
+        orders = [{"order": k} for k in range(first, first + _ORDERS)]
+        if self.kind != "angular" or carries_rotary(ctx.machine, variant[2]) or \
+                variant[2] not in ctx.machine.workpiece_branch:
+            return orders
+        # A table's tilt with a constant part turns the table, and the work on it, about
+        # its pivot: the constant is the squareness of the tilt's plane (ISO 230-1), booked
+        # with the tilt as one rotation rather than as a pair of squareness slopes. On a
+        # carriage that carries rotary axes the constant turn is their lines' tilts
+        # (rotary_location) and its carried axes' squareness: candidates of their own. On
+        # the tool side a constant turn of a carriage differs from the table's own tilt
+        # about the same direction by the pivot alone, which this family does not fit, so
+        # it could stand in for it: there the squareness family holds a constant turn.
+        return orders + [{"order": k, "constant": True} for k in range(first, first + _ORDERS)]
+
+    def nested_columns(self, variant: str, setting: dict, largest: dict) -> list[int] | None:
+        """Columns of the largest setting's design: P1 .. Pk, then P0 for a constant part.
+
+        Parameters
+        ----------
+        variant : str
+            The variant.
+        setting : dict
+            ``{"order": k}``, with ``"constant": True`` for a tilt with a constant part.
+        largest : dict
+            The last setting (the highest order, with the constant part on an angular
+            error).
+
+        Returns
+        -------
+        list of int or None
+            Column indices into the largest design (None for a periodic error).
+        """
+        if self.periodic:
+            return None
+        first = 2 if self.kind == "straightness" else 1
+        columns = list(range(setting["order"] - first + 1))
+        if setting.get("constant"):
+            columns.append(largest["order"] - first + 1)
+        return columns
 
     def parameter_names(self, variant: str, setting: dict) -> list[str]:
         """Harmonic or Legendre coefficients.
@@ -169,7 +232,8 @@ class ComponentError(EffectFamily):
         if self.periodic:
             return ["cos1", "sin1", "cos2", "sin2"]
         first = 2 if self.kind == "straightness" else 1
-        return [f"P{k}" for k in range(first, setting["order"] + 1)]
+        return [f"P{k}" for k in range(first, setting["order"] + 1)] + \
+            (["P0"] if setting.get("constant") else [])
 
     def _basis(self, q, u, setting):
         if self.periodic:
@@ -182,7 +246,10 @@ class ComponentError(EffectFamily):
             basis[:, 3] = 2.0 * basis[:, 0] * basis[:, 1]
             return basis
         first = 2 if self.kind == "straightness" else 1
-        return _legendre_columns(u, first, setting["order"])
+        columns = _legendre_columns(u, first, setting["order"])
+        if setting.get("constant"):
+            columns = np.column_stack([columns, np.ones_like(columns[:, 0])])
+        return columns
 
     def design(self, ctx: Context, variant: str, setting: dict):
         """(N, 3, P) TCP error per unit coefficient: the error's sensitivity along its basis.
@@ -237,6 +304,8 @@ class ComponentError(EffectFamily):
                                                    _LARGEST_ORDER)
             first = 2 if self.kind == "straightness" else 1
             basis = ctx.cache[key][:, first:setting["order"] + 1]
+            if setting.get("constant"):
+                basis = np.column_stack([basis, ctx.cache[key][:, 0]])
         return ctx.jacobian(variant), basis
 
     def orientation_sensitivity(self, ctx: Context, variant: str, setting: dict):
@@ -390,6 +459,11 @@ class ComponentError(EffectFamily):
         kind = {"positioning": "positioning", "straightness": "straightness",
                 "angular": "angular"}[self.kind]
         reach = " reaching the TCP through its Abbe arms" if self.kind == "angular" else ""
+        if setting.get("constant"):
+            # ISO 230-1: a constant turn of a carriage is the squareness of its plane.
+            plane = {"A": "Y and Z", "B": "X and Z", "C": "X and Y"}[variant[1]]
+            reach += (f"; its constant part P0 turns the carriage and all it carries - the "
+                      f"squareness of {plane}")
         return (f"the {kind} error {variant} of the {axis} axis, smooth along its travel "
                 f"(Legendre order {setting.get('order')}){reach} (ISO 230-1, Kidani eq. 2.6)")
 
@@ -408,7 +482,9 @@ class ComponentError(EffectFamily):
         """
         if self.periodic:
             return f"period {setting['period_m'] * 1e3:.3f} mm"
-        return f"order {setting['order']}"
+        constant = ", with a constant part (its plane's squareness)" if \
+            setting.get("constant") else ""
+        return f"order {setting['order']}{constant}"
 
 
 class Squareness(EffectFamily):
