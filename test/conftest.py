@@ -66,14 +66,20 @@ def data_dir() -> Path:
 
 
 #: Test files that take longest, longest first: they start first, so that parallel workers
-#: (``-n 2``) do not end with one of them running alone (from ``--durations`` runs).
+#: (``-n 2``) do not end with one of them running alone (longest-first packing: the last
+#: files to start are the shortest). The order of their wall times in a loaded
+#: ``make test`` (docs/benchmarks.md, 2026-11-27, third session); the files not named
+#: take seconds each and follow in collection order.
 SLOWEST_FILES = (
-    "test_demo_5axis.py", "test_demo_trunnion.py", "test_demo.py", "test_demo_vmc.py",
-    "test_closed_loop.py", "test_thermal_studies.py", "test_selection_issue28.py",
-    "test_record_play.py", "test_lockstep.py", "test_thesis_results.py", "test_graph.py",
-    "test_hidden_effects.py", "test_monitor_refit.py", "test_check_log_runs.py",
-    "test_check_cli.py", "test_context_memo.py", "test_model_gate.py",
-    "test_catalogue_trials.py", "test_survey_conventions.py", "test_fem.py",
+    "test_demo_trunnion.py", "test_demo_5axis.py", "test_demo_vmc.py", "test_demo.py",
+    "test_hidden_effects.py", "test_closed_loop.py", "test_check_log_runs.py",
+    "test_catalogue_trials.py", "test_record_play.py", "test_model_tools.py",
+    "test_bad_input.py", "test_graph.py", "test_check_cli.py", "test_thesis_results.py",
+    "test_selection_issue28.py", "test_cli_golden.py", "test_fleet.py",
+    "test_survey_conventions.py", "test_monitor_refit.py", "test_model_gate.py",
+    "test_cnc_bridge.py", "test_lockstep.py", "test_controller_tables.py", "test_fuzz.py",
+    "test_diagnosis.py", "test_tool_direction.py", "test_cartesian_surveys.py",
+    "test_thermal_studies.py", "test_virtual_machine.py", "test_context_memo.py",
 )
 
 

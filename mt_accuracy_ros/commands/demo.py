@@ -218,7 +218,7 @@ def _start_nodes(model: Path, bag: Path, scenario: str, compensation_mode: str,
     step = {"lockstep": True} if lockstep else {}
     # A lockstep run's pacing reports (several per batch) are run control, not data: the
     # bag holds what a real-time run's holds.
-    recording = {"exclude_topics": ["/lockstep"]} if lockstep else {}
+    recording = {"exclude_topics": ["/lockstep", "/lockstep/stream"]} if lockstep else {}
     nodes = [start_node("recorder", {"output": str(bag), "discovery_period_s": 0.2,
                                      **recording}, quiet=True),
              # The estimator reads the virtual machine's own strokes and scale distances:

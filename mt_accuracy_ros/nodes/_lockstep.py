@@ -25,7 +25,9 @@ the stream says what it must have handled before the batch covering data time
     starting a check counts as handled once the check is published);
 ``temperatures``
     published every temperature stamped up to ``start`` (the temperature
-    publisher follows the machine's own progress);
+    publisher follows the machine's own progress: the position of the stream,
+    which the machine says on ``lockstep/stream`` whenever such a participant may
+    wait for it - not on ``lockstep``, whose reports only the machine needs);
 ``checks``
     acted on every check any participant published (a user).
 
@@ -42,6 +44,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 STREAMS = ("scales", "compensation", "reference", "temperatures", "checks")
+#: The participants' reports, heard by the machine.
+PROGRESS_TOPIC = "lockstep"
+#: The machine's stream position, heard by what follows it (the temperature source): a
+#: topic of its own, so that neither hears the reports it has no use for - every report
+#: costs each subscriber a callback, several reports per batch.
+STREAM_TOPIC = "lockstep/stream"
 
 
 @dataclass
@@ -110,6 +118,17 @@ class LockstepGate:
     def leave_out(self, node: str, reason: str) -> None:
         self.left_out[node] = reason
 
+    def stream_awaited(self, position_ns: int) -> bool:
+        """Whether a ``temperatures`` participant may still wait for the stream to reach
+        ``position_ns`` [ns]: one that has not reported, or has published only the
+        readings stamped before it. True without such a participant (a node following the
+        stream without holding it then hears every position, as before)."""
+        followers = [n for n, s in self.participants.items()
+                     if s == "temperatures" and n not in self.left_out]
+        return not followers or any(
+            n not in self.progress or self.progress[n].handled_ns < position_ns
+            for n in followers)
+
     def waiting_for(self, start_ns: int, end_ns: int, last_reference_ns: int | None,
                     stream_start_ns: int) -> tuple[str, str] | None:
         """(node, what it has not done yet) holding the batch [start, end), or None.
@@ -167,12 +186,13 @@ def lockstep_qos():
 
 
 class ProgressReporter:
-    """Publishes one node's ``DataProgress`` on ``lockstep``: at each change (a report
-    that changes nothing is not sent) and every 0.25 s of wall time (so a machine that
-    subscribes late still hears it)."""
+    """Publishes one node's ``DataProgress`` on ``topic`` (:data:`PROGRESS_TOPIC`, or the
+    machine's :data:`STREAM_TOPIC`): at each change (a report that changes nothing is not
+    sent) and every 0.25 s of wall time (so a machine that subscribes late still hears
+    it)."""
 
     def __init__(self, node, name: str | None = None, *, follows_models: bool = False,
-                 publishes_models: bool = False) -> None:
+                 publishes_models: bool = False, topic: str = PROGRESS_TOPIC) -> None:
         from rclpy.clock import Clock, ClockType
 
         from mt_accuracy_msgs.msg import DataProgress
@@ -182,7 +202,7 @@ class ProgressReporter:
         self.name = name or node.get_name()
         self.state = Progress(model_version_published=0 if publishes_models else -1,
                               model_version_settled=0 if follows_models else -1)
-        self._publisher = node.create_publisher(DataProgress, "lockstep", lockstep_qos())
+        self._publisher = node.create_publisher(DataProgress, topic, lockstep_qos())
         node.create_timer(0.25, self.publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.publish()
 

@@ -54,8 +54,9 @@ from ._priority import declare_niceness
 from ._common import (MATCH_SETTLE_S, RESULT_QOS, SENSOR_QOS, accept, float_descriptor,
                       int_descriptor, nanoseconds_to_stamp, pack_float64, plain_descriptor,
                       refuse, run_node)
-from ._lockstep import (LockstepGate, ProgressReporter, check_compensation_delay,
-                        lockstep_qos, parse_participants, progress_from_message)
+from ._lockstep import (PROGRESS_TOPIC, STREAM_TOPIC, LockstepGate, ProgressReporter,
+                        check_compensation_delay, lockstep_qos, parse_participants,
+                        progress_from_message)
 from ._scenario import ScenarioClock, resolve_scenario
 
 #: Simulated seconds generated per window.
@@ -205,8 +206,10 @@ class EncoderPublisher(Node):
                                             * 1e9)),
             compensation_delay_ns=int(round(float(
                 self.get_parameter("compensation_delay_s").value) * 1e9)))
-        self._progress = ProgressReporter(self)
-        self.create_subscription(DataProgress, "lockstep", self._on_progress, lockstep_qos())
+        # The stream's position, for what follows it (the temperature source).
+        self._progress = ProgressReporter(self, topic=STREAM_TOPIC)
+        self.create_subscription(DataProgress, PROGRESS_TOPIC, self._on_progress,
+                                 lockstep_qos())
 
     def _on_progress(self, message) -> None:
         if message.node in self._lockstep.participants:
@@ -310,6 +313,9 @@ class EncoderPublisher(Node):
 
     def _finish_at_the_end(self) -> None:
         if self._next_index + self._batch > self.scenario.n_samples:
+            if self._lockstep is not None and not self.finished:
+                # The stream's end: what follows the stream publishes everything before it.
+                self._progress.report(handled_ns=self._data_stamp_ns(self._next_index))
             self.finished = True
             if self.compensation.mode != "off":
                 self.compensation.publish_status()  # the whole run's figures, once more
@@ -333,11 +339,20 @@ class EncoderPublisher(Node):
                 self._waiting = None
                 self._publish_batch(self._next_index)
                 self._next_index += self._batch
-                self._progress.report(handled_ns=self._data_stamp_ns(self._next_index))
+                self._report_position()
         except MtAccuracyError as exc:
             self.get_logger().error(f"simulation failed: {exc}")
             self.finished = True
         self._finish_at_the_end()
+
+    def _report_position(self) -> None:
+        """Say the stream's position (on ``lockstep/stream``) when a participant following
+        it (the temperature source) has not yet published what lies before it: right after
+        the batch that reaches it, but not after every batch - each report costs its
+        subscribers a callback, and there is one batch every 10 ms of data."""
+        position = self._data_stamp_ns(self._next_index)
+        if self._lockstep.stream_awaited(position):
+            self._progress.report(handled_ns=position)
 
     def _corrections_in_flight(self, start_ns: int) -> tuple[str, str] | None:
         """The broadcaster says it has computed this batch's corrections: wait (at most

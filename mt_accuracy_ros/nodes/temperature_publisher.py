@@ -23,7 +23,7 @@ from mt_accuracy_msgs.msg import TemperatureArray
 from ..sim.machine_tool import simulate
 from ._common import (MATCH_SETTLE_S, SENSOR_QOS, accept, float_descriptor, int_descriptor,
                       nanoseconds_to_stamp, pack_float64, plain_descriptor, refuse, run_node)
-from ._lockstep import ProgressReporter, lockstep_qos
+from ._lockstep import STREAM_TOPIC, ProgressReporter, lockstep_qos
 from ._scenario import ScenarioClock, resolve_scenario
 
 
@@ -47,8 +47,8 @@ class TemperaturePublisher(Node):
             "Hold the stream until this many subscriptions match 'temperatures'", 0, 100,
             read_only=True))
         self.declare_parameter("lockstep", False, plain_descriptor(
-            "Follow the encoder publisher's data time (its 'lockstep' progress) instead of "
-            "the wall clock", read_only=True))
+            "Follow the encoder publisher's data time (its position on 'lockstep/stream') "
+            "instead of the wall clock", read_only=True))
         self.add_on_set_parameters_callback(self._validate)
         self.scenario = resolve_scenario(str(self.get_parameter("scenario").value))
         result = simulate(self.scenario, start_index=0, stop_index=1)
@@ -68,7 +68,8 @@ class TemperaturePublisher(Node):
             from mt_accuracy_msgs.msg import DataProgress
 
             self._progress = ProgressReporter(self)
-            self.create_subscription(DataProgress, "lockstep", self._on_progress, lockstep_qos())
+            self.create_subscription(DataProgress, STREAM_TOPIC, self._on_progress,
+                                     lockstep_qos())
         self.create_timer(0.05, self._tick)
 
     def _on_progress(self, message) -> None:

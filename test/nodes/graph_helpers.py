@@ -30,15 +30,24 @@ def call_service(node, client, request, timeout_s: float = 60.0, attempt_s: floa
     A request sent before the server has matched the client's response reader is
     dropped by the RMW ("failed to send response (timeout)"), which a loaded host
     makes likely: asking again is the client's job, as ``ros2 param get`` does on
-    a slow graph. Only idempotent requests may be sent this way.
+    a slow graph. Only idempotent requests may be sent this way. Every request sent
+    stays awaited and the first answer counts: a server slower than ``attempt_s`` (a
+    model gate on a loaded host) answers its requests one after the other, and a
+    client that kept only its newest would always wait behind the ones it gave up.
     """
     deadline = time.monotonic() + timeout_s
     assert client.wait_for_service(timeout_sec=timeout_s), f"no service {client.srv_name}"
-    while time.monotonic() < deadline:
-        future = client.call_async(request)
-        if spin_until(node, future.done, timeout_s=attempt_s):
-            return future.result()
-        client.remove_pending_request(future)
+    futures = []
+    try:
+        while time.monotonic() < deadline:
+            futures.append(client.call_async(request))
+            if spin_until(node, lambda: any(f.done() for f in futures),
+                          timeout_s=min(attempt_s, max(0.0, deadline - time.monotonic()))):
+                return next(f for f in futures if f.done()).result()
+    finally:
+        for future in futures:
+            if not future.done():
+                client.remove_pending_request(future)
     raise AssertionError(f"{client.srv_name} did not answer in {timeout_s} s")
 
 

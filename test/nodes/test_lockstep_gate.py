@@ -71,6 +71,25 @@ def test_reports_never_go_back_and_a_left_out_participant_holds_nothing():
     assert g.waiting_for(T0 + 60 * MS, T0 + 70 * MS, None, T0) is None
 
 
+def test_the_stream_position_is_awaited_exactly_while_the_temperatures_hold_it():
+    # The machine says where its stream is only while a temperatures participant may wait
+    # for it: then that participant's report (its next reading's stamp - 1) is the rule.
+    g = gate(estimator="scales", thermometers="temperatures")
+    assert g.stream_awaited(T0)                       # not reported yet
+    g.update("thermometers", Progress(handled_ns=T0 + 500 * MS - 1))
+    assert not g.stream_awaited(T0 + 10 * MS)
+    assert not g.stream_awaited(T0 + 500 * MS - 1)
+    assert g.stream_awaited(T0 + 500 * MS)            # the reading at 500 ms is due
+    # ... whenever the gate would hold a batch starting there for the temperatures.
+    g.update("estimator", Progress(handled_ns=T0 + 500 * MS))
+    for start in (T0 + 490 * MS, T0 + 500 * MS):
+        held = g.waiting_for(start, start + 10 * MS, None, T0)
+        assert (held is not None and held[0] == "thermometers") == g.stream_awaited(start)
+    g.leave_out("thermometers", "silent")
+    assert g.stream_awaited(T0 + 500 * MS)            # no follower holds: every position
+    assert gate(estimator="scales").stream_awaited(T0)
+
+
 def test_bad_participants_and_a_delay_shorter_than_a_batch_are_refused():
     assert parse_participants(["a:scales", "", "b:checks"]) == {"a": "scales", "b": "checks"}
     with pytest.raises(ValueError, match="node:stream"):

@@ -37,7 +37,14 @@ def _by_stamp(bag: Path, topic: str) -> dict[int, object]:
 
 
 def _graph(probe, out: Path, topics: list[str], sim_time: bool):
-    """Recorder, estimator and compensator; returns the processes once they listen."""
+    """Recorder, estimator and compensator; returns the processes once they listen.
+
+    Started only once the graph has none of their subscriptions left: those of a graph
+    stopped just before leave the graph's view late on a loaded host, and counted as this
+    graph's they let the test go on - and stop - a recorder still constructing."""
+    watched = ("/yaw/y", "/compensation", "/scales")
+    assert spin_until(probe, lambda: not any(probe.count_subscribers(t) for t in watched),
+                      timeout_s=60), {t: probe.count_subscribers(t) for t in watched}
     extra = {"use_sim_time": True} if sim_time else {}
     processes = [start_node("recorder", {"output": str(out), "topics": topics,
                                          "discovery_period_s": 0.1, "chunk_size": 65536, **extra}),
