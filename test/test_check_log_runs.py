@@ -362,10 +362,10 @@ def test_a_least_squares_fit_the_physics_bound_refused_is_said_with_its_mend():
 
 def test_a_regime_no_model_predicts_better_than_a_constant_does_not_decide():
     """Three regimes judged from the others: heating, where both models beat the constant;
-    dwell, where neither does (one fitted on heating alone extrapolates nowhere); cooling,
-    where one does. The regimes that tell are heating and cooling; the note names the
-    dwell."""
-    from mt_accuracy_ros.commands.check_log import _say_untold_regimes, telling_regimes
+    dwell, where neither does; cooling, where one does. The regimes that tell are heating
+    and cooling; the note names the dwell."""
+    from mt_accuracy_ros.commands.check_log import (_say_untold_regimes, deciding_blocks,
+                                                    robust_score, telling_regimes)
 
     def blocks(**rmse):
         return [{"regime": r, "trained_rows": 10, "judged_rows": 10, "rmse": v,
@@ -375,6 +375,12 @@ def test_a_regime_no_model_predicts_better_than_a_constant_does_not_decide():
               "pcs": blocks(heating=2.0, dwell=8.0, cooling=6.0)}
     constant = blocks(heating=5.0, dwell=7.0, cooling=5.0)
     assert telling_regimes(across, constant) == {"heating", "cooling"}
+    # The blocks that decide, and the score over them.
+    assert [b["regime"] for b in deciding_blocks(across["pcs"], {"heating", "cooling"})] == \
+        ["heating", "cooling"]
+    assert robust_score(1.0, deciding_blocks(across["pcs"], {"heating", "cooling"})) == \
+        pytest.approx(np.sqrt((2.0 ** 2 + 6.0 ** 2) / 2))
+    assert robust_score(9.0, []) == 9.0
     notes: list[str] = []
     _say_untold_regimes(across, {"heating", "cooling"}, notes)
     assert notes == ["no model predicts the training regime dwell from the others better "
