@@ -213,8 +213,19 @@ def row_ranges(rows: ArrayLike, shown: int = SHOWN_RANGES) -> str:
                                        if more > 0 else "")
 
 
-def _stretches(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
-    """[(start, stop)) of each run of True in ``mask``."""
+def true_stretches(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
+    """Each run of True in ``mask``.
+
+    Parameters
+    ----------
+    mask : ndarray of bool, shape (N,)
+        Any flags.
+
+    Returns
+    -------
+    list of (int, int)
+        ``[(start, stop))`` of each run of True, in order.
+    """
     edges = np.diff(np.concatenate(([0], mask.astype(np.int8), [0])))
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
@@ -237,7 +248,7 @@ def dead_rows(values: NDArray[np.float64]) -> NDArray[np.bool_]:
     finite = np.isfinite(values)
     dead = finite & ((values < low) | (values > high))
     zero = finite & (values == 0.0)
-    for a, b in _stretches(zero):
+    for a, b in true_stretches(zero):
         if b - a >= MIN_ZERO_ROWS:
             dead[a:b] = True
     return dead
@@ -477,8 +488,19 @@ HEATED_START_K = 5.0
 
 
 def coolest_reading(values: NDArray[np.float64]) -> float:
-    """The lowest reading that is not a dead sensor's [degC] (a heater's first reading,
-    before it rises: even its second may lie kelvins above)."""
+    """The lowest reading that is not a dead sensor's (a heater's first reading, before it
+    rises: even its second may lie kelvins above).
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        One sensor's readings [degC].
+
+    Returns
+    -------
+    float
+        The lowest live reading [degC]; NaN when none is live.
+    """
     alive = values[np.isfinite(values) & ~dead_rows(values)]
     return float(alive.min()) if alive.size else float("nan")
 
@@ -521,7 +543,7 @@ def heated_part(values: NDArray[np.float64], outside: NDArray[np.bool_],
     rise = float(np.nanmax(values)) - coolest
     # Heating moves: each stretch above the range lasts, varies, and is entered and left
     # by steps far smaller than the whole rise (a glitch, a wrong channel: one step).
-    for start, stop in _stretches(outside):
+    for start, stop in true_stretches(outside):
         entry = abs(values[start] - values[start - 1]) if start > 0 else 0.0
         exit_ = abs(values[stop] - values[stop - 1]) if stop < values.size else 0.0
         if stop - start < 3 or np.ptp(values[start:stop]) == 0.0 or \

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import ArrayLike, NDArray
 
-from .sensor_health import noise_from_differences, row_ranges
+from .sensor_health import noise_from_differences, row_ranges, true_stretches
 
 #: A spike lies this many noises (and resolutions) beyond its neighbours on both sides.
 SPIKE_SIGMAS = 30.0
@@ -74,7 +74,22 @@ class TargetSpikes:
         return int(self.rows.sum())
 
     def text(self, name: str, unit: str, data_rows: ArrayLike | None = None) -> str:
-        """One line: the target, how many readings, how far, where, what was done."""
+        """One line: the target, how many readings, how far, where, what was done.
+
+        Parameters
+        ----------
+        name : str
+            The target column.
+        unit : str
+            The unit of the values judged (the offsets, noise and resolution).
+        data_rows : array_like of int, shape (N,), optional
+            Each reading's data row in the file (default 1..N).
+
+        Returns
+        -------
+        str
+            The note.
+        """
         numbers = np.arange(1, self.rows.size + 1) if data_rows is None \
             else np.asarray(data_rows)
         largest = self.offsets[np.argmax(np.abs(self.offsets))]
@@ -155,16 +170,10 @@ def _segment_spikes(values: NDArray[np.float64], inputs: list[NDArray[np.float64
         # The offset from the unmasked neighbours: the first pass's, or this pass's.
         out[new] = found[new]
         masked[new] = np.nan
-    for a, b in _stretches(out != 0.0):
+    for a, b in true_stretches(out != 0.0):
         if not _steps_alone(values, masked, a, b) or any(_moves(x, a, b) for x in inputs):
             out[a:b] = 0.0
     return out
-
-
-def _stretches(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
-    """[(start, stop)) of each run of True in ``mask``."""
-    edges = np.diff(np.concatenate(([0], mask.astype(np.int8), [0])))
-    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
 def _steps_alone(values: NDArray[np.float64], masked: NDArray[np.float64], a: int, b: int

@@ -72,7 +72,18 @@ class Regime:
         return self.kind.split(" at ")[1] if " at " in self.kind else ""
 
     def rows_text(self, data_rows: NDArray[np.intp] | None = None) -> str:
-        """"rows 12-340" in the file's numbering (``data_rows``, default 1..N)."""
+        """The stretch's rows as a user reads them.
+
+        Parameters
+        ----------
+        data_rows : ndarray of int, shape (N,), optional
+            Each row's number in the file (default 1..N).
+
+        Returns
+        -------
+        str
+            "rows 12-340".
+        """
         first, last = (self.start + 1, self.stop) if data_rows is None else \
             (int(data_rows[self.start]), int(data_rows[self.stop - 1]))
         return f"rows {first}-{last}"
@@ -107,21 +118,59 @@ class Regimes:
         return list(dict.fromkeys(s.kind for s in self.stretches))
 
     def labels_in(self, rows: NDArray[np.bool_], part: str) -> list[str]:
-        """The ``part`` ("trend" or "program") of the stretches that hold any of ``rows``
-        (N,) bool, in order of first appearance (no empty program)."""
+        """The labels of one part of the stretches that hold any of ``rows``.
+
+        Parameters
+        ----------
+        rows : ndarray of bool, shape (N,)
+            The rows asked about.
+        part : {"trend", "program"}
+            Which part of a stretch's kind.
+
+        Returns
+        -------
+        list of str
+            In order of first appearance (no empty program).
+        """
         return [label for label in dict.fromkeys(getattr(s, part) for s in self.stretches
                                                  if rows[s.start:s.stop].any()) if label]
 
     def text(self, data_rows: NDArray[np.intp] | None = None, shown: int = 8) -> str:
-        """"heating rows 1-300, dwell rows 301-420, ..." (the first ``shown``)."""
+        """The stretches in words.
+
+        Parameters
+        ----------
+        data_rows : ndarray of int, shape (N,), optional
+            Each row's number in the file (default 1..N).
+        shown : int, optional
+            Stretches named at most.
+
+        Returns
+        -------
+        str
+            "heating rows 1-300, dwell rows 301-420, ..." (the first ``shown``).
+        """
         parts = [f"{s.kind} {s.rows_text(data_rows)}" for s in self.stretches[:shown]]
         more = len(self.stretches) - shown
         return ", ".join(parts) + (f" and {more} more" if more > 0 else "")
 
 
 def smoothed(values: NDArray[np.float64], window: int) -> NDArray[np.float64]:
-    """A centred moving average of ``values`` (n,) over ``window`` rows, the ends over the
-    rows there are (no padding that would bend the trend at a run's ends)."""
+    """A centred moving average, the ends over the rows there are (no padding that would
+    bend the trend at a run's ends).
+
+    Parameters
+    ----------
+    values : ndarray, shape (n,)
+        Any signal, any unit.
+    window : int
+        The average's width [rows].
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The smoothed signal, same unit.
+    """
     window = max(1, min(int(window), values.size))
     cumulative = np.concatenate([[0.0], np.cumsum(values)])
     half = window // 2
@@ -131,8 +180,20 @@ def smoothed(values: NDArray[np.float64], window: int) -> NDArray[np.float64]:
 
 
 def trend_kinds(time_s: NDArray[np.float64], mean_c: NDArray[np.float64]) -> NDArray[np.str_]:
-    """"heating", "dwell" or "cooling" (n,) of one run from its mean temperature [degC]
-    at ``time_s`` [s] (rules in the module docstring)."""
+    """Each row's trend in one run (rules in the module docstring).
+
+    Parameters
+    ----------
+    time_s : ndarray, shape (n,)
+        The run's time [s].
+    mean_c : ndarray, shape (n,)
+        The structure's mean temperature [degC].
+
+    Returns
+    -------
+    ndarray of str, shape (n,)
+        "heating", "dwell" or "cooling".
+    """
     n = mean_c.size
     kinds = np.full(n, "dwell", dtype=object)
     if n < 3 or np.ptp(mean_c) < STILL_K:
@@ -156,7 +217,18 @@ def trend_kinds(time_s: NDArray[np.float64], mean_c: NDArray[np.float64]) -> NDA
 
 def speed_levels(speed: NDArray[np.float64]) -> NDArray[np.float64]:
     """Each row's spindle program: its speed rounded to levels :data:`SPEED_LEVEL_SHARE` of
-    the largest speed apart (n,) [the speed's unit]."""
+    the largest speed apart.
+
+    Parameters
+    ----------
+    speed : ndarray, shape (n,)
+        The spindle speed, any unit.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Each row's level, the speed's unit.
+    """
     top = float(np.nanmax(np.abs(speed))) if np.isfinite(speed).any() else 0.0
     if top <= 0.0:
         return np.zeros(speed.size)

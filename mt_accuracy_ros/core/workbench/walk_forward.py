@@ -93,13 +93,35 @@ class WalkForward:
     first_fit_rows: int
 
     def wins_over(self, method: str, others: list[str]) -> bool:
-        """Whether ``method``'s pooled error is below every one of ``others``'."""
+        """Whether one method beat others, pooled.
+
+        Parameters
+        ----------
+        method : str
+            The method judged.
+        others : list of str
+            The methods it must beat.
+
+        Returns
+        -------
+        bool
+            ``method``'s pooled error is below every one of ``others``'.
+        """
         return all(self.pooled_m[method] < self.pooled_m[o] for o in others)
 
 
 def parse_period(text: str) -> float | None:
-    """A walk-forward period in seconds from ``"4h"``, ``"30 min"``, ``"900"`` (seconds),
-    ``"2d"``; None for ``"run"`` (each run a period).
+    """A walk-forward period in seconds.
+
+    Parameters
+    ----------
+    text : str
+        ``"4h"``, ``"30 min"``, ``"900"`` (seconds), ``"2d"``, or ``"run"``.
+
+    Returns
+    -------
+    float or None
+        The period [s]; None for ``"run"`` (each run a period).
 
     Raises
     ------
