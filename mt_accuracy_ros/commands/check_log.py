@@ -319,8 +319,8 @@ class LogData:
     to_unit: float
     run_names: list[str] | None
     notes: list[str]
-    #: (N,) each observation's row in the file (1-based after the header), so that what is
-    #: said of the rows names them as the user's editor numbers them.
+    #: (N,) each observation's data row in the file (1-based, the header and any units
+    #: row not counted), as the other notes number rows.
     file_rows: np.ndarray | None = None
 
 
@@ -616,7 +616,8 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
     one-line errors naming the row, run or column (see :func:`check_csv`)."""
     from ..core.workbench.log_runs import (leave_out_dead_sensors, mixed_units_problem,
                                            run_labels, run_level_notes, run_starts)
-    from ..core.workbench.thermal_log import complete_log_rows, log_observations
+    from ..core.workbench.thermal_log import (complete_log_rows, kept_data_rows,
+                                              log_observations)
     from ..io.csv_table import csv_header, joined_columns, read_csv_table
     from .check import _column_and_unit
 
@@ -710,10 +711,8 @@ def read_log(path: Path, target: str, time_column: str, inputs: list[str],
         # Rows with a hole in a sensor (not dead) are left out: the runs that remain.
         kept_runs = np.asarray(run_of_row)[complete]
         run_names = [run_names[k] for k in kept_runs[run_starts(obs.run_of_row)]]
-    file_rows = (np.arange(1, complete.size + 1) if table.data_rows is None
-                 else np.asarray(table.data_rows))[complete]
     return LogData(table, obs, target_column, unit, 1.0 / target_scale, run_names, notes,
-                   file_rows)
+                   kept_data_rows(table.data_rows, complete))
 
 
 @dataclasses.dataclass

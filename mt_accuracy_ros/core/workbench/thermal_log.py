@@ -94,6 +94,26 @@ def complete_log_rows(time_s: NDArray[np.float64], target_m: NDArray[np.float64]
     return good
 
 
+def kept_data_rows(data_rows: NDArray[np.intp] | None, kept: NDArray[np.bool_]
+                   ) -> NDArray[np.intp]:
+    """The data rows (1-based, the header not counted) of the rows ``kept``.
+
+    Parameters
+    ----------
+    data_rows : ndarray of int, shape (N,), optional
+        Each row's data row in the file (None: 1..N).
+    kept : ndarray of bool, shape (N,)
+        The rows kept (:func:`complete_log_rows`).
+
+    Returns
+    -------
+    ndarray of int, shape (K,)
+        The kept rows' data rows, in order.
+    """
+    rows = np.arange(1, kept.size + 1) if data_rows is None else np.asarray(data_rows)
+    return rows[kept]
+
+
 def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
                      temperatures: dict[str, NDArray[np.float64]], *,
                      spindle_speed_rad_s: NDArray[np.float64] | None = None,
@@ -155,8 +175,7 @@ def log_observations(time_s: NDArray[np.float64], target_m: NDArray[np.float64],
     if int(good.sum()) < MIN_LOG_ROWS:
         raise InsufficientDataError(f"only {int(good.sum())} complete rows; a thermal log "
                                     f"needs >= {MIN_LOG_ROWS}")
-    rows = np.flatnonzero(good)
-    file_rows = rows + 1 if data_rows is None else np.asarray(data_rows)[good]
+    file_rows = kept_data_rows(data_rows, good)
     t, y = t[good], y[good]
     runs = None
     if run_of_row is not None:
