@@ -304,15 +304,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--topology")
     parser.add_argument("--instrument")
     parser.add_argument("--json", help="write every trial's outcome here")
+    parser.add_argument("--only", nargs="+", default=None, metavar="TRIAL",
+                        help="check only these trials of the drawn set (e.g. 008 030); the "
+                             "draw is the whole set's, so a trial is the same as in a full run")
+    parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
+                        help="write the surveys here and keep them (default: a temporary folder)")
     args = parser.parse_args(argv)
     rows = []
-    with tempfile.TemporaryDirectory() as tmp:
+    with (contextlib.nullcontext(str(args.keep)) if args.keep
+          else tempfile.TemporaryDirectory()) as tmp:
         root = Path(tmp)
+        root.mkdir(parents=True, exist_ok=True)
         with contextlib.redirect_stdout(io.StringIO()):
             generate(str(root), args.trials, args.seed, topology=args.topology,
                      instrument=args.instrument)
         index = json.loads((root / "index.json").read_text())
         for i, entry in enumerate(index["trials"]):
+            if args.only and not any(entry["name"].endswith(t) for t in args.only):
+                continue
             folder = root / entry["folder"]
             truth = json.loads((folder / "truth.json").read_text())
             truth["strokes_m"] = linear_strokes(folder / "machine.yaml")
