@@ -451,6 +451,53 @@ def setup_note(machine) -> str:
             f"from there, so their zero-angle errors are taken out by the set-up{notes}")
 
 
+def in_package_convention(measured, mask, direction_errors: dict, convention, machine,
+                          positions) -> tuple[np.ndarray, dict, str]:
+    """A survey's errors turned into the package's convention: the tool relative to the
+    work, actual minus nominal, along the machine's axes.
+
+    Parameters
+    ----------
+    measured : ndarray, shape (N, 3)
+        The error columns as read [m] (0 where ``mask`` is False).
+    mask : ndarray of bool, shape (N, 3)
+        Which components the survey measured.
+    direction_errors : dict of str to ndarray, shape (N,)
+        The tool direction's change per component [rad] (may be empty).
+    convention : ErrorConvention
+        What the columns mean (the column map's ``error_convention``).
+    machine : MachineDescription
+        The machine whose nominal chain gives a turning frame's orientation.
+    positions : dict of str to ndarray, shape (N,)
+        Axis commands [m, rad].
+
+    Returns
+    -------
+    tuple of (ndarray, shape (N, 3); dict; str)
+        The errors [m], the direction changes [rad], and the sentence saying how they were
+        read.
+    """
+    from ..core.kinematics.chain import KinematicModel
+
+    measured = convention.sign * measured
+    directions = {c: convention.sign * v for c, v in direction_errors.items()}
+    if convention.frame != "machine":
+        if not mask.all():
+            raise InputDataError(
+                f"error_convention: frame: {convention.frame} needs all three error components "
+                "(x, y, z): a turning frame's components mix along the machine's axes")
+        # The body the instrument turns with, on the nominal chain: bed = R @ its frame.
+        rotation = KinematicModel(machine).branch(convention.frame, positions, errors=False,
+                                                  check_stroke=False)[:, :3, :3]
+        measured = np.einsum("nij,nj->ni", rotation, measured)
+        if directions:
+            change = np.column_stack([directions.get(c, np.zeros(len(measured)))
+                                      for c in "xyz"])
+            turned = np.einsum("nij,nj->ni", rotation, change)
+            directions = {c: turned[:, k] for k, c in enumerate("xyz") if c in directions}
+    return measured, directions, convention.note()
+
+
 def with_tool_direction(obs, direction_errors: dict, machine) -> str:
     """Put a two-sphere R-test's tool-direction readings into ``obs`` and say so.
 
@@ -639,16 +686,18 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
         if component in survey.errors:
             measured[:, c] = survey.errors[component]
             mask[:, c] = True
+    measured, direction_errors, convention_note = in_package_convention(
+        measured, mask, survey.direction_errors, column_map.error_convention, model.machine,
+        survey.positions)
     obs = Observations(survey.positions, measured, mask, survey.time_s, survey.velocities,
                        survey.temperatures, column_map.uncertainty_m,
                        directions=survey.directions, accelerations=survey.accelerations,
                        spindle_speed_rad_s=survey.spindle_speed_rad_s,
                        run_of_row=survey.run_of_row,
                        work_point=survey_targets(survey, column_map, model.machine))
-    instrument_notes = [setup_note(model.machine)]
-    if survey.direction_errors:
-        instrument_notes.append(with_tool_direction(obs, survey.direction_errors,
-                                                    model.machine))
+    instrument_notes = [setup_note(model.machine), convention_note]
+    if direction_errors:
+        instrument_notes.append(with_tool_direction(obs, direction_errors, model.machine))
     warning = outside_travel(model.machine, survey.positions)
     blocks = None
     if survey.run_of_row is not None:

@@ -24,6 +24,8 @@ A **column map** (YAML, or ``--col ROLE=COLUMN[:UNIT]`` flags) says::
     # or per row (several spheres): {columns: {x: sx, y: sy, z: sz}, unit: mm}
     direction_errors: {x: {column: dux, unit: urad}, ...}  # the tool direction's change
                                                            #   (a two-sphere R-test)
+    error_convention: {of: tool, as: deviation, frame: machine}   # optional: what the
+                                                           #   error columns mean (below)
     work_axes: [Y, X]                                      # optional: the axes carrying the
                                                            #   workpiece, bed outwards
     run: {column: day}                                     # optional: a survey of many runs
@@ -37,6 +39,13 @@ A rotary position column (A, B, C) is an angle in a unit the map or the column's
 gives; a direction error is the change of the tool axis' unit vector relative to the
 work, actual minus nominal, in the machine frame (what a two-sphere R-test measures
 across the tool axis), as a small angle.
+
+The error columns are read, unless ``error_convention`` says otherwise, as the tool
+relative to the work (``of: tool``; ``of: work`` - the sphere seen from the tool's nest),
+actual minus nominal (``as: deviation``; ``as: correction`` - nominal minus actual, what
+a compensation adds), along the machine's axes (``frame: machine``; ``frame: work`` - an
+instrument turning with the table, ``frame: tool`` - with the head). The check says which
+it took (:meth:`ErrorConvention.note`).
 
 A ``run`` column (text or numbers) cuts the survey into runs: each run's rows lie
 together, its time may restart, lags restart at its first reading and whole runs are
@@ -85,6 +94,70 @@ ROLES_HELP = ("time, pos.X, err.x, temp.<sensor>, vel.X, acc.X, dir.X, spindle, 
               "tdir.x, target.x")
 
 
+#: ``error_convention`` keys -> their words; the first of each is the default.
+ERROR_CONVENTION_WORDS = {"of": ("tool", "work"), "as": ("deviation", "correction"),
+                          "frame": ("machine", "work", "tool")}
+
+
+@dataclass(frozen=True)
+class ErrorConvention:
+    """What a survey's error columns (and tool-direction columns) mean.
+
+    ``of``: ``tool`` - the tool relative to the work (the package's convention) or
+    ``work`` - the work (a sphere) relative to the tool; ``as``: ``deviation`` (actual
+    minus nominal) or ``correction`` (nominal minus actual); ``frame``: the axes the
+    components lie along - ``machine`` (the bed's), ``work`` (the workpiece frame's, an
+    instrument turning with the table) or ``tool`` (the spindle frame's).
+    """
+
+    of: str = "tool"
+    sense: str = "deviation"
+    frame: str = "machine"
+    #: Whether the map stated it (the note says so either way).
+    stated: bool = False
+
+    @property
+    def sign(self) -> float:
+        """+1 or -1: what turns the columns into the tool relative to the work, actual
+        minus nominal (each of ``of: work`` and ``as: correction`` turns the sign)."""
+        flips = (self.of == "work") + (self.sense == "correction")
+        return -1.0 if flips % 2 else 1.0
+
+    def note(self) -> str:
+        """The sentence the check prints about how it read the error columns."""
+        words = {"tool": "the tool relative to the work", "work": "the work relative to the "
+                 "tool (turned to the tool relative to the work)"}[self.of]
+        sense = {"deviation": "actual minus nominal", "correction": "nominal minus actual "
+                 "(a correction; turned to actual minus nominal)"}[self.sense]
+        frame = {"machine": "along the machine's axes",
+                 "work": "along the workpiece frame's axes (turned to the machine's at each "
+                         "reading's nominal pose)",
+                 "tool": "along the spindle frame's axes (turned to the machine's at each "
+                         "reading's nominal pose)"}[self.frame]
+        given = "the column map's error_convention" if self.stated else \
+            "the default; say otherwise with error_convention: {of: work|tool, as: " \
+            "deviation|correction, frame: machine|work|tool}"
+        return f"errors read as {words}, {sense}, {frame} ({given})"
+
+
+def _error_convention(spec, where: str) -> ErrorConvention:
+    """The map's ``error_convention`` block; an unknown key or word is refused."""
+    if not isinstance(spec, dict):
+        raise ParameterError(f"{where}: expected {{of: tool, as: deviation, frame: machine}}")
+    unknown = set(spec) - set(ERROR_CONVENTION_WORDS)
+    if unknown:
+        raise ParameterError(f"{where}: unknown key(s) {', '.join(sorted(map(str, unknown)))}; "
+                             f"known: {', '.join(ERROR_CONVENTION_WORDS)}")
+    chosen = {}
+    for key, words in ERROR_CONVENTION_WORDS.items():
+        word = str(spec.get(key, words[0])).strip().lower()
+        if word not in words:
+            raise ParameterError(f"{where}.{key}: {spec[key]!r} is not one of "
+                                 f"{', '.join(words)}")
+        chosen[key] = word
+    return ErrorConvention(chosen["of"], chosen["as"], chosen["frame"], stated=True)
+
+
 @dataclass
 class ColumnMap:
     """Role -> (column, unit). Roles as in the module docstring."""
@@ -109,6 +182,8 @@ class ColumnMap:
     #: offset (the machine's ``workpiece`` point) along the workpiece frame's axes
     #: (``target_point:`` with ``value``); per-row targets are the roles ``target.x/y/z``.
     target_point_m: np.ndarray | None = None
+    #: What the error columns mean (``error_convention:``; default the package's own).
+    error_convention: ErrorConvention = field(default_factory=ErrorConvention)
 
     @property
     def uncertainty_m(self) -> float:
@@ -176,7 +251,7 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
     known = {"time", "row_period_s", "positions", "errors", "temperatures", "velocities",
              "accelerations", "directions", "spindle_speed", "uncertainty", "machine",
              "tool_offset", "work_axes", "run", "setup_pose", "target_point",
-             "direction_errors"}
+             "direction_errors", "error_convention"}
     unknown = set(data) - known
     if unknown:
         raise ParameterError(f"{source}: unknown key(s) {', '.join(sorted(unknown))}; known: "
@@ -228,6 +303,9 @@ def column_map_from_dict(data: dict, source: str = "column map") -> ColumnMap:
         out.setup_pose = _setup_pose(data["setup_pose"], f"{source}: setup_pose")
     if "target_point" in data:
         _target_point(out, data["target_point"], f"{source}: target_point")
+    if "error_convention" in data:
+        out.error_convention = _error_convention(data["error_convention"],
+                                                 f"{source}: error_convention")
     return out
 
 
