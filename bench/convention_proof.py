@@ -22,7 +22,9 @@ Scoring, per trial (every identifiable effect of the truth):
   pivot's offset turns along the axis' own travel - its positioning error (ISO 230-1);
 * a zero-angle error the poses can see (an outer axis' zero: a located sphere sees it as
   the tilt of the axis it carries) is right as that tilt;
-* a squareness is right when a squareness of its plane is named;
+* a squareness is right when a squareness of its plane is named, or one rotation: the
+  constant part P0 of a carriage's tilt in that plane (it turns the carriage and the axes
+  it carries, which ISO 230-1 books as the plane's squareness), within 30 % or 3 U;
 * what the poses cannot part is said, and scored as said: a rotary location error the
   named effect folds into another (``setting.inseparable``, "EB0C=EX0C*-0.417": EX0C
   stands for EX0C - 0.417 m/rad x EB0C) is right when every parameter it folds into
@@ -186,6 +188,24 @@ def turned_line(effect: dict, named: dict, chain: str, strokes: dict) -> str:
     return "constant part as a line's tilt" if judged and all(judged) else ""
 
 
+def constant_turn(effect: dict, named: dict) -> str:
+    """A squareness named as one rotation: the constant part P0 of a carriage's tilt in
+    the same plane, which turns the carriage and the axes it carries (ISO 230-1 books that
+    as the squareness of the plane). Right when |P0| is within 30 % or 3 U of the
+    squareness (its sign depends on which axis of the pair is taken as the reference and
+    on the carriage's side, so it is not judged, as a named squareness' is not).
+    "" when it is not."""
+    if named["effect"] not in ("angular", "angular_arm") or len(named["variant"]) != 3 or \
+            plane_of(named["variant"]) != plane_of(effect["iso_name"]):
+        return ""
+    value = named["parameters"].get("P0")
+    if value is None:
+        return ""
+    truth = abs(effect["value_si"])
+    spread = 3.0 * named.get("parameter_uncertainties", {}).get("P0", 0.0)
+    return "as one rotation" if abs(abs(value) - truth) <= max(0.3 * truth, spread) else ""
+
+
 def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = None,
             strokes: dict | None = None) -> str:
     """Why ``named`` accounts for the truth ``effect`` ("" when it does not)."""
@@ -213,7 +233,9 @@ def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = No
             return "value"
         return "wrong value"
     if kind == "squareness":
-        return "plane" if family == "squareness" and plane_of(variant) == plane_of(iso) else ""
+        if family == "squareness" and plane_of(variant) == plane_of(iso):
+            return "plane"
+        return constant_turn(effect, named)
     if kind == "table_tilt":
         axis = effect["axis"]
         if family in ("angular", "angular_periodic", "angular_arm") and variant == iso:

@@ -84,3 +84,18 @@ def test_a_pivots_part_along_the_axis_is_its_positioning_error_only_where_it_tur
     assert score(_truth(yaw([0.124, -0.34, 0.079])), {"named": named})["right"]
     verdict = score(_truth(yaw([0.0, 0.0, 0.2])), {"named": named})
     assert not verdict["right"] and "extra: positioning:EYY" in verdict["why"]
+
+
+def test_a_squareness_named_as_one_rotation_is_right_with_its_value():
+    """A constant turn of a carriage in the squareness' plane (a tilt's P0) is that
+    plane's squareness (ISO 230-1); another plane, or another size, is not."""
+    truth = _truth({"iso_name": "EB0Z", "kind": "squareness", "axis": "Z", "side": "tool",
+                    "value_si": -34.5e-6, "identifiable": True})
+    one_turn = _named("angular:EBY", {"P1": 0.4e-6, "P0": 34.47e-6})
+    assert score(truth, {"named": [one_turn]})["right"]
+    smaller = _named("angular:EBY", {"P1": 0.4e-6, "P0": 12e-6})
+    assert not score(truth, {"named": [smaller]})["right"]
+    other_plane = _named("angular:ECY", {"P1": 0.4e-6, "P0": 34.47e-6})
+    assert not score(truth, {"named": [other_plane]})["right"]
+    no_constant = _named("angular:EBY", {"P1": 34.47e-6})
+    assert not score(truth, {"named": [no_constant]})["right"]
