@@ -75,6 +75,20 @@ def linear_strokes(path: Path) -> dict[str, tuple[float, float]]:
             if name in "XYZ" and isinstance(spec.get("stroke"), list)}
 
 
+#: An identifiable effect whose largest located signature is under this many standard
+#: deviations of the instrument's noise is reported as at the noise (still judged).
+FAINT_SIGMAS = 3.0
+
+
+def at_noise(truth: dict) -> list[str]:
+    """The identifiable effects whose largest signature [um] is under FAINT_SIGMAS x the
+    readings' noise: no check can be expected to name them from a survey's noise alone."""
+    sigma_um = 1e6 * float(truth["conventions"].get("noise_sigma_m") or 0.0)
+    return [e["iso_name"] for e in truth["effects"] if e["identifiable"] and sigma_um and
+            (e.get("signature_max_um") or 0.0) < FAINT_SIGMAS * sigma_um and
+            (e.get("signature_max_dir_urad") is None)]
+
+
 def run_check(folder: Path) -> tuple[dict | None, str, float]:
     """The CLI on one trial: (its JSON or None, what it printed, seconds)."""
     from mt_accuracy_ros.cli import main
@@ -353,6 +367,7 @@ def main(argv: list[str] | None = None) -> int:
                            for e in truth["effects"]] or ["null"]
             row = {"trial": entry["name"], "topology": truth["topology"],
                    "instrument": truth["instrument"], "truth": truth_names,
+                   "at_noise": at_noise(truth),
                    "setup_pose_deg": truth["conventions"].get("setup_pose_deg"),
                    "seconds": round(seconds, 2), **verdict}
             if result is None:
@@ -363,6 +378,10 @@ def main(argv: list[str] | None = None) -> int:
                   f"{'RIGHT' if row['right'] else 'WRONG'} {row['why']}", flush=True)
     right = sum(r["right"] for r in rows)
     print(f"right: {right} of {len(rows)}")
+    faint = [r["trial"] for r in rows if not r["right"] and r["at_noise"]]
+    if faint:
+        print(f"  of the wrong, with an identifiable effect whose largest signature is under "
+              f"{FAINT_SIGMAS:g} sigma of the noise: {', '.join(faint)} (still counted wrong)")
     by = {}
     for r in rows:
         key = r["topology"]
