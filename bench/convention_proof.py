@@ -345,6 +345,9 @@ def main(argv: list[str] | None = None) -> int:
                              "draw is the whole set's, so a trial is the same as in a full run")
     parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
                         help="write the surveys here and keep them (default: a temporary folder)")
+    parser.add_argument("--no-error-conventions", action="store_true",
+                        help="write every survey's error columns in the default convention "
+                             "(the generator's other draws are the same either way)")
     args = parser.parse_args(argv)
     rows = []
     with (contextlib.nullcontext(str(args.keep)) if args.keep
@@ -353,7 +356,8 @@ def main(argv: list[str] | None = None) -> int:
         root.mkdir(parents=True, exist_ok=True)
         with contextlib.redirect_stdout(io.StringIO()):
             generate(str(root), args.trials, args.seed, topology=args.topology,
-                     instrument=args.instrument)
+                     instrument=args.instrument,
+                     error_conventions=not args.no_error_conventions)
         index = json.loads((root / "index.json").read_text())
         for i, entry in enumerate(index["trials"]):
             if args.only and not any(entry["name"].endswith(t) for t in args.only):
@@ -369,6 +373,7 @@ def main(argv: list[str] | None = None) -> int:
                    "instrument": truth["instrument"], "truth": truth_names,
                    "at_noise": at_noise(truth),
                    "setup_pose_deg": truth["conventions"].get("setup_pose_deg"),
+                   "error_convention": truth["conventions"].get("error_convention"),
                    "seconds": round(seconds, 2), **verdict}
             if result is None:
                 row["printed"] = printed.strip().splitlines()[-1:] if printed else []

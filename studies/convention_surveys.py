@@ -16,6 +16,11 @@ trial's ``truth.json``:
   frame, where the nominal uses the located target (and, with head rotaries, the
   located tool): locating at the setup pose is a translation of the target in the
   workpiece frame (tool: in the tool frame), so every error is zero there.
+* The error columns are then written in a convention drawn per trial from a stream of
+  its own (half the trials the default above): ``of: work`` is the work relative to
+  the tool, ``as: correction`` nominal minus actual (each turns the sign), ``frame:
+  work``/``tool`` the components along the nominal end frame of the work/tool side at
+  each row's commands: ``e_written = s R^T e``.  Tool-direction columns likewise.
 
 Run: ``python -m studies.convention_surveys --out DIR --trials N --seed S``.
 """
@@ -177,6 +182,85 @@ def located_errors(machine, errs, rows):
         out.append(np.array([r[key] - r["rtn"] @ d_t + r["rwn"] @ d_w[g]
                              for r, g in zip(raw, rows["group"])]))
     return out[0], out[1]
+
+
+DEFAULT_ERROR_CONVENTION = {"of": "tool", "as": "deviation", "frame": "machine"}
+ERROR_CONVENTION_WORDS = {"of": ("tool", "work"), "as": ("deviation", "correction"),
+                          "frame": ("machine", "work", "tool")}
+
+
+def nominal_end_rotations(machine, rows):
+    """Nominal orientations (bed frame) of the tool-side and work-side end frames.
+
+    Parameters
+    ----------
+    machine : dict
+        A drawn machine (``build_machine``).
+    rows : dict
+        Survey rows (``make_rows``): commands ``q`` [SI] and targets [m].
+
+    Returns
+    -------
+    tool, work : ndarray, shape (n, 3, 3)
+        ``R_tn``, ``R_wn`` of each row: columns are the end frame's axes in bed
+        coordinates (the targets do not turn them).
+    """
+    ends = [end_points(machine, q, t, {}) for q, t in zip(rows["q"], rows["target"])]
+    return (np.array([e[2][:3, :3] for e in ends]), np.array([e[3][:3, :3] for e in ends]))
+
+
+def convention_factors(convention, rot_tool, rot_work):
+    """Sign and per-row rotation taking default-convention errors to ``convention``.
+
+    Parameters
+    ----------
+    convention : dict
+        ``{"of": tool|work, "as": deviation|correction, "frame": machine|work|tool}``.
+    rot_tool, rot_work : ndarray, shape (n, 3, 3)
+        Nominal end-frame orientations (``nominal_end_rotations``).
+
+    Returns
+    -------
+    sign : float
+        -1 for each of ``of: work`` (work - tool = -(tool - work)) and ``as:
+        correction`` (nominal - actual = -(actual - nominal)); +1 otherwise.
+    rot : ndarray, shape (n, 3, 3)
+        ``R`` whose columns are the frame's axes in bed coordinates (identity for
+        ``machine``): components along them are ``R^T e``.
+    """
+    sign = (-1.0 if convention["of"] == "work" else 1.0) * (
+        -1.0 if convention["as"] == "correction" else 1.0)
+    n = len(rot_tool)
+    rot = {"machine": np.broadcast_to(np.eye(3), (n, 3, 3)), "work": rot_work,
+           "tool": rot_tool}[convention["frame"]]
+    return sign, rot
+
+
+def to_error_convention(values, convention, rot_tool, rot_work):
+    """Default-convention errors (n x 3, bed frame) as written in ``convention``: s R^T e."""
+    sign, rot = convention_factors(convention, rot_tool, rot_work)
+    return sign * np.einsum("nji,nj->ni", rot, values)
+
+
+def from_error_convention(values, convention, rot_tool, rot_work):
+    """Inverse of ``to_error_convention``: e = s R e_written (n x 3, bed frame)."""
+    sign, rot = convention_factors(convention, rot_tool, rot_work)
+    return sign * np.einsum("nij,nj->ni", rot, values)
+
+
+def draw_error_convention(rng):
+    """The error columns' convention: (convention dict, written in the map or not).
+
+    Half the trials take the default (seven in ten of those omit the key, the rest
+    write its default words); the others one of the eleven other combinations.  Every
+    survey here writes all three error components, so every frame is allowed.
+    """
+    if rng.random() < 0.5:
+        return dict(DEFAULT_ERROR_CONVENTION), bool(rng.random() < 0.3)
+    combos = [{"of": o, "as": a, "frame": f} for o in ERROR_CONVENTION_WORDS["of"]
+              for a in ERROR_CONVENTION_WORDS["as"] for f in ERROR_CONVENTION_WORDS["frame"]]
+    combos = [c for c in combos if c != DEFAULT_ERROR_CONVENTION]
+    return combos[int(rng.integers(len(combos)))], True
 
 
 # ----------------------------------------------------------------- machines
@@ -537,6 +621,8 @@ def build_map(trial):
     if trial["with_dir"]:
         out["direction_errors"] = {c: {"column": cols["dir"][c], "unit": u["direction"]}
                                    for c in "xyz"}
+    if trial["error_convention_written"]:
+        out["error_convention"] = dict(trial["error_convention"])
     f = LEN_UNITS[u["target"]]
     if trial["instrument"] == "r_test":
         out["target_point"] = {"value": [_num(v / f) for v in trial["rows"]["target"][0]],
@@ -583,14 +669,19 @@ def build_machine_yaml(trial, rng):
 def survey_columns(trial):
     """(name, values) pairs of the CSV, values converted to the declared units."""
     u, cols, rows = trial["units"], trial["columns"], trial["rows"]
+    errors, dirs = trial["errors_m"], trial["dir_errors"]
+    if trial["error_convention"] != DEFAULT_ERROR_CONVENTION:
+        rot_tool, rot_work = nominal_end_rotations(trial["machine"], rows)
+        errors, dirs = (to_error_convention(v, trial["error_convention"], rot_tool, rot_work)
+                        for v in (errors, dirs))
     out = [(cols["time"], trial["time_s"] / TIME_UNITS[u["time"]])]
     for n, c in cols["pos"].items():
         f = ANG_UNITS[u["angle"]] if n in ROTARY else LEN_UNITS[u["length"]]
         out.append((c, np.array([q[n] for q in rows["q"]]) / f))
     for i, c in enumerate("xyz"):
-        out.append((cols["err"][c], trial["errors_m"][:, i] / LEN_UNITS[u["error"]]))
+        out.append((cols["err"][c], errors[:, i] / LEN_UNITS[u["error"]]))
         if trial["with_dir"]:
-            out.append((cols["dir"][c], trial["dir_errors"][:, i] / ANG_UNITS[u["direction"]]))
+            out.append((cols["dir"][c], dirs[:, i] / ANG_UNITS[u["direction"]]))
         if trial["instrument"] in ("probing", "laser_tracker"):
             out.append((cols["tgt"][c], rows["target"][:, i] / LEN_UNITS[u["target"]]))
     return out
@@ -615,7 +706,12 @@ CONVENTION_TEXT = {
                        "from its frame origin)",
     "squareness": "the slide of axis K moves along Rod(v) e_K, v carrying the named component",
     "positions": "commands as sent, SI before unit conversion; rotary sign: +q turns the body "
-                 "by sign*q about +k"}
+                 "by sign*q about +k",
+    "error_convention_definition": "columns written as s R^T e (e: error_definition / "
+                                   "direction_definition), s = -1 per of: work and per as: "
+                                   "correction, R = I (frame: machine) or the nominal "
+                                   "orientation of the work-side (R_wn) / tool-side (R_tn) "
+                                   "end frame at the row's commands"}
 TARGET_KIND = {"r_test": "one fixed sphere (map value)",
                "probing": "spheres, per row in columns, each located separately",
                "laser_tracker": "material point nominally at the tool tip, per row in columns",
@@ -652,6 +748,7 @@ def draw_trial(rng, name, topology=None, instrument=None, n_rows=None, null=None
     t["units"] = draw_units(rng)
     t["columns"] = column_names(rng, [a["name"] for a in m["work"] + m["tool"]], t["units"])
     t["machine_setup_deg"] = _machine_setup(m, rng)
+    t["error_convention"], t["error_convention_written"] = dict(DEFAULT_ERROR_CONVENTION), False
     return t
 
 
@@ -685,7 +782,9 @@ def build_truth(trial):
         "tool_offset_m": trial["tool_offset_m"], "direction_errors": trial["with_dir"],
         "noise_sigma_m": trial["sigma_m"], "noise_sigma_dir_rad": trial["sigma_dir"],
         "uncertainty_k2_m": trial["uncertainty_m"], "tool_vector_m": m["tool_vec"].tolist(),
-        "workpiece_m": m["work_vec"].tolist(), "n_targets": len(rows["setup"])})
+        "workpiece_m": m["work_vec"].tolist(), "n_targets": len(rows["setup"]),
+        "error_convention": dict(trial["error_convention"]),
+        "error_convention_in_map": trial["error_convention_written"]})
     return {"trial": trial["name"], "topology": trial["topology"],
             "instrument": trial["instrument"], "chain": m["chain"], "rows": len(rows["q"]),
             "null": not trial["effects"], "conventions": conv, "effects": trial["effects"]}
@@ -708,14 +807,23 @@ def write_trial(trial, folder, rng):
     (folder / "truth.json").write_text(json.dumps(build_truth(trial), indent=1))
 
 
-def generate(out, trials, seed, topology=None, instrument=None, n_rows=None):
-    """Generate ``trials`` trials into ``out``; one independent stream per trial."""
+def generate(out, trials, seed, topology=None, instrument=None, n_rows=None,
+             error_conventions=True):
+    """Generate ``trials`` trials into ``out``; one independent stream per trial.
+
+    With ``error_conventions`` each trial's error columns take a convention drawn from
+    a stream of its own (``[seed, trial, 7]``), so every other draw is the same as
+    without it; without, every survey is in the default convention with no key.
+    """
     out = Path(out)
     index = []
     for i, ss in enumerate(np.random.SeedSequence(seed).spawn(trials)):
         rng = np.random.default_rng(ss)
         name = f"trial_{i:03d}"
         t = draw_trial(rng, name, topology, instrument, n_rows)
+        if error_conventions:
+            t["error_convention"], t["error_convention_written"] = draw_error_convention(
+                np.random.default_rng([seed, i, 7]))
         write_trial(t, out / name, rng)
         index.append({"name": name, "folder": name, "topology": t["topology"],
                       "instrument": t["instrument"], "rows": len(t["rows"]["q"]),
@@ -729,15 +837,19 @@ def generate(out, trials, seed, topology=None, instrument=None, n_rows=None):
 
 
 def main(argv=None):
-    """Command line: ``--out DIR --trials N --seed S [--topology T] [--instrument I]``."""
+    """Command line: ``--out DIR --trials N --seed S [--topology T] [--instrument I]
+    [--no-error-conventions]``."""
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", required=True)
     p.add_argument("--trials", type=int, default=12)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--topology", choices=TOPOLOGIES)
     p.add_argument("--instrument", choices=INSTRUMENTS)
+    p.add_argument("--no-error-conventions", action="store_true",
+                   help="write every survey's errors in the default convention (no key)")
     a = p.parse_args(argv)
-    generate(a.out, a.trials, a.seed, a.topology, a.instrument)
+    generate(a.out, a.trials, a.seed, a.topology, a.instrument,
+             error_conventions=not a.no_error_conventions)
 
 
 if __name__ == "__main__":

@@ -6,6 +6,7 @@ generator's own code paths.
 """
 import ast
 import csv
+import json
 import math
 import sys
 from pathlib import Path
@@ -236,3 +237,127 @@ def test_generator_imports_nothing_of_the_package():
         elif isinstance(node, ast.ImportFrom):
             assert node.module.split(".")[0] in allowed
     assert "mt_accuracy_ros" not in src and "importlib" not in src
+
+
+# ------------------------------------------------------------ error conventions
+def yaml_end_rotations(doc, q):
+    """Nominal tool-side and work-side end orientations from machine.yaml's text."""
+    tokens = doc["chain"].strip("[]").split()
+    work = tokens[tokens.index("w") + 1:tokens.index("b")][::-1]
+    tool = tokens[tokens.index("b") + 1:tokens.index("t")]
+    return yaml_end(doc, tool, None, q)[1], yaml_end(doc, work, None, q)[1]
+
+
+def column_triplet(mp, key, data):
+    """The x, y, z columns of ``key`` (errors, direction_errors) in SI, n x 3."""
+    spec = mp[key]
+    return np.array([[float(si(float(r[spec[c]["column"]]), spec[c]["unit"])) for c in "xyz"]
+                     for r in data])
+
+
+def to_default(values, conv, doc, q):
+    """Written errors back to the default convention: e = s R e_written (README's words)."""
+    sign = (-1.0 if conv["of"] == "work" else 1.0) * (-1.0 if conv["as"] == "correction"
+                                                      else 1.0)
+    out = []
+    for v, qq in zip(values, q):
+        r_tool, r_work = yaml_end_rotations(doc, qq)
+        r = {"machine": np.eye(3), "work": r_work, "tool": r_tool}[conv["frame"]]
+        out.append(sign * r @ v)
+    return np.array(out)
+
+
+@pytest.fixture(scope="module")
+def on_off(tmp_path_factory):
+    """The first trials of one seed, with and without drawn error conventions."""
+    root = tmp_path_factory.mktemp("conv")
+    for sub, flag in (("on", True), ("off", False)):
+        cs.generate(root / sub, 14, 2026, n_rows=40, error_conventions=flag)
+    return root
+
+
+def test_conventions_leave_every_other_draw_unchanged(on_off):
+    seen = set()
+    for k in range(14):
+        on, off = on_off / "on" / f"trial_{k:03d}", on_off / "off" / f"trial_{k:03d}"
+        assert (on / "machine.yaml").read_bytes() == (off / "machine.yaml").read_bytes()
+        t_on, t_off = (json.loads((f / "truth.json").read_text()) for f in (on, off))
+        conv = t_on["conventions"].pop("error_convention")
+        written = t_on["conventions"].pop("error_convention_in_map")
+        assert t_off["conventions"].pop("error_convention") == cs.DEFAULT_ERROR_CONVENTION
+        assert t_off["conventions"].pop("error_convention_in_map") is False
+        assert t_on == t_off
+        mp_on, doc, d_on, q = read_trial(on)
+        mp_off, _, d_off, q_off = read_trial(off)
+        assert mp_on.pop("error_convention", None) == (conv if written else None)
+        assert mp_on == mp_off and q == q_off
+        assert list(d_on[0]) == list(d_off[0])         # same columns, same order
+        moved = {mp_on["errors"][c]["column"] for c in "xyz"} | (
+            {mp_on["direction_errors"][c]["column"] for c in "xyz"}
+            if "direction_errors" in mp_on else set())
+        for r_on, r_off in zip(d_on, d_off):          # positions, time, targets: bit for bit
+            assert {c: v for c, v in r_on.items() if c not in moved} == \
+                   {c: v for c, v in r_off.items() if c not in moved}
+        for key in ("errors", "direction_errors"):
+            if key in mp_on:
+                back = to_default(column_triplet(mp_on, key, d_on), conv, doc, q)
+                np.testing.assert_allclose(back, column_triplet(mp_off, key, d_off),
+                                           rtol=0, atol=1e-12)
+        seen.add((written, conv == cs.DEFAULT_ERROR_CONVENTION, conv["frame"]))
+    # the draw reaches the omitted default, a written non-default in a turned frame
+    assert (False, True, "machine") in seen and any(s[0] and s[2] != "machine" for s in seen)
+
+
+def test_written_frames_turn_where_the_machine_turns(on_off):
+    """A non-machine frame changes the written numbers on a five-axis rotary survey."""
+    changed = 0
+    for k in range(14):
+        on = on_off / "on" / f"trial_{k:03d}"
+        t = json.loads((on / "truth.json").read_text())
+        conv = t["conventions"]["error_convention"]
+        if conv["frame"] == "machine" or t["topology"] not in cs.FIVE_AXIS:
+            continue
+        mp, doc, data, q = read_trial(on)
+        written = column_triplet(mp, "errors", data)
+        read_as_machine = to_default(written, dict(conv, frame="machine"), doc, q)
+        changed += bool(np.abs(read_as_machine - to_default(written, conv, doc, q)).max() > 1e-7)
+    assert changed >= 1
+
+
+@pytest.mark.parametrize("conv", [{"of": o, "as": a, "frame": f}
+                                  for o in ("tool", "work") for a in ("deviation", "correction")
+                                  for f in ("machine", "work", "tool")])
+@pytest.mark.parametrize("topology", ["swivel_head_BC", "trunnion_AC"])
+def test_each_convention_round_trips_and_matches_closed_form(conv, topology):
+    m = machine(topology)
+    rng = np.random.default_rng(5)
+    tilt = "B" if topology == "swivel_head_BC" else "A"
+    s = {n: sign_of(m, n) for n in (tilt, "C")}
+    poses = [{tilt: float(b), "C": float(c)} for b, c in rng.uniform(-1.5, 1.5, (6, 2))]
+    rows = {"q": [cs.solve_linear(m, p, np.zeros(3)) for p in poses],
+            "target": np.zeros((6, 3))}
+    r_tool, r_work = cs.nominal_end_rotations(m, rows)
+    e = rng.normal(0.0, 20e-6, (6, 3))
+    written = cs.to_error_convention(e, conv, r_tool, r_work)
+    np.testing.assert_allclose(cs.from_error_convention(written, conv, r_tool, r_work), e,
+                               rtol=0, atol=1e-18)
+    sign = (-1.0 if conv["of"] == "work" else 1.0) * (-1.0 if conv["as"] == "correction"
+                                                      else 1.0)
+    for p, w, ee in zip(poses, written, e):
+        # chains from the bed: the head's C carries B; the trunnion's A carries C
+        turned = rot(2, s["C"] * p["C"]) @ rot(1, s["B"] * p["B"]) if tilt == "B" else \
+            rot(0, s["A"] * p["A"]) @ rot(2, s["C"] * p["C"])
+        r_tool, r_work = (turned, np.eye(3)) if tilt == "B" else (np.eye(3), turned)
+        r = {"machine": np.eye(3), "work": r_work, "tool": r_tool}[conv["frame"]]
+        np.testing.assert_allclose(w, sign * r.T @ ee, rtol=0, atol=1e-18)
+
+
+def test_drawn_conventions_are_the_documented_words():
+    draws = [cs.draw_error_convention(np.random.default_rng([7, k, 7])) for k in range(400)]
+    default = [w for c, w in draws if c == cs.DEFAULT_ERROR_CONVENTION]
+    assert 150 < len(default) < 250 and 0 < sum(default) < len(default)
+    others = {tuple(c.values()) for c, w in draws if c != cs.DEFAULT_ERROR_CONVENTION}
+    assert len(others) == 11 and all(w for c, w in draws if c != cs.DEFAULT_ERROR_CONVENTION)
+    for c, _ in draws:
+        assert set(c) == {"of", "as", "frame"}
+        assert all(c[k] in cs.ERROR_CONVENTION_WORDS[k] for k in c)
