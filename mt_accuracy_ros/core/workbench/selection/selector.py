@@ -402,7 +402,8 @@ class Selector(ReadingDesigns):
         self._choose_by_bic(waiting, out)
         return out
 
-    def _settings_before_bic(self, term: Term, stats: _BaseStatistics):
+    def _settings_before_bic(self, term: Term, stats: _BaseStatistics
+                             ) -> tuple[list[dict | None], list[tuple] | None]:
         """``term``'s settings per fold where no BIC is needed (trained None), else the folds
         a preselection chose (None where it did not) and each setting's training products
         (X'X, X'y, y'y per fold) for BIC to compare."""
