@@ -38,7 +38,10 @@ surveys of 1k, 10k, 100k readings). Every run is printed, not the best.
    first N rows of ``data/fl_thermal``: 16 sensors, ``--target ch5_um``; the log holds
    11,115 rows). ``--baseline TREE`` runs the same commands on another checkout's
    code (``PYTHONPATH=TREE``) in alternation: the ratio of CPU times is measured in the
-   same run, and the two JSON outputs are compared byte for byte.
+   same run, and the two JSON outputs are compared byte for byte. ``--bytecode``: each
+   tree's modules are compiled once (untimed, into a folder of the run's) and every
+   child reads them compiled, as from an installed package; without it, a child under
+   ``PYTHONDONTWRITEBYTECODE`` compiles the package from source, ~0.2 s of CPU each.
 
 Usage: ``python -m bench.engine_speed [--sizes 1000 10000 100000] [--repeats 3]
 [--no-sklearn] [--sklearn-max 10000]``;
@@ -325,10 +328,15 @@ def panel_command(shape: str, readings: int, folder: Path) -> list[str] | None:
     return ["check", str(csv), "--columns", str(mapping), *model, "--auto", "3"]
 
 
-def _cpu_child(command: list[str], tree: Path) -> tuple[float, float, str]:
+def _cpu_child(command: list[str], tree: Path, bytecode: Path | None = None
+               ) -> tuple[float, float, str]:
     """CPU time [s] (user + system), peak RSS [MB] and stdout of a child on one core that
-    imports the package from ``tree``."""
+    imports the package from ``tree``; with ``bytecode``, its compiled modules are read
+    from (and written to) that folder, as an installed package's are."""
     env = dict(os.environ, PYTHONPATH=str(tree))
+    if bytecode is not None:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        env["PYTHONPYCACHEPREFIX"] = str(bytecode)
     child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                              text=True, preexec_fn=_pin, env=env, cwd=tempfile.gettempdir())
     output = child.stdout.read()
@@ -345,11 +353,22 @@ def _package_file(tree: Path) -> str:
 
 
 def panel_runs(shapes: list[str], sizes: list[int], folder: Path, repeats: int,
-               baseline: Path | None) -> list[dict]:
-    """Every (shape, size) ``repeats`` times, this tree and ``baseline`` alternating."""
+               baseline: Path | None, bytecode: bool = False) -> list[dict]:
+    """Every (shape, size) ``repeats`` times, this tree and ``baseline`` alternating;
+    ``bytecode``: each tree's modules compiled once before (untimed) and read compiled,
+    else as the environment says (PYTHONDONTWRITEBYTECODE: compiled from source in
+    every child)."""
     trees = {"after": ROOT} | ({"before": baseline} if baseline else {})
+    caches = {label: folder / f"bytecode_{label}" if bytecode else None for label in trees}
     for label, tree in trees.items():
-        print(json.dumps({"tree": label, "imports": _package_file(tree)}), flush=True)
+        if bytecode:
+            _cpu_child([sys.executable, "-m", "compileall", "-q", str(tree / "mt_accuracy_ros")],
+                       tree, caches[label])
+        print(json.dumps({"tree": label, "imports": _package_file(tree),
+                          "bytecode": "compiled once, read by every child" if bytecode else
+                          "compiled from source in every child"
+                          if os.environ.get("PYTHONDONTWRITEBYTECODE") else
+                          "the tree's own __pycache__"}), flush=True)
     runs = []
     for readings in sizes:
         for shape in shapes:
@@ -364,7 +383,8 @@ def panel_runs(shapes: list[str], sizes: list[int], folder: Path, repeats: int,
                 for label, tree in trees.items():
                     out = folder / f"{label}.json"
                     cpu, rss, text = _cpu_child([sys.executable, "-m", "mt_accuracy_ros.cli",
-                                                 *arguments, "--json", str(out)], tree)
+                                                 *arguments, "--json", str(out)], tree,
+                                                caches[label])
                     outputs[label] = out.read_bytes()
                     named = [line.split()[1] for line in text.splitlines()
                              if line.startswith("named:")]
@@ -427,6 +447,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--shapes", nargs="+", choices=PANEL_SHAPES, default=list(PANEL_SHAPES))
     parser.add_argument("--baseline", type=Path, default=None, metavar="TREE",
                         help="--panel: also run another checkout's code, alternating")
+    parser.add_argument("--bytecode", action="store_true",
+                        help="--panel: each tree's modules compiled once, untimed, and read "
+                             "compiled by every child, as an installed package's are (else a "
+                             "child under PYTHONDONTWRITEBYTECODE compiles them from source)")
     args = parser.parse_args(argv)
     if args.diagnosis_child:
         diagnosis_child(*args.diagnosis_child)
@@ -435,7 +459,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.panel:
         with tempfile.TemporaryDirectory() as folder:
             runs = panel_runs(args.shapes, args.sizes, Path(folder), args.repeats,
-                              args.baseline)
+                              args.baseline, args.bytecode)
         print(panel_table(runs))
         return 0
     report = {"machine": f"{platform.machine()}, {platform.python_version()}, 1 core",

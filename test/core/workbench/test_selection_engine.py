@@ -169,9 +169,10 @@ def test_held_out_fits_reused_from_the_choice_of_settings_are_the_fits_made_afre
     assert compared      # not vacuous: candidates whose settings BIC compares
     reused = [selector.out_of_fold(stats, term) for term in compared]
     assert any(selector._settings_and_fits(term, stats)[1] for term in compared)
-    fresh_choice = selection.Selector._settings_and_fits
-    monkeypatch.setattr(selection.Selector, "_settings_and_fits",
-                        lambda self, term, s: (fresh_choice(self, term, s)[0], {}))
+    fresh_choice = selection.Selector._settings_and_fits_of
+    monkeypatch.setattr(selection.Selector, "_settings_and_fits_of",
+                        lambda self, terms, s: [(settings, {}) for settings, _ in
+                                                fresh_choice(self, terms, s)])
     for term, (squared, settings) in zip(compared, reused):
         again, settings_again = selector.out_of_fold(stats, term)
         np.testing.assert_array_equal(squared, again)
@@ -205,3 +206,113 @@ def test_a_fit_and_its_standard_errors_from_one_decomposition_are_the_two_made_a
         apart = ridge_standard_errors(whole, penalised, sigma2) if penalty[1] else \
             np.sqrt(sigma2 * np.clip(np.diag(normal_inverse(whole)), 0.0, None))
         np.testing.assert_array_equal(standard, apart)
+
+
+def _products_fit_one_by_one(gram, rhs, yy, readings, penalty):
+    """The whole record's fit of one candidate as it was made before the fits were
+    batched: its own decomposition, its own solve."""
+    from mt_accuracy_ros.core.workbench.selection.linalg import (normal_inverse, penalise,
+                                                                 ridge_standard_errors,
+                                                                 solve_normal)
+
+    gram, rhs, yy = gram.sum(axis=0), rhs.sum(axis=0), float(yy.sum())
+    penalised = penalise(gram, penalty[0], gram.shape[0], penalty[1])
+    coefficients = solve_normal(penalised, rhs)
+    rss = yy - 2.0 * float(coefficients @ rhs) + float(coefficients @ gram @ coefficients)
+    sigma2 = max(rss, 0.0) / max(1, readings - gram.shape[0])
+    inverse = normal_inverse(penalised)
+    standard = ridge_standard_errors(gram, penalised, sigma2, inverse) \
+        if penalised is not gram else np.sqrt(sigma2 * np.clip(np.diag(inverse), 0.0, None))
+    return coefficients, standard
+
+
+def test_full_data_fits_in_batches_are_each_candidates_own_fit(monkeypatch):
+    """``products_fits`` decomposes the candidates' normal matrices of one size together
+    (in batches of a few MB): each fit equals the one made alone (to 1e-12), ridge and
+    rank-deficient ones too, whatever the batches' size."""
+    from mt_accuracy_ros.core.workbench.selection import linalg
+
+    rng = np.random.default_rng(11)
+    problems = []
+    for k in range(40):
+        p = (3, 5, 8)[k % 3]
+        x = rng.normal(size=(5, 60, p)) * np.geomspace(1e-3, 10.0, p)
+        if k % 7 == 0:
+            x[..., -1] = x[..., 0]          # a repeated column
+        y = rng.normal(size=(5, 60))
+        problems.append((np.einsum("fni,fnj->fij", x, x), np.einsum("fni,fn->fi", x, y),
+                         np.einsum("fn,fn->f", y, y), (1, (0.0, 0.0, 0.3)[k % 3])))
+    for limit in (linalg.BATCH_BYTES, 1000):
+        monkeypatch.setattr(linalg, "BATCH_BYTES", limit)
+        for batched, problem in zip(linalg.products_fits(problems, 300), problems):
+            for got, alone in zip(batched, _products_fit_one_by_one(*problem[:3], 300,
+                                                                      problem[3])):
+                np.testing.assert_allclose(got, alone, rtol=1e-12, atol=0)
+
+
+def test_same_shape_batches_hold_every_index_once_by_shape_and_size():
+    from mt_accuracy_ros.core.workbench.selection.linalg import same_shape_batches
+
+    shapes = [(5, 3, 3), (5, 4, 4), (5, 3, 3), (5, 3, 3), (5, 4, 4), (5, 3, 3)]
+    batches = same_shape_batches(shapes, limit_bytes=2 * 5 * 9 * 8)
+    assert sorted(i for b in batches for i in b) == list(range(len(shapes)))
+    # Two 3x3 stacks fit the limit, one 4x4 stack only.
+    assert batches == [[0, 2], [3, 5], [1], [4]]
+    assert all(len({shapes[i] for i in b}) == 1 for b in batches)
+
+
+def _fold_fits_one_by_one(selector, term, stats):
+    """A candidate's in-fold settings and fold fits as they were made before a step's
+    candidates were batched: its settings compared by BIC with a solve per setting, each
+    chosen setting's folds solved alone."""
+    from mt_accuracy_ros.core.workbench.selection.designs import penalty_of
+    from mt_accuracy_ros.core.workbench.selection.linalg import penalise, solve_normal
+
+    q = stats.base.shape[1]
+    chosen, trained = selector._settings_before_bic(term, stats)
+    compared = {}
+    if trained is not None:
+        counts = np.array([selector.y.size - (b - a) for a, b in selector.fold_bounds], float)
+        best_bic, best = np.full(selector.folds, np.inf), [term.settings[0]] * selector.folds
+        for setting, (gram, rhs, yy) in zip(term.settings, trained):
+            coefficients = solve_normal(gram, rhs)
+            rss = np.maximum(yy - np.einsum("fi,fi->f", coefficients, rhs), 1e-300)
+            bic = counts * np.log(rss / counts) + gram.shape[1] * np.log(counts)
+            for fold in np.flatnonzero(bic < best_bic):
+                best_bic[fold], best[fold] = bic[fold], setting
+            if penalty_of(term, setting) <= 0:
+                compared[tuple(sorted(setting.items()))] = coefficients
+        chosen = [c if c is not None else b for c, b in zip(chosen, best)]
+    fits = {}
+    for key in dict.fromkeys(tuple(sorted(s.items())) for s in chosen):
+        fits[key] = compared.get(key)
+        if fits[key] is None:
+            gram, rhs, _ = selector._products_of(stats, term, dict(key))
+            fits[key] = solve_normal(penalise(selector._train(gram), q, gram.shape[1],
+                                              penalty_of(term, dict(key))),
+                                     selector._train(rhs))
+    return chosen, fits
+
+
+@pytest.mark.parametrize("limit", [None, 3000])
+def test_a_steps_fold_fits_in_batches_are_each_candidates_own(monkeypatch, limit):
+    """``fold_fits`` solves every candidate's BIC comparisons and held-out fits in
+    batched calls: each candidate's settings are those it chooses alone and each fold's
+    fit equals its own solve (to 1e-12), with batches of the default size and of a few
+    matrices (flushed many times in a step)."""
+    from mt_accuracy_ros.core.workbench.selection import linalg
+
+    if limit is not None:
+        monkeypatch.setattr(linalg, "BATCH_BYTES", limit)
+        monkeypatch.setattr(selection.selector, "BATCH_BYTES", limit)
+    selector, terms = _selector()
+    selector.selected = [(terms[0], terms[0].settings[0])]
+    stats = selector.base_statistics(selector.base_columns())
+    kinds = {(len(t.settings) > 1, t.family.preselects) for t in terms}
+    assert {(True, False), (False, False)} <= kinds     # BIC and single settings both
+    for (settings, fits), term in zip(selector.fold_fits(terms, stats), terms):
+        alone_settings, alone_fits = _fold_fits_one_by_one(selector, term, stats)
+        assert settings == alone_settings, term.name
+        assert fits.keys() == alone_fits.keys(), term.name
+        for key, coefficients in fits.items():
+            np.testing.assert_allclose(coefficients, alone_fits[key], rtol=1e-12, atol=1e-300)

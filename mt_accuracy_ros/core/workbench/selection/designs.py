@@ -72,11 +72,14 @@ def design_setting(term: "Term", setting: dict) -> tuple:
         Its (name, value) pairs but the penalty's, sorted, lists made tuples (hashable).
     """
     key = getattr(term.family, "penalty_setting", None)
+    # (Asked for several times per candidate and step: no closure made per call.)
+    return tuple(sorted((k, _frozen(v) if isinstance(v, (list, tuple)) else v)
+                        for k, v in setting.items() if k != key))
 
-    def frozen(value):
-        return tuple(frozen(v) for v in value) if isinstance(value, (list, tuple)) else value
 
-    return tuple(sorted((k, frozen(v)) for k, v in setting.items() if k != key))
+def _frozen(sequence: list | tuple) -> tuple:
+    """``sequence`` with every list or tuple in it, nested, made a tuple (hashable)."""
+    return tuple(_frozen(v) if isinstance(v, (list, tuple)) else v for v in sequence)
 
 
 @dataclass

@@ -16,6 +16,40 @@ from numpy.typing import NDArray
 NORMAL_RCOND = 1e-12
 
 
+#: The most bytes of normal matrices decomposed in one batched call: a step's candidates
+#: are batched for speed, but their stacked copies (and the decomposition's temporaries,
+#: several times that) must not add to a check's peak memory.
+BATCH_BYTES = 2 * 2 ** 20
+
+
+def same_shape_batches(shapes: list[tuple[int, ...]], limit_bytes: int | None = None
+                       ) -> list[list[int]]:
+    """Indices of arrays of one shape, in batches of at most ``limit_bytes`` of float64.
+
+    Parameters
+    ----------
+    shapes : list of tuple of int
+        Each array's shape.
+    limit_bytes : int, optional
+        The most bytes of arrays in a batch (a batch holds at least one); default
+        :data:`BATCH_BYTES`.
+
+    Returns
+    -------
+    list of list of int
+        Every index once, each batch of one shape, in the order first met.
+    """
+    limit_bytes = BATCH_BYTES if limit_bytes is None else limit_bytes
+    groups: dict[tuple[int, ...], list[int]] = {}
+    for i, shape in enumerate(shapes):
+        groups.setdefault(tuple(shape), []).append(i)
+    batches = []
+    for shape, members in groups.items():
+        per_batch = max(1, limit_bytes // max(8 * int(np.prod(shape)), 1))
+        batches += [members[k:k + per_batch] for k in range(0, len(members), per_batch)]
+    return batches
+
+
 def _equilibrated_eigen(gram: NDArray[np.float64]):
     """(scale, eigenvectors, inverse eigenvalues) of X'X with unit-diagonal columns; the
     directions below :data:`NORMAL_RCOND` get inverse 0. Batched over leading axes."""
@@ -73,10 +107,7 @@ def solve_normal_grouped(grams: list[NDArray[np.float64]], rhs: list[NDArray[np.
         The coefficients of each fit, in the order given.
     """
     out: list[NDArray[np.float64] | None] = [None] * len(grams)
-    groups: dict[tuple, list[int]] = {}
-    for i, gram in enumerate(grams):
-        groups.setdefault(gram.shape, []).append(i)
-    for members in groups.values():
+    for members in same_shape_batches([gram.shape for gram in grams]):
         if len(members) == 1:
             out[members[0]] = solve_normal(grams[members[0]], rhs[members[0]])
             continue
@@ -225,11 +256,53 @@ def products_fit(gram: NDArray[np.float64], rhs: NDArray[np.float64], yy: NDArra
     standard_errors : ndarray, shape (p,)
         Of the whole record's fit (the sum over the folds' products).
     """
-    gram, rhs, yy = gram.sum(axis=0), rhs.sum(axis=0), float(yy.sum())
-    penalised = penalise(gram, penalty[0], gram.shape[0], penalty[1])
-    # The coefficients and their covariance from one decomposition of the same matrix.
-    eigen = _equilibrated_eigen(penalised)
-    coefficients = _solve_with(eigen, rhs)
+    return products_fits([(gram, rhs, yy, penalty)], readings)[0]
+
+
+def products_fits(problems: list[tuple[NDArray[np.float64], NDArray[np.float64],
+                                       NDArray[np.float64], tuple[int, float]]],
+                  readings: int) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """:func:`products_fit` of each problem, the decompositions of one size in one call.
+
+    A step's candidates are fitted on the whole record together: their normal matrices
+    of one size are decomposed by batched eigendecompositions (:func:`same_shape_batches`;
+    each matrix's result is its own call's, bit for bit) and solved by batched products.
+
+    Parameters
+    ----------
+    problems : list of (gram, rhs, yy, penalty)
+        Per fit: each fold's X'X (F, p, p), X'y (F, p) and y'y (F,), and (first penalised
+        column, ridge strength) as :func:`products_fit` takes them; p may differ.
+    readings : int
+        R, the rows of the whole record.
+
+    Returns
+    -------
+    list of (coefficients (p,), standard_errors (p,))
+        In the order given.
+    """
+    summed = []
+    for gram, rhs, yy, (start, strength) in problems:
+        gram = gram.sum(axis=0)
+        summed.append((gram, rhs.sum(axis=0), float(yy.sum()),
+                       penalise(gram, start, gram.shape[0], strength)))
+    out: list = [None] * len(problems)
+    for members in same_shape_batches([gram.shape for gram, *_ in summed]):
+        # The coefficients and their covariance from one decomposition of each matrix.
+        scale, vectors, inverse = _equilibrated_eigen(np.stack([summed[i][3] for i in members]))
+        solved = _solve_with((scale, vectors, inverse), np.stack([summed[i][1] for i in members]))
+        for k, i in enumerate(members):
+            gram, rhs, yy, penalised = summed[i]
+            out[i] = _fit_from_eigen(gram, rhs, yy, penalised, (scale[k], vectors[k], inverse[k]),
+                                     solved[k], readings)
+    return out
+
+
+def _fit_from_eigen(gram, rhs, yy: float, penalised, eigen, coefficients, readings: int
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The standard errors of the whole record's ``coefficients`` (p,), solved from
+    ``penalised``'s :func:`_equilibrated_eigen` ``eigen``; ``gram`` (p, p), ``rhs`` (p,) and
+    ``yy`` its unpenalised products."""
     dof = max(1, readings - gram.shape[0])
     # yy - 2 c'r + c'Gc: the residual sum of squares of any coefficients.
     rss = yy - 2.0 * float(coefficients @ rhs) + float(coefficients @ gram @ coefficients)

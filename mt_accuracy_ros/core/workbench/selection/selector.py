@@ -53,8 +53,8 @@ from ..distributions import chi2_sf
 from ..line_search import minimise_bounded
 from .designs import ReadingDesigns, Term, _BaseStatistics, penalty_of
 from .folds import time_blocks
-from .linalg import (penalise, penalised_fit, products_fit, solve_normal,
-                     solve_normal_grouped)
+from .linalg import (BATCH_BYTES, penalise, penalised_fit, products_fit, products_fits,
+                     same_shape_batches, solve_normal, solve_normal_grouped)
 from .significance import (Evidence, PassRule, block_gains, coefficient_p_value,
                            gain_p_value, max_t_adjusted)
 
@@ -265,7 +265,8 @@ class Selector(ReadingDesigns):
         residual, _ = self.cv.held_out_residuals(x, self.y, lambda fold: coefficients[fold])
         return residual ** 2
 
-    def out_of_fold(self, stats: _BaseStatistics, term: Term | None
+    def out_of_fold(self, stats: _BaseStatistics, term: Term | None,
+                    fold_fits: tuple[list[dict], dict] | None = None
                     ) -> tuple[NDArray[np.float64], dict]:
         """Out-of-fold squared errors of the current model (+ ``term``).
 
@@ -276,6 +277,9 @@ class Selector(ReadingDesigns):
         term : Term or None
             A candidate, its setting chosen inside each fold (:meth:`choose_settings`);
             None: the current model alone.
+        fold_fits : (list of dict, dict), optional
+            ``term``'s :meth:`fold_fits`, when already made (a step makes every
+            candidate's together).
 
         Returns
         -------
@@ -289,21 +293,13 @@ class Selector(ReadingDesigns):
             coefficients = solve_normal(self._train(stats.products[:, :q, :q]),
                                         self._train(stats.products[:, :q, q]))
             return self._per_sample(self._held_out_errors(stats.base, coefficients)), {}
-        settings, fitted = self._settings_and_fits(term, stats)
+        settings, fits = self.fold_fits([term], stats)[0] if fold_fits is None else fold_fits
         squared = np.empty(self.y.size)
         q = stats.base.shape[1]
-        for key in {tuple(sorted(s.items())) for s in settings}:
+        for key, coefficients in fits.items():
             setting = dict(key)
             basis = self.basis_rows(term, setting)
             design = self.design_rows(term, setting) if basis is None else None
-            gram, rhs, _ = self._products_of(stats, term, setting)
-            # The folds' fits the choice of settings made already (the same products,
-            # unpenalised) are these folds' fits.
-            coefficients = fitted.get(key)
-            if coefficients is None:
-                coefficients = solve_normal(penalise(self._train(gram), q, gram.shape[1],
-                                                     penalty_of(term, setting)),
-                                            self._train(rhs))
             for fold, (a, b) in enumerate(self.fold_bounds):
                 if settings[fold] == setting:
                     own = design[a:b] @ coefficients[fold, q:] if basis is None else \
@@ -311,6 +307,54 @@ class Selector(ReadingDesigns):
                     squared[a:b] = (stats.base[a:b] @ coefficients[fold, :q] + own -
                                     self.y[a:b]) ** 2
         return self._per_sample(squared), dict(enumerate(settings))
+
+    def fold_fits(self, terms: list[Term], stats: _BaseStatistics
+                  ) -> list[tuple[list[dict], dict[tuple, NDArray[np.float64]]]]:
+        """Each candidate's in-fold settings and the folds' fits of the settings chosen.
+
+        The fits the choice of settings compared already (the same products,
+        unpenalised) are taken from it; the others are solved together, the normal
+        matrices of one size of every candidate in batched calls
+        (:func:`.linalg.same_shape_batches`; each fit is its own call's, bit for bit).
+
+        Parameters
+        ----------
+        terms : list of Term
+            The candidates.
+        stats : _BaseStatistics
+            The current model's per-fold products.
+
+        Returns
+        -------
+        list of (settings, fits)
+            Per candidate, in order: the setting each fold chooses (:meth:`choose_settings`,
+            length F) and, per setting chosen by its sorted items, every fold's fit of
+            base + candidate on its training blocks (F, q + p).
+        """
+        q = stats.base.shape[1]
+        plans, pending = [], []
+        for index, (term, (settings, compared)) in enumerate(
+                zip(terms, self._settings_and_fits_of(terms, stats))):
+            fits = {}
+            for key in dict.fromkeys(tuple(sorted(s.items())) for s in settings):
+                fits[key] = compared.get(key)
+                if fits[key] is None:
+                    pending.append((index, key, term, self._products_of(stats, term, dict(key))))
+            plans.append((settings, fits))
+        # The training blocks' matrices are made per batch: all at once, they would be a
+        # copy of every candidate's products.
+        for batch in same_shape_batches([products[0].shape for *_, products in pending]):
+            grams, rhs = [], []
+            for i in batch:
+                _, key, term, (gram, right, _) = pending[i]
+                grams.append(penalise(self._train(gram), q, gram.shape[1],
+                                      penalty_of(term, dict(key))))
+                rhs.append(self._train(right))
+            solved = solve_normal(np.stack(grams), np.stack(rhs))
+            for k, i in enumerate(batch):
+                index, key, _, _ = pending[i]
+                plans[index][1][key] = solved[k]
+        return plans
 
     def choose_settings(self, term: Term, stats: _BaseStatistics) -> list[dict]:
         """The setting each fold's training blocks choose (preselection or BIC).
@@ -335,10 +379,38 @@ class Selector(ReadingDesigns):
         """:meth:`choose_settings`, and each fold's fit (F, p) of the settings compared by
         BIC, by the setting's sorted items (empty when none was compared: one setting, a
         preselection for every fold, a penalised family)."""
+        return self._settings_and_fits_of([term], stats)[0]
+
+    def _settings_and_fits_of(self, terms: list[Term], stats: _BaseStatistics
+                              ) -> list[tuple[list[dict], dict[tuple, NDArray[np.float64]]]]:
+        """:meth:`_settings_and_fits` of each of ``terms``, the fits BIC compares solved
+        for several candidates together (:func:`.linalg.solve_normal_grouped`), a few
+        MB of training matrices at a time."""
+        out: list = [None] * len(terms)
+        waiting: list = []
+        held = 0
+        for index, term in enumerate(terms):
+            chosen, trained = self._settings_before_bic(term, stats)
+            if trained is None:
+                out[index] = chosen, {}
+                continue
+            waiting.append((index, term, chosen, trained))
+            held += sum(gram.nbytes for gram, _, _ in trained)
+            if held > BATCH_BYTES:
+                self._choose_by_bic(waiting, out)
+                waiting, held = [], 0
+        self._choose_by_bic(waiting, out)
+        return out
+
+    def _settings_before_bic(self, term: Term, stats: _BaseStatistics
+                             ) -> tuple[list[dict | None], list[tuple] | None]:
+        """``term``'s settings per fold where no BIC is needed (trained None), else the folds
+        a preselection chose (None where it did not) and each setting's training products
+        (X'X, X'y, y'y per fold) for BIC to compare."""
         if len(term.settings) == 1:
-            return [term.settings[0]] * self.folds, {}
+            return [term.settings[0]] * self.folds, None
         if getattr(term.family, "penalty_setting", None):
-            return self._choose_penalty(term, stats), {}
+            return self._choose_penalty(term, stats), None
         chosen: list[dict | None] = [None] * self.folds
         if term.family.preselects:
             if stats.after_base is None:
@@ -363,24 +435,33 @@ class Selector(ReadingDesigns):
             chosen = term.family.preselect_folds(self.ctx, term.variant, term.settings,
                                                  after_base[:, :, :3], self.mask[:, :3], trains)
         if all(c is not None for c in chosen):
-            return chosen, {}
+            return chosen, None
+        return chosen, [tuple(self._train(a) for a in self._products_of(stats, term, setting))
+                        for setting in term.settings]
+
+    def _choose_by_bic(self, waiting: list, out: list) -> None:
+        """Each waiting (index, term, chosen, trained) of :meth:`_settings_before_bic`: its
+        settings' fold fits solved (together), the folds no preselection chose given the
+        setting of least BIC, into ``out[index]``."""
+        solved = iter(solve_normal_grouped([gram for *_, trained in waiting
+                                            for gram, _, _ in trained],
+                                           [rhs for *_, trained in waiting
+                                            for _, rhs, _ in trained]))
         counts = np.array([max(a, 1) if self.forward else self.y.size - (b - a)
                            for a, b in self.fold_bounds], float)
-        best_bic = np.full(self.folds, np.inf)
-        best = [term.settings[0]] * self.folds
-        trained = [tuple(self._train(a) for a in self._products_of(stats, term, setting))
-                   for setting in term.settings]
-        solved = solve_normal_grouped([gram for gram, _, _ in trained],
-                                      [rhs for _, rhs, _ in trained])
-        fits = {}
-        for setting, (gram, rhs, yy), coefficients in zip(term.settings, trained, solved):
-            rss = np.maximum(yy - np.einsum("fi,fi->f", coefficients, rhs), 1e-300)
-            bic = counts * np.log(rss / counts) + gram.shape[1] * np.log(counts)
-            for fold in np.flatnonzero(bic < best_bic):
-                best_bic[fold], best[fold] = bic[fold], setting
-            if penalty_of(term, setting) <= 0:
-                fits[tuple(sorted(setting.items()))] = coefficients
-        return [c if c is not None else b for c, b in zip(chosen, best)], fits
+        for index, term, chosen, trained in waiting:
+            best_bic = np.full(self.folds, np.inf)
+            best = [term.settings[0]] * self.folds
+            fits = {}
+            for setting, (gram, rhs, yy) in zip(term.settings, trained):
+                coefficients = next(solved)
+                rss = np.maximum(yy - np.einsum("fi,fi->f", coefficients, rhs), 1e-300)
+                bic = counts * np.log(rss / counts) + gram.shape[1] * np.log(counts)
+                for fold in np.flatnonzero(bic < best_bic):
+                    best_bic[fold], best[fold] = bic[fold], setting
+                if penalty_of(term, setting) <= 0:
+                    fits[tuple(sorted(setting.items()))] = coefficients
+            out[index] = [c if c is not None else b for c, b in zip(chosen, best)], fits
 
     def _validation_errors(self, term: Term, stats: _BaseStatistics,
                            pairs: list[tuple[int, int, NDArray[np.float64]]]
@@ -602,9 +683,18 @@ class Selector(ReadingDesigns):
             candidate tried (Westfall-Young max-T), its full-data fit and whether
             physics refuses it.
         """
+        # Every candidate's fold fits and full-data fit first, their solves batched.
+        plans = self.fold_fits(terms, stats)
+        q = stats.base.shape[1]
+        reported = [self._reported_setting(settings) for settings, _ in plans]
+        problems = [(*self._products_of(stats, term, setting), (q, penalty_of(term, setting)))
+                    for term, setting in zip(terms, reported)]
+        full_fits = products_fits(problems, self.y.size)
         scored, gains = [], []
-        for term in terms:
-            candidate, gain = self._score_one(term, stats, base_sq, count)
+        for term, plan, setting, problem, full_fit in zip(terms, plans, reported, problems,
+                                                          full_fits):
+            candidate, gain = self._score_one(term, stats, base_sq, count, plan, setting,
+                                              problem[0], full_fit)
             scored.append(candidate)
             gains.append(gain)
             if len(scored) % 8 == 0:
@@ -620,12 +710,24 @@ class Selector(ReadingDesigns):
                 s.adjusted_p = float(adjusted)
         return scored
 
+    @staticmethod
+    def _reported_setting(settings: list[dict]) -> dict:
+        """The setting a candidate reports: the most frequent of its folds' ``settings``."""
+        keys = [tuple(sorted(s.items())) for s in settings]
+        # Ties by the first fold to choose it: never by a set's (hash-seeded) order.
+        return dict(max(dict.fromkeys(keys), key=keys.count))
+
     def _score_one(self, term: Term, stats: _BaseStatistics, base_sq: NDArray[np.float64],
-                   count: int) -> tuple[Scored, NDArray[np.float64]]:
+                   count: int, fold_fits: tuple[list[dict], dict], setting: dict,
+                   gram: NDArray[np.float64],
+                   full_fit: tuple[NDArray[np.float64], NDArray[np.float64]]
+                   ) -> tuple[Scored, NDArray[np.float64]]:
         """:meth:`score` of one candidate (its p-value not yet adjusted) and its gain per
-        test block (B,)."""
+        test block (B,), from its :meth:`fold_fits`, its reported ``setting``, that
+        setting's per-fold X'X ``gram`` (F, q + p, q + p) and its full-data fit there
+        (coefficients, standard errors) (q + p,) each."""
         q = stats.base.shape[1]
-        per_sample, chosen = self.out_of_fold(stats, term)
+        per_sample, _ = self.out_of_fold(stats, term, fold_fits)
         mse = float(per_sample.sum() / count)
         # Tested on the components it moves (the others' errors are the base's).
         moved = self.components_of(term)
@@ -637,24 +739,17 @@ class Selector(ReadingDesigns):
                                  per_sample[:, moved].sum(axis=1))
         share = (own_base - own_mse) / own_excess if own_excess > 0 else \
             (1.0 if own_mse < own_base else 0.0)
-        # The setting reported is the most frequent in-fold choice.
-        settings = [tuple(sorted(s.items())) for s in chosen.values()]
-        # Ties by the first fold to choose it: never by a set's (hash-seeded) order.
-        setting = dict(max(dict.fromkeys(settings), key=settings.count))
         candidate = Scored(term, float(np.sqrt(mse)),
                            1.0 - np.sqrt(own_mse / own_base) if own_base > 0 else 0.0,
                            gain_p_value(gain), 1.0, float(share), setting, per_sample,
                            components="".join(c for c, m in zip(self.components, moved) if m))
         # Every candidate carries its full-data fit, so that a user may add any of them
         # (judged by physics now, while its design is at hand).
-        products = self._products_of(stats, term, setting)
-        candidate.coefficients, candidate.standard_errors = (
-            a[q:] for a in self._fit_products(*products, penalty=(q, penalty_of(term, setting))))
+        candidate.coefficients, candidate.standard_errors = (a[q:] for a in full_fit)
         candidate.parameter_names = term.family.parameter_names(term.variant, setting)
         own = candidate.coefficients
         candidate.refusal = self.physics_refusal(
-            term, setting, own,
-            own_square_sum=float(own @ products[0][:, q:, q:].sum(axis=0) @ own))
+            term, setting, own, own_square_sum=float(own @ gram[:, q:, q:].sum(axis=0) @ own))
         return candidate, gain
 
     def rank(self, scored: list[Scored]) -> tuple[list[Scored], Scored | None]:
