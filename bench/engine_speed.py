@@ -130,6 +130,7 @@ def diagnosis_child(csv: str, mapping: str) -> None:
     import yaml
 
     from mt_accuracy_ros.allocator import keep_freed_arrays
+    from mt_accuracy_ros.commands.check import in_package_convention
     from mt_accuracy_ros.core.compensation.error_model import resolve_model
     from mt_accuracy_ros.core.workbench.diagnosis import Observations, diagnose
     from mt_accuracy_ros.io.column_map import column_map_from_dict, read_mapped_csv
@@ -143,6 +144,8 @@ def diagnosis_child(csv: str, mapping: str) -> None:
     for c, component in enumerate("xyz"):
         if component in survey.errors:
             measured[:, c], mask[:, c] = survey.errors[component], True
+    measured, _, _ = in_package_convention(measured, mask, {}, column_map.error_convention,
+                                           model.machine, survey.positions)
     obs = Observations(survey.positions, measured, mask, survey.time_s, survey.velocities,
                        survey.temperatures, column_map.uncertainty_m,
                        directions=survey.directions, accelerations=survey.accelerations,

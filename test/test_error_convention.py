@@ -145,3 +145,121 @@ def test_the_convention_signs():
     assert ErrorConvention(of="work").sign == -1.0
     assert ErrorConvention(sense="correction").sign == -1.0
     assert ErrorConvention(of="work", sense="correction").sign == 1.0
+
+
+HEAD_YAML = """\
+name: b_head
+chain: '[w X Y b Z B t]'
+tool: [0.0, 0.0, -0.1]
+workpiece: [0.0, 0.0, 0.0]
+axes:
+  X: {stroke: [-0.3, 0.3], offset: [0, 0, 0]}
+  Y: {stroke: [-0.3, 0.3], offset: [0, 0, 0]}
+  Z: {stroke: [-0.3, 0.3], offset: [0, 0, 0]}
+  B: {stroke: {value: [-90, 90], unit: deg}, sign: 1, offset: [0, 0, 0]}
+"""
+
+
+def _turn_y(angle):
+    """(N, 3, 3) rotations by ``angle`` (N,) [rad] about y."""
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros((angle.size, 3, 3))
+    out[:, 0, 0], out[:, 0, 2], out[:, 2, 0], out[:, 2, 2] = c, s, -s, c
+    out[:, 1, 1] = 1.0
+    return out
+
+
+def _machine(tmp_path, text, setup=None):
+    from mt_accuracy_ros.core.kinematics.machine import load_machine, with_setup_pose
+
+    path = tmp_path / "machine.yaml"
+    path.write_text(text)
+    machine = load_machine(path)
+    return with_setup_pose(machine, setup, "the test's set-up") if setup else machine
+
+
+def _convert(machine, positions, errors, directions, **words):
+    from mt_accuracy_ros.commands.check import in_package_convention
+
+    mask = np.ones(errors.shape, dtype=bool)
+    convention = ErrorConvention(**words, stated=True)
+    return in_package_convention(errors, mask, directions, convention, machine, positions)
+
+
+@pytest.mark.parametrize("words, expected_sign", [({"of": "work"}, -1.0),
+                                                  ({"of": "work", "sense": "correction"}, 1.0)])
+def test_errors_and_directions_along_a_turning_table_are_turned_to_the_machine(
+        tmp_path, words, expected_sign):
+    """frame: work on a C table: machine axes = s Rz(C) @ the table's, for the errors and
+    the tool direction's change alike (closed form)."""
+    rng = np.random.default_rng(2)
+    n = 50
+    c_turn = rng.uniform(-np.pi, np.pi, n)
+    positions = {"C": c_turn, **{a: rng.uniform(-0.1, 0.1, n) for a in "XYZ"}}
+    errors, change = rng.normal(0, 1e-5, (n, 3)), rng.normal(0, 1e-5, (n, 3))
+    change[:, 2] = 0.0
+    directions = {c: change[:, k] for k, c in enumerate("xyz")}
+    machine = _machine(tmp_path, MACHINE_YAML)
+    out, turned, note = _convert(machine, positions, errors, directions, frame="work",
+                                 **words)
+    turn = _turn_z(c_turn)
+    np.testing.assert_allclose(out, expected_sign * np.einsum("nij,nj->ni", turn, errors),
+                               rtol=0, atol=1e-18)
+    expected = expected_sign * np.einsum("nij,nj->ni", turn, change)
+    np.testing.assert_allclose(np.column_stack([turned[c] for c in "xyz"]), expected,
+                               rtol=0, atol=1e-18)
+    assert "workpiece frame's axes (the machine's at every rotary axis at 0" in note
+
+
+def test_errors_along_a_turning_head_are_turned_with_the_spindle(tmp_path):
+    """frame: tool on a B head: machine axes = Ry(B) @ the spindle frame's; frame: work
+    there is the machine's own (no rotary axis carries the work)."""
+    rng = np.random.default_rng(3)
+    n = 40
+    b_turn = rng.uniform(-1.2, 1.2, n)
+    positions = {"B": b_turn, **{a: rng.uniform(-0.1, 0.1, n) for a in "XYZ"}}
+    errors = rng.normal(0, 1e-5, (n, 3))
+    machine = _machine(tmp_path, HEAD_YAML)
+    out, _, note = _convert(machine, positions, errors, {}, frame="tool")
+    np.testing.assert_allclose(out, np.einsum("nij,nj->ni", _turn_y(b_turn), errors),
+                               rtol=0, atol=1e-18)
+    assert "spindle frame's axes" in note
+    same, _, _ = _convert(machine, positions, errors, {}, frame="work")
+    np.testing.assert_allclose(same, errors, rtol=0, atol=1e-18)
+
+
+def test_a_frame_aligned_at_the_set_up_pose_turns_from_there(tmp_path):
+    """aligned_at: setup: the table's axes are the machine's at the set-up pose C = 45 deg,
+    so machine axes = Rz(C - 45 deg) @ the table's."""
+    rng = np.random.default_rng(4)
+    n = 30
+    c_turn = rng.uniform(-np.pi, np.pi, n)
+    positions = {"C": c_turn, **{a: np.zeros(n) for a in "XYZ"}}
+    errors = rng.normal(0, 1e-5, (n, 3))
+    machine = _machine(tmp_path, MACHINE_YAML, {"C": np.radians(45.0)})
+    out, _, note = _convert(machine, positions, errors, {}, frame="work", aligned_at="setup")
+    expected = np.einsum("nij,nj->ni", _turn_z(c_turn - np.radians(45.0)), errors)
+    np.testing.assert_allclose(out, expected, rtol=0, atol=1e-18)
+    assert "the machine's at the set-up pose" in note
+
+
+def test_a_turning_frame_needs_every_direction_component(tmp_path):
+    n = 10
+    positions = {"C": np.zeros(n), **{a: np.zeros(n) for a in "XYZ"}}
+    machine = _machine(tmp_path, MACHINE_YAML)
+    with pytest.raises(InputDataError, match="three direction_errors components .missing z"):
+        _convert(machine, positions, np.zeros((n, 3)), {"x": np.zeros(n), "y": np.zeros(n)},
+                 frame="work")
+
+
+def test_the_check_and_the_fleet_say_the_convention_in_their_json(tmp_path):
+    from mt_accuracy_ros.commands.fleet import _compact
+
+    c_turn, xyz, errors, _ = _survey(n=80)
+    result = _check(*_write(tmp_path, "s", c_turn, xyz, -errors, "{of: work}"))
+    said = {"of": "work", "as": "deviation", "frame": "machine", "aligned_at": "zero",
+            "stated": True}
+    assert result.to_json()["error_convention"] == said
+    assert _compact(result)["error_convention"] == said
+    default = _check(*_write(tmp_path, "d", c_turn, xyz, errors, None))
+    assert default.to_json()["error_convention"]["stated"] is False

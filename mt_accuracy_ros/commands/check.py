@@ -467,7 +467,8 @@ def in_package_convention(measured, mask, direction_errors: dict, convention, ma
     convention : ErrorConvention
         What the columns mean (the column map's ``error_convention``).
     machine : MachineDescription
-        The machine whose nominal chain gives a turning frame's orientation.
+        The machine whose nominal chain gives a turning frame's orientation (and the
+        set-up pose, for ``aligned_at: setup``).
     positions : dict of str to ndarray, shape (N,)
         Axis commands [m, rad].
 
@@ -477,25 +478,43 @@ def in_package_convention(measured, mask, direction_errors: dict, convention, ma
         The errors [m], the direction changes [rad], and the sentence saying how they were
         read.
     """
-    from ..core.kinematics.chain import KinematicModel
-
     measured = convention.sign * measured
     directions = {c: convention.sign * v for c, v in direction_errors.items()}
-    if convention.frame != "machine":
-        if not mask.all():
-            raise InputDataError(
-                f"error_convention: frame: {convention.frame} needs all three error components "
-                "(x, y, z): a turning frame's components mix along the machine's axes")
-        # The body the instrument turns with, on the nominal chain: bed = R @ its frame.
-        rotation = KinematicModel(machine).branch(convention.frame, positions, errors=False,
-                                                  check_stroke=False)[:, :3, :3]
-        measured = np.einsum("nij,nj->ni", rotation, measured)
-        if directions:
-            change = np.column_stack([directions.get(c, np.zeros(len(measured)))
-                                      for c in "xyz"])
-            turned = np.einsum("nij,nj->ni", rotation, change)
-            directions = {c: turned[:, k] for k, c in enumerate("xyz") if c in directions}
+    if convention.frame == "machine":
+        return measured, directions, convention.note()
+    missing = [c for c in "xyz" if not mask[:, "xyz".index(c)].all()]
+    missing_directions = [c for c in "xyz" if directions and c not in directions]
+    if missing or missing_directions:
+        what = "error" if missing else "direction_errors"
+        raise InputDataError(
+            f"error_convention: frame: {convention.frame} needs all three {what} components "
+            f"(missing {', '.join(missing or missing_directions)}): a turning frame's "
+            "components mix along the machine's axes")
+    rotation = frame_rotation(machine, positions, convention)
+    measured = np.einsum("nij,nj->ni", rotation, measured)
+    if directions:
+        change = np.column_stack([directions[c] for c in "xyz"])
+        turned = np.einsum("nij,nj->ni", rotation, change)
+        directions = {c: turned[:, k] for k, c in enumerate("xyz")}
     return measured, directions, convention.note()
+
+
+def frame_rotation(machine, positions, convention) -> np.ndarray:
+    """(N, 3, 3) R with machine axes = R @ the instrument's axes, for an instrument that
+    turns with the work (``frame: work``) or the spindle (``frame: tool``), on the
+    nominal chain; its axes are the machine's at every rotary axis at 0, or at the set-up
+    pose (``aligned_at: setup``: R = R(q) R(q_setup)^T)."""
+    from ..core.kinematics.chain import KinematicModel
+
+    branch = {"work": "workpiece", "tool": "tool"}[convention.frame]
+    chain = KinematicModel(machine)
+    rotation = chain.branch(branch, positions, errors=False, check_stroke=False)[:, :3, :3]
+    if convention.aligned_at == "setup":
+        at_setup = {a: np.full(1, machine.setup_angle(a) if machine.axes[a].is_rotary else 0.0)
+                    for a in machine.axis_order}
+        aligned = chain.branch(branch, at_setup, errors=False, check_stroke=False)[0, :3, :3]
+        rotation = rotation @ aligned.T
+    return rotation
 
 
 def with_tool_direction(obs, direction_errors: dict, machine) -> str:
@@ -731,7 +750,8 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
         rows_read=survey.rows_read, rows_dropped=survey.rows_dropped,
         rows_note=survey.summary(Path(path).name), namespace="",
         machine_note="; ".join(n for n in [machine_note, *instrument_notes] if n),
-        setup_pose_rad=dict(model.machine.setup_pose), travel_warning=warning,
+        setup_pose_rad=dict(model.machine.setup_pose),
+        error_convention=column_map.error_convention.as_dict(), travel_warning=warning,
         sensors_kept=sorted(survey.temperatures), sensor_notes=sensor_notes or None)
     return result
 

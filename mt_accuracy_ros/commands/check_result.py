@@ -39,7 +39,8 @@ JSON_KEYS = {
             "final_diagnosis", "final_verdict", "final_localisation", "machine", "model_yaml",
             "warnings"),
     "survey_csv": ("data", "kind", "rows_read", "rows_dropped", "rows_note", "machine",
-                   "machine_note", "setup_pose_rad", "travel_warning", "namespace", "readings",
+                   "machine_note", "setup_pose_rad", "error_convention", "travel_warning",
+                   "namespace", "readings",
                    "figures_before_m", "figures_after_m", "baseline_rmse", "baseline_cv_rmse",
                    "ranking", "named", "dropped", "verdict", "localisation", "added",
                    "final_rmse", "steps", "band", "final_diagnosis", "final_verdict",
@@ -235,9 +236,12 @@ class DataSource(_AsDict):
     namespace : str or None
         A bag: the machine's namespace ("" for a survey).
     machine_note : str or None
-        A survey: the machine assumed and the set-up, in words.
+        A survey: the machine assumed, the set-up and the error columns' reading, in words.
     setup_pose_rad : dict or None
         A survey: each rotary axis' set-up angle [rad].
+    error_convention : dict or None
+        A survey: how its error columns were read (``of``, ``as``, ``frame``,
+        ``aligned_at``, and ``stated``: whether the column map said so).
     travel_warning : str or None
         A survey: readings outside the machine's travel ("" when none).
     sensors_kept : list of str or None
@@ -252,6 +256,7 @@ class DataSource(_AsDict):
     namespace: str | None = None
     machine_note: str | None = None
     setup_pose_rad: dict | None = None
+    error_convention: dict | None = None
     travel_warning: str | None = None
     sensors_kept: list[str] | None = None
     sensor_notes: list[str] | None = None

@@ -69,6 +69,8 @@ def _compact(result) -> dict:
             "final_rmse_m": float(result.final_rmse),
             "band_m": float(result.band or 0.0),
             "machine_model": result.machine,
+            # How a survey's error columns were read (None for a bag).
+            "error_convention": result.source.error_convention,
             "named": [{"name": n["name"], "effect": n["effect"],
                        "display": n.get("display", {}),
                        "error_reduction": float(n["error_reduction"])}

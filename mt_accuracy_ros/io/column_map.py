@@ -38,14 +38,15 @@ per-row target) as ROLE, e.g. ``--col pos.X=x_mm:mm --col err.x=dev_x:um``.
 A rotary position column (A, B, C) is an angle in a unit the map or the column's name
 gives; a direction error is the change of the tool axis' unit vector relative to the
 work, actual minus nominal, in the machine frame (what a two-sphere R-test measures
-across the tool axis), as a small angle.
+across the tool axis), as a small angle - unless ``error_convention`` says otherwise.
 
 The error columns are read, unless ``error_convention`` says otherwise, as the tool
 relative to the work (``of: tool``; ``of: work`` - the sphere seen from the tool's nest),
 actual minus nominal (``as: deviation``; ``as: correction`` - nominal minus actual, what
 a compensation adds), along the machine's axes (``frame: machine``; ``frame: work`` - an
-instrument turning with the table, ``frame: tool`` - with the head). The check says which
-it took (:meth:`ErrorConvention.note`).
+instrument turning with the table, ``frame: tool`` - with the head, whose axes are the
+machine's with every rotary axis at 0, or at the set-up pose with ``aligned_at: setup``).
+The check says which it took (:meth:`ErrorConvention.note`).
 
 A ``run`` column (text or numbers) cuts the survey into runs: each run's rows lie
 together, its time may restart, lags restart at its first reading and whole runs are
@@ -96,7 +97,7 @@ ROLES_HELP = ("time, pos.X, err.x, temp.<sensor>, vel.X, acc.X, dir.X, spindle, 
 
 #: ``error_convention`` keys -> their words; the first of each is the default.
 ERROR_CONVENTION_WORDS = {"of": ("tool", "work"), "as": ("deviation", "correction"),
-                          "frame": ("machine", "work", "tool")}
+                          "frame": ("machine", "work", "tool"), "aligned_at": ("zero", "setup")}
 
 
 @dataclass(frozen=True)
@@ -107,12 +108,16 @@ class ErrorConvention:
     ``work`` - the work (a sphere) relative to the tool; ``as``: ``deviation`` (actual
     minus nominal) or ``correction`` (nominal minus actual); ``frame``: the axes the
     components lie along - ``machine`` (the bed's), ``work`` (the workpiece frame's, an
-    instrument turning with the table) or ``tool`` (the spindle frame's).
+    instrument turning with the table) or ``tool`` (the spindle frame's); ``aligned_at``:
+    where a turning frame's axes are the machine's - ``zero`` (every rotary axis at 0: the
+    machine description's workpiece or spindle frame) or ``setup`` (at the set-up pose:
+    an instrument aligned with the machine's axes where the work was set up).
     """
 
     of: str = "tool"
     sense: str = "deviation"
     frame: str = "machine"
+    aligned_at: str = "zero"
     #: Whether the map stated it (the note says so either way).
     stated: bool = False
 
@@ -129,15 +134,23 @@ class ErrorConvention:
                  "tool (turned to the tool relative to the work)"}[self.of]
         sense = {"deviation": "actual minus nominal", "correction": "nominal minus actual "
                  "(a correction; turned to actual minus nominal)"}[self.sense]
+        aligned = {"zero": "every rotary axis at 0",
+                   "setup": "the set-up pose"}[self.aligned_at]
         frame = {"machine": "along the machine's axes",
-                 "work": "along the workpiece frame's axes (turned to the machine's at each "
-                         "reading's nominal pose)",
-                 "tool": "along the spindle frame's axes (turned to the machine's at each "
-                         "reading's nominal pose)"}[self.frame]
+                 "work": f"along the workpiece frame's axes (the machine's at {aligned}; "
+                         "turned to the machine's at each reading's nominal pose)",
+                 "tool": f"along the spindle frame's axes (the machine's at {aligned}; "
+                         "turned to the machine's at each reading's nominal pose)"}[self.frame]
         given = "the column map's error_convention" if self.stated else \
-            "the default; say otherwise with error_convention: {of: work|tool, as: " \
-            "deviation|correction, frame: machine|work|tool}"
+            "the default; a column map (--columns MAP.yaml) says otherwise with " \
+            "error_convention: {of: work|tool, as: deviation|correction, frame: " \
+            "machine|work|tool, aligned_at: zero|setup}"
         return f"errors read as {words}, {sense}, {frame} ({given})"
+
+    def as_dict(self) -> dict:
+        """The convention in the map's words, and whether the map stated it (the JSON's)."""
+        return {"of": self.of, "as": self.sense, "frame": self.frame,
+                "aligned_at": self.aligned_at, "stated": self.stated}
 
 
 def _error_convention(spec, where: str) -> ErrorConvention:
@@ -155,7 +168,8 @@ def _error_convention(spec, where: str) -> ErrorConvention:
             raise ParameterError(f"{where}.{key}: {spec[key]!r} is not one of "
                                  f"{', '.join(words)}")
         chosen[key] = word
-    return ErrorConvention(chosen["of"], chosen["as"], chosen["frame"], stated=True)
+    return ErrorConvention(chosen["of"], chosen["as"], chosen["frame"], chosen["aligned_at"],
+                           stated=True)
 
 
 @dataclass

@@ -86,16 +86,27 @@ def test_a_pivots_part_along_the_axis_is_its_positioning_error_only_where_it_tur
     assert not verdict["right"] and "extra: positioning:EYY" in verdict["why"]
 
 
-def test_a_squareness_named_as_one_rotation_is_right_with_its_value():
-    """A constant turn of a carriage in the squareness' plane (a tilt's P0) is that
-    plane's squareness (ISO 230-1); another plane, or another size, is not."""
-    truth = _truth({"iso_name": "EB0Z", "kind": "squareness", "axis": "Z", "side": "tool",
-                    "value_si": -34.5e-6, "identifiable": True})
-    one_turn = _named("angular:EBY", {"P1": 0.4e-6, "P0": 34.47e-6})
-    assert score(truth, {"named": [one_turn]})["right"]
-    smaller = _named("angular:EBY", {"P1": 0.4e-6, "P0": 12e-6})
-    assert not score(truth, {"named": [smaller]})["right"]
-    other_plane = _named("angular:ECY", {"P1": 0.4e-6, "P0": 34.47e-6})
-    assert not score(truth, {"named": [other_plane]})["right"]
-    no_constant = _named("angular:EBY", {"P1": 34.47e-6})
-    assert not score(truth, {"named": [no_constant]})["right"]
+def test_a_squareness_named_as_one_rotation_is_right_with_its_value_and_sign():
+    """A constant turn of a carriage that carries one axis of the plane (Y carries X, so
+    EBY turns X's travel against Z's) is that plane's squareness (ISO 230-1): EB0Z tilts
+    Z's travel, so P0 = -EB0Z. Another size, the wrong sign, another plane, a carriage
+    that carries no axis of the plane (X, outermost: a turn of the work only) or a
+    tool-side one (Z carries only the tool) are not."""
+    truth = {"chain": "[w X Y b Z t]", "conventions": {"tool_located": False},
+             "strokes_m": {}, "effects": [{"iso_name": "EB0Z", "kind": "squareness",
+                                           "axis": "Z", "side": "tool",
+                                           "value_si": -34.5e-6, "identifiable": True}]}
+
+    def right(name, p0):
+        return score(truth, {"named": [_named(name, {"P1": 0.4e-6, "P0": p0})]})["right"]
+
+    assert right("angular:EBY", 34.47e-6)
+    assert not right("angular:EBY", 12e-6)
+    assert not right("angular:EBY", -34.47e-6)
+    assert not right("angular:ECY", 34.47e-6)
+    assert not right("angular:EBX", 34.47e-6)
+    assert not right("angular_arm:EBZ", 34.47e-6)
+    assert not score(truth, {"named": [_named("angular:EBY", {"P1": 34.47e-6})]})["right"]
+    # Tilting the carried axis instead: EB0X turns X's travel as EBY's P0 does.
+    truth["effects"][0].update(iso_name="EB0X", axis="X", side="work", value_si=20e-6)
+    assert right("angular:EBY", 20e-6) and not right("angular:EBY", -20e-6)
