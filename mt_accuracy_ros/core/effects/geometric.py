@@ -14,13 +14,18 @@
     ISO 230-1 3.4.8), up to an order chosen in-fold by BIC; a table's tilt
     (a work-side carriage carrying no rotary axis) may also take its constant
     P_0, chosen the same way: one rotation of the table, its constant the
-    squareness of its plane (ISO 230-1);
+    squareness of its plane (ISO 230-1). A work-side carriage that carries the
+    rotary axes turns them with the table and the work; under a target located
+    at the set-up (an R-test's or a probed sphere) its tilt is read as
+    e(q) - R_S(q) R_S(q_s)^T e(q_s) (ISO 10791-6), orders 1-2, with its constant
+    part unless the turn is about the first carried rotary axis' direction;
   - periodic: cos/sin of 2 pi q / lambda and its second harmonic, the period
     lambda searched from 2 to 50 mm (ball-screw pitch, rack, guideway waviness)
     by a weighted least-squares periodogram of the training readings.
 
 * **Squareness** of the three axis pairs: location errors E_C0Y, E_B0Z, E_A0Z
-  (Khan & Chen's eps_xy, eps_zx, eps_zy), one candidate each.
+  (Khan & Chen's eps_xy, eps_zx, eps_zy), one candidate each; under a target located
+  at the set-up on a work side that turns, read located like a tilt (ISO 10791-6).
 * **Rotary axes** (Khan & Chen eqs. 9-16, section 3): position-dependent errors
   E_XA ... E_CA of a rotary axis as Fourier series in its angle (harmonics 2-4;
   the first is the location errors'),
@@ -37,6 +42,7 @@ from __future__ import annotations
 import numpy as np
 
 from .base import Context, EffectFamily, along
+from .setup_location import side_rotations
 from .spectral import (direct_basis, frequency_grid, grid_periodogram, resolvable,
                        weight_sums)
 
@@ -44,6 +50,8 @@ from .spectral import (direct_basis, frequency_grid, grid_periodogram, resolvabl
 _KIND_COMPONENTS = {"positioning": "self", "straightness": "XYZ", "angular": "ABC"}
 #: Legendre orders searched per smooth error (from its first order on), and the largest.
 _ORDERS = 6
+#: Legendre orders of a located tilt of a carriage that carries the rotary axes.
+_LOCATED_ORDERS = 2
 _LARGEST_ORDER = 2 + _ORDERS - 1
 
 
@@ -102,6 +110,116 @@ def carries_rotary(machine, axis: str) -> bool:
         if axis in branch:
             return any(machine.axes[a].is_rotary for a in branch[branch.index(axis) + 1:])
     return False
+
+
+def turns_about_carried_rotary(machine, variant: str) -> bool:
+    """Whether the angular error ``variant`` of a carriage turns about the direction of the
+    first rotary axis the carriage carries: a constant turn of it is that axis' zero and
+    line offset (ISO 230-7 location errors), not a tilt of its own.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine (branches from the bed outwards).
+    variant : str
+        An angular error, e.g. ``EBX``.
+
+    Returns
+    -------
+    bool
+        True when the first rotary axis outward of the carriage turns about the same
+        direction (linear axes between them do not turn it).
+    """
+    for branch in (machine.workpiece_branch, machine.tool_branch):
+        if variant[2] in branch:
+            for axis in branch[branch.index(variant[2]) + 1:]:
+                if machine.axes[axis].is_rotary:
+                    return machine.axes[axis].direction == "ABC".index(variant[1])
+    return False
+
+
+def located_tilt_seen(ctx: Context) -> bool:
+    """Whether the work side holds a rotary axis that moved: then what was located at the
+    set-up (the sphere, the part) turns with it, and a tilt's value there shows.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings.
+
+    Returns
+    -------
+    bool
+        True when a rotary axis of the workpiece branch moved over the readings.
+    """
+    machine = ctx.machine
+    return any(machine.axes[a].is_rotary and ctx.moves(a) for a in machine.workpiece_branch)
+
+
+#: How close [rad] a rotary command must be to its set-up angle for a reading to be taken at
+#: the set-up pose (commands written in degrees to a few decimals).
+_AT_SETUP_RAD = 1e-5
+
+
+def setup_rows(ctx: Context) -> np.ndarray | None:
+    """(N,) for each reading, the first reading of its target taken at the set-up pose
+    (every work-side rotary axis at its set-up angle, modulo a turn): where the target was
+    located. None when a target has no reading there.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings.
+
+    Returns
+    -------
+    ndarray of intp, shape (N,), or None
+        Row index of each reading's set-up reading.
+    """
+    key = "tilt_setup_rows"
+    if key not in ctx.cache:
+        machine = ctx.machine
+        at_setup = np.ones(ctx.n, dtype=bool)
+        for axis in machine.workpiece_branch:
+            if machine.axes[axis].is_rotary:
+                turn = ctx.variables.positions[axis] - machine.setup_angle(axis)
+                wrapped = np.angle(np.exp(1j * turn))    # an angle modulo a full turn
+                at_setup &= np.abs(wrapped) < _AT_SETUP_RAD
+        groups = ctx.target_groups
+        groups = np.zeros(ctx.n, dtype=np.intp) if groups is None else groups
+        rows = np.empty(ctx.n, dtype=np.intp)
+        found = True
+        for g in np.unique(groups):
+            member = groups == g
+            first = np.flatnonzero(member & at_setup)
+            if first.size == 0:
+                found = False
+                break
+            rows[member] = first[0]
+        ctx.cache[key] = rows if found else None
+    return ctx.cache[key]
+
+
+def located_tilt(ctx: Context, design: np.ndarray) -> np.ndarray:
+    """(N, 3, P) a work-side tilt's design as a target located at the set-up reads it:
+    e(q) - R_S(q) R_S(q_s)^T e(q_s), e(q_s) the tilt's move of the same target at the
+    reading where it was located (ISO 10791-6 set-up).
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings (:func:`setup_rows` not None).
+    design : ndarray, shape (N, 3, P)
+        The tilt's move of the target per unit coefficient [m per unit], bed frame.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, P)
+        [m per unit], bed frame.
+    """
+    turned, at_setup = side_rotations(ctx, "work")
+    then = design[setup_rows(ctx)]
+    return design - np.einsum("nij,jk,nkp->nip", turned, at_setup.T, then)
 
 
 class ComponentError(EffectFamily):
@@ -164,7 +282,10 @@ class ComponentError(EffectFamily):
         -------
         list of dict
             ``{"period_m": lambda}`` [m] on a resolvable frequency grid, or ``{"order": k}``;
-            a table's tilt also ``{"order": k, "constant": True}`` (P1 .. Pk and P0).
+            a table's tilt also ``{"order": k, "constant": True}`` (P1 .. Pk and P0); the
+            tilt of a work-side carriage that carries rotary axes, under a target located
+            at the set-up, also ``{"order": k, "located": True}`` with or without the
+            constant (:func:`located_tilt`), k = 1, 2.
         """
         if self.periodic:
             low, high = ctx.machine.axes[variant[2]].stroke
@@ -174,9 +295,24 @@ class ComponentError(EffectFamily):
             return [{"period_m": float(1.0 / f)} for f in grid]
         first = 2 if self.kind == "straightness" else 1
         orders = [{"order": k} for k in range(first, first + _ORDERS)]
-        if self.kind != "angular" or carries_rotary(ctx.machine, variant[2]) or \
-                variant[2] not in ctx.machine.workpiece_branch:
+        if self.kind != "angular" or variant[2] not in ctx.machine.workpiece_branch:
             return orders
+        if carries_rotary(ctx.machine, variant[2]):
+            if not located_tilt_seen(ctx) or setup_rows(ctx) is None:
+                return orders
+            # A carriage that carries the rotary axes turns them, the table and the work
+            # about its pivot; the target located at the set-up took in the tilt there,
+            # which then turns with the rotary axes (ISO 10791-6): one rotation, read as
+            # the located instrument reads it (its value at the set-up tied to its shape).
+            # Smooth and of low order only: a located tilt of higher order, on a sweep where
+            # the carriage follows one rotary axis, would stand in for that axis' own errors.
+            # A constant turn about the direction of the first rotary axis carried is that
+            # axis' zero and line offset (rotary_location), not offered as the tilt's.
+            located = [{"order": k, "located": True} for k in range(1, _LOCATED_ORDERS + 1)]
+            if turns_about_carried_rotary(ctx.machine, variant):
+                return orders + located
+            return orders + located + [{"order": k, "constant": True, "located": True}
+                                       for k in range(1, _LOCATED_ORDERS + 1)]
         # A table's tilt with a constant part turns the table, and the work on it, about
         # its pivot: the constant is the squareness of the tilt's plane (ISO 230-1), booked
         # with the tilt as one rotation rather than as a pair of squareness slopes. On a
@@ -208,6 +344,8 @@ class ComponentError(EffectFamily):
         if self.periodic:
             return None
         first = 2 if self.kind == "straightness" else 1
+        if bool(setting.get("located")) != bool(largest.get("located")):
+            return None     # a located tilt's columns are not the plain ones'
         columns = list(range(setting["order"] - first + 1))
         if setting.get("constant"):
             columns.append(largest["order"] - first + 1)
@@ -268,6 +406,13 @@ class ComponentError(EffectFamily):
         ndarray, shape (N, 3, P)
             [m per m] or [m per rad] of coefficient.
         """
+        if setting.get("located"):
+            # e(q) - R_S(q) R_S(q_s)^T e(q_s): the tilt, and its value at the set-up located
+            # into the work and turning with it (ISO 10791-6); the datum takes the rest.
+            plain = along(*self.separable_design(ctx, variant, dict(setting, located=False)))
+            # Readings with no target at the set-up pose (a CNC's own commands) get the
+            # tilt as the machine makes it: the located part is the instrument's.
+            return plain if setup_rows(ctx) is None else located_tilt(ctx, plain)
         return along(*self.separable_design(ctx, variant, setting))
 
     def separable_design(self, ctx: Context, variant: str, setting: dict):
@@ -287,6 +432,8 @@ class ComponentError(EffectFamily):
         tuple of ndarray
             (sensitivity (N, 3) [m per error unit], basis (N, P) dimensionless).
         """
+        if setting.get("located"):
+            return None     # the located set-up error is no product of one sensitivity
         axis = variant[2]
         if self.periodic:
             # Every periodic error of an axis has the same harmonics at one period.
@@ -328,6 +475,29 @@ class ComponentError(EffectFamily):
         # Pitch, yaw and roll turn the tool; positioning and straightness do not.
         return ctx.orientation_jacobian(variant) if self.kind == "angular" else None
 
+    def orientation_design(self, ctx: Context, variant: str, setting: dict):
+        """(N, 3, P) the tool's turn per unit coefficient [rad per unit]: the tilt's turn
+        along its basis; the located set-up error turns nothing (a translation).
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        ndarray, shape (N, 3, P), or None
+            [rad per parameter unit], bed frame; None for positioning and straightness.
+        """
+        if not setting.get("located"):
+            return super().orientation_design(ctx, variant, setting)
+        # A sphere has no direction to locate: the tool's turn is the tilt's own.
+        return super().orientation_design(ctx, variant, dict(setting, located=False))
+
     def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
         """The error motion itself, E(q) [m or rad] at axis positions q: what a CNC's
         per-axis compensation table holds (not its effect at the TCP).
@@ -352,8 +522,9 @@ class ComponentError(EffectFamily):
         """
         low, high = machine.axes[variant[2]].stroke
         q = np.asarray(q, dtype=np.float64)
-        return self._basis(q, (2.0 * q - (low + high)) / (high - low), setting) @ \
-            np.asarray(coefficients, dtype=np.float64)
+        basis = self._basis(q, (2.0 * q - (low + high)) / (high - low), setting)
+        # The located set-up error (last, with ``located``) is no motion of the axis.
+        return basis @ np.asarray(coefficients, dtype=np.float64)[:basis.shape[1]]
 
     @property
     def preselects(self) -> bool:
@@ -464,6 +635,10 @@ class ComponentError(EffectFamily):
             plane = {"A": "Y and Z", "B": "X and Z", "C": "X and Y"}[variant[1]]
             reach += (f"; its constant part P0 turns the carriage and all it carries - the "
                       f"squareness of {plane}")
+        if setting.get("located"):
+            reach += ("; the tilt turns the rotary axes the carriage carries, and its value "
+                      "where the target was located at the set-up turns with them "
+                      "(ISO 10791-6)")
         return (f"the {kind} error {variant} of the {axis} axis, smooth along its travel "
                 f"(Legendre order {setting.get('order')}){reach} (ISO 230-1, Kidani eq. 2.6)")
 
@@ -484,7 +659,8 @@ class ComponentError(EffectFamily):
             return f"period {setting['period_m'] * 1e3:.3f} mm"
         constant = ", with a constant part (its plane's squareness)" if \
             setting.get("constant") else ""
-        return f"order {setting['order']}{constant}"
+        located = ", located at the set-up with the work" if setting.get("located") else ""
+        return f"order {setting['order']}{constant}{located}"
 
 
 class Squareness(EffectFamily):
@@ -552,7 +728,9 @@ class Squareness(EffectFamily):
         return ["angle_rad"]
 
     def design(self, ctx, variant, setting):
-        """Location error's sensitivity, or the slope's: sensitivity times position.
+        """Location error's sensitivity, or the slope's: sensitivity times position; read
+        as a target located at the set-up reads it where the work side turns
+        (:func:`located_tilt`: the squareness' move there went into the target).
 
         Parameters
         ----------
@@ -570,8 +748,24 @@ class Squareness(EffectFamily):
         """
         if variant in self.OTHER_REFERENCE:
             position = ctx.variables.positions[variant[2]]
-            return (ctx.jacobian(variant) * position[:, None])[:, :, None]
-        return ctx.jacobian(variant)[:, :, None]
+            design = (ctx.jacobian(variant) * position[:, None])[:, :, None]
+        else:
+            design = ctx.jacobian(variant)[:, :, None]
+        if self._located(ctx, variant):
+            design = located_tilt(ctx, design)
+        return design
+
+    @staticmethod
+    def _located(ctx: Context, variant: str) -> bool:
+        """Whether a target located at the set-up took in this squareness' move there, turning
+        with the work-side rotary axes: not where the tilted slide is on a head that turns
+        (there the tool was located in its own frame first, and its part turns with the head)."""
+        if not located_tilt_seen(ctx) or setup_rows(ctx) is None:
+            return False
+        machine = ctx.machine
+        slide = variant[3] if len(variant) == 4 else variant[2]
+        head = any(machine.axes[a].is_rotary for a in machine.tool_branch)
+        return not (head and slide in machine.tool_branch)
 
     def orientation_design(self, ctx, variant, setting):
         """The turn of the later axis' frame; None for the other-reference (translational) form.
