@@ -631,10 +631,13 @@ class ComponentError(EffectFamily):
                 "angular": "angular"}[self.kind]
         reach = " reaching the TCP through its Abbe arms" if self.kind == "angular" else ""
         if setting.get("constant"):
-            # ISO 230-1: a constant turn of a carriage is the squareness of its plane.
+            # ISO 230-1: a constant turn of a carriage that carries one axis of its plane
+            # turns that axis' travel against the other's - their squareness; carrying
+            # neither (the outermost table), it turns only the work on it.
             plane = {"A": "Y and Z", "B": "X and Z", "C": "X and Y"}[variant[1]]
             reach += (f"; its constant part P0 turns the carriage and all it carries - the "
-                      f"squareness of {plane}")
+                      f"squareness of {plane} where it carries one of them, else a turn of "
+                      "the work on it")
         if setting.get("located"):
             reach += ("; the tilt turns the rotary axes the carriage carries, and its value "
                       "where the target was located at the set-up turns with them "
