@@ -103,6 +103,26 @@ class Scored:
                         self.coefficient_p if on_coefficients else 1.0)
 
 
+def simplicity(candidate: Scored) -> tuple[int, int]:
+    """How much a candidate assumes, for Occam's tie-break (smaller is simpler).
+
+    Parameters
+    ----------
+    candidate : Scored
+        A scored candidate (its full-data coefficients set).
+
+    Returns
+    -------
+    tuple of int
+        Its family's :meth:`~..effects.base.EffectFamily.variant_complexity`, then its
+        number of fitted parameters (of two equally assuming families, the one that fits
+        fewer numbers: an offset of the tool where it was located before a rotary line
+        offset and its two tilts).
+    """
+    parameters = 0 if candidate.coefficients is None else int(candidate.coefficients.size)
+    return candidate.term.family.variant_complexity(candidate.term.variant), parameters
+
+
 @dataclass
 class Step:
     """One selection step: the ranking and, if one passed, the term added."""
@@ -777,11 +797,11 @@ class Selector(ReadingDesigns):
         if not plausible:
             return scored, None
         # Occam: among candidates the held-out data cannot tell apart from the best
-        # (out-of-fold MSE within ``tie``), the simplest explanation is named first.
+        # (out-of-fold MSE within ``tie``), the simplest explanation is named first: the
+        # fewest assumptions, then the fewest parameters.
         limit = scored[0].cv_rmse ** 2 * (1.0 + self.tie)
         tied = [s for s in plausible if s.cv_rmse ** 2 <= limit]
-        simplest = min(tied, key=lambda s: (s.term.family.variant_complexity(s.term.variant),
-                                             s.cv_rmse))
+        simplest = min(tied, key=lambda s: (*simplicity(s), s.cv_rmse))
         scored.remove(simplest)
         scored.insert(0, simplest)
         return scored, plausible[0]
@@ -852,8 +872,7 @@ class Selector(ReadingDesigns):
             limit = plausible[0].cv_rmse ** 2 * (1.0 + self.tie)
             lowest = float("inf")
             for c in sorted((s for s in plausible if s.cv_rmse ** 2 <= limit),
-                            key=lambda s: (s.term.family.variant_complexity(s.term.variant),
-                                           s.cv_rmse)):
+                            key=lambda s: (*simplicity(s), s.cv_rmse)):
                 if c.cv_rmse < lowest:
                     keep.add(id(c))
                     lowest = c.cv_rmse
@@ -1035,9 +1054,10 @@ class Selector(ReadingDesigns):
     def run(self, terms: list[Term], max_terms: int = 4, beam: int = 3) -> list[Step]:
         """The forward selection: steps until nothing passes or ``max_terms`` were added.
 
-        A first step where no single term passes tries pairs (:meth:`pair_lookahead`).
-        After each addition every earlier term must still earn its place
-        (:meth:`no_longer_needed`); one that does not is dropped (:attr:`dropped`).
+        A first step where no single term passes tries pairs (:meth:`pair_lookahead`);
+        one where a simpler candidate passes too may begin from it instead
+        (:meth:`_simpler_start`). After each addition every earlier term must still earn
+        its place (:meth:`no_longer_needed`); one that does not is dropped (:attr:`dropped`).
         Every added term is refit jointly at the end; one physics then refuses is taken
         out again, with the reason.
 
@@ -1055,9 +1075,17 @@ class Selector(ReadingDesigns):
         list of Step
             In order; ``Scored.coefficients`` of the added ones are the joint fit.
         """
-        steps = []
         self.keep_errors = max(1, beam)
-        remaining = list(terms)
+        steps = self._simpler_start(terms, max_terms, beam,
+                                    self._forward(terms, max_terms, beam, []))
+        self._refit_jointly(steps)
+        return steps
+
+    def _forward(self, terms: list[Term], max_terms: int, beam: int, steps: list[Step]
+                 ) -> list[Step]:
+        """:meth:`run`'s greedy steps from ``steps`` (and :attr:`selected`) on."""
+        chosen = {t.name for t, _ in self.selected}
+        remaining = [t for t in terms if t.name not in chosen]
         while len(self.selected) < max_terms and remaining:
             step = self.step(remaining)
             steps.append(step)
@@ -1081,6 +1109,57 @@ class Selector(ReadingDesigns):
             remaining = [t for t in remaining if t.name != step.added.term.name]
             if len(self.selected) > 1:
                 self.no_longer_needed(steps, step.added)
+        return steps
+
+    def _simpler_start(self, terms: list[Term], max_terms: int, beam: int,
+                       steps: list[Step]) -> list[Step]:
+        """The search begun from a simpler first term, when it ends as well with fewer
+        parameters.
+
+        The first step takes the candidate with the least held-out error; a flexible one
+        (a rotary axis' harmonics) may stand in there for two simple effects together (a
+        squareness and the tool's located error), after which each of them trims too
+        little to be named. Each plausible candidate among the first step's ``beam`` best
+        that is simpler (:func:`simplicity`) and passes the acceptance rule on its own is
+        taken first instead, and the search goes on from it; its selection replaces the
+        first when it predicts the held-out readings as well (out-of-fold MSE within the
+        Occam tie) with no more effects and fewer parameters - Occam's razor over whole
+        selections, not only over one step's candidates.
+        """
+        first = steps[0] if steps else None
+        if first is None or first.added is None or not beam:
+            return steps
+
+        def size() -> tuple[int, int]:
+            coefficients, _, _ = self.fit_full(self.selected)
+            return len(self.selected), sum(c.size for c in coefficients)
+
+        best = (steps, list(self.selected), list(self.dropped),
+                self._out_of_fold_mse(self.selected), size())
+        for alternative in [s for s in first.ranking[1:beam] if not s.refusal and
+                            simplicity(s) < simplicity(first.added)]:
+            self.selected, self.dropped = [], []
+            stats = self._baseline()[0]
+            start = replace(alternative)
+            # On the block test alone: its full-data coefficients were not ranked first.
+            if self.test([start], first.added, terms, stats.base) is None:
+                continue
+            self.selected = [(start.term, start.setting)]
+            ranking = [start if s is alternative else s for s in first.ranking]
+            path = self._forward(terms, max_terms, beam,
+                                 [Step(first.base_cv_rmse, ranking, start)])
+            mse, (count, parameters) = self._out_of_fold_mse(self.selected), size()
+            # No more effects and fewer numbers: one effect is never traded for two.
+            if mse <= best[3] * (1.0 + self.tie) and count <= best[4][0] and \
+                    parameters < best[4][1]:
+                best = (path, list(self.selected), list(self.dropped), mse,
+                        (count, parameters))
+        steps, self.selected, self.dropped = best[0], best[1], best[2]
+        return steps
+
+    def _refit_jointly(self, steps: list[Step]) -> None:
+        """Every added term refit jointly; one physics then refuses is taken out again,
+        with the reason (:meth:`run`)."""
         while True:
             added = [s.added for s in steps if s.added is not None]
             if not added:
@@ -1101,7 +1180,6 @@ class Selector(ReadingDesigns):
             for step in steps:
                 if step.added is scored:
                     step.added = None
-        return steps
 
     def remaining_residual(self) -> NDArray[np.float64]:
         """(N, K) residual after the offsets and the selected terms (in-sample)."""
