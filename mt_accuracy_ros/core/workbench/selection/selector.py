@@ -1120,11 +1120,11 @@ class Selector(ReadingDesigns):
         (a rotary axis' harmonics) may stand in there for two simple effects together (a
         squareness and the tool's located error), after which each of them trims too
         little to be named. Each plausible candidate among the first step's ``beam`` best
-        that is simpler (:func:`simplicity`) and passes the acceptance rule on its own is
-        taken first instead, and the search goes on from it; its selection replaces the
-        first when it predicts the held-out readings as well (out-of-fold MSE within the
-        Occam tie) with no more effects and fewer parameters - Occam's razor over whole
-        selections, not only over one step's candidates.
+        that assumes less (:meth:`EffectFamily.variant_complexity`) and passes the
+        acceptance rule on its own is taken first instead, and the search goes on from it;
+        its selection replaces the first when it predicts the held-out readings as well
+        (out-of-fold MSE within the Occam tie) with no more effects and fewer parameters -
+        Occam's razor over whole selections, not only over one step's candidates.
         """
         first = steps[0] if steps else None
         if first is None or first.added is None or not beam:
@@ -1136,8 +1136,13 @@ class Selector(ReadingDesigns):
 
         best = (steps, list(self.selected), list(self.dropped),
                 self._out_of_fold_mse(self.selected), size())
+        def assumes(s: Scored) -> int:
+            return s.term.family.variant_complexity(s.term.variant)
+
+        # Of fewer assumptions: a family that fits fewer numbers to the same assumptions (a
+        # rotary axis' harmonics against its line's offsets and tilts) is no simpler start.
         for alternative in [s for s in first.ranking[1:beam] if not s.refusal and
-                            simplicity(s) < simplicity(first.added)]:
+                            assumes(s) < assumes(first.added)]:
             self.selected, self.dropped = [], []
             stats = self._baseline()[0]
             start = replace(alternative)
