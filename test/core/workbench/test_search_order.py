@@ -47,6 +47,11 @@ def test_a_squareness_under_a_head_is_named_not_the_b_axis_harmonics(tmp_path):
                  if n["name"] in ("squareness:EXZ", "squareness:EZX", "squareness:EB0Z"))
     assert abs(square + 51.5e-6) < 0.1 * 51.5e-6, result["named"]
     assert score(truth, result)["right"], score(truth, result)
+    # Said, beside the term the search began from: nothing silent about the choice.
+    said = [n["explanation"] for n in result["named"] if "the search began from" in
+            n["explanation"]]
+    assert len(said) == 1 and "rotary_error" in said[0] and "numbers instead of" in said[0], \
+        [n["explanation"] for n in result["named"]]
 
 
 def _candidate(name: str, cv_rmse: float, parameters: int) -> Scored:

@@ -133,6 +133,29 @@ class Step:
 
 
 
+@dataclass(frozen=True)
+class SimplerStart:
+    """The search began from a simpler first term than the first step's leader, because
+    that whole selection predicts the held-out readings as well with fewer numbers
+    (:meth:`Selector._simpler_start`)."""
+
+    started_from: str
+    leader: str
+    parameters: int
+    leader_parameters: int
+    #: Out-of-fold RMS of each whole selection (the residual's unit: [m]).
+    held_out_rms: float
+    leader_held_out_rms: float
+
+    def sentence(self) -> str:
+        """What the output says of it, beside the term the search began from."""
+        return (f"the search began from {self.started_from}, which assumes less than "
+                f"{self.leader} (the first step's leader): that whole selection predicts the "
+                f"held-out readings as well ({self.held_out_rms * 1e6:.3g} against "
+                f"{self.leader_held_out_rms * 1e6:.3g} um RMS) with {self.parameters} numbers "
+                f"instead of {self.leader_parameters}")
+
+
 class Selector(ReadingDesigns):
     """Forward selection over ``terms`` for the residual (N, K) at ``ctx``'s readings.
 
@@ -152,6 +175,8 @@ class Selector(ReadingDesigns):
         #: into folds + 1 blocks, each block is predicted by a fit on the blocks *before*
         #: it only, and the first block is never judged (nothing precedes it).
         self.forward = bool(forward)
+        #: Set by :meth:`run` when the selection kept began from a simpler first term.
+        self.simpler_start: SimplerStart | None = None
         folds = folds + 1 if self.forward else folds
         if blocks is not None:
             # Given blocks (a log of many runs: whole runs, never cut): 0, 1, ... in order.
@@ -1076,6 +1101,7 @@ class Selector(ReadingDesigns):
             In order; ``Scored.coefficients`` of the added ones are the joint fit.
         """
         self.keep_errors = max(1, beam)
+        self.simpler_start = None
         steps = self._simpler_start(terms, max_terms, beam,
                                     self._forward(terms, max_terms, beam, []))
         self._refit_jointly(steps)
@@ -1136,6 +1162,7 @@ class Selector(ReadingDesigns):
 
         best = (steps, list(self.selected), list(self.dropped),
                 self._out_of_fold_mse(self.selected), size())
+        mse0, size0 = best[3], best[4]
         def assumes(s: Scored) -> int:
             return s.term.family.variant_complexity(s.term.variant)
 
@@ -1159,6 +1186,10 @@ class Selector(ReadingDesigns):
                     parameters < best[4][1]:
                 best = (path, list(self.selected), list(self.dropped), mse,
                         (count, parameters))
+        if best[0] is not steps:
+            self.simpler_start = SimplerStart(best[0][0].added.term.name,
+                                              first.added.term.name, best[4][1], size0[1],
+                                              float(np.sqrt(best[3])), float(np.sqrt(mse0)))
         steps, self.selected, self.dropped = best[0], best[1], best[2]
         return steps
 
