@@ -718,9 +718,11 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     for candidate, step in zip(selected, [s for s in steps if s.added is not None]):
         candidate.cv_rmse_after = step.added.cv_rmse
     say_inseparable(selector, [s.added for s in steps if s.added is not None], selected, terms)
-    for candidate in selected:
-        if selector.simpler_start and candidate.name == selector.simpler_start.started_from:
-            candidate.explanation += "; " + selector.simpler_start.sentence()
+    if selector.simpler_start and selected:
+        # Beside the term begun from, or - when a later one explained it and took its
+        # place - beside the first named.
+        began = [c for c in selected if c.name == selector.simpler_start.started_from]
+        (began or selected)[0].explanation += "; " + selector.simpler_start.sentence()
     position_mask = obs.measured_mask
     in_sample = float(np.sqrt(np.mean(position_residual[position_mask] ** 2))) \
         if position_mask.any() else 0.0

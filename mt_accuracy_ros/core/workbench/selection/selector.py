@@ -1186,8 +1186,11 @@ class Selector(ReadingDesigns):
                     parameters < best[4][1]:
                 best = (path, list(self.selected), list(self.dropped), mse,
                         (count, parameters))
+                # The term begun from (a later one may have explained it and taken its
+                # place: its step then holds no addition).
+                started_from = start.term.name
         if best[0] is not steps:
-            self.simpler_start = SimplerStart(best[0][0].added.term.name,
+            self.simpler_start = SimplerStart(started_from,
                                               first.added.term.name, best[4][1], size0[1],
                                               float(np.sqrt(best[3])), float(np.sqrt(mse0)))
         steps, self.selected, self.dropped = best[0], best[1], best[2]
