@@ -356,16 +356,23 @@ def test_a_stop_signal_in_the_middle_of_writing_leaves_every_counted_message_rea
                                        "chunk_size": 1024, "chunk_interval_s": 0.01,
                                        "discovery_period_s": 0.1})
     assert spin_until(node, lambda: publisher.get_subscription_count() >= 1)
-    sent, started, signalled = 0, time.monotonic(), False
-    stop_at = 0.3 + 0.1 * round_
-    while time.monotonic() - started < stop_at + 0.5:
+    # The signal's moment is counted from the first chunk on disk (an event), not from the
+    # match: a loaded host once let the whole 0.3 s pass before the recorder wrote anything.
+    bag_file = tmp_path / "bag" / "bag_0.mcap"
+    sent, writing_since, signalled_at = 0, None, None
+    deadline = time.monotonic() + 60
+    while signalled_at is None or time.monotonic() - signalled_at < 0.5:
+        assert time.monotonic() < deadline, "the recorder wrote no chunk in 60 s"
         publisher.publish(String(data=f"m{sent}"))
         sent += 1
         if sent % 20 == 0:
             spin_for(node, 0.001)
-        if not signalled and time.monotonic() - started >= stop_at:
+            if writing_since is None and _recoverable(bag_file) > 0:
+                writing_since = time.monotonic()
+        if (signalled_at is None and writing_since is not None
+                and time.monotonic() - writing_since >= 0.1 * round_):
             recorder.popen.send_signal(signal.SIGINT)
-            signalled = True
+            signalled_at = time.monotonic()
     assert recorder.popen.wait(timeout=30) == 0
     node.destroy_node()
     counted = bag_info(tmp_path / "bag")["topics"]["/chatter"]["count"]
