@@ -37,15 +37,23 @@ PUBLISHER = textwrap.dedent("""
 
 @pytest.fixture(scope="module")
 def received():
+    """Every message type as the other process published it. The subscriber has a context
+    and an executor of its own (never the process-wide ones other test files share) and
+    is torn down in rclpy's order: the executor, the node, the context - and only then is
+    the publisher's process ended (a loaded run once crashed inside destroy_node)."""
     import rclpy
+    from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     import mt_accuracy_msgs.msg as messages
 
     code = PUBLISHER.format(test_dir=str(REPO_ROOT / "test"), types=MESSAGE_TYPES)
     publisher = subprocess.Popen([sys.executable, "-c", code])
-    rclpy.init()
-    node = rclpy.create_node("roundtrip_subscriber")
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node("roundtrip_subscriber", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
     qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
     got: dict[str, object] = {}
@@ -56,12 +64,14 @@ def received():
         # A timeout against a hung graph, not a speed requirement.
         deadline = time.monotonic() + 25
         while len(got) < len(MESSAGE_TYPES) and time.monotonic() < deadline:
-            rclpy.spin_once(node, timeout_sec=0.1)
+            executor.spin_once(timeout_sec=0.1)
     finally:
+        executor.remove_node(node)
+        executor.shutdown()
+        node.destroy_node()
+        context.try_shutdown()
         publisher.kill()
         publisher.wait()
-        node.destroy_node()
-        rclpy.shutdown()
     return got
 
 
