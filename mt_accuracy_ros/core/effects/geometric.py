@@ -45,7 +45,7 @@ import numpy as np
 
 from .base import Context, EffectFamily, along
 from .setup_location import side_rotations
-from .spectral import (direct_basis, frequency_grid, grid_periodogram, resolvable,
+from .spectral import (direct_basis, frequency_grid, resolvable, strongest_frequencies,
                        weight_sums)
 
 #: ISO 230-1 component letters of a linear axis' errors, by kind.
@@ -620,9 +620,8 @@ class ComponentError(EffectFamily):
                                          frequencies, basis=basis)
         # The period is chosen by the fundamental alone: with its harmonic too, readings
         # taken on the fly (positions on a near-lattice) let aliases fit as well.
-        explained, _ = grid_periodogram(q, targets.T, None, frequencies, weights=ctx.cache[key],
-                                        basis=basis)
-        return np.argmax(explained, axis=0)
+        return strongest_frequencies(q, targets.T, frequencies, weights=ctx.cache[key],
+                                     basis=basis)
 
     def explanation(self, variant: str, setting: dict) -> str:
         """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
