@@ -349,39 +349,19 @@ def grid_periodogram(q, target, weight, frequencies, *, weights=None, basis=None
     return out_e, out_a
 
 
-#: cos and -sin of :func:`direct_basis`'s phases as two real arrays (2, P, N): a real
-#: target's sums by two real products, half a complex product's arithmetic. Bounded as
-#: :data:`_BASES` is, for as many axes.
-_BASIS_PARTS = ByteBoundedCache(max_bytes=45_000_000)
-
-
-def _basis_parts(q: NDArray[np.float64], frequencies: NDArray[np.float64],
-                 basis: NDArray[np.complex128]) -> NDArray[np.float64]:
-    """(real, imaginary) of ``basis`` (:func:`direct_basis` of ``q`` and ``frequencies``),
-    contiguous, kept for the process as the basis is."""
-    key = _basis_key(q, frequencies)
-    parts = _BASIS_PARTS.get(key)
-    if parts is None:
-        parts = np.stack([basis.real, basis.imag])
-        parts.flags.writeable = False
-        _BASIS_PARTS.put(key, parts)
-    return parts
-
-
 def strongest_frequencies(q, target, frequencies, *, weights, basis=None
                           ) -> NDArray[np.intp]:
     """The index of each column's largest :func:`grid_periodogram` ``explained``, as
     ``np.argmax(grid_periodogram(...)[0], axis=0)`` gives it, at a fraction of its cost.
 
-    The periodogram is computed once more cheaply: a real target's sums by two real
-    products where the sums are direct, and every frequency's 3 x 3 normal equations
-    solved in closed form (adjugate over determinant, for all columns at once) instead
-    of by LAPACK one column at a time. That rounds differently, so each value carries a
-    bound on how far either computation can be from the exact one (floating-point
-    error of the sums, the solve and the offset's subtraction, with a 64-fold
-    margin); a column whose largest value is not clear of every other by those bounds
-    - a near tie, a degenerate frequency - is computed again as
-    :func:`grid_periodogram` does. So the index returned is the one it returns.
+    The same Fourier sums, but every frequency's 3 x 3 normal equations solved in closed
+    form (adjugate over determinant, for all columns at once) instead of by LAPACK one
+    column at a time. That rounds differently, so each value carries a bound on how far
+    either computation can be from the exact one (floating-point error of the solve,
+    the target's sum and the offset's subtraction, with a 64-fold margin); a column
+    whose largest value is not clear of every other by those bounds - a near tie, a
+    degenerate frequency - is computed again as :func:`grid_periodogram` does. So the
+    index returned is the one it returns.
 
     Parameters
     ----------
@@ -404,14 +384,9 @@ def strongest_frequencies(q, target, frequencies, *, weights, basis=None
     q = np.asarray(q, float)
     target = np.asarray(target, float).reshape(q.size, -1)
     sum_w, zw1, zw2 = weights
-    if basis is None:
-        basis = direct_basis(q, frequencies)
-    if basis is not None:
-        parts = _basis_parts(q, np.asarray(frequencies, float), basis)
-        zt_re, zt_im = parts[0] @ target, parts[1] @ target
-    else:
-        (zt1,) = _sums_at(q, target, frequencies, harmonic=False)
-        zt_re, zt_im = zt1.real, zt1.imag
+    # The target's sums as grid_periodogram makes them: only the solve differs.
+    (zt1,) = _sums_at(q, target, frequencies, harmonic=False, basis=basis)
+    zt_re, zt_im = zt1.real, zt1.imag
     with np.errstate(divide="ignore", invalid="ignore"):
         # A column of no weight (a degenerate determinant) is left to the exact path.
         explained, bound = _closed_form_explained(sum_w, zw1, zw2, target, zt_re, zt_im)
@@ -465,7 +440,8 @@ def _closed_form_explained(sum_w, zw1, zw2, target, zt_re, zt_im):
     # times the sum of its terms' magnitudes). LAPACK's solve: a backward error
     # eps |N| moves x' r by eps |x|' |N| |x|. The adjugate: each entry and the
     # determinant off by eps times their terms' magnitudes (``terms``, ``det_terms``).
-    # The target's sums (r) off by n eps sum |t| in either. The offset's subtraction.
+    # The target's sum (r0) taken in another order: off by n eps sum |t|. The offset's
+    # subtraction.
     ax0, ax1, ax2 = np.abs(x0), np.abs(x1), np.abs(x2)
     aa, ab, ac, ad, ae, af = np.abs(a), np.abs(b), np.abs(c), np.abs(d), np.abs(e), np.abs(f)
     solve_scale = (ax0 * (aa * ax0 + ab * ax1 + ac * ax2) +

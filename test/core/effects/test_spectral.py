@@ -149,7 +149,7 @@ def _fold_columns(seed: int, n: int, folds: int = 5):
 
 @pytest.mark.parametrize("n", [150, 3000])
 def test_the_strongest_frequencies_are_the_periodograms_argmax(n):
-    """The cheaper choice (real products, the 3 x 3 solved in closed form, a bound on
+    """The cheaper choice (the 3 x 3 solved in closed form for every column, a bound on
     each value's rounding) is the index the periodogram's argmax gives, column by column
     - by the direct sums (150 readings) and by the lattice (3,000); a column of zeros
     chooses the first frequency, as the argmax of its all-zero periodogram does."""
