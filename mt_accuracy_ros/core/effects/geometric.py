@@ -39,11 +39,13 @@
 """
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 from .base import Context, EffectFamily, along
 from .setup_location import side_rotations
-from .spectral import (direct_basis, frequency_grid, grid_periodogram, resolvable,
+from .spectral import (direct_basis, frequency_grid, resolvable, strongest_frequencies,
                        weight_sums)
 
 #: ISO 230-1 component letters of a linear axis' errors, by kind.
@@ -585,12 +587,27 @@ class ComponentError(EffectFamily):
         jac = ctx.jacobian(variant)
         trains = np.asarray(trains, dtype=bool)
         targets = np.einsum("fnc,nc->fn", residuals, np.where(mask, jac, 0.0)) * trains
-        q = ctx.variables.positions[variant[2]]
         frequencies = np.array([1.0 / s["period_m"] for s in settings])
         # The weights' sums depend on the readings, mask and training sets alone, not on
         # the residual: a selection's later steps reuse them.
         key = ("periodogram_weights", variant, trains.shape, hash(trains.tobytes()),
                hash(mask.tobytes()), hash(frequencies.tobytes()))
+        # The choice depends on nothing else than these and the targets; a selection asks
+        # for the same targets again (its other look, a step whose residual along this
+        # error did not move), so it is kept by the targets' digest.
+        choice_key = ("periodogram_choice", key,
+                      hashlib.blake2b(targets.tobytes(), digest_size=16).digest())
+        if choice_key not in ctx.cache:
+            ctx.cache[choice_key] = self._strongest_periods(ctx, variant, frequencies, key,
+                                                            targets, mask, trains)
+        return [settings[int(i)] for i in ctx.cache[choice_key]]
+
+    @staticmethod
+    def _strongest_periods(ctx, variant, frequencies, key, targets, mask, trains):
+        """Index of the strongest frequency of each fold's (row of ``targets``) periodogram,
+        shape (F,)."""
+        jac = ctx.jacobian(variant)
+        q = ctx.variables.positions[variant[2]]
         # The exponentials of an axis' positions serve every variant on that axis.
         basis_key = ("periodogram_basis", variant[2], hash(frequencies.tobytes()))
         if basis_key not in ctx.cache:
@@ -603,9 +620,8 @@ class ComponentError(EffectFamily):
                                          frequencies, basis=basis)
         # The period is chosen by the fundamental alone: with its harmonic too, readings
         # taken on the fly (positions on a near-lattice) let aliases fit as well.
-        explained, _ = grid_periodogram(q, targets.T, None, frequencies, weights=ctx.cache[key],
-                                        basis=basis)
-        return [settings[int(i)] for i in np.argmax(explained, axis=0)]
+        return strongest_frequencies(q, targets.T, frequencies, weights=ctx.cache[key],
+                                     basis=basis)
 
     def explanation(self, variant: str, setting: dict) -> str:
         """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
