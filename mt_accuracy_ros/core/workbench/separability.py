@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..effects.geometric import lever_line_offsets
 from .distributions import chi2_sf
 from .selection import Selector, Term
 
@@ -140,8 +141,27 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
             for other in terms:
                 if _comparable(term, other):
                     found += _reproduces(selector, base, contribution, term, other, limit)
+        if setting.get("lever"):
+            found.append(_lever_statement(selector, term, setting, coefficients[k]))
         out.append(found)
     return out
+
+
+def _lever_statement(selector: Selector, term: Term, setting: dict,
+                     coefficients: NDArray[np.float64]) -> dict:
+    """A located tilt's lever (its pivot off the carriage's origin) said as the carried
+    rotary lines' offsets it equals on any poses (:func:`lever_line_offsets`)."""
+    names = term.family.parameter_names(term.variant, setting)
+    fitted = dict(zip(names, map(float, coefficients)))
+    machine = selector.ctx.machine
+    offsets = lever_line_offsets(machine, term.variant, fitted)
+    carried = "".join(sorted({name[3] for name in offsets},
+                             key=machine.axis_order.index))
+    return {"name": f"rotary_location:{carried}", "parameters": offsets,
+            "reason": "the tilt's lever -P0 x p, a translation of the carriage, is the "
+                      "offset of every rotary line it carries (ISO 230-7): a pivot off "
+                      "the carriage's origin and those lines' offsets move the readings "
+                      "alike on any poses"}
 
 
 def _reproduces(selector: Selector, base: NDArray[np.float64], contribution: NDArray[np.float64],
