@@ -60,7 +60,7 @@ def parameter_unit(family: str, variant: str, name: str) -> tuple[str, float]:
     elif family == "rotary_location":   # each parameter its own ISO location error
         kind = "length" if name[1:2] in ("X", "Y", "Z") else "angle"
     elif family in ("angular", "angular_arm") and name.startswith("lever_"):
-        kind = "length"                 # a located tilt's lever: the carriage's move -P0 x p
+        kind = "length"                 # a located tilt's lever: the carriage's move
     elif family == "heat_source":
         kind = "spindle_gain" if variant == "spindle_speed" else "feed_gain"
     else:

@@ -260,12 +260,12 @@ def lever_names(variant: str) -> list[str]:
 def located_lever(ctx: Context, variant: str) -> np.ndarray:
     """(N, 3, 2) the reading's change per metre of a located tilt's lever: a tilt eps(q)
     about a pivot p off the carriage's origin turns what it carries about p, which moves it
-    by v = -P0 x p more than a turn about the origin does (x -> p + R (x - p); ISO 230-1: an
-    angular error about a point off the reference point moves it by the lever); v is taken
-    across the tilt's axis. A target located at the set-up took that move in there, and it
-    turns with the carried rotary axes, so the reading (the tool relative to the work)
-    changes by -(I - R_S(q) R_S(q_s)^T) v (ISO 10791-6): the located set-up error's shape,
-    of the opposite sign, along the two directions across.
+    by v = -P0 (e_k x p) more than a turn about the origin does (x -> p + R (x - p); ISO
+    230-1: an angular error about a point off the reference point moves it by the lever);
+    v is taken across the tilt's axis e_k. A target located at the set-up took that move
+    in there, and it turns with the carried rotary axes, so the reading (the tool relative
+    to the work) changes by -(I - R_S(q) R_S(q_s)^T) v (ISO 10791-6): the located set-up
+    error's shape, of the opposite sign, along the two directions across.
 
     Parameters
     ----------
@@ -519,14 +519,13 @@ class ComponentError(EffectFamily):
             # into the work and turning with it (ISO 10791-6); the datum takes the rest.
             plain = along(*self.separable_design(ctx, variant, dict(setting, located=False)))
             # Readings with no target at the set-up pose (a CNC's own commands) get the
-            # tilt as the machine makes it: the located part is the instrument's.
-            if setup_rows(ctx) is None:
-                lever = np.zeros((ctx.n, 3, 2 if setting.get("lever") else 0))
-                return np.concatenate([plain, lever], axis=2)
-            located = located_tilt(ctx, plain)
+            # tilt as the machine makes it: the located part is the instrument's. The lever
+            # is the machine's own (its carried lines' offsets, referred to the machine's
+            # set-up pose as a rotary line is): the same on any batch of commands.
+            tilt = plain if setup_rows(ctx) is None else located_tilt(ctx, plain)
             if setting.get("lever"):
-                located = np.concatenate([located, located_lever(ctx, variant)], axis=2)
-            return located
+                tilt = np.concatenate([tilt, located_lever(ctx, variant)], axis=2)
+            return tilt
         return along(*self.separable_design(ctx, variant, setting))
 
     def separable_design(self, ctx: Context, variant: str, setting: dict):
@@ -776,9 +775,9 @@ class ComponentError(EffectFamily):
                       "where the target was located at the set-up turns with them "
                       "(ISO 10791-6)")
         if setting.get("lever"):
-            reach += (f"; about a pivot p off the carriage's origin, whose lever -P0 x p "
-                      f"({', '.join(lever_names(variant))}) moves all it carries, located "
-                      "alike (ISO 230-1)")
+            reach += (f"; about a pivot p off the carriage's origin, whose lever "
+                      f"-P0 (e_k x p) ({', '.join(lever_names(variant))}) moves all it "
+                      "carries, located alike")
         return (f"the {kind} error {variant} of the {axis} axis, smooth along its travel "
                 f"(Legendre order {setting.get('order')}){reach} (ISO 230-1, Kidani eq. 2.6)")
 

@@ -142,26 +142,35 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
                 if _comparable(term, other):
                     found += _reproduces(selector, base, contribution, term, other, limit)
         if setting.get("lever"):
-            found.append(_lever_statement(selector, term, setting, coefficients[k]))
+            found += _lever_statement(selector, term, setting, coefficients[k])
         out.append(found)
     return out
 
 
 def _lever_statement(selector: Selector, term: Term, setting: dict,
-                     coefficients: NDArray[np.float64]) -> dict:
-    """A located tilt's lever (its pivot off the carriage's origin) said as the carried
-    rotary lines' offsets it equals on any poses (:func:`lever_line_offsets`)."""
+                     coefficients: NDArray[np.float64]) -> list[dict]:
+    """A located tilt's lever (its pivot off the carriage's origin) said as what it equals
+    on any poses: the carried rotary lines' offsets (:func:`lever_line_offsets`) and the
+    work's located set-up error, v = -lever (:func:`located_lever` is minus
+    :func:`located_design`'s columns across the tilt's axis)."""
     names = term.family.parameter_names(term.variant, setting)
     fitted = dict(zip(names, map(float, coefficients)))
     machine = selector.ctx.machine
     offsets = lever_line_offsets(machine, term.variant, fitted)
+    if not offsets:
+        raise ValueError(f"{term.name}: a lever, but its carriage carries no rotary line")
     carried = "".join(sorted({name[3] for name in offsets},
                              key=machine.axis_order.index))
-    return {"name": f"rotary_location:{carried}", "parameters": offsets,
-            "reason": "the tilt's lever -P0 x p, a translation of the carriage, is the "
-                      "offset of every rotary line it carries (ISO 230-7): a pivot off "
-                      "the carriage's origin and those lines' offsets move the readings "
-                      "alike on any poses"}
+    lever = {name: value for name, value in fitted.items() if name.startswith("lever_")}
+    part = f"the tilt's lever ({', '.join(lever)}; -P0 (e_k x p), a translation of the carriage)"
+    located = {"v_" + name[-1]: -value for name, value in lever.items()}
+    return [{"name": f"rotary_location:{carried}", "parameters": offsets,
+             "reason": f"{part} is the offset of every rotary line it carries (ISO 230-7): "
+                       "a pivot off the carriage's origin and those lines' offsets move the "
+                       "readings alike on any poses; the tilt's other numbers are its own"},
+            {"name": "setup_location:work", "parameters": located,
+             "reason": f"{part} moves a target located at the set-up as the work's located "
+                       "set-up error -lever does (ISO 10791-6)"}]
 
 
 def _reproduces(selector: Selector, base: NDArray[np.float64], contribution: NDArray[np.float64],

@@ -156,6 +156,13 @@ def test_a_roll_of_the_carriage_that_carries_a_and_c_about_a_pivot_is_named_as_t
     assert roll.parameters["lever_z"] == pytest.approx(c0 * PIVOT[0], abs=0.2e-6)
     slope = named["squareness:EZY"].parameters["angle_rad"]
     assert abs(slope) == pytest.approx(abs(c1 * PIVOT[0]), rel=0.1)
+    # Said: the lever is the offsets of the lines Y carries, and the located set-up error.
+    said = {s["name"]: s["parameters"] for s in roll.inseparable}
+    assert said["rotary_location:AC"] == pytest.approx(
+        {"EZ0A": roll.parameters["lever_z"], "EX0C": roll.parameters["lever_x"]}, abs=1e-15)
+    assert said["setup_location:work"] == pytest.approx(
+        {"v_x": -roll.parameters["lever_x"], "v_z": -roll.parameters["lever_z"]}, abs=1e-15)
+    assert "lever (lever_x, lever_z" in roll.explanation
 
 
 def test_the_lever_is_the_offsets_of_the_lines_the_carriage_carries():
@@ -174,3 +181,39 @@ def test_the_lever_is_the_offsets_of_the_lines_the_carriage_carries():
         np.testing.assert_allclose(coefficients, [-15e-6, 20e-6], atol=1e-10)
     lever = {"lever_x": -15e-6, "lever_z": 20e-6}
     assert lever_line_offsets(ctx.machine, "EBY", lever) == {"EZ0A": 20e-6, "EX0C": -15e-6}
+
+
+def test_the_lever_of_a_yaw_offsets_every_carried_line_across_it():
+    """A yaw ECY's lever lies along x and y: it offsets A's line in y and C's line in x and
+    y (each line keeps v's components across its own direction, ISO 230-7); readings made
+    from exactly those offsets are the yaw's lever's, at two set-up poses."""
+    lever = {"lever_x": 12e-6, "lever_y": -9e-6}
+    offsets = {"EY0A": -9e-6, "EX0C": 12e-6, "EY0C": -9e-6}
+    for setup_deg in ({"A": 0, "C": 0}, {"A": 60, "C": 45}):
+        ctx, _, _ = _ctx([], setup_deg)
+        assert lever_line_offsets(ctx.machine, "ECY", lever) == offsets
+        truth = [{"iso_name": name, "kind": "location_offset", "axis": name[3],
+                  "value_si": value} for name, value in offsets.items()]
+        ctx, errors, groups = _ctx(truth, setup_deg)
+        coefficients, rms = _fit(located_lever(ctx, "ECY"), errors, groups)
+        assert np.abs(errors).max() > 5e-6
+        assert rms < 1e-9
+        np.testing.assert_allclose(coefficients, [12e-6, -9e-6], atol=1e-10)
+
+
+def test_the_levers_prediction_does_not_depend_on_a_set_up_reading_in_the_batch():
+    """A CNC's own commands hold no reading at the set-up pose: the lever is the machine's
+    (its carried lines' offsets, referred to the machine's set-up pose), so its columns are
+    the same whether or not the batch holds such a reading (before: zeros without one)."""
+    generator, described = _trunnion_ac({"A": 0, "C": 0})
+    poses = _grid({"A": 0, "C": 0})
+    positions, _, targets, _ = _located_readings(generator, described, poses, SPHERES[:1], [])
+    family = ComponentError("angular", False)
+    with_setup = Context(described, Variables(positions), work_point=targets[0])
+    moved = np.abs(positions["A"]) + np.abs(positions["C"]) > 1e-3
+    without = Context(described, Variables({k: v[moved] for k, v in positions.items()}),
+                      work_point=targets[0])
+    full = family.design(with_setup, "EBY", LEVER)
+    assert not np.all(moved) and np.any(full[moved][:, :, -2:])
+    np.testing.assert_allclose(family.design(without, "EBY", LEVER)[:, :, -2:],
+                               full[moved][:, :, -2:], atol=1e-15)
