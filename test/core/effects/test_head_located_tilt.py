@@ -33,6 +33,7 @@ from mt_accuracy_ros.core.effects.geometric import (HEAD, ComponentError, carrie
                                                    turns_about_carried_rotary)
 from mt_accuracy_ros.core.effects.variables import Variables
 from mt_accuracy_ros.core.workbench.diagnosis import Observations, diagnose
+from mt_accuracy_ros.core.workbench.selection import Selector, Term
 from studies import convention_surveys as cs
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "workbench"))
@@ -252,3 +253,19 @@ def test_a_pitch_of_the_ram_under_a_turning_head_is_named_alone():
     # Stroke -0.6 .. 0.9 m: P1 = 0.75 c1 = 45 urad, P0 = 0.15 c1 = 9 urad.
     assert named.parameters["P1"] == pytest.approx(45e-6, abs=3e-6)
     assert named.parameters.get("P0", 0.0) == pytest.approx(9e-6, abs=3e-6)
+
+
+def test_a_located_tilts_sensitivity_is_made_again_from_a_separable_setting():
+    """A selector that lost a tilt's sensitivity from its store makes it again from a
+    setting whose design is one sensitivity times scalar columns: not from the last, the
+    head-located one (not separable)."""
+    generator, described = _gantry_head({"C": 0, "B": 0})
+    located, _, _ = _readings(generator, described, _grid({"C": 0, "B": 0}), [])
+    ctx = Context(described, located.variables, work_point=SPHERE)
+    family = ComponentError("angular", False)
+    term = Term(family, "EAZ", family.settings(ctx, "EAZ"))
+    assert term.settings[-1].get("located") == HEAD
+    selector = Selector(ctx, np.zeros((ctx.n, 3)), np.ones((ctx.n, 3), dtype=bool), 1e-6)
+    along_rows, squared = selector.sensitivity(term)
+    np.testing.assert_array_equal(along_rows, ctx.jacobian("EAZ").reshape(-1))
+    np.testing.assert_allclose(squared, np.sum(ctx.jacobian("EAZ") ** 2, axis=1))
