@@ -20,6 +20,11 @@ alternative need reproduce). Only a contribution the other named effects do not 
 reproduce is judged (what is left of it beyond that bound). The alternative's own
 coefficients are given (its least-squares fit of that contribution), so a reader - or a
 proof - can read the other explanation's values.
+
+A named rotary line or set-up location is also judged parameter by parameter against the
+constant turns of the tool-side carriages that carry the head (:func:`head_turns`): where
+the carriages stand still while the head turns, such a turn moves the located tool along
+the circles a line's offset draws, and the output says which parameter it stands for.
 """
 from __future__ import annotations
 
