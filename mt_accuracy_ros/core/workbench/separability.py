@@ -203,6 +203,14 @@ def head_turns(selector: Selector, base: NDArray[np.float64], block: NDArray[np.
         family_named("angular")
     names = term.family.parameter_names(term.variant, named_setting)
     names = names if len(names) == block.shape[1] > 1 else [""] * block.shape[1]
+    # Only a parameter that carries a part the others and the base do not reproduce has
+    # anything for a turn to stand for (a parameter fitted near zero has not).
+    needed = []
+    for j in range(block.shape[1]):
+        x = np.column_stack([base, np.delete(block, j, axis=1)])
+        solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
+        rest = contribution - x @ solution
+        needed.append(float(rest @ rest) > limit)
     found = []
     for axis in machine.tool_branch:
         if not carries_head(machine, axis):
@@ -217,6 +225,8 @@ def head_turns(selector: Selector, base: NDArray[np.float64], block: NDArray[np.
             if not np.any(columns):
                 continue
             for j, name in enumerate(names):
+                if not needed[j]:
+                    continue
                 x = np.column_stack([base, np.delete(block, j, axis=1), columns])
                 solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
                 rest = contribution - x @ solution

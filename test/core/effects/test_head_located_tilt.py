@@ -269,3 +269,23 @@ def test_a_located_tilts_sensitivity_is_made_again_from_a_separable_setting():
     along_rows, squared = selector.sensitivity(term)
     np.testing.assert_array_equal(along_rows, ctx.jacobian("EAZ").reshape(-1))
     np.testing.assert_allclose(squared, np.sum(ctx.jacobian("EAZ") ** 2, axis=1))
+
+
+def test_a_line_parameter_fitted_near_zero_has_no_turn_said_to_stand_for_it():
+    """C's line tilted about y alone (EB0C, folded into EX0C), the carriages still: the turns
+    about y are said to stand for EX0C, and none for EY0C, which carries nothing here (any
+    turn would 'reproduce' a zero)."""
+    generator, described = _gantry_head({"C": 0, "B": 0})
+    sweep = [{"B": 0.0, "C": math.radians(c)} for c in np.arange(-180, 180, 15)] * 4
+    tilt = {"iso_name": "EB0C", "kind": "location_tilt", "axis": "C", "value_si": 56e-6}
+    ctx, errors, _ = _readings(generator, described, sweep, [tilt])
+    n = ctx.n
+    measured = errors + np.random.default_rng(4).normal(0.0, geometry.NOISE, (n, 3))
+    obs = Observations(ctx.variables.positions, measured, np.ones((n, 3), bool),
+                       np.arange(n, dtype=float), {}, {}, 2 * geometry.NOISE,
+                       work_point=SPHERE)
+    diagnosis = diagnose(ErrorModel(described), obs)
+    assert [s.name for s in diagnosis.selected] == ["rotary_location:C"], diagnosis.text()
+    reasons = [alt["reason"] for alt in diagnosis.selected[0].inseparable
+               if alt["name"].startswith("angular:")]
+    assert reasons and all(r.endswith("as EX0C does") for r in reasons), reasons
