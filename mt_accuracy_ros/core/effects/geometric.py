@@ -838,7 +838,12 @@ class ComponentError(EffectFamily):
         kind = {"positioning": "positioning", "straightness": "straightness",
                 "angular": "angular"}[self.kind]
         reach = " reaching the TCP through its Abbe arms" if self.kind == "angular" else ""
-        if setting.get("constant"):
+        if setting.get("constant") and setting.get("located") == HEAD:
+            # A constant turn of a carriage that carries the head turns the head's lines
+            # together: their tilts about the same direction (ISO 230-7).
+            reach += ("; its constant part P0 turns the head and all it carries - its rotary "
+                      "axes' lines tilted alike about the same direction")
+        elif setting.get("constant"):
             # ISO 230-1: a constant turn of a carriage that carries one axis of its plane
             # turns that axis' travel against the other's - their squareness; carrying
             # neither (the outermost table), it turns only the work on it.
@@ -877,6 +882,8 @@ class ComponentError(EffectFamily):
         located = ", located at the set-up with the work" if setting.get("located") else ""
         if setting.get("located") == HEAD:
             located = ", the tool located at the head's set-up"
+            constant = ", with a constant part (the head's lines tilted alike)" if \
+                setting.get("constant") else ""
         return f"order {setting['order']}{constant}{located}"
 
 

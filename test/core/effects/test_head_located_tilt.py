@@ -289,3 +289,18 @@ def test_a_line_parameter_fitted_near_zero_has_no_turn_said_to_stand_for_it():
     reasons = [alt["reason"] for alt in diagnosis.selected[0].inseparable
                if alt["name"].startswith("angular:")]
     assert reasons and all(r.endswith("as EX0C does") for r in reasons), reasons
+
+
+def test_the_head_located_tilts_words_say_the_tool_and_the_heads_lines():
+    """The output says the tool was located at the head's set-up, and that the constant
+    part turns the head's lines (not a squareness of the plane)."""
+    family = ComponentError("angular", False)
+    setting = {"order": 1, "constant": True, "located": HEAD}
+    words = family.explanation("EAZ", setting)
+    assert "the tool was located at the head's set-up" in words
+    assert "rotary axes' lines tilted alike" in words and "squareness" not in words
+    assert family.describe_setting(setting) == \
+        "order 1, with a constant part (the head's lines tilted alike), the tool located " \
+        "at the head's set-up"
+    assert family.describe_setting({"order": 2, "constant": True}) == \
+        "order 2, with a constant part (its plane's squareness)"
