@@ -59,6 +59,8 @@ def parameter_unit(family: str, variant: str, name: str) -> tuple[str, float]:
         kind = "length" if variant[1:2] in ("X", "Y", "Z") else "angle"
     elif family == "rotary_location":   # each parameter its own ISO location error
         kind = "length" if name[1:2] in ("X", "Y", "Z") else "angle"
+    elif family in ("angular", "angular_arm") and name.startswith("lever_"):
+        kind = "length"                 # a located tilt's lever: the carriage's move -P0 x p
     elif family == "heat_source":
         kind = "spindle_gain" if variant == "spindle_speed" else "feed_gain"
     else:

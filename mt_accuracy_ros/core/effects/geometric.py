@@ -44,11 +44,13 @@
 """
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 from .base import Context, EffectFamily, along
-from .setup_location import side_rotations
-from .spectral import (direct_basis, frequency_grid, grid_periodogram, resolvable,
+from .setup_location import located_design, side_rotations
+from .spectral import (direct_basis, frequency_grid, resolvable, strongest_frequencies,
                        weight_sums)
 
 #: ISO 230-1 component letters of a linear axis' errors, by kind.
@@ -225,6 +227,100 @@ def located_tilt(ctx: Context, design: np.ndarray) -> np.ndarray:
     turned, at_setup = side_rotations(ctx, "work")
     then = design[setup_rows(ctx)]
     return design - np.einsum("nij,jk,nkp->nip", turned, at_setup.T, then)
+
+
+def lever_components(variant: str) -> str:
+    """The bed's directions across a tilt's axis, along which its pivot's lever moves the
+    carriage: ``xz`` for ``EBY``.
+
+    Parameters
+    ----------
+    variant : str
+        An angular error, e.g. ``EBY``.
+
+    Returns
+    -------
+    str
+        Two of ``x``, ``y``, ``z``.
+    """
+    return "".join(c for c in "xyz" if c != "xyz"["ABC".index(variant[1])])
+
+
+def lever_names(variant: str) -> list[str]:
+    """Parameter names of a located tilt's lever, e.g. ``["lever_x", "lever_z"]`` [m].
+
+    Parameters
+    ----------
+    variant : str
+        An angular error, e.g. ``EBY``.
+
+    Returns
+    -------
+    list of str
+        One per direction of :func:`lever_components`.
+    """
+    return [f"lever_{c}" for c in lever_components(variant)]
+
+
+def located_lever(ctx: Context, variant: str) -> np.ndarray:
+    """(N, 3, 2) the reading's change per metre of a located tilt's lever: a tilt eps(q)
+    about a pivot p off the carriage's origin turns what it carries about p, which moves it
+    by v = -P0 x p more than a turn about the origin does (x -> p + R (x - p); ISO 230-1: an
+    angular error about a point off the reference point moves it by the lever); v is taken
+    across the tilt's axis. A target located at the set-up took that move in there, and it
+    turns with the carried rotary axes, so the reading (the tool relative to the work)
+    changes by -(I - R_S(q) R_S(q_s)^T) v (ISO 10791-6): the located set-up error's shape,
+    of the opposite sign, along the two directions across.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings (:func:`setup_rows` not None).
+    variant : str
+        An angular error of a work-side carriage that carries the rotary axes, e.g. ``EBY``.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 2)
+        [m per m of the carriage's move v], bed frame.
+    """
+    across = ["xyz".index(c) for c in lever_components(variant)]
+    return -located_design(ctx, "work")[:, :, across]
+
+
+def lever_line_offsets(machine, variant: str, lever: dict[str, float]) -> dict[str, float]:
+    """A located tilt's lever as the offsets of the rotary lines its carriage carries: a
+    translation v of the carriage moves each carried line by v (ISO 230-7 location errors,
+    the body turning about the moved line), and the readings alike on any poses, since
+    (I - R_1 R_2) v = (I - R_1) v + R_1 (I - R_2) v; each line keeps v's components across
+    its own direction.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine (branches from the bed outwards).
+    variant : str
+        The tilt, an angular error of a carriage that carries rotary axes, e.g. ``EBY``.
+    lever : dict of str to float
+        The lever's components, ``{"lever_x": ..., "lever_z": ...}``: the carriage's move
+        [m], bed frame.
+
+    Returns
+    -------
+    dict of str to float
+        ISO 230-7 line offsets [m], e.g. ``{"EZ0A": lever_z, "EX0C": lever_x}``; empty when
+        the carriage carries no rotary axis.
+    """
+    branch = next((b for b in (machine.workpiece_branch, machine.tool_branch)
+                   if variant[2] in b), ())
+    carried = [a for a in branch[branch.index(variant[2]) + 1:] if machine.axes[a].is_rotary] \
+        if branch else []
+    out = {}
+    for axis in carried:
+        for component in lever_components(variant):
+            if "xyz".index(component) != machine.axes[axis].direction:
+                out[f"E{component.upper()}0{axis}"] = float(lever[f"lever_{component}"])
+    return out
 
 
 #: The ``located`` value of a tilt's setting on the tool side: the tool was located (its
@@ -491,8 +587,14 @@ class ComponentError(EffectFamily):
             located = [{"order": k, "located": True} for k in range(1, _LOCATED_ORDERS + 1)]
             if turns_about_carried_rotary(ctx.machine, variant):
                 return orders + located
-            return orders + located + [{"order": k, "constant": True, "located": True}
-                                       for k in range(1, _LOCATED_ORDERS + 1)]
+            # Its pivot, off the carriage's origin, moves what the carriage carries by the
+            # constant part's lever (located_lever): offered with the constant part, at
+            # order 1 only (at order 2 it led the first step where a squareness and a line
+            # offset were the truth).
+            return orders + located + \
+                [{"order": 1, "constant": True, "located": True, "lever": True}] + \
+                [{"order": k, "constant": True, "located": True}
+                 for k in range(1, _LOCATED_ORDERS + 1)]
         # A table's tilt with a constant part turns the table, and the work on it, about
         # its pivot: the constant is the squareness of the tilt's plane (ISO 230-1), booked
         # with the tilt as one rotation rather than as a pair of squareness slopes. On a
@@ -526,9 +628,14 @@ class ComponentError(EffectFamily):
         first = 2 if self.kind == "straightness" else 1
         if bool(setting.get("located")) != bool(largest.get("located")):
             return None     # a located tilt's columns are not the plain ones'
+        if setting.get("lever") and not largest.get("lever"):
+            return None     # nor are a lever's
         columns = list(range(setting["order"] - first + 1))
         if setting.get("constant"):
             columns.append(largest["order"] - first + 1)
+        if setting.get("lever"):
+            # the lever's two columns follow the largest setting's P0
+            columns += [largest["order"] - first + 2, largest["order"] - first + 3]
         return columns
 
     def parameter_names(self, variant: str, setting: dict) -> list[str]:
@@ -551,7 +658,8 @@ class ComponentError(EffectFamily):
             return ["cos1", "sin1", "cos2", "sin2"]
         first = 2 if self.kind == "straightness" else 1
         return [f"P{k}" for k in range(first, setting["order"] + 1)] + \
-            (["P0"] if setting.get("constant") else [])
+            (["P0"] if setting.get("constant") else []) + \
+            (lever_names(variant) if setting.get("lever") else [])
 
     def _basis(self, q, u, setting):
         if self.periodic:
@@ -594,7 +702,13 @@ class ComponentError(EffectFamily):
             plain = along(*self._plain_separable(ctx, variant, setting))
             # Readings with no target at the set-up pose (a CNC's own commands) get the
             # tilt as the machine makes it: the located part is the instrument's.
-            return plain if setup_rows(ctx) is None else located_tilt(ctx, plain)
+            if setup_rows(ctx) is None:
+                lever = np.zeros((ctx.n, 3, 2 if setting.get("lever") else 0))
+                return np.concatenate([plain, lever], axis=2)
+            located = located_tilt(ctx, plain)
+            if setting.get("lever"):
+                located = np.concatenate([located, located_lever(ctx, variant)], axis=2)
+            return located
         return along(*self._plain_separable(ctx, variant, setting))
 
     def _head_located_design(self, ctx: Context, variant: str, setting: dict):
@@ -704,7 +818,11 @@ class ComponentError(EffectFamily):
             return turn if head_setup_row(ctx) is None else located_head_turn(ctx, turn)
         # The two spheres located at the set-up with the work: the direction's change there
         # turns with the work (ISO 10791-6).
-        return located_turn(ctx, turn) if self._turn_located(ctx, variant) else turn
+        turn = located_turn(ctx, turn) if self._turn_located(ctx, variant) else turn
+        if not setting.get("lever"):
+            return turn
+        # The lever (a translation) turns nothing.
+        return np.concatenate([turn, np.zeros((ctx.n, 3, 2))], axis=2)
 
     def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
         """The error motion itself, E(q) [m or rad] at axis positions q: what a CNC's
@@ -793,12 +911,27 @@ class ComponentError(EffectFamily):
         jac = ctx.jacobian(variant)
         trains = np.asarray(trains, dtype=bool)
         targets = np.einsum("fnc,nc->fn", residuals, np.where(mask, jac, 0.0)) * trains
-        q = ctx.variables.positions[variant[2]]
         frequencies = np.array([1.0 / s["period_m"] for s in settings])
         # The weights' sums depend on the readings, mask and training sets alone, not on
         # the residual: a selection's later steps reuse them.
         key = ("periodogram_weights", variant, trains.shape, hash(trains.tobytes()),
                hash(mask.tobytes()), hash(frequencies.tobytes()))
+        # The choice depends on nothing else than these and the targets; a selection asks
+        # for the same targets again (its other look, a step whose residual along this
+        # error did not move), so it is kept by the targets' digest.
+        choice_key = ("periodogram_choice", key,
+                      hashlib.blake2b(targets.tobytes(), digest_size=16).digest())
+        if choice_key not in ctx.cache:
+            ctx.cache[choice_key] = self._strongest_periods(ctx, variant, frequencies, key,
+                                                            targets, mask, trains)
+        return [settings[int(i)] for i in ctx.cache[choice_key]]
+
+    @staticmethod
+    def _strongest_periods(ctx, variant, frequencies, key, targets, mask, trains):
+        """Index of the strongest frequency of each fold's (row of ``targets``) periodogram,
+        shape (F,)."""
+        jac = ctx.jacobian(variant)
+        q = ctx.variables.positions[variant[2]]
         # The exponentials of an axis' positions serve every variant on that axis.
         basis_key = ("periodogram_basis", variant[2], hash(frequencies.tobytes()))
         if basis_key not in ctx.cache:
@@ -811,9 +944,8 @@ class ComponentError(EffectFamily):
                                          frequencies, basis=basis)
         # The period is chosen by the fundamental alone: with its harmonic too, readings
         # taken on the fly (positions on a near-lattice) let aliases fit as well.
-        explained, _ = grid_periodogram(q, targets.T, None, frequencies, weights=ctx.cache[key],
-                                        basis=basis)
-        return [settings[int(i)] for i in np.argmax(explained, axis=0)]
+        return strongest_frequencies(q, targets.T, frequencies, weights=ctx.cache[key],
+                                     basis=basis)
 
     def explanation(self, variant: str, setting: dict) -> str:
         """One sentence of physics for a user (see :meth:`EffectFamily.explanation`).
@@ -859,6 +991,10 @@ class ComponentError(EffectFamily):
             reach += ("; the tilt turns the rotary axes the carriage carries, and its value "
                       "where the target was located at the set-up turns with them "
                       "(ISO 10791-6)")
+        if setting.get("lever"):
+            reach += (f"; about a pivot p off the carriage's origin, whose lever -P0 x p "
+                      f"({', '.join(lever_names(variant))}) moves all it carries, located "
+                      "alike (ISO 230-1)")
         return (f"the {kind} error {variant} of the {axis} axis, smooth along its travel "
                 f"(Legendre order {setting.get('order')}){reach} (ISO 230-1, Kidani eq. 2.6)")
 
@@ -884,7 +1020,8 @@ class ComponentError(EffectFamily):
             located = ", the tool located at the head's set-up"
             constant = ", with a constant part (the head's lines tilted alike)" if \
                 setting.get("constant") else ""
-        return f"order {setting['order']}{constant}{located}"
+        lever = ", about a pivot off its origin" if setting.get("lever") else ""
+        return f"order {setting['order']}{constant}{located}{lever}"
 
 
 class Squareness(EffectFamily):

@@ -32,7 +32,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..effects import family_named
-from ..effects.geometric import HEAD, carries_head, head_setup_row, turns_about_carried_rotary
+from ..effects.geometric import (HEAD, carries_head, head_setup_row, lever_line_offsets,
+                                 turns_about_carried_rotary)
 from .distributions import chi2_sf
 from .selection import Selector, Term
 
@@ -149,6 +150,8 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
                     found += _reproduces(selector, base, contribution, term, other, limit)
             found += head_turns(selector, base, block, contribution, (term, setting), terms,
                                 limit)
+        if setting.get("lever"):
+            found.append(_lever_statement(selector, term, setting, coefficients[k]))
         out.append(found)
     return out
 
@@ -238,6 +241,23 @@ def head_turns(selector: Selector, base: NDArray[np.float64], block: NDArray[np.
                                   "reason": why + (f" as {name} does" if name else "")})
                     break
     return found
+
+
+def _lever_statement(selector: Selector, term: Term, setting: dict,
+                     coefficients: NDArray[np.float64]) -> dict:
+    """A located tilt's lever (its pivot off the carriage's origin) said as the carried
+    rotary lines' offsets it equals on any poses (:func:`lever_line_offsets`)."""
+    names = term.family.parameter_names(term.variant, setting)
+    fitted = dict(zip(names, map(float, coefficients)))
+    machine = selector.ctx.machine
+    offsets = lever_line_offsets(machine, term.variant, fitted)
+    carried = "".join(sorted({name[3] for name in offsets},
+                             key=machine.axis_order.index))
+    return {"name": f"rotary_location:{carried}", "parameters": offsets,
+            "reason": "the tilt's lever -P0 x p, a translation of the carriage, is the "
+                      "offset of every rotary line it carries (ISO 230-7): a pivot off "
+                      "the carriage's origin and those lines' offsets move the readings "
+                      "alike on any poses"}
 
 
 def _reproduces(selector: Selector, base: NDArray[np.float64], contribution: NDArray[np.float64],

@@ -224,15 +224,12 @@ def test_a_yaw_of_the_carriage_under_a_c_sweep_is_named_with_its_constant_part()
     assert named.parameters.get("P0", 0.0) == pytest.approx(-2e-6, abs=15e-6)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "on this small grid the yaw's constant part is named as the XY squareness (located, "
-    "53.6 urad for 52) and its varying part as a straightness EXY of order 4 (the simpler "
-    "translation in the Occam tie), not as the yaw; the convention proof's trial 036, of "
-    "this shape, names the yaw"))
 def test_a_yaw_and_a_pitch_of_the_carriages_seen_by_three_probed_spheres_are_both_named():
     """Three spheres probed on a trunnion B/C over a grid, each located on its own: the Y
     carriage's yaw (constant, linear and quadratic) and the X carriage's pitch are named,
-    nothing else (before: B's and C's lines, a squareness and stand-ins)."""
+    nothing else (before: B's and C's lines, a squareness and stand-ins; before the located
+    tilt's lever, the yaw's constant part as the XY squareness, located, 53.6 urad for 52,
+    and its varying part as a straightness EXY of order 4)."""
     generator, described = geometry._trunnion_bc({"B": 0, "C": 0})
     poses = [{"B": math.radians(b), "C": math.radians(c)}
              for b in np.arange(-90, 91, 30) for c in np.arange(-180, 180, 45)] * 2

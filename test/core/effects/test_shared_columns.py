@@ -56,3 +56,42 @@ def test_the_store_is_bounded_and_keeps_nothing_it_cannot_hold_enough_of(monkeyp
     # Too large for the store to hold SHARED_COLUMNS_KEPT of them: made, not kept.
     ctx.shared_columns(("big",), make(4000))
     assert ("big",) not in ctx._shared
+
+
+def test_a_preselection_asked_again_for_the_same_targets_is_the_choice_made_before(
+        monkeypatch):
+    """The period a periodogram chooses depends on the variant's readings, weights, folds
+    and the targets alone: asked again with the same residual (another look, a step that
+    left it unchanged) the kept choice comes back without a periodogram, equal to a
+    fresh context's; another residual is computed anew."""
+    from mt_accuracy_ros.core.effects import geometric
+
+    ctx = _context(400)
+    family = ComponentError("positioning", True)
+    settings = family.settings(ctx, "EXX")
+    rng = np.random.default_rng(9)
+    x = ctx.variables.positions["X"]
+    residual = np.zeros((400, 3))
+    residual[:, 0] = 4e-6 * np.sin(2 * np.pi * x / settings[5]["period_m"]) + \
+        rng.normal(0.0, 1e-6, 400)
+    mask = np.ones((400, 3), dtype=bool)
+    trains = np.ones((5, 400), dtype=bool)
+    for fold, rows in enumerate(np.array_split(np.arange(400), 5)):
+        trains[fold, rows] = False
+    residuals = np.repeat(residual[None], 5, axis=0)
+    computed = []
+    strongest = geometric.strongest_frequencies
+
+    def counted(*args, **kwargs):
+        computed.append(1)
+        return strongest(*args, **kwargs)
+
+    monkeypatch.setattr(geometric, "strongest_frequencies", counted)
+    first = family.preselect_folds(ctx, "EXX", settings, residuals, mask, trains)
+    again = family.preselect_folds(ctx, "EXX", settings, residuals.copy(), mask, trains)
+    assert again == first and len(computed) == 1
+    fresh = family.preselect_folds(_context(400), "EXX", settings, residuals, mask, trains)
+    assert fresh == first and len(computed) == 2
+    assert all(c["period_m"] == pytest.approx(settings[5]["period_m"]) for c in first)
+    family.preselect_folds(ctx, "EXX", settings, 0.5 * residuals, mask, trains)
+    assert len(computed) == 3

@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mt_accuracy_ros.core.effects import spectral
 from mt_accuracy_ros.core.effects.spectral import (direct_basis, frequency_grid,
-                                                   grid_periodogram, periodogram, weight_sums)
+                                                   grid_periodogram, periodogram,
+                                                   strongest_frequencies, weight_sums)
 from mt_accuracy_ros.core.workbench.selection import solve_normal
 
 
@@ -127,3 +129,86 @@ def test_a_basis_asked_again_is_the_kept_one_and_equals_a_fresh_one():
     assert other is not first
     np.testing.assert_array_equal(other[:, 1:], first[:, 1:])
     assert not np.array_equal(other[:, 0], first[:, 0])
+
+
+def _fold_columns(seed: int, n: int, folds: int = 5):
+    """A preselection's columns: each fold's training readings weighted, the rest zero; one
+    column of zeros (a component the error does not reach)."""
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(0.0, 0.4, n)
+    sensitivity = rng.uniform(0.5, 1.5, n)
+    signal = 3e-6 * np.sin(2 * np.pi * q / 0.0123 + 0.4) + rng.normal(0, 2e-6, n)
+    trains = np.ones((folds, n), dtype=bool)
+    for fold, rows in enumerate(np.array_split(np.arange(n), folds)):
+        trains[fold, rows] = False
+    weights = np.where(trains, sensitivity ** 2, 0.0).T
+    targets = np.where(trains, sensitivity * signal, 0.0).T
+    targets[:, -1] = 0.0
+    return q, targets, weights
+
+
+@pytest.mark.parametrize("n", [150, 3000])
+def test_the_strongest_frequencies_are_the_periodograms_argmax(n):
+    """The cheaper choice (the 3 x 3 solved in closed form for every column, a bound on
+    each value's rounding) is the index the periodogram's argmax gives, column by column
+    - by the direct sums (150 readings) and by the lattice (3,000); a column of zeros
+    chooses the first frequency, as the argmax of its all-zero periodogram does."""
+    for seed in range(6):
+        q, targets, weights = _fold_columns(seed + 10 * n, n)
+        f = frequency_grid(float(np.ptp(q)))
+        basis = direct_basis(q, f)
+        assert (basis is None) == (n == 3000)
+        sums = weight_sums(q, weights, f, basis=basis)
+        exact, _ = grid_periodogram(q, targets, None, f, weights=sums, basis=basis)
+        chosen = strongest_frequencies(q, targets, f, weights=sums, basis=basis)
+        np.testing.assert_array_equal(chosen, np.argmax(exact, axis=0))
+        assert chosen[-1] == 0 and not exact[:, -1].any()
+
+
+def test_the_closed_form_explained_is_the_solves_within_its_bound():
+    """Adjugate over determinant against LAPACK's solve (the formulation it replaces, kept
+    here): equal to 1e-12 of the column's largest value, and each difference inside the
+    bound the choice trusts."""
+    q, targets, weights = _fold_columns(5, 150)
+    targets, weights = targets[:, :-1], weights[:, :-1]
+    f = frequency_grid(float(np.ptp(q)))
+    basis = direct_basis(q, f)
+    sum_w, zw1, zw2 = weight_sums(q, weights, f, basis=basis)
+    zt1 = basis @ targets
+    explained, bound = spectral._closed_form_explained(sum_w, zw1, zw2, targets, zt1.real,
+                                                       zt1.imag)
+    for j in range(targets.shape[1]):
+        solved, _ = spectral._solve(float(sum_w[j]), zw1[:, j], zw2[:, j],
+                                    float(targets[:, j].sum()), zt1[:, j])
+        difference = np.abs(explained[:, j] - solved)
+        assert difference.max() <= 1e-12 * np.abs(solved).max()
+        assert np.all(difference <= bound[:, j])
+
+
+def test_an_unclear_choice_is_made_by_the_periodogram_itself(monkeypatch):
+    """A tie (the same frequency listed twice, its two values equal to the bit in either
+    computation) is not clear by any bound: that column is computed again as
+    grid_periodogram does, whose argmax takes the first of the two; the clear columns
+    are not."""
+    q, targets, weights = _fold_columns(7, 150)
+    # Column 1 another period: its choice is clear.
+    targets[:, 1] = np.where(weights[:, 1] > 0, 5e-6 * np.sin(2 * np.pi * q / 0.031), 0.0)
+    f = frequency_grid(float(np.ptp(q)))
+    sums = weight_sums(q, weights, f)
+    exact, _ = grid_periodogram(q, targets, None, f, weights=sums)
+    strongest = int(np.argmax(exact[:, 0]))
+    doubled = np.insert(f, strongest, f[strongest])
+    basis = direct_basis(q, doubled)
+    sums = weight_sums(q, weights, doubled, basis=basis)
+    asked = []
+
+    def counted(q_, target, weight, frequencies, **kwargs):
+        asked.append(target.shape[1])
+        return grid_periodogram(q_, target, weight, frequencies, **kwargs)
+
+    monkeypatch.setattr(spectral, "grid_periodogram", counted)
+    chosen = strongest_frequencies(q, targets, doubled, weights=sums, basis=basis)
+    exact, _ = grid_periodogram(q, targets, None, doubled, weights=sums, basis=basis)
+    np.testing.assert_array_equal(chosen, np.argmax(exact, axis=0))
+    assert chosen[0] == strongest and chosen[1] != strongest
+    assert asked == [int(np.sum(chosen == strongest))]
