@@ -18,7 +18,12 @@
     rotary axes turns them with the table and the work; under a target located
     at the set-up (an R-test's or a probed sphere) its tilt is read as
     e(q) - R_S(q) R_S(q_s)^T e(q_s) (ISO 10791-6), orders 1-2, with its constant
-    part unless the turn is about the first carried rotary axis' direction;
+    part unless the turn is about the first carried rotary axis' direction. A
+    tool-side carriage that carries the head's rotary axes turns them and the tool,
+    which was located at the head's set-up: e(q) - R_T(q) R_T(q_s)^T e(q_t), the
+    tool's direction alike (:func:`located_head_tilt`). Where the instrument measured
+    the tool's direction, a work-side tilt's turn is read located with the work
+    (:func:`located_turn`);
   - periodic: cos/sin of 2 pi q / lambda and its second harmonic, the period
     lambda searched from 2 to 50 mm (ball-screw pitch, rack, guideway waviness)
     by a weighted least-squares periodogram of the training readings.
@@ -318,6 +323,177 @@ def lever_line_offsets(machine, variant: str, lever: dict[str, float]) -> dict[s
     return out
 
 
+#: The ``located`` value of a tilt's setting on the tool side: the tool was located (its
+#: length set) at the head's set-up pose, and that location turns with the head.
+HEAD = "head"
+
+
+def carries_head(machine, axis: str) -> bool:
+    """Whether ``axis`` is a tool-side carriage that carries rotary axes of the head.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine (branches from the bed outwards).
+    axis : str
+        A linear axis' letter.
+
+    Returns
+    -------
+    bool
+        True when ``axis`` is on the tool branch with a rotary axis further out on it.
+    """
+    return axis in machine.tool_branch and carries_rotary(machine, axis)
+
+
+def head_setup_row(ctx: Context) -> int | None:
+    """The first reading taken with every rotary axis of the head at its set-up angle (modulo
+    a turn): where the tool was located - its length and position set in its own frame - by
+    the instrument (ISO 10791-6 set-up). None when the head never was there.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings.
+
+    Returns
+    -------
+    int or None
+        Row index of that reading.
+    """
+    key = "tilt_head_setup_row"
+    if key not in ctx.cache:
+        machine = ctx.machine
+        at_setup = np.ones(ctx.n, dtype=bool)
+        for axis in machine.tool_branch:
+            if machine.axes[axis].is_rotary:
+                turn = ctx.variables.positions[axis] - machine.setup_angle(axis)
+                at_setup &= np.abs(np.angle(np.exp(1j * turn))) < _AT_SETUP_RAD
+        first = np.flatnonzero(at_setup)
+        ctx.cache[key] = int(first[0]) if first.size else None
+    return ctx.cache[key]
+
+
+def head_located_settings(ctx: Context, variant: str) -> list[dict]:
+    """The located settings of a tilt of a carriage that carries the head's rotary axes:
+    ``{"order": k, "located": "head"}``, k = 1, 2, and with the constant part P0 unless the
+    turn is about the first carried rotary axis' direction; none when the head did not turn
+    or never stood at its set-up pose.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings.
+    variant : str
+        An angular error of a tool-side carriage that carries the head (e.g. ``EAZ``).
+
+    Returns
+    -------
+    list of dict
+        The settings (:func:`located_head_tilt` makes their designs).
+    """
+    machine = ctx.machine
+    turned = any(machine.axes[a].is_rotary and ctx.moves(a) for a in machine.tool_branch)
+    if not turned or head_setup_row(ctx) is None:
+        return []
+    # The carriage turns the head, its rotary lines and the tool about its pivot; the tool
+    # located at the head's set-up took the tilt's move there into where the tool is
+    # believed to be, and that belief turns with the head (ISO 10791-6): one rotation, its
+    # value at the set-up tied to its shape. Low orders only, as on the work side. A
+    # constant turn about the first carried rotary axis' direction is that axis' zero and
+    # line offset (ISO 230-7), not offered as the tilt's.
+    located = [{"order": k, "located": HEAD} for k in range(1, _LOCATED_ORDERS + 1)]
+    if turns_about_carried_rotary(machine, variant):
+        return located
+    return located + [{"order": k, "constant": True, "located": HEAD}
+                      for k in range(1, _LOCATED_ORDERS + 1)]
+
+
+def located_head_tilt(ctx: Context, design: np.ndarray) -> np.ndarray:
+    """(N, 3, P) a tilt of a carriage carrying the head as the located instruments read it:
+    the tool located at the head's set-up (row t), then the target at the work's (rows s),
+
+        f(q) = e(q) - R_T(q) R_T(q_s)^T e(q_t),   f(q) - R_W(q) R_W(q_s)^T f(q_s)
+
+    (ISO 10791-6 set-up; R_T, R_W the tool's and the work's end-frame rotations). The second
+    step only where the work side turns; else it is a constant, which the datum takes.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings (:func:`head_setup_row` not None).
+    design : ndarray, shape (N, 3, P)
+        The tilt's move of the tool tip per unit coefficient [m per unit], bed frame.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, P)
+        [m per unit], bed frame.
+    """
+    turned, at_setup = side_rotations(ctx, "tool")
+    then = design[head_setup_row(ctx)]
+    # e(q) - R_T(q) R_T(q_s)^T e(q_t): the tool's believed position turns with the head.
+    located = design - np.einsum("nij,jk,kp->nip", turned, at_setup.T, then)
+    if located_tilt_seen(ctx) and setup_rows(ctx) is not None:
+        located = located_tilt(ctx, located)     # then the target, located with the work
+    return located
+
+
+def located_head_turn(ctx: Context, turn: np.ndarray) -> np.ndarray:
+    """(N, 3, P) the tool direction's turn of a tilt of a carriage carrying the head, as an
+    instrument that located the tool's direction at the head's set-up reads it:
+    w(q) - R_T(q) R_T(q_s)^T w(q_t) (ISO 10791-6 set-up). Its part along the tool axis is
+    no direction change (the instrument sees the part across it): R_T(q) R_T(q_s)^T carries
+    the set-up's tool axis onto the reading's, so the two parts stay apart.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings (:func:`head_setup_row` not None).
+    turn : ndarray, shape (N, 3, P)
+        The tilt's turn of the tool per unit coefficient [rad per unit], bed frame.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, P)
+        [rad per unit], bed frame.
+    """
+    turned, at_setup = side_rotations(ctx, "tool")
+    then = turn[head_setup_row(ctx)]
+    return turn - np.einsum("nij,jk,kp->nip", turned, at_setup.T, then)
+
+
+def located_turn(ctx: Context, turn: np.ndarray) -> np.ndarray:
+    """(N, 3, P) a work-side error's turn of the tool as a two-sphere instrument located at
+    the set-up with the work reads it: the direction's change du(q_s) = w(q_s) x u(q_s) there
+    went into the located spheres and turns with the work,
+
+        w(q) - u(q) x R_W(q) R_W(q_s)^T du(q_s)         (ISO 10791-6 set-up)
+
+    (its part across the tool axis u is what the instrument sees; the same reading as
+    :meth:`KinematicModel.located_sensitivities` gives a rotary line's error).
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings (:func:`setup_rows` not None).
+    turn : ndarray, shape (N, 3, P)
+        The error's turn of the tool relative to the work per unit coefficient [rad per
+        unit], bed frame.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, P)
+        [rad per unit], bed frame.
+    """
+    turned, at_setup = side_rotations(ctx, "work")
+    rows = setup_rows(ctx)
+    axis = ctx.tool_axis()
+    then = np.cross(turn[rows], axis[rows][:, :, None], axisa=1, axisb=1, axisc=1)
+    moved = np.einsum("nij,jk,nkp->nip", turned, at_setup.T, then)
+    return turn - np.cross(axis[:, :, None], moved, axisa=1, axisb=1, axisc=1)
+
+
 class ComponentError(EffectFamily):
     """Positioning / straightness / angular error of a linear axis, smooth or periodic.
 
@@ -381,7 +557,9 @@ class ComponentError(EffectFamily):
             a table's tilt also ``{"order": k, "constant": True}`` (P1 .. Pk and P0); the
             tilt of a work-side carriage that carries rotary axes, under a target located
             at the set-up, also ``{"order": k, "located": True}`` with or without the
-            constant (:func:`located_tilt`), k = 1, 2.
+            constant (:func:`located_tilt`), k = 1, 2; the tilt of a tool-side carriage that
+            carries the head's rotary axes ``{"order": k, "located": "head"}`` alike
+            (:func:`head_located_settings`).
         """
         if self.periodic:
             low, high = ctx.machine.axes[variant[2]].stroke
@@ -391,6 +569,8 @@ class ComponentError(EffectFamily):
             return [{"period_m": float(1.0 / f)} for f in grid]
         first = 2 if self.kind == "straightness" else 1
         orders = [{"order": k} for k in range(first, first + _ORDERS)]
+        if self.kind == "angular" and carries_head(ctx.machine, variant[2]):
+            return orders + head_located_settings(ctx, variant)
         if self.kind != "angular" or variant[2] not in ctx.machine.workpiece_branch:
             return orders
         if carries_rotary(ctx.machine, variant[2]):
@@ -514,10 +694,12 @@ class ComponentError(EffectFamily):
         ndarray, shape (N, 3, P)
             [m per m] or [m per rad] of coefficient.
         """
+        if setting.get("located") == HEAD:
+            return self._head_located_design(ctx, variant, setting)
         if setting.get("located"):
             # e(q) - R_S(q) R_S(q_s)^T e(q_s): the tilt, and its value at the set-up located
             # into the work and turning with it (ISO 10791-6); the datum takes the rest.
-            plain = along(*self.separable_design(ctx, variant, dict(setting, located=False)))
+            plain = along(*self._plain_separable(ctx, variant, setting))
             # Readings with no target at the set-up pose (a CNC's own commands) get the
             # tilt as the machine makes it: the located part is the instrument's. The lever
             # is the machine's own (its carried lines' offsets, referred to the machine's
@@ -526,7 +708,14 @@ class ComponentError(EffectFamily):
             if setting.get("lever"):
                 tilt = np.concatenate([tilt, located_lever(ctx, variant)], axis=2)
             return tilt
-        return along(*self.separable_design(ctx, variant, setting))
+        return along(*self._plain_separable(ctx, variant, setting))
+
+    def _head_located_design(self, ctx: Context, variant: str, setting: dict):
+        """(N, 3, P) the tilt of a carriage carrying the head, the tool located at the head's
+        set-up (:func:`located_head_tilt`); the tilt as the machine makes it at readings
+        where the head never stood at its set-up (a CNC's own commands)."""
+        plain = along(*self._plain_separable(ctx, variant, setting))
+        return plain if head_setup_row(ctx) is None else located_head_tilt(ctx, plain)
 
     def separable_design(self, ctx: Context, variant: str, setting: dict):
         """The error's sensitivity and its basis columns (shared between the axis' errors).
@@ -545,8 +734,19 @@ class ComponentError(EffectFamily):
         tuple of ndarray
             (sensitivity (N, 3) [m per error unit], basis (N, P) dimensionless).
         """
-        if setting.get("located"):
+        if setting.get("located") or self._turn_located(ctx, variant):
             return None     # the located set-up error is no product of one sensitivity
+        return self._plain_separable(ctx, variant, setting)
+
+    def _turn_located(self, ctx: Context, variant: str) -> bool:
+        """Whether the instrument measured the tool's direction and located it with the work
+        at the set-up: a work-side tilt's turn is then read as located (:func:`located_turn`)."""
+        return self.kind == "angular" and ctx.orientation_lever_m is not None and \
+            variant[2] in ctx.machine.workpiece_branch and setup_rows(ctx) is not None
+
+    def _plain_separable(self, ctx: Context, variant: str, setting: dict):
+        """(sensitivity (N, 3), basis (N, P)) of the error as the machine makes it (no set-up
+        located into it): see :meth:`separable_design`."""
         axis = variant[2]
         if self.periodic:
             # Every periodic error of an axis has the same harmonics at one period.
@@ -590,7 +790,9 @@ class ComponentError(EffectFamily):
 
     def orientation_design(self, ctx: Context, variant: str, setting: dict):
         """(N, 3, P) the tool's turn per unit coefficient [rad per unit]: the tilt's turn
-        along its basis; the located set-up error turns nothing (a translation).
+        along its basis, read as the instrument located the direction: with the tool at the
+        head's set-up (:func:`located_head_turn`) or with the work (:func:`located_turn`,
+        where the direction was measured); else the tilt's own turn.
 
         Parameters
         ----------
@@ -606,14 +808,19 @@ class ComponentError(EffectFamily):
         ndarray, shape (N, 3, P), or None
             [rad per parameter unit], bed frame; None for positioning and straightness.
         """
-        if not setting.get("located"):
-            return super().orientation_design(ctx, variant, setting)
-        # A sphere has no direction to locate: the tool's turn is the tilt's own; the
-        # lever (a translation) turns nothing.
-        turn = super().orientation_design(ctx, variant, dict(setting, located=False,
-                                                             lever=False))
-        if turn is None or not setting.get("lever"):
+        turn = self.orientation_sensitivity(ctx, variant, setting)
+        if turn is None:
+            return None
+        turn = along(turn, self._plain_separable(ctx, variant, setting)[1])
+        if setting.get("located") == HEAD:
+            # The tool's direction located at the head's set-up too (two spheres).
+            return turn if head_setup_row(ctx) is None else located_head_turn(ctx, turn)
+        # The two spheres located at the set-up with the work: the direction's change there
+        # turns with the work (ISO 10791-6).
+        turn = located_turn(ctx, turn) if self._turn_located(ctx, variant) else turn
+        if not setting.get("lever"):
             return turn
+        # The lever (a translation) turns nothing.
         return np.concatenate([turn, np.zeros((ctx.n, 3, 2))], axis=2)
 
     def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
@@ -762,7 +969,12 @@ class ComponentError(EffectFamily):
         kind = {"positioning": "positioning", "straightness": "straightness",
                 "angular": "angular"}[self.kind]
         reach = " reaching the TCP through its Abbe arms" if self.kind == "angular" else ""
-        if setting.get("constant"):
+        if setting.get("constant") and setting.get("located") == HEAD:
+            # A constant turn of a carriage that carries the head turns the head's lines
+            # together: their tilts about the same direction (ISO 230-7).
+            reach += ("; its constant part P0 turns the head and all it carries - its rotary "
+                      "axes' lines tilted alike about the same direction")
+        elif setting.get("constant"):
             # ISO 230-1: a constant turn of a carriage that carries one axis of its plane
             # turns that axis' travel against the other's - their squareness; carrying
             # neither (the outermost table), it turns only the work on it.
@@ -770,7 +982,11 @@ class ComponentError(EffectFamily):
             reach += (f"; its constant part P0 turns the carriage and all it carries - the "
                       f"squareness of {plane} where it carries one of them, else a turn of "
                       "the work on it")
-        if setting.get("located"):
+        if setting.get("located") == HEAD:
+            reach += ("; the tilt turns the head's rotary axes the carriage carries, and its "
+                      "value where the tool was located at the head's set-up turns with the "
+                      "head (ISO 10791-6)")
+        elif setting.get("located"):
             reach += ("; the tilt turns the rotary axes the carriage carries, and its value "
                       "where the target was located at the set-up turns with them "
                       "(ISO 10791-6)")
@@ -799,6 +1015,10 @@ class ComponentError(EffectFamily):
         constant = ", with a constant part (its plane's squareness)" if \
             setting.get("constant") else ""
         located = ", located at the set-up with the work" if setting.get("located") else ""
+        if setting.get("located") == HEAD:
+            located = ", the tool located at the head's set-up"
+            constant = ", with a constant part (the head's lines tilted alike)" if \
+                setting.get("constant") else ""
         lever = ", about a pivot off its origin" if setting.get("lever") else ""
         return f"order {setting['order']}{constant}{located}{lever}"
 

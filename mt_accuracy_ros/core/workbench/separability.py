@@ -20,13 +20,20 @@ alternative need reproduce). Only a contribution the other named effects do not 
 reproduce is judged (what is left of it beyond that bound). The alternative's own
 coefficients are given (its least-squares fit of that contribution), so a reader - or a
 proof - can read the other explanation's values.
+
+A named rotary line or set-up location is also judged parameter by parameter against the
+constant turns of the tool-side carriages that carry the head (:func:`head_turns`): where
+the carriages stand still while the head turns, such a turn moves the located tool along
+the circles a line's offset draws, and the output says which parameter it stands for.
 """
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..effects.geometric import lever_line_offsets
+from ..effects import family_named
+from ..effects.geometric import (HEAD, carries_head, head_setup_row, lever_line_offsets,
+                                 turns_about_carried_rotary)
 from .distributions import chi2_sf
 from .selection import Selector, Term
 
@@ -141,10 +148,99 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
             for other in terms:
                 if _comparable(term, other):
                     found += _reproduces(selector, base, contribution, term, other, limit)
+            found += head_turns(selector, base, block, contribution, (term, setting), terms,
+                                limit)
         if setting.get("lever"):
             found += _lever_statement(selector, term, setting, coefficients[k])
         out.append(found)
     return out
+
+
+#: The located families a constant turn of a carriage that carries the head can stand for.
+HEAD_TURNED = ("rotary_location", "setup_location")
+
+
+def head_turns(selector: Selector, base: NDArray[np.float64], block: NDArray[np.float64],
+               contribution: NDArray[np.float64], named: tuple[Term, dict],
+               terms: list[Term], limit: float) -> list[dict]:
+    """The constant turns of tool-side carriages that carry the head which the readings
+    cannot part from a named rotary line's or set-up location's parameter.
+
+    A constant turn eps of such a carriage turns the head's lines and the tool about its
+    pivot; the tool, located at the head's set-up, took the turn's move there in, and that
+    belief turns with the head (ISO 10791-6): it reads eps x a(q) - R_T(q) R_T(q_s)^T
+    eps x a(q_t), a the arm to the tool tip. Where the carriages stand still (a sweep of a
+    head axis with the tip on its line) this is a circle, as a line's offset draws: the
+    parameter and the turn are one here. Each parameter of the named effect is judged on
+    its own (the others refitted with the turn in its place), within the same bound.
+
+    Parameters
+    ----------
+    selector : Selector
+        The selection (its rows and noise).
+    base : ndarray, shape (R, q)
+        The offsets and the other named effects' columns at the rows [m per unit].
+    block : ndarray, shape (R, p)
+        The named effect's columns [m per unit].
+    contribution : ndarray, shape (R,)
+        The named effect's fitted contribution [m].
+    named : tuple of (Term, dict)
+        The named effect and its setting.
+    terms : list of Term
+        The candidates the selection considered (an angular family is taken from them).
+    limit : float
+        The bound on the fits' sums of squares [m^2].
+
+    Returns
+    -------
+    list of dict
+        ``{"name", "parameters" (SI), "reason"}`` per carriage turn that stands for one of
+        the named parameters (``reason`` names which).
+    """
+    ctx = selector.ctx
+    machine = ctx.machine
+    term, named_setting = named
+    if term.family.name not in HEAD_TURNED or head_setup_row(ctx) is None:
+        return []
+    angular = next((t.family for t in terms if t.family.name == "angular"), None) or \
+        family_named("angular")
+    names = term.family.parameter_names(term.variant, named_setting)
+    names = names if len(names) == block.shape[1] > 1 else [""] * block.shape[1]
+    # Only a parameter that carries a part the others and the base do not reproduce has
+    # anything for a turn to stand for (a parameter fitted near zero has not).
+    needed = []
+    for j in range(block.shape[1]):
+        x = np.column_stack([base, np.delete(block, j, axis=1)])
+        solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
+        rest = contribution - x @ solution
+        needed.append(float(rest @ rest) > limit)
+    found = []
+    for axis in machine.tool_branch:
+        if not carries_head(machine, axis):
+            continue
+        for component in "ABC":
+            variant = f"E{component}{axis}"
+            setting = {"order": 0, "constant": True, "located": HEAD}
+            if turns_about_carried_rotary(machine, variant):
+                continue    # that axis' zero and line offset (ISO 230-7)
+            turn = Term(angular, variant, [setting])
+            columns = selector.design_rows(turn, setting)
+            if not np.any(columns):
+                continue
+            for j, name in enumerate(names):
+                if not needed[j]:
+                    continue
+                x = np.column_stack([base, np.delete(block, j, axis=1), columns])
+                solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
+                rest = contribution - x @ solution
+                if float(rest @ rest) <= limit:
+                    why = ("a constant turn of a carriage that carries the head turns its "
+                           "lines and the tool located at the head's set-up along the same "
+                           "circles")
+                    found.append({"name": turn.name, "parameters": {"P0": float(solution[-1])},
+                                  "reason": why + (f" as {name} does" if name else "")})
+                    break
+    return found
 
 
 def _lever_statement(selector: Selector, term: Term, setting: dict,

@@ -343,8 +343,11 @@ class ReadingDesigns:
         """
         both = self._sensitivities.get(term.name)
         if both is None:
-            sensitivity, _ = self.ctx.measured_separable(term.family, term.variant,
-                                                         term.settings[-1])
+            # Made again after the store let it go: from a setting whose design is separable
+            # (a located tilt's last settings are not).
+            separable = (self.ctx.measured_separable(term.family, term.variant, setting)
+                         for setting in reversed(term.settings))
+            sensitivity, _ = next(pair for pair in separable if pair is not None)
             both = self._sensitivity_rows(sensitivity)
             self._sensitivities.put(term.name, both)
         return both[:self.y.size], both[self.y.size:]
