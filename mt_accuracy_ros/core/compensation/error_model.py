@@ -582,7 +582,7 @@ class ErrorModel:
                   accelerations: dict[str, ArrayLike] | None = None,
                   spindle_speed_rad_s: ArrayLike | None = None, fresh: bool = False,
                   referred: bool = True, work_point: ArrayLike | None = None,
-                  run_starts: ArrayLike | None = None
+                  run_starts: ArrayLike | None = None, located_readings: bool = False
                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position error (N, 3) [m], orientation error (N, 3) [rad]) at command positions.
 
@@ -631,6 +631,11 @@ class ErrorModel:
             Instrument target [m], workpiece frame.
         run_starts : array_like of int, shape (R,), optional
             Row index of the first reading of each run.
+        located_readings : bool, optional
+            True for an instrument's readings whose target (and tool) was located at the
+            set-up among them (a survey's): a located tilt is then read as that instrument
+            reads it. False (default) for a CNC's own commands: every error as the machine
+            makes it, the same whatever poses the batch holds.
 
         Returns
         -------
@@ -688,7 +693,7 @@ class ErrorModel:
                                   lag_states=None if run_starts is not None
                                   else self._lag_states, run_starts=run_starts)
             context = Context(self.machine, variables, self._kinematics, orientation,
-                              work_point=work_point)
+                              work_point=work_point, located_readings=located_readings)
             turned = np.zeros_like(orientation)
             for name, entry in catalogue.items():
                 position = position + catalogue_error(name, entry, context)

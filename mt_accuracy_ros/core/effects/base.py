@@ -88,8 +88,14 @@ class Context:
                  orientation: NDArray[np.float64] | None = None, *,
                  orientation_lever_m: float | None = None,
                  work_point: NDArray[np.float64] | None = None,
-                 zero_rows: NDArray[np.intp] | None = None) -> None:
+                 zero_rows: NDArray[np.intp] | None = None,
+                 located_readings: bool = False) -> None:
         self.machine = machine
+        #: True for an instrument's readings, whose target (and tool) was located at the
+        #: set-up: the located families then read the set-up among them. False for a CNC's
+        #: own commands (a compensation's batch), which get every error as the machine
+        #: makes it, whatever poses the batch holds.
+        self.located_readings = located_readings
         #: (N,) the reading each reading's instrument was zeroed at (a log of zeroed runs:
         #: its run's first), or None: a position design is then referred to that row.
         self.zero_rows = None if zero_rows is None else np.asarray(zero_rows, dtype=np.intp)

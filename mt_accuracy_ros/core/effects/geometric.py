@@ -184,6 +184,8 @@ def setup_rows(ctx: Context) -> np.ndarray | None:
         Row index of each reading's set-up reading.
     """
     key = "tilt_setup_rows"
+    if not ctx.located_readings:
+        return None     # a CNC's own commands: nothing was located among them
     if key not in ctx.cache:
         machine = ctx.machine
         at_setup = np.ones(ctx.n, dtype=bool)
@@ -362,6 +364,8 @@ def head_setup_row(ctx: Context) -> int | None:
         Row index of that reading.
     """
     key = "tilt_head_setup_row"
+    if not ctx.located_readings:
+        return None     # a CNC's own commands: no tool was located among them
     if key not in ctx.cache:
         machine = ctx.machine
         at_setup = np.ones(ctx.n, dtype=bool)

@@ -73,7 +73,8 @@ class ContextMemo:
                 kinematics: KinematicModel, orientation: NDArray[np.float64] | None, *,
                 orientation_lever_m: float | None,
                 work_point: NDArray[np.float64] | None,
-                zero_rows: NDArray[np.intp] | None) -> Context:
+                zero_rows: NDArray[np.intp] | None, located_readings: bool = False
+                ) -> Context:
         """A :class:`Context` of these arguments: the kept one if they are the kept
         context's (the machine the same object, every array equal), else a new one.
 
@@ -94,6 +95,8 @@ class ContextMemo:
             Fixed target [m], workpiece frame.
         zero_rows : ndarray of int, shape (N,), or None
             The row each reading's instrument was zeroed at.
+        located_readings : bool, optional
+            An instrument's readings, located at the set-up (:class:`Context`).
 
         Returns
         -------
@@ -107,11 +110,12 @@ class ContextMemo:
                     _same_array(ctx.orientation, orientation) and
                     ctx.orientation_lever_m == orientation_lever_m and
                     _same_array(ctx.work_point, work_point) and
-                    _same_array(ctx.zero_rows, zero_rows)):
+                    _same_array(ctx.zero_rows, zero_rows) and
+                    ctx.located_readings == located_readings):
                 self.reused += 1
                 return ctx
         ctx = Context(machine, variables, kinematics, orientation,
                       orientation_lever_m=orientation_lever_m, work_point=work_point,
-                      zero_rows=zero_rows)
+                      zero_rows=zero_rows, located_readings=located_readings)
         self._kept = ctx
         return ctx

@@ -296,7 +296,8 @@ class Observations:
         inputs = {"temperatures": self.temperatures, "velocities": self.velocities or None,
                   "directions": self.directions or None, "time_s": self.time_s,
                   "accelerations": self.accelerations or None,
-                  "spindle_speed_rad_s": self.spindle_speed_rad_s}
+                  "spindle_speed_rad_s": self.spindle_speed_rad_s,
+                  "located_readings": True}      # an instrument's, located at the set-up
         if self.work_point is not None:
             inputs["work_point"] = self.work_point
         if self.run_starts is not None:
@@ -871,7 +872,8 @@ def residual_frame(model: ErrorModel, obs: Observations, *, absolute: bool = Fal
     lever = obs.orientation_lever_m if directions else None
     make = Context if contexts is None else contexts.context
     ctx = make(model.machine, variables, model._kinematics, orientation,
-               orientation_lever_m=lever, work_point=obs.work_point, zero_rows=obs.zero_rows)
+               orientation_lever_m=lever, work_point=obs.work_point, zero_rows=obs.zero_rows,
+               located_readings=True)   # an instrument's readings, located at the set-up
     position_residual = residual
     if directions:
         # The tool's direction as a second measured quantity, scaled to the position's

@@ -246,9 +246,11 @@ def head_turns(selector: Selector, base: NDArray[np.float64], block: NDArray[np.
 def _lever_statement(selector: Selector, term: Term, setting: dict,
                      coefficients: NDArray[np.float64]) -> list[dict]:
     """A located tilt's lever (its pivot off the carriage's origin) said as what it equals
-    on any poses: the carried rotary lines' offsets (:func:`lever_line_offsets`) and the
-    work's located set-up error, v = -lever (:func:`located_lever` is minus
-    :func:`located_design`'s columns across the tilt's axis)."""
+    on any poses: the carried rotary lines' offsets (:func:`lever_line_offsets`), and - in
+    words, with its values - the work's located set-up error v = -lever
+    (:func:`located_lever` is minus :func:`located_design`'s columns across the tilt's
+    axis). Only the lever's numbers are said so; the tilt's others are its own, so no
+    whole alternative to the tilt is listed."""
     names = term.family.parameter_names(term.variant, setting)
     fitted = dict(zip(names, map(float, coefficients)))
     machine = selector.ctx.machine
@@ -258,15 +260,14 @@ def _lever_statement(selector: Selector, term: Term, setting: dict,
     carried = "".join(sorted({name[3] for name in offsets},
                              key=machine.axis_order.index))
     lever = {name: value for name, value in fitted.items() if name.startswith("lever_")}
-    part = f"the tilt's lever ({', '.join(lever)}; -P0 (e_k x p), a translation of the carriage)"
-    located = {"v_" + name[-1]: -value for name, value in lever.items()}
+    located = ", ".join(f"v_{name[-1]} {-value * 1e6:.3g} µm" for name, value in lever.items())
     return [{"name": f"rotary_location:{carried}", "parameters": offsets,
-             "reason": f"{part} is the offset of every rotary line it carries (ISO 230-7): "
-                       "a pivot off the carriage's origin and those lines' offsets move the "
-                       "readings alike on any poses; the tilt's other numbers are its own"},
-            {"name": "setup_location:work", "parameters": located,
-             "reason": f"{part} moves a target located at the set-up as the work's located "
-                       "set-up error -lever does (ISO 10791-6)"}]
+             "reason": f"the tilt's lever ({', '.join(lever)}; -P0 (e_k x p), a translation "
+                       "of the carriage) is the offset of every rotary line it carries "
+                       "(ISO 230-7) and, as a target located at the set-up reads it, the "
+                       f"work's located set-up error ({located}; ISO 10791-6): the three "
+                       "move the readings alike on any poses; the tilt's other numbers "
+                       "are its own"}]
 
 
 def _reproduces(selector: Selector, base: NDArray[np.float64], contribution: NDArray[np.float64],

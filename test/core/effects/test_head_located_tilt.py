@@ -81,7 +81,8 @@ def _readings(generator, described, poses, effects):
             "setup": {0: 0}, "tool_setup": 0}
     errors, directions = cs.located_errors(generator, cs.errs_from_effects(effects), rows)
     positions = {a: np.array([q[a] for q in rows["q"]]) for a in described.axis_order}
-    ctx = Context(described, Variables(positions), work_point=SPHERE, orientation_lever_m=0.1)
+    ctx = Context(described, Variables(positions), work_point=SPHERE, orientation_lever_m=0.1,
+                  located_readings=True)
     return ctx, errors, directions
 
 
@@ -166,7 +167,8 @@ def test_a_turn_about_the_carried_c_is_cs_zero_and_offers_no_constant_part():
     away = [{"B": math.radians(b), "C": 0.3} for b in np.arange(-90, 31, 20)]
     q = [cs.solve_linear(generator, p, SPHERE) for p in away]
     positions = {a: np.array([row[a] for row in q]) for a in described.axis_order}
-    elsewhere = Context(described, Variables(positions), work_point=SPHERE)
+    elsewhere = Context(described, Variables(positions), work_point=SPHERE,
+                        located_readings=True)
     assert head_setup_row(elsewhere) is None
     assert not any(s.get("located") for s in family.settings(elsewhere, "EAZ"))
 
@@ -261,7 +263,7 @@ def test_a_located_tilts_sensitivity_is_made_again_from_a_separable_setting():
     head-located one (not separable)."""
     generator, described = _gantry_head({"C": 0, "B": 0})
     located, _, _ = _readings(generator, described, _grid({"C": 0, "B": 0}), [])
-    ctx = Context(described, located.variables, work_point=SPHERE)
+    ctx = Context(described, located.variables, work_point=SPHERE, located_readings=True)
     family = ComponentError("angular", False)
     term = Term(family, "EAZ", family.settings(ctx, "EAZ"))
     assert term.settings[-1].get("located") == HEAD
@@ -304,3 +306,18 @@ def test_the_head_located_tilts_words_say_the_tool_and_the_heads_lines():
         "at the head's set-up"
     assert family.describe_setting({"order": 2, "constant": True}) == \
         "order 2, with a constant part (its plane's squareness)"
+
+
+def test_a_cncs_own_commands_get_the_heads_carriage_tilt_as_the_machine_makes_it():
+    """A compensation's batch of commands holds no located tool, even where the head stands
+    at its set-up: a head-located tilt predicts the plain tilt there, whatever the batch."""
+    generator, described = _gantry_head({"B": 0, "C": 0})
+    ctx, _, _ = _readings(generator, described, _grid({"B": 0, "C": 0}), [])
+    family = ComponentError("angular", False)
+    setting = next(s for s in family.settings(ctx, "EAZ") if s.get("located") == "head")
+    commands = Context(described, ctx.variables, work_point=SPHERE)
+    plain = along(*family.separable_design(commands, "EAZ", dict(setting, located=False)))
+    assert head_setup_row(commands) is None and head_setup_row(ctx) is not None
+    np.testing.assert_array_equal(family.design(commands, "EAZ", setting), plain)
+    assert np.abs(family.design(ctx, "EAZ", setting)
+                  - family.design(commands, "EAZ", setting)).max() > 1e-3

@@ -100,7 +100,8 @@ def test_the_located_tilt_about_the_carriage_origin_is_the_generators_closed_for
     generator, described = _trunnion_ac(setup_deg)
     positions, errors, targets, groups = _located_readings(
         generator, described, _grid(setup_deg), SPHERES[:1], [_tilt(name)])
-    ctx = Context(described, Variables(positions), work_point=targets[0])
+    ctx = Context(described, Variables(positions), work_point=targets[0],
+                  located_readings=True)
     family = ComponentError("angular", False)
     setting = {"order": 2, "constant": True, "located": True}
     assert setting in family.settings(ctx, name)
@@ -118,7 +119,8 @@ def test_without_the_located_part_the_tilt_leaves_the_set_up_turning_with_the_ro
     generator, described = _trunnion_ac({"A": 0, "C": 0})
     positions, errors, targets, groups = _located_readings(
         generator, described, _grid({"A": 0, "C": 0}), SPHERES[:1], [_tilt("EBX")])
-    ctx = Context(described, Variables(positions), work_point=targets[0])
+    ctx = Context(described, Variables(positions), work_point=targets[0],
+                  located_readings=True)
     family = ComponentError("angular", False)
     plain = along(*family.separable_design(ctx, "EBX", {"order": 2, "constant": True}))
     _, rms = _fit(plain, errors, groups)
@@ -133,7 +135,8 @@ def test_three_probed_spheres_each_located_on_its_own_read_the_same_tilt():
              for b in np.arange(-90, 91, 30) for c in np.arange(-180, 180, 45)]
     positions, errors, targets, groups = _located_readings(
         generator, described, poses, SPHERES, [_tilt("ECY")])
-    ctx = Context(described, Variables(positions), work_point=targets)
+    ctx = Context(described, Variables(positions), work_point=targets,
+                  located_readings=True)
     np.testing.assert_array_equal(np.unique(setup_rows(ctx)), [0, 1, 2])
     family = ComponentError("angular", False)
     setting = {"order": 2, "constant": True, "located": True}
@@ -152,7 +155,8 @@ def test_a_pivot_off_the_carriage_origin_adds_columns_of_the_tilts_own_shape():
     pivot = (0.2, -0.3, 0.1)
     positions, errors, targets, groups = _located_readings(
         generator, described, _grid({"A": 0, "C": 0}), SPHERES[:1], [_tilt("ECY", pivot)])
-    ctx = Context(described, Variables(positions), work_point=targets[0])
+    ctx = Context(described, Variables(positions), work_point=targets[0],
+                  located_readings=True)
     family = ComponentError("angular", False)
     setting = {"order": 2, "constant": True, "located": True}
     tilt = ctx.measured_design(family, "ECY", setting)
@@ -175,7 +179,8 @@ def test_the_constant_turn_about_the_first_carried_rotary_axis_is_its_location_e
     poses = [{"B": math.radians(b), "C": 0.0} for b in np.arange(-90, 91, 30)]
     positions, _, targets, _ = _located_readings(generator, described, poses, SPHERES[:1],
                                                  [])
-    ctx = Context(described, Variables(positions), work_point=targets[0])
+    ctx = Context(described, Variables(positions), work_point=targets[0],
+                  located_readings=True)
     family = ComponentError("angular", False)
     assert not any(s.get("constant") for s in family.settings(ctx, "EBX"))
     assert any(s.get("constant") and s.get("located") for s in family.settings(ctx, "ECY"))
@@ -188,7 +193,8 @@ def test_no_reading_at_the_set_up_pose_offers_no_located_tilt():
     poses = [{"B": math.radians(b), "C": 0.3} for b in np.arange(-90, 91, 30)]
     q = [cs.solve_linear(generator, p, SPHERES[0]) for p in poses]
     positions = {a: np.array([row[a] for row in q]) for a in described.axis_order}
-    ctx = Context(described, Variables(positions), work_point=SPHERES[0])
+    ctx = Context(described, Variables(positions), work_point=SPHERES[0],
+                  located_readings=True)
     family = ComponentError("angular", False)
     assert setup_rows(ctx) is None
     assert not any(s.get("located") for s in family.settings(ctx, "ECY"))
@@ -255,7 +261,8 @@ def test_a_squareness_of_a_table_slide_is_read_located_like_its_tilt(located):
     square = {"iso_name": "EC0Y", "kind": "squareness", "axis": "Y", "value_si": 50e-6}
     positions, errors, targets, groups = _located_readings(
         generator, described, _grid({"A": 0, "C": 0}), SPHERES[:1], [square])
-    ctx = Context(described, Variables(positions), work_point=targets[0])
+    ctx = Context(described, Variables(positions), work_point=targets[0],
+                  located_readings=True)
     family = Squareness()
     design = family.design(ctx, "EXY", {}) if located else \
         (ctx.jacobian("EXY") * positions["Y"][:, None])[:, :, None]
@@ -265,3 +272,23 @@ def test_a_squareness_of_a_table_slide_is_read_located_like_its_tilt(located):
         assert abs(coefficients[0]) == pytest.approx(50e-6, rel=0.01)
     else:
         assert rms > 0.5e-6
+
+
+@pytest.mark.parametrize("name", ["ECY", "EBX"])
+def test_a_cncs_own_commands_get_the_tilt_as_the_machine_makes_it_whatever_poses(name):
+    """A compensation's batch of commands is no instrument's: nothing was located among
+    them, so a located tilt predicts the machine's own tilt there - the plain design - even
+    when the batch holds the set-up pose (before, such a row turned the batch's prediction
+    into the located reading: micrometres apart for the same commands)."""
+    generator, described = _trunnion_ac({"A": 0, "C": 0})
+    positions, _, targets, _ = _located_readings(
+        generator, described, _grid({"A": 0, "C": 0}), SPHERES[:1], [])
+    family = ComponentError("angular", False)
+    setting = {"order": 2, "constant": True, "located": True}
+    commands = Context(described, Variables(positions), work_point=targets[0])
+    readings = Context(described, Variables(positions), work_point=targets[0],
+                       located_readings=True)
+    plain = along(*family.separable_design(commands, name, {"order": 2, "constant": True}))
+    assert setup_rows(commands) is None and setup_rows(readings) is not None
+    np.testing.assert_array_equal(family.design(commands, name, setting), plain)
+    assert np.abs(family.design(readings, name, setting) - plain).max() > 1e-3
