@@ -152,8 +152,74 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
                                 limit)
         if setting.get("lever"):
             found += _lever_statement(selector, term, setting, coefficients[k])
+        found += head_constant(selector, base, block, contribution, (term, setting), terms,
+                               limit)
         out.append(found)
     return out
+
+
+def head_constant(selector: Selector, base: NDArray[np.float64], block: NDArray[np.float64],
+                  contribution: NDArray[np.float64], named: tuple[Term, dict],
+                  terms: list[Term], limit: float) -> list[dict]:
+    """The head's rotary lines that the readings cannot part from a named head-located
+    tilt's constant part.
+
+    A constant turn of a carriage that carries the head and nothing more (a swivel head's
+    Z ram) turns the head's lines and the tool alike: it is those lines' tilts and
+    offsets (ISO 230-7), on any poses. Where the carriage carries a further linear axis
+    its turn also tilts that axis' travel, which no line does. Judged as
+    :func:`head_turns` judges a parameter: the tilt refitted with the lines' columns in
+    place of its P0, within the same bound.
+
+    Parameters
+    ----------
+    selector : Selector
+        The selection (its rows and noise).
+    base : ndarray, shape (R, q)
+        The offsets and the other named effects' columns at the rows [m per unit].
+    block : ndarray, shape (R, p)
+        The named tilt's columns [m per unit].
+    contribution : ndarray, shape (R,)
+        The named tilt's fitted contribution [m].
+    named : tuple of (Term, dict)
+        The named effect and its setting.
+    terms : list of Term
+        The candidates the selection considered (the head's ``rotary_location`` among
+        them).
+    limit : float
+        The bound on the fits' sums of squares [m^2].
+
+    Returns
+    -------
+    list of dict
+        ``{"name", "parameters" (SI, the lines' fit), "reason"}``, or empty.
+    """
+    term, setting = named
+    if setting.get("located") != HEAD or not setting.get("constant"):
+        return []
+    names = term.family.parameter_names(term.variant, setting)
+    if "P0" not in names or len(names) != block.shape[1]:
+        return []
+    machine = selector.ctx.machine
+    head = {a for a in machine.tool_branch if machine.axes[a].is_rotary}
+    kept = np.column_stack([base, np.delete(block, names.index("P0"), axis=1)])
+    for other in terms:
+        if other.family.name != "rotary_location" or not set(other.variant) <= head:
+            continue
+        line_setting = other.settings[0]
+        columns = selector.design_rows(other, line_setting)
+        x = np.column_stack([kept, columns])
+        solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
+        rest = contribution - x @ solution
+        if np.any(columns) and float(rest @ rest) <= limit:
+            lines = other.family.parameter_names(other.variant, line_setting)
+            return [{"name": other.name,
+                     "parameters": dict(zip(lines, map(float, solution[kept.shape[1]:]))),
+                     "reason": "the tilt's constant part P0 turns the head's lines and the "
+                               "tool alike: a carriage that carries only the head turns "
+                               "as its lines' tilts and offsets do (ISO 230-7); the "
+                               "tilt's other numbers are its own"}]
+    return []
 
 
 #: The located families a constant turn of a carriage that carries the head can stand for.

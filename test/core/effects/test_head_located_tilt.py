@@ -255,6 +255,11 @@ def test_a_pitch_of_the_ram_under_a_turning_head_is_named_alone():
     # Stroke -0.6 .. 0.9 m: P1 = 0.75 c1 = 45 urad, P0 = 0.15 c1 = 9 urad.
     assert named.parameters["P1"] == pytest.approx(45e-6, abs=3e-6)
     assert named.parameters.get("P0", 0.0) == pytest.approx(9e-6, abs=3e-6)
+    # The ram carries only the head: its constant turn is the head's lines' - said.
+    (said,) = [s for s in named.inseparable if s["name"].startswith("rotary_location:")]
+    assert set(said["name"].partition(":")[2]) <= {"B", "C"}
+    assert "constant part P0" in said["reason"]
+    assert max(abs(v) for v in said["parameters"].values()) > 1e-6
 
 
 def test_a_located_tilts_sensitivity_is_made_again_from_a_separable_setting():
