@@ -168,6 +168,28 @@ def located_tilt_seen(ctx: Context) -> bool:
 _AT_SETUP_RAD = 1e-5
 
 
+def _at_setup(ctx: Context, branch) -> np.ndarray:
+    """(N,) whether every rotary axis of ``branch`` stands at its set-up angle, modulo a
+    full turn (within :data:`_AT_SETUP_RAD`)."""
+    machine = ctx.machine
+    at_setup = np.ones(ctx.n, dtype=bool)
+    for axis in branch:
+        if machine.axes[axis].is_rotary:
+            turn = ctx.variables.positions[axis] - machine.setup_angle(axis)
+            wrapped = np.angle(np.exp(1j * turn))    # an angle modulo a full turn
+            at_setup &= np.abs(wrapped) < _AT_SETUP_RAD
+    return at_setup
+
+
+def _turned_from_setup(ctx: Context, side: str, then: np.ndarray) -> np.ndarray:
+    """(N, 3, P) R_S(q) R_S(q_s)^T v: a value v at the set-up - one (3, P) or each
+    reading's own (N, 3, P) - turning with the side's rotary axes since (ISO 10791-6)."""
+    turned, at_setup = side_rotations(ctx, side)
+    if then.ndim == 2:
+        return np.einsum("nij,jk,kp->nip", turned, at_setup.T, then)
+    return np.einsum("nij,jk,nkp->nip", turned, at_setup.T, then)
+
+
 def setup_rows(ctx: Context) -> np.ndarray | None:
     """(N,) for each reading, the first reading of its target taken at the set-up pose
     (every work-side rotary axis at its set-up angle, modulo a turn): where the target was
@@ -187,13 +209,7 @@ def setup_rows(ctx: Context) -> np.ndarray | None:
     if not ctx.located_readings:
         return None     # a CNC's own commands: nothing was located among them
     if key not in ctx.cache:
-        machine = ctx.machine
-        at_setup = np.ones(ctx.n, dtype=bool)
-        for axis in machine.workpiece_branch:
-            if machine.axes[axis].is_rotary:
-                turn = ctx.variables.positions[axis] - machine.setup_angle(axis)
-                wrapped = np.angle(np.exp(1j * turn))    # an angle modulo a full turn
-                at_setup &= np.abs(wrapped) < _AT_SETUP_RAD
+        at_setup = _at_setup(ctx, ctx.machine.workpiece_branch)
         groups = ctx.target_groups
         groups = np.zeros(ctx.n, dtype=np.intp) if groups is None else groups
         rows = np.empty(ctx.n, dtype=np.intp)
@@ -226,9 +242,8 @@ def located_tilt(ctx: Context, design: np.ndarray) -> np.ndarray:
     ndarray, shape (N, 3, P)
         [m per unit], bed frame.
     """
-    turned, at_setup = side_rotations(ctx, "work")
-    then = design[setup_rows(ctx)]
-    return design - np.einsum("nij,jk,nkp->nip", turned, at_setup.T, then)
+    # ISO 10791-6: the value where the target was located turns with the work.
+    return design - _turned_from_setup(ctx, "work", design[setup_rows(ctx)])
 
 
 def lever_components(variant: str) -> str:
@@ -367,13 +382,7 @@ def head_setup_row(ctx: Context) -> int | None:
     if not ctx.located_readings:
         return None     # a CNC's own commands: no tool was located among them
     if key not in ctx.cache:
-        machine = ctx.machine
-        at_setup = np.ones(ctx.n, dtype=bool)
-        for axis in machine.tool_branch:
-            if machine.axes[axis].is_rotary:
-                turn = ctx.variables.positions[axis] - machine.setup_angle(axis)
-                at_setup &= np.abs(np.angle(np.exp(1j * turn))) < _AT_SETUP_RAD
-        first = np.flatnonzero(at_setup)
+        first = np.flatnonzero(_at_setup(ctx, ctx.machine.tool_branch))
         ctx.cache[key] = int(first[0]) if first.size else None
     return ctx.cache[key]
 
@@ -434,10 +443,8 @@ def located_head_tilt(ctx: Context, design: np.ndarray) -> np.ndarray:
     ndarray, shape (N, 3, P)
         [m per unit], bed frame.
     """
-    turned, at_setup = side_rotations(ctx, "tool")
-    then = design[head_setup_row(ctx)]
     # e(q) - R_T(q) R_T(q_s)^T e(q_t): the tool's believed position turns with the head.
-    located = design - np.einsum("nij,jk,kp->nip", turned, at_setup.T, then)
+    located = design - _turned_from_setup(ctx, "tool", design[head_setup_row(ctx)])
     if located_tilt_seen(ctx) and setup_rows(ctx) is not None:
         located = located_tilt(ctx, located)     # then the target, located with the work
     return located
@@ -462,9 +469,8 @@ def located_head_turn(ctx: Context, turn: np.ndarray) -> np.ndarray:
     ndarray, shape (N, 3, P)
         [rad per unit], bed frame.
     """
-    turned, at_setup = side_rotations(ctx, "tool")
-    then = turn[head_setup_row(ctx)]
-    return turn - np.einsum("nij,jk,kp->nip", turned, at_setup.T, then)
+    # w(q) - R_T(q) R_T(q_s)^T w(q_t) (ISO 10791-6): the located direction turns with the head.
+    return turn - _turned_from_setup(ctx, "tool", turn[head_setup_row(ctx)])
 
 
 def located_turn(ctx: Context, turn: np.ndarray) -> np.ndarray:
@@ -490,11 +496,10 @@ def located_turn(ctx: Context, turn: np.ndarray) -> np.ndarray:
     ndarray, shape (N, 3, P)
         [rad per unit], bed frame.
     """
-    turned, at_setup = side_rotations(ctx, "work")
     rows = setup_rows(ctx)
     axis = ctx.tool_axis()
     then = np.cross(turn[rows], axis[rows][:, :, None], axisa=1, axisb=1, axisc=1)
-    moved = np.einsum("nij,jk,nkp->nip", turned, at_setup.T, then)
+    moved = _turned_from_setup(ctx, "work", then)     # ISO 10791-6: turns with the work
     return turn - np.cross(axis[:, :, None], moved, axisa=1, axisb=1, axisc=1)
 
 

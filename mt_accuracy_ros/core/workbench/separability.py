@@ -69,6 +69,15 @@ _WHY = {
 }
 
 
+def _refit(x: NDArray[np.float64], contribution: NDArray[np.float64]
+           ) -> tuple[NDArray[np.float64], float]:
+    """The least-squares fit of ``contribution`` (R,) by the columns ``x`` (R, q) and the
+    sum of squares it leaves [m^2]: what every judgement here compares with its bound."""
+    solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
+    rest = contribution - x @ solution
+    return solution, float(rest @ rest)
+
+
 def chi2_quantile(level: float, dof: int) -> float:
     """x with P(chi-square(dof) <= x) = ``level``, by bisection on the survival function
     (to 1e-9 relative; scipy.stats is not imported for one number).
@@ -209,9 +218,8 @@ def head_constant(selector: Selector, base: NDArray[np.float64], block: NDArray[
         line_setting = other.settings[0]
         columns = selector.design_rows(other, line_setting)
         x = np.column_stack([kept, columns])
-        solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
-        rest = contribution - x @ solution
-        if np.any(columns) and float(rest @ rest) <= limit:
+        solution, misfit = _refit(x, contribution)
+        if np.any(columns) and misfit <= limit:
             lines = other.family.parameter_names(other.variant, line_setting)
             return [{"name": other.name,
                      "parameters": dict(zip(lines, map(float, solution[kept.shape[1]:]))),
@@ -277,9 +285,8 @@ def head_turns(selector: Selector, base: NDArray[np.float64], block: NDArray[np.
     needed = []
     for j in range(block.shape[1]):
         x = np.column_stack([base, np.delete(block, j, axis=1)])
-        solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
-        rest = contribution - x @ solution
-        needed.append(float(rest @ rest) > limit)
+        solution, misfit = _refit(x, contribution)
+        needed.append(misfit > limit)
     found = []
     for axis in machine.tool_branch:
         if not carries_head(machine, axis):
@@ -297,9 +304,8 @@ def head_turns(selector: Selector, base: NDArray[np.float64], block: NDArray[np.
                 if not needed[j]:
                     continue
                 x = np.column_stack([base, np.delete(block, j, axis=1), columns])
-                solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
-                rest = contribution - x @ solution
-                if float(rest @ rest) <= limit:
+                solution, misfit = _refit(x, contribution)
+                if misfit <= limit:
                     why = ("a constant turn of a carriage that carries the head turns its "
                            "lines and the tool located at the head's set-up along the same "
                            "circles")
@@ -347,9 +353,8 @@ def _reproduces(selector: Selector, base: NDArray[np.float64], contribution: NDA
         if not np.any(columns):
             continue
         x = np.column_stack([base, columns])
-        solution, *_ = np.linalg.lstsq(x, contribution, rcond=None)
-        rest = contribution - x @ solution
-        if float(rest @ rest) <= limit:
+        solution, misfit = _refit(x, contribution)
+        if misfit <= limit:
             return [_statement(term, other, setting, solution[base.shape[1]:])]
     return []
 
