@@ -127,6 +127,33 @@ def test_export_writes_reads_back_and_refuses_a_bad_spacing(tmp_path, capsys):
     assert not empty.exists()
 
 
+def test_export_carries_a_fitted_rotary_line_and_says_what_no_file_holds(tmp_path, capsys):
+    """A C-centre offset the workbench named is in the volumetric file's location block; a
+    rotary axis' own run-out (no table of a linear axis holds it) is said, with its size."""
+    import yaml
+
+    model = tmp_path / "model.yaml"
+    model.write_text(yaml.safe_dump({"machine": "trunnion_ac", "effects": {
+        "rotary_location:C": {"family": "rotary_location", "variant": "C", "setting": {},
+                              "coefficients": {"EX0C": 20e-6, "EY0C": 0.0, "EA0C": 0.0,
+                                               "EB0C": 0.0}},
+        "rotary_error:EZA": {"family": "rotary_error", "variant": "EZA",
+                             "setting": {"harmonics": 1},
+                             "coefficients": {"cos1": 5e-6, "sin1": -3e-6}}}}))
+    out = tmp_path / "tables"
+    assert main(["export", str(model), "--spacing-mm", "10", "--out", str(out), "--json",
+                 str(tmp_path / "e.json")]) == 0
+    said = capsys.readouterr().out
+    assert "does not hold rotary_error:EZA" in said and "in real time" in said
+    assert "rotary_location:C" not in said
+    lines = (out / "volumetric_isg.csv").read_text().splitlines()
+    block = lines.index("// location errors (constant)")
+    assert dict(zip(lines[block + 1].split(), map(float, lines[block + 2].split())))[
+        "EX0C"] == pytest.approx(0.020)                          # mm
+    summary = json.loads((tmp_path / "e.json").read_text())
+    assert list(summary["not_in_file"]) == ["rotary_error:EZA"]
+
+
 def test_arcsec_is_the_unit_zhu_uses():
     assert 1 / ARCSEC == pytest.approx(206264.806247, rel=1e-9)
 

@@ -673,9 +673,11 @@ def _table_section(data: BagData, directory: Path, stem: str) -> Section:
     if data.tables:
         first = next(iter(data.tables.values()))
         if len(first.squareness_names):
-            section.paragraphs.append("Squareness: " + ", ".join(
-                f"{n} = {v * UM:.3g} µrad" for n, v in zip(first.squareness_names,
-                                                          first.squareness)) + ".")
+            # Location errors: angles (squareness, a line's tilt) and a rotary line's
+            # offsets (EX0C ...: a length), told apart by the name's second letter.
+            section.paragraphs.append("Location errors: " + ", ".join(
+                f"{n} = {v * UM:.3g} {'µrad' if n[1] in 'ABC' else 'µm'}"
+                for n, v in zip(first.squareness_names, first.squareness)) + ".")
     section.paragraphs.append("Positions in mm, linear errors in µm, angular errors in µrad.")
     return section
 

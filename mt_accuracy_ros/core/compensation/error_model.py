@@ -825,15 +825,20 @@ class ErrorModel:
         return total
 
     def table_location_errors(self) -> dict[str, float]:
-        """Location errors (squareness) of the fitted catalogue effects [rad]."""
+        """Location errors of the fitted catalogue effects [m or rad]: squareness, rotary
+        lines' offsets and tilts (ISO 230-7), a tilt's pivot lever as its carried lines'
+        offsets - what a CNC's location block holds."""
         out: dict[str, float] = {}
         for entry in self.effects.values():
             if is_catalogue_entry(entry) and "family" in entry:
                 family = family_named(entry["family"])
                 if hasattr(family, "location_error"):
-                    names = family.parameter_names(entry.get("variant", ""), {})
+                    variant = entry.get("variant", "")
+                    setting = entry.get("setting") or {}
+                    names = family.parameter_names(variant, setting)
                     for name, value in family.location_error(
-                            entry["variant"], [entry["coefficients"][n] for n in names]).items():
+                            self.machine, variant, setting,
+                            [entry["coefficients"][n] for n in names]).items():
                         out[name] = out.get(name, 0.0) + value
         return out
 

@@ -860,6 +860,34 @@ class ComponentError(EffectFamily):
         # The located set-up error (last, with ``located``) is no motion of the axis.
         return basis @ np.asarray(coefficients, dtype=np.float64)[:basis.shape[1]]
 
+    def location_error(self, machine, variant: str, setting: dict,
+                       coefficients) -> dict[str, float]:
+        """What a CNC table's location block holds of it: a tilt's pivot lever, as the
+        offsets of the rotary lines its carriage carries (:func:`lever_line_offsets`: the
+        same move of the work on any poses); nothing for an effect without a lever (its
+        error motion is all in the axis' table, :meth:`motion_error`).
+
+        Parameters
+        ----------
+        machine : MachineDescription
+            The machine (which rotary lines the carriage carries).
+        variant : str
+            ISO name, e.g. ``EBY``.
+        setting : dict
+            The fitted setting.
+        coefficients : sequence of float, length P
+            Fitted coefficients, in :meth:`parameter_names` order [m] or [rad].
+
+        Returns
+        -------
+        dict of str to float
+            ISO 230-7 line offsets [m], e.g. ``{"EZ0A": ...}``; empty without a lever.
+        """
+        if not setting.get("lever"):
+            return {}
+        fitted = dict(zip(self.parameter_names(variant, setting), coefficients))
+        return lever_line_offsets(machine, variant, {n: fitted[n] for n in lever_names(variant)})
+
     @property
     def preselects(self) -> bool:
         return self.periodic    # by the periodogram
@@ -1159,14 +1187,19 @@ class Squareness(EffectFamily):
             return None
         return ctx.orientation_jacobian(variant)[:, :, None]
 
-    def location_error(self, variant: str, coefficients) -> dict[str, float]:
+    def location_error(self, machine, variant: str, setting: dict,
+                       coefficients) -> dict[str, float]:
         """The location error it stands for (a CNC table's squareness entry) [rad]; the
         other-reference form is a motion error (:meth:`motion_error`), not one.
 
         Parameters
         ----------
+        machine : MachineDescription
+            The machine (unused: a squareness is its own entry).
         variant : str
             The variant.
+        setting : dict
+            The fitted setting (unused).
         coefficients : sequence of float, length 1
             The fitted angle [rad].
 
@@ -1593,6 +1626,32 @@ class RotaryLocation(EffectFamily):
                 "set-up pose; Khan & Chen position-independent errors)")
         folded = inseparable_sentence(setting.get("inseparable", ""))
         return f"{text}; {folded}" if folded else text
+
+    def location_error(self, machine, variant: str, setting: dict,
+                       coefficients) -> dict[str, float]:
+        """The line errors as a CNC table's location block holds them: ISO 230-7's offsets and
+        tilts of each line, the body turning about the actual line from the set-up pose, as
+        the chain reads a described axis' location errors (:mod:`..kinematics.chain`). A
+        folded error is not listed: the one kept stands for the sum the readings gave.
+
+        Parameters
+        ----------
+        machine : MachineDescription
+            The machine (unused: the names carry the axis).
+        variant : str
+            The variant, e.g. ``AC``.
+        setting : dict
+            The fitted setting (its folds).
+        coefficients : sequence of float, length P
+            Fitted values in :meth:`parameter_names` order [m] or [rad].
+
+        Returns
+        -------
+        dict of str to float
+            ``{"EX0C": ..., "EA0C": ...}`` [m] or [rad].
+        """
+        return {name: float(value) for name, value in
+                zip(self.parameter_names(variant, setting), coefficients)}
 
     def describe_setting(self, setting):
         """The setting in words, e.g. the folds in words.
