@@ -20,6 +20,10 @@ Scoring, per trial (every identifiable effect of the truth):
   one rotation of the body) or carried by the tilt; a pivot away from the carriage's
   origin may add a straightness of the same axis, a slope along it, or - where the
   pivot's offset turns along the axis' own travel - its positioning error (ISO 230-1);
+* a tilt of a carriage the survey never moved is one constant turn eps(q0): named as the
+  squareness of the plane it turns, where the carriage carries exactly one axis of that
+  plane (ISO 230-1), it is right within 30 % or 3 U of eps(q0), with the sign of the
+  squareness-as-one-rotation rule below (the same relation read the other way);
 * a zero-angle error the poses can see (an outer axis' zero: a located sphere sees it as
   the tilt of the axis it carries) is right as that tilt;
 * a squareness is right when a squareness of its plane is named, or one rotation: the
@@ -74,6 +78,28 @@ def linear_strokes(path: Path) -> dict[str, tuple[float, float]]:
     axes = (yaml.safe_load(path.read_text()) or {}).get("axes", {}) if path.exists() else {}
     return {name: tuple(map(float, spec["stroke"])) for name, spec in axes.items()
             if name in "XYZ" and isinstance(spec.get("stroke"), list)}
+
+
+#: A length unit's size [m], as the generator writes the survey's position columns.
+LENGTH_UNITS_M = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "in": 0.0254}
+
+
+def still_axes(path: Path, truth: dict) -> dict[str, float]:
+    """The linear axes whose command never changed in the survey, with that command [m]."""
+    import csv
+
+    conventions = truth["conventions"]
+    scale = LENGTH_UNITS_M[conventions["units"]["length"]]
+    with path.open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    out = {}
+    for axis, column in conventions["columns"]["pos"].items():
+        if axis not in "XYZ" or not rows:
+            continue
+        values = np.array([float(r[column]) for r in rows]) * scale
+        if np.ptp(values) < 1e-9:
+            out[axis] = float(values[0])
+    return out
 
 
 #: An identifiable effect whose largest located signature is under this many standard
@@ -243,8 +269,36 @@ def constant_turn(effect: dict, named: dict, chain: str) -> str:
     return "as one rotation" if right else ""
 
 
+def still_turn(effect: dict, named: dict, chain: str, still: dict) -> str:
+    """A tilt of a carriage that never moved, named as the squareness of the plane it turns:
+    standing still, the tilt is one constant turn eps(q0) of the carriage, which turns the
+    travel of the axis U it carries in that plane against the other's - the plane's
+    squareness (ISO 230-1), the other direction of :func:`constant_turn`. Right when the
+    squareness is within 30 % or 3 U of eps(q0) with the sign :func:`constant_turn` uses (+
+    when the named form tilts U's travel, - when it tilts the other's). "" when it is not."""
+    axis, variant = effect["axis"], named["variant"]
+    if axis not in still or named["effect"] != "squareness" or not chain or \
+            plane_of(variant) != plane_of(effect["iso_name"]):
+        return ""
+    letters = chain.strip("[]").split()
+    bed = letters.index("b")
+    work, tool = letters[1:bed][::-1], letters[bed + 1:-1]
+    side = work if axis in work else tool if axis in tool else []
+    carried = set(side[side.index(axis) + 1:]) & plane_of(variant) if side else set()
+    value = named["parameters"].get("angle_rad")
+    if len(carried) != 1 or value is None:
+        return ""
+    q0 = still[axis]
+    c0, c1, c2 = effect["value_si"]
+    turn = c0 + c1 * q0 + c2 * q0 * q0             # the generator's eps(q), q the command
+    expected = turn if variant[-1] in carried else -turn
+    spread = 3.0 * named.get("parameter_uncertainties", {}).get("angle_rad", 0.0)
+    right = value * expected > 0 and abs(value - expected) <= max(0.3 * abs(expected), spread)
+    return "a still carriage's turn as its plane's squareness" if right else ""
+
+
 def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = None,
-            strokes: dict | None = None) -> str:
+            strokes: dict | None = None, still: dict | None = None) -> str:
     """Why ``named`` accounts for the truth ``effect`` ("" when it does not)."""
     family, variant = named["effect"], named["variant"]
     iso, kind = effect["iso_name"], effect["kind"]
@@ -281,7 +335,8 @@ def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = No
         if constant and family == "squareness" and axis in plane_of(variant) and \
                 plane_of(variant) == plane_of(iso):
             return "constant part"
-        turned = turned_line(effect, named, chain, strokes)
+        turned = turned_line(effect, named, chain, strokes) or \
+            still_turn(effect, named, chain, still or {})
         if turned:
             return turned
         # A pivot away from the carriage's origin adds p x eps(q): a straightness of the
@@ -312,16 +367,17 @@ def score(truth: dict, result: dict | None) -> dict:
     used, problems = set(), []
 
     strokes = truth.get("strokes_m", {})
+    still = truth.get("still_m", {})
 
     def accounts(effect, entry):
-        why = matches(effect, entry, truth.get("chain", ""), truths, strokes)
+        why = matches(effect, entry, truth.get("chain", ""), truths, strokes, still)
         if why and why != "wrong value":
             return why
         # What the output says the readings cannot part from it, scored as if named.
         stated = [matches(effect, {"effect": alt["name"].split(":")[0],
                                    "variant": alt["name"].partition(":")[2],
                                    "parameters": alt["parameters"]},
-                          truth.get("chain", ""), truths, strokes)
+                          truth.get("chain", ""), truths, strokes, still)
                   for alt in entry.get("inseparable", [])]
         said = next((f"stated inseparable ({w})" for w in stated if w and w != "wrong value"),
                     why)
@@ -388,6 +444,7 @@ def main(argv: list[str] | None = None) -> int:
             folder = root / entry["folder"]
             truth = json.loads((folder / "truth.json").read_text())
             truth["strokes_m"] = linear_strokes(folder / "machine.yaml")
+            truth["still_m"] = still_axes(folder / "survey.csv", truth)
             result, printed, seconds = run_check(folder)
             verdict = score(truth, result)
             truth_names = [e["iso_name"] + ("" if e["identifiable"] else " (unidentifiable)")

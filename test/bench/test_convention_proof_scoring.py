@@ -110,3 +110,29 @@ def test_a_squareness_named_as_one_rotation_is_right_with_its_value_and_sign():
     # Tilting the carried axis instead: EB0X turns X's travel as EBY's P0 does.
     truth["effects"][0].update(iso_name="EB0X", axis="X", side="work", value_si=20e-6)
     assert right("angular:EBY", 20e-6) and not right("angular:EBY", -20e-6)
+
+
+def test_a_still_carriages_tilt_as_its_planes_squareness_with_its_value_and_sign():
+    """Y never moved (at 0.1357 m): its pitch EBY is one turn eps(q0) that turns the X
+    travel it carries against Z's - the X-Z squareness (ISO 230-1). The form tilting X's
+    travel (EZX) carries +eps(q0), the one tilting Z's (EB0Z) -eps(q0); another size, the
+    wrong sign, another plane, or a Y that moved are not."""
+    c0, c1, c2 = -51.28e-6, 70.91e-6, 512.4e-6
+    q0 = 0.1357
+    turn = c0 + c1 * q0 + c2 * q0 ** 2                         # -32.3 urad
+    truth = {"chain": "[w X Y b Z C B t]", "conventions": {"tool_located": False},
+             "strokes_m": {"Y": (0.08, 0.19)}, "still_m": {"Y": q0},
+             "effects": [{"iso_name": "EBY", "kind": "table_tilt", "axis": "Y",
+                          "side": "work", "value_si": [c0, c1, c2],
+                          "constant_part_si": c0, "pivot_m": [0.0, 0.0, 0.0],
+                          "identifiable": True}]}
+
+    def right(name, angle):
+        return score(truth, {"named": [_named(name, {"angle_rad": angle})]})["right"]
+
+    assert right("squareness:EZX", 0.98 * turn) and right("squareness:EB0Z", -0.98 * turn)
+    assert not right("squareness:EZX", -turn) and not right("squareness:EB0Z", turn)
+    assert not right("squareness:EZX", 0.5 * turn)
+    assert not right("squareness:EC0Y", turn) and not right("squareness:EYX", turn)
+    truth["still_m"] = {}
+    assert not right("squareness:EZX", turn)
