@@ -39,9 +39,9 @@ Scoring, per trial (every identifiable effect of the truth):
   the truth among the stated pair, with its value;
 * a table tilt's constant part - its mean over the stroke, which the catalogue's
   zero-mean shapes leave out - turns one body against the other: named as the lines of
-  rotary axes tilted about the same direction it is right when each is within 30 % or
-  3 U of it (the sign kept for an axis on the tilted carriage's side, turned for one on
-  the other);
+  rotary axes tilted about the same direction it is right when the lines together carry
+  it once, within 30 % or 3 U (the sign kept for a line on the tilted carriage's side,
+  turned for one on the other; split between them in any proportion);
 * a ``setup_location`` (the machine's error where the work or tool was located, turning
   with it) is right beside a truth that has such an error there: a linear-axis error
   (tilt, squareness) on that side - on the tool side only when the head carries rotary
@@ -224,18 +224,22 @@ def turned_line(effect: dict, named: dict, chain: str, strokes: dict) -> str:
     bed = letters.index("b")
     work_side = set(letters[1:bed])
     component = effect["iso_name"][1]
-    judged = []
+    total, variance, lines = 0.0, 0.0, 0
     for axis in named["variant"]:
         name = f"E{component}0{axis}"
         value = named["parameters"].get(name)
         if value is None or component == axis or not mean:
             continue
-        # Every line the named effect tilts about that direction turns with it.
-        expected = mean if (axis in work_side) == (effect["axis"] in work_side) else -mean
-        spread = 3.0 * named.get("parameter_uncertainties", {}).get(name, 0.0)
-        judged.append(value * expected > 0 and
-                      abs(value - expected) <= max(0.3 * abs(expected), spread))
-    return "constant part as a line's tilt" if judged and all(judged) else ""
+        # The turn may be booked on the lines of either body, split in any proportion (a
+        # line on the tilted carriage's side with its sign, one on the other side turned):
+        # the lines together must carry it once.
+        same_side = (axis in work_side) == (effect["axis"] in work_side)
+        total += value if same_side else -value
+        variance += named.get("parameter_uncertainties", {}).get(name, 0.0) ** 2
+        lines += 1
+    right = lines and total * mean > 0 and \
+        abs(total - mean) <= max(0.3 * abs(mean), 3.0 * np.sqrt(variance))
+    return "constant part as a line's tilt" if right else ""
 
 
 def constant_turn(effect: dict, named: dict, chain: str) -> str:

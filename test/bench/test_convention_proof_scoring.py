@@ -136,3 +136,24 @@ def test_a_still_carriages_tilt_as_its_planes_squareness_with_its_value_and_sign
     assert not right("squareness:EC0Y", turn) and not right("squareness:EYX", turn)
     truth["still_m"] = {}
     assert not right("squareness:EZX", turn)
+
+
+def test_a_tilts_constant_part_split_between_the_lines_is_right_once_not_twice():
+    """X carries C on the work side, B turns the head: a constant roll of X turns C's line
+    (EA0C = the mean turn) and leaves B's (EA0B = 0); booked on both, it is counted twice."""
+    tilt = {"iso_name": "EAX", "kind": "table_tilt", "axis": "X", "side": "work",
+            "value_si": [-44.5e-6, 0.0, 0.0], "constant_part_si": -44.5e-6,
+            "pivot_m": [0.0, 0.0, 0.0], "identifiable": True}
+    truth = {"chain": "[w C X Y b Z B t]", "conventions": {"tool_located": True},
+             "strokes_m": {"X": (-0.31, 0.23)}, "effects": [tilt]}
+
+    def right(ea0c, ea0b):
+        line = _named("rotary_location:CB", {"EA0C": ea0c, "EA0B": ea0b, "EX0C": 0.0})
+        return score(truth, {"named": [line]})["right"]
+
+    assert right(-44e-6, 0.0)               # all on C's line
+    assert right(0.0, 44e-6)                # all on B's, the other side: turned
+    assert right(-22e-6, 22e-6)             # split
+    assert not right(-44e-6, 44e-6)         # twice
+    assert not right(-44e-6, -44e-6)        # booked against itself: no turn left
+    assert not right(-10e-6, 0.0)           # too small
