@@ -68,3 +68,25 @@ def test_the_trunnion_job_finds_the_c_centre_and_the_a_pivot_and_judges_its_end_
     assert "EX0C +" in said and "not identifiable: EA0A, EC0C" in said, said
     report = (out / "report.html").read_text()
     assert "location errors identified (ISO 230-7" in report and "EX0C +" in report
+
+
+def test_the_jobs_model_exports_the_found_lines_to_the_cnc_file(trunnion_run, tmp_path,
+                                                                 capsys):
+    """The user's next step: `mt-accuracy export model.yaml`. The C centre and A pivot the
+    job found are in the volumetric file's location block (mm), and nothing the model
+    holds of the positions is said to be left out of it."""
+    from mt_accuracy_ros.cli import main
+
+    _, out, _ = trunnion_run
+    found = yaml.safe_load((out / "model.yaml").read_text())["effects"][
+        "rotary_location:AC"]["coefficients"]
+    tables = tmp_path / "tables"
+    assert main(["export", str(out / "model.yaml"), "--out", str(tables), "--json",
+                 str(tmp_path / "e.json")]) == 0
+    assert "does not hold" not in capsys.readouterr().out
+    lines = (tables / "volumetric_isg.csv").read_text().splitlines()
+    block = lines.index("// location errors (constant)")
+    written = dict(zip(lines[block + 1].split(), map(float, lines[block + 2].split())))
+    for name in ("EX0C", "EY0C", "EY0A", "EZ0A"):
+        assert written[name] == pytest.approx(found[name] * 1e3, rel=1e-9), name
+    assert json.loads((tmp_path / "e.json").read_text())["not_in_file"] == {}

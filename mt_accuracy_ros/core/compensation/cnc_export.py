@@ -589,14 +589,14 @@ def carried_effects(model: ErrorModel, spacing_m: float, *, points: int = 400,
         return KinematicModel(applied).tcp_error(q, check_stroke=False)["position"]
 
     def through_model(of: ErrorModel) -> NDArray[np.float64]:
-        return of.tcp_error(q)[0]
+        return of.tcp_error(q, referred=False)[0]       # a file is not referred to a datum
 
     # The geometric catalogue effects alone: the others need temperatures or feeds, which
     # a file of positions does not take, and each effect's part is its own either way.
     geometric = {name: entry for name, entry in model.effects.items()
                  if is_catalogue_entry(entry) and "family" in entry and
                  family_named(entry["family"]).group in ("geometric", "rotary")}
-    model = replace(model, effects=geometric, datum={})
+    model = replace(model, effects=geometric)
     file_with, model_with = through_file(model), through_model(model)
     out = []
     for name in geometric:
