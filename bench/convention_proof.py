@@ -39,9 +39,10 @@ Scoring, per trial (every identifiable effect of the truth):
   the truth among the stated pair, with its value;
 * a table tilt's constant part - its mean over the stroke, which the catalogue's
   zero-mean shapes leave out - turns one body against the other: named as the lines of
-  rotary axes tilted about the same direction it is right when the lines together carry
-  it once, within 30 % or 3 U (the sign kept for a line on the tilted carriage's side,
-  turned for one on the other; split between them in any proportion);
+  rotary axes tilted about the same direction, it is right when the lines the tilted
+  carriage carries together carry it, within 30 % or 3 U, and the other body's lines stay
+  at zero; where the carriage carries no rotary axis, when the other body's lines
+  together carry it with the sign turned;
 * a ``setup_location`` (the machine's error where the work or tool was located, turning
   with it) is right beside a truth that has such an error there: a linear-axis error
   (tilt, squareness) on that side - on the tool side only when the head carries rotary
@@ -214,31 +215,42 @@ def mean_tilt(effect: dict, strokes: dict) -> float:
 
 
 def turned_line(effect: dict, named: dict, chain: str, strokes: dict) -> str:
-    """A tilt's constant part named as a rotary axis' line tilted about the same direction:
-    the same turn of one body against the other (its sign kept for an axis on the tilted
-    carriage's side, turned for one on the other side). "" when it is not."""
+    """A tilt's constant part named as a rotary axis' line tilted about the same direction.
+    Where the tilted carriage carries rotary axes, the turn is theirs: their lines together
+    carry it (its sign kept) and the other body's lines stay at zero (within 30 % of the
+    turn or 3 U). Where it carries none, it turns the work (or the tool) against the other
+    body, booked on the other body's lines with the sign turned, together once. "" when it
+    is not."""
     if named["effect"] != "rotary_location" or not chain or not strokes:
         return ""
     mean = mean_tilt(effect, strokes)
     letters = chain.strip("[]").split()
     bed = letters.index("b")
-    work_side = set(letters[1:bed])
+    work, tool = letters[1:bed][::-1], letters[bed + 1:-1]
+    side = work if effect["axis"] in work else tool
+    carried = set(side[side.index(effect["axis"]) + 1:]) if effect["axis"] in side else set()
     component = effect["iso_name"][1]
-    total, variance, lines = 0.0, 0.0, 0
-    for axis in named["variant"]:
-        name = f"E{component}0{axis}"
-        value = named["parameters"].get(name)
-        if value is None or component == axis or not mean:
-            continue
-        # The turn may be booked on the lines of either body, split in any proportion (a
-        # line on the tilted carriage's side with its sign, one on the other side turned):
-        # the lines together must carry it once.
-        same_side = (axis in work_side) == (effect["axis"] in work_side)
-        total += value if same_side else -value
-        variance += named.get("parameter_uncertainties", {}).get(name, 0.0) ** 2
-        lines += 1
-    right = lines and total * mean > 0 and \
-        abs(total - mean) <= max(0.3 * abs(mean), 3.0 * np.sqrt(variance))
+    uncertainty = named.get("parameter_uncertainties", {})
+    lines = {axis: named["parameters"][f"E{component}0{axis}"] for axis in named["variant"]
+             if component != axis and f"E{component}0{axis}" in named["parameters"]}
+    if not lines or not mean:
+        return ""
+    own = [a for a in lines if a in carried and lines[a] is not None]
+    if own:
+        total = sum(lines[a] for a in own)
+        spread = 3.0 * np.sqrt(sum(uncertainty.get(f"E{component}0{a}", 0.0) ** 2
+                                   for a in own))
+        still = all(abs(v) <= max(0.3 * abs(mean),
+                                  3.0 * uncertainty.get(f"E{component}0{a}", 0.0))
+                    for a, v in lines.items() if a not in own)
+    else:
+        # Turning only the work (or the tool): the other body's lines, the sign turned.
+        others = [a for a in lines if a not in side]
+        total = -sum(lines[a] for a in others)
+        spread = 3.0 * np.sqrt(sum(uncertainty.get(f"E{component}0{a}", 0.0) ** 2
+                                   for a in others))
+        still = bool(others)
+    right = still and total * mean > 0 and abs(total - mean) <= max(0.3 * abs(mean), spread)
     return "constant part as a line's tilt" if right else ""
 
 
@@ -276,12 +288,16 @@ def constant_turn(effect: dict, named: dict, chain: str) -> str:
 def still_turn(effect: dict, named: dict, chain: str, still: dict) -> str:
     """A tilt of a carriage that never moved, named as the squareness of the plane it turns:
     standing still, the tilt is one constant turn eps(q0) of the carriage, which turns the
-    travel of the axis U it carries in that plane against the other's - the plane's
-    squareness (ISO 230-1), the other direction of :func:`constant_turn`. Right when the
-    squareness is within 30 % or 3 U of eps(q0) with the sign :func:`constant_turn` uses (+
-    when the named form tilts U's travel, - when it tilts the other's). "" when it is not."""
+    travel of the axis U it carries in that plane by eps(q0) against the other's - the
+    plane's squareness (ISO 230-1), the other direction of :func:`constant_turn`. The named
+    form tilts axis K's travel by theta_K = +eps(q0) when K is U, -eps(q0) when it is the
+    other axis. A location form (``EB0Z``) is that rotation; a slope form (``EZX``: the C
+    error growing with K's command) is theta_K turned into the error along C by the command's
+    sign: s_K ((e_R x e_K) . e_C) theta_K, R the tilt's rotation axis. Right within 30 % or
+    3 U with that sign. ``still``: ``{"at": {axis: q0 [m]}, "signs": {axis: +-1}}``. ""
+    when it is not."""
     axis, variant = effect["axis"], named["variant"]
-    if axis not in still or named["effect"] != "squareness" or not chain or \
+    if axis not in still.get("at", {}) or named["effect"] != "squareness" or not chain or \
             plane_of(variant) != plane_of(effect["iso_name"]):
         return ""
     letters = chain.strip("[]").split()
@@ -292,10 +308,16 @@ def still_turn(effect: dict, named: dict, chain: str, still: dict) -> str:
     value = named["parameters"].get("angle_rad")
     if len(carried) != 1 or value is None:
         return ""
-    q0 = still[axis]
+    q0 = still["at"][axis]
     c0, c1, c2 = effect["value_si"]
     turn = c0 + c1 * q0 + c2 * q0 * q0             # the generator's eps(q), q the command
-    expected = turn if variant[-1] in carried else -turn
+    tilted = variant[-1]                           # K: the axis whose travel the form tilts
+    expected = turn if tilted in carried else -turn
+    if len(variant) == 3:                          # a slope: error along C per K's command
+        unit = {a: np.eye(3)["XYZ".index(a)] for a in "XYZ"}
+        rotation = np.eye(3)["ABC".index(effect["iso_name"][1])]
+        expected *= still.get("signs", {}).get(tilted, 1) * float(
+            np.cross(rotation, unit[tilted]) @ unit[variant[1]])
     spread = 3.0 * named.get("parameter_uncertainties", {}).get("angle_rad", 0.0)
     right = value * expected > 0 and abs(value - expected) <= max(0.3 * abs(expected), spread)
     return "a still carriage's turn as its plane's squareness" if right else ""
@@ -371,7 +393,8 @@ def score(truth: dict, result: dict | None) -> dict:
     used, problems = set(), []
 
     strokes = truth.get("strokes_m", {})
-    still = truth.get("still_m", {})
+    still = {"at": truth.get("still_m", {}),
+             "signs": truth.get("conventions", {}).get("signs", {})}
 
     def accounts(effect, entry):
         why = matches(effect, entry, truth.get("chain", ""), truths, strokes, still)
