@@ -191,8 +191,8 @@ def _controller_tables(args: argparse.Namespace, model, band: float, asked: floa
 def _generic_tables(args: argparse.Namespace, model, band: float, asked: float | None):
     """(files' texts, notes, summary, spacing [m], round trip) of the per-axis bilateral
     tables and the volumetric ISG-CSV, every one computed before anything is written."""
-    from ..core.compensation.cnc_export import (bilateral_tables, carried_effects, round_trip,
-                                               write_bilateral_csv, write_isg_csv)
+    from ..core.compensation.cnc_export import (bilateral_tables, round_trip, write_bilateral_csv,
+                                               write_isg_csv)
     from ..core.compensation.controller_tables import (period_problems, periodic_periods,
                                                        volumetric_spacing)
     from ..core.errors import ParameterError
@@ -217,17 +217,52 @@ def _generic_tables(args: argparse.Namespace, model, band: float, asked: float |
         notes.append(f"warning: at {spacing * 1e3:g} mm the tables leave up to "
                      f"{check.tcp_max_error_m * 1e6:.3g} um at the TCP, over the band "
                      f"{args.band_um:g} um")
-    # Each fitted geometric effect through the file against the model's own prediction:
-    # one the file cannot hold (a rotary axis' own error motion) is said, never left out.
-    left_out = [c for c in carried_effects(model, spacing) if not c.carried]
-    for effect in left_out:
-        notes.append(f"warning: volumetric_isg.csv does not hold {effect.name} "
-                     f"({effect.model_rms_m * 1e6:.3g} um RMS at the TCP; the file leaves "
-                     f"{effect.gap_rms_m * 1e6:.3g} um of it): compensate it in real time "
-                     "(the broadcaster's stream)")
+    held, left_out = _what_the_file_holds(model, spacing)
+    notes += held
     summary = {"files": list(texts), **check.as_dict(), "band_m": band,
                "not_in_file": {c.name: c.gap_rms_m for c in left_out}}
     return texts, notes, summary, spacing, check
+
+
+def _what_the_file_holds(model, spacing: float) -> tuple[list[str], list]:
+    """Notes on what the volumetric file holds of the model: each fitted geometric effect
+    through the file against the model's own prediction (one the file cannot hold - a
+    rotary axis' own error motion - said, never left out), a survey's set-up (no file's),
+    a line error that stands for a sum (the survey's poses could not part it). Returns the
+    notes and the effects not carried (:class:`~..core.compensation.cnc_export.CarriedEffect`)."""
+    from ..core.compensation.cnc_export import SET_UP_FAMILIES, carried_effects
+    from ..core.effects.geometric import inseparable_sentence
+
+    notes = []
+    rotary = [a for a in model.machine.axis_order if model.machine.axes[a].is_rotary]
+    set_up = {a: model.machine.setup_angle(a) for a in rotary}
+    left_out = [c for c in carried_effects(model, spacing) if not c.carried]
+    for effect in left_out:
+        share = effect.gap_rms_m / effect.model_rms_m if effect.model_rms_m else 1.0
+        held = "does not hold" if share > 0.9 else f"holds only {100 * (1 - share):.0f} % of"
+        why = ""
+        if effect.name.split(":")[0] in ("rotary_location", "angular") and \
+                any(abs(v) > 0 for v in set_up.values()):
+            why = (" - the file's line errors are ISO 230-7's (the body turning by the raw "
+                   "command); with the set-up at " + ", ".join(
+                       f"{a} = {np.degrees(v):g} deg" for a, v in set_up.items()) +
+                   " this check, which turns each body from its set-up angle, reads an outer "
+                   "axis' line otherwise: check the compensation on the machine")
+        notes.append(f"warning: volumetric_isg.csv {held} {effect.name} "
+                     f"({effect.model_rms_m * 1e6:.3g} um RMS at the TCP; the file leaves "
+                     f"{effect.gap_rms_m * 1e6:.3g} um of it): compensate the rest in real "
+                     f"time (the broadcaster's stream){why}")
+    for name, entry in model.effects.items():
+        if isinstance(entry, dict) and entry.get("family") in SET_UP_FAMILIES:
+            notes.append(f"{name} is where the survey's work or tool was located (its "
+                         "set-up), not the machine: a new part set-up takes out its own, so "
+                         "no file holds it")
+        folded = inseparable_sentence(((entry.get("setting") or {}).get("inseparable", ""))
+                                      if isinstance(entry, dict) else "")
+        if folded and entry.get("family") == "rotary_location":
+            notes.append(f"{name}: {folded} - the file holds the values as fitted, right on "
+                         "poses like the survey's")
+    return notes, left_out
 
 
 def _refuse_too_many_points(args: argparse.Namespace, machine, asked: float | None,

@@ -350,9 +350,11 @@ class TableCompensation:
         values : array_like, shape (M * len(columns),) or (M, len(columns))
             Row-major table: positions [m], then each column in its unit [m] / [rad].
         squareness_names : list of str
-            Location error names (``EC0Y`` ...).
+            Location error names: squareness (``EC0Y`` ...), rotary lines' tilts
+            (``EA0C`` ...) and offsets (``EX0C`` ...).
         squareness : array_like, shape (len(squareness_names),)
-            Their values [rad], each within 10 mrad.
+            Their values, [rad] for an angle and [m] for an offset, each within 1e-2 (10
+            mrad, 10 mm).
         version : int
             Model version; a new one goes live once every linear axis' table of it is in.
 
@@ -410,7 +412,7 @@ class TableCompensation:
         if square.size != len(names) or not np.all(np.isfinite(square)) or \
                 np.any(np.abs(square) > 1e-2):
             return self._refuse("bad squareness: names and values differ in number, are "
-                                "not finite or beyond 10 mrad")
+                                "not finite or beyond 10 mrad (an angle) or 10 mm (an offset)")
         table = AxisTable(axis, grid.copy(),
                           {name: data[:, col].copy() for name, col in parsed.items()},
                           int(version))

@@ -2,6 +2,8 @@
 volumetric file; an effect no file can hold is said, never left out silently."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -12,6 +14,8 @@ from mt_accuracy_ros.core.compensation.tables import machine_with_table
 from mt_accuracy_ros.core.effects.geometric import lever_line_offsets
 from mt_accuracy_ros.core.kinematics.chain import KinematicModel
 from mt_accuracy_ros.core.kinematics.machine import load_machine
+
+from conftest import REPO_ROOT
 
 LINES = {"rotary_location:AC": {
     "family": "rotary_location", "variant": "AC", "setting": {},
@@ -92,3 +96,60 @@ def test_what_the_file_carries_is_judged_effect_by_effect():
     # Left out whole: the file leaves all of it.
     assert run_out.gap_rms_m == pytest.approx(run_out.model_rms_m, rel=1e-9)
     assert run_out.model_rms_m > 1e-6
+
+
+def test_a_fitted_line_beside_the_descriptions_own_is_carried():
+    """The description's EX0C (50 um) and a fitted one (20 um) sum in the file (70 um); the
+    fitted effect is judged carried, not compared against the description's."""
+    machine = load_machine("trunnion_ac")
+    axes = dict(machine.axes)
+    axes["C"] = replace(axes["C"], location_errors={"X": 50e-6})
+    described = replace(machine, axes=axes)
+    fitted = {"rotary_location:C": {"family": "rotary_location", "variant": "C",
+                                    "setting": {}, "coefficients": {"EX0C": 20e-6, "EY0C": 0.0,
+                                                                    "EA0C": 0.0, "EB0C": 0.0}}}
+    model = ErrorModel(described, {"geometric": {}, **fitted})
+    assert model.location_table()["EX0C"] == pytest.approx(70e-6)
+    (judged,) = carried_effects(model, 0.01)
+    assert judged.carried and judged.gap_rms_m < 1e-3 * judged.model_rms_m
+
+
+def test_a_surveys_set_up_is_no_machine_effect_to_carry():
+    model = ErrorModel(load_machine("trunnion_ac"), {
+        "setup_location:work": {"family": "setup_location", "variant": "work", "setting": {},
+                                "coefficients": {"v_x": 10e-6, "v_y": -8e-6, "v_z": 5e-6}},
+        **LINES})
+    assert [c.name for c in carried_effects(model, 0.01)] == ["rotary_location:AC"]
+
+
+def test_an_outer_axis_set_up_off_zero_is_read_otherwise_by_the_check_and_said(tmp_path,
+                                                                               capsys):
+    """A set up at -30 deg: the chain turns A's body from there, the model reads A's line
+    as a located instrument does (the raw turn, the part's set-up error turning with the
+    work); they part once C leaves its set-up, so the check reports a gap for A's line and
+    says why, while C's line (the last axis) agrees."""
+    import yaml
+
+    from mt_accuracy_ros.cli import main
+
+    machine = load_machine("trunnion_ac")
+    moved = replace(machine, setup_pose={"A": np.radians(-30.0), "C": 0.0})
+    a_only = {name: {**entry, "coefficients": {k: (v if k[3] == "A" else 0.0)
+                                              for k, v in entry["coefficients"].items()}}
+              for name, entry in LINES.items()}
+    c_only = {name: {**entry, "coefficients": {k: (v if k[3] == "C" else 0.0)
+                                              for k, v in entry["coefficients"].items()}}
+              for name, entry in LINES.items()}
+    (outer,) = carried_effects(ErrorModel(moved, a_only), 0.01)
+    (inner,) = carried_effects(ErrorModel(moved, c_only), 0.01)
+    assert not outer.carried and inner.carried
+    text = yaml.safe_load((REPO_ROOT / "mt_accuracy_ros" / "machines" / "trunnion_ac.yaml")
+                          .read_text())
+    text["setup_pose"] = {"A": {"value": -30.0, "unit": "deg"}, "C": {"value": 0.0,
+                                                                      "unit": "deg"}}
+    (tmp_path / "m.yaml").write_text(yaml.safe_dump(text))
+    (tmp_path / "model.yaml").write_text(yaml.safe_dump(
+        {"machine": str(tmp_path / "m.yaml"), "effects": a_only}))
+    assert main(["export", str(tmp_path / "model.yaml"), "--out", str(tmp_path / "t")]) == 0
+    said = capsys.readouterr().out
+    assert "rotary_location:AC" in said and "A = -30 deg" in said and "ISO 230-7" in said
