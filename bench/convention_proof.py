@@ -148,17 +148,21 @@ def folds_of(named: dict) -> dict[str, dict[str, float]]:
     return out
 
 
+def folded_share(kept: str, named: dict, truths: dict[str, float]) -> float:
+    """What a named rotary_location parameter stands for beyond its own truth: each
+    error the output folds into it (``setting.inseparable``) times its ratio."""
+    return sum(ratio * truths.get(name, 0.0) for name, onto in folds_of(named).items()
+               for k, ratio in onto.items() if k == kept)
+
+
 def folded_value(effect: dict, named: dict, truths: dict[str, float]) -> str:
     """"value"/"wrong value" for a truth location error the named effect folded, "" if not."""
     into = folds_of(named).get(effect["iso_name"])
     if not into:
         return ""
-    folds = folds_of(named)
     for kept in into:
         # What the kept parameter stands for: its own truth plus each folded one's share.
-        expected = truths.get(kept, 0.0) + sum(ratio * truths.get(name, 0.0)
-                                               for name, onto in folds.items()
-                                               for k, ratio in onto.items() if k == kept)
+        expected = truths.get(kept, 0.0) + folded_share(kept, named, truths)
         value = named["parameters"].get(kept)
         spread = 3.0 * named.get("parameter_uncertainties", {}).get(kept, 0.0)
         if value is None or value * expected <= 0 or \
@@ -254,8 +258,11 @@ def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = No
         carried = carried_rotary(chain, effect["axis"]) if chain else ""
         if not carried or family != "rotary_location" or carried not in variant:
             return ""
-        effect = dict(effect, iso_name=f"E{effect['axis']}0{carried}",
-                      kind="location_tilt")
+        if effect["iso_name"] in folds_of(named):
+            # Said as what it folds into (its tilt and its arm's offset): scored as said.
+            return folded_value(effect, named, truths or {})
+        effect = dict(effect, iso_name=f"E{effect['axis']}0{carried}", axis=carried,
+                      kind="location_tilt", as_carried_tilt=True)
         iso, kind = effect["iso_name"], effect["kind"]
     if kind in ("location_offset", "location_tilt"):
         if family != "rotary_location" or effect["axis"] not in variant:
@@ -264,7 +271,9 @@ def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = No
         if value is None:
             return folded_value(effect, named, truths or {}) if family == "rotary_location" \
                 else ""
-        truth = effect["value_si"]
+        # A parameter the output says stands for a sum is judged against that sum.
+        truth = effect["value_si"] + (0.0 if effect.get("as_carried_tilt") else
+                                      folded_share(iso, named, truths or {}))
         spread = 3.0 * named.get("parameter_uncertainties", {}).get(iso, 0.0)
         if value * truth > 0 and abs(value - truth) <= max(0.3 * abs(truth), spread):
             return "value"
@@ -308,7 +317,7 @@ def score(truth: dict, result: dict | None) -> dict:
     names = [n["name"] for n in named]
     wanted = [e for e in truth["effects"] if e["identifiable"]]
     truths = {e["iso_name"]: e["value_si"] for e in truth["effects"]
-              if e["kind"] in ("location_offset", "location_tilt")}
+              if e["kind"] in ("location_offset", "location_tilt", "zero")}
     used, problems = set(), []
 
     strokes = truth.get("strokes_m", {})
