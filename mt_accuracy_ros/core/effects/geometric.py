@@ -1767,7 +1767,10 @@ def inseparable_sentence(text: str) -> str:
             stands = "; ".join(f"{kept} stands for {kept} + {ratio:.4g} "
                                f"{_ratio_unit(name, kept)} x {name}"
                                for kept, ratio in into.items())
-            said.append(f"{name} moves these readings as {moves} would, which these poses "
+            # An outer axis' zero turns the lines it carries about its own (ISO 230-7).
+            what = f"{name} (the {name[3]} axis' zero error, turning the lines it carries)" \
+                if name[1] == name[3] else name
+            said.append(f"{what} moves these readings as {moves} would, which these poses "
                         f"cannot part: {stands}")
     if unseen:
         said.append(f"{', '.join(unseen)} move(s) nothing on these poses (not seen)")

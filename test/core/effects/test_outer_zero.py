@@ -137,7 +137,8 @@ def test_the_line_family_says_the_outer_zero_folded_and_never_fits_it(outer, off
     zero = f"E{outer}0{outer}"
     assert zero not in family.parameter_names("C", setting)
     assert family.parameter_names("C", setting) == ["EX0C", "EY0C", "EA0C", "EB0C"]
-    assert f"{zero} moves these readings as" in family.explanation("C", setting)
+    assert f"{zero} (the {outer} axis' zero error, turning the lines it carries) moves " \
+        "these readings as" in family.explanation("C", setting)
 
 
 def test_a_zero_and_the_carried_tilt_are_named_as_the_sums_they_make():
