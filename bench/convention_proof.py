@@ -21,7 +21,9 @@ Scoring, per trial (every identifiable effect of the truth):
   origin may add a straightness of the same axis, a slope along it, or - where the
   pivot's offset turns along the axis' own travel - its positioning error (ISO 230-1);
 * a zero-angle error the poses can see (an outer axis' zero: a located sphere sees it as
-  the tilt of the axis it carries) is right as that tilt;
+  the tilt of the axis it carries) is right as that tilt, named on that axis'
+  ``rotary_location``; where the output folds it into the carried line ("EB0B=EX0C*-0.118&
+  EB0C*1", ISO 230-7: the line turned about the outer one) it is scored as a fold, below;
 * a squareness is right when a squareness of its plane is named, or one rotation: the
   constant part P0 of the tilt of a carriage that carries exactly one axis of that plane
   (it turns that axis' travel against the other's, which ISO 230-1 books as the plane's
@@ -29,10 +31,11 @@ Scoring, per trial (every identifiable effect of the truth):
 * what the poses cannot part is said, and scored as said: a rotary location error the
   named effect folds into another (``setting.inseparable``, "EB0C=EX0C*-0.417": EX0C
   stands for EX0C - 0.417 m/rad x EB0C) is right when every parameter it folds into
-  carries the truth's sum within 30 % or 3 U; an effect the output states the readings
-  cannot part from a named one (``inseparable``: the other's name and its own fit of the
-  same contribution) is right when that statement would be right as a named effect -
-  the truth among the stated pair, with its value;
+  carries the truth's sum within 30 % or 3 U, and a truth kept as a parameter into
+  which another truth is folded is judged against that sum too; an effect the output
+  states the readings cannot part from a named one (``inseparable``: the other's name
+  and its own fit of the same contribution) is right when that statement would be right
+  as a named effect - the truth among the stated pair, with its value;
 * a table tilt's constant part - its mean over the stroke, which the catalogue's
   zero-mean shapes leave out - turns one body against the other: named as the lines of
   rotary axes tilted about the same direction it is right when each is within 30 % or
