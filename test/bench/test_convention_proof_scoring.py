@@ -111,32 +111,3 @@ def test_a_squareness_named_as_one_rotation_is_right_with_its_value_and_sign():
     truth["effects"][0].update(iso_name="EB0X", axis="X", side="work", value_si=20e-6)
     assert right("angular:EBY", 20e-6) and not right("angular:EBY", -20e-6)
 
-
-TRUNNION = "[w C B X Y b Z t]"
-
-
-def _zero(axis, value):
-    return {"iso_name": f"E{axis}0{axis}", "kind": "zero", "axis": axis, "side": "work",
-            "value_si": value, "identifiable": True}
-
-
-def test_an_outer_zero_is_right_as_the_tilt_of_the_line_it_carries():
-    truth = dict(_truth(_zero("B", 48e-6), head=False), chain=TRUNNION)
-    named = _named("rotary_location:C", {"EX0C": 0.0, "EB0C": 47e-6})
-    assert score(truth, {"named": [named]})["right"]
-    named["parameters"]["EB0C"] = -47e-6
-    assert not score(truth, {"named": [named]})["right"]
-
-
-def test_an_outer_zero_said_folded_is_scored_as_the_sums_it_makes():
-    """EB0B folded into C's line: EX0C stands for EX0C - 0.118 EB0B, EB0C for EB0C + EB0B."""
-    truth = dict(_truth(_zero("B", 48e-6), _location("EB0C", -51e-6, "C"), head=False),
-                 chain=TRUNNION)
-    setting = {"inseparable": "EB0B=EX0C*-1.18e-01&EB0C*1.0e+00"}
-    right = _named("rotary_location:C", {"EX0C": -5.7e-6, "EB0C": -3.1e-6}, setting)
-    assert score(truth, {"named": [right]})["right"]
-    # EB0C at its own truth alone is not the sum the output says it stands for.
-    alone = _named("rotary_location:C", {"EX0C": -5.7e-6, "EB0C": -51e-6}, setting)
-    verdict = score(truth, {"named": [alone]})
-    assert not verdict["right"] and "EB0B wrong value" in verdict["why"]
-    assert "EB0C wrong value" in verdict["why"]
