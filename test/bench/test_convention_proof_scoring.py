@@ -110,4 +110,3 @@ def test_a_squareness_named_as_one_rotation_is_right_with_its_value_and_sign():
     # Tilting the carried axis instead: EB0X turns X's travel as EBY's P0 does.
     truth["effects"][0].update(iso_name="EB0X", axis="X", side="work", value_si=20e-6)
     assert right("angular:EBY", 20e-6) and not right("angular:EBY", -20e-6)
-
