@@ -48,7 +48,7 @@ import hashlib
 
 import numpy as np
 
-from ..kinematics.machine import MachineDescription
+from ..kinematics.machine import outer_zeros
 from .base import Context, EffectFamily, along
 from .setup_location import located_design, side_rotations
 from .spectral import (direct_basis, frequency_grid, resolvable, strongest_frequencies,
@@ -1618,40 +1618,6 @@ class RotaryLocation(EffectFamily):
 #: columns kept before it (and the offsets) are taken out is not parted from them: its
 #: parameter would be known this many times worse than if it were.
 INSEPARABLE_FRACTION = 1e-4
-
-
-def outer_zeros(machine: MachineDescription, axes: str) -> list[str]:
-    """The zero-angle errors of the rotary axes that carry one of ``axes`` on its side.
-
-    An outer axis' zero error e turns the body by q + e about its line (ISO 230-7), and
-    with it the lines of the rotary axes it carries: a sphere located at the set-up (by a
-    translation) then reads it exactly as the carried line turned by e about the outer
-    line - a tilt e of that line and an offset e x (its origin's arm from the outer line)
-    (:meth:`~..kinematics.chain.KinematicModel.located_sensitivities`).
-
-    Parameters
-    ----------
-    machine : MachineDescription
-        The machine.
-    axes : str
-        Rotary axis letters, e.g. ``"C"`` or ``"BC"``.
-
-    Returns
-    -------
-    list of str
-        ISO names, e.g. ``["EB0B"]`` for ``"C"`` on a ``[w C B X Y b Z t]`` trunnion.
-    """
-    out = []
-    for branch in (machine.workpiece_branch, machine.tool_branch):
-        for axis in axes:
-            if axis not in branch:
-                continue
-            # The branch runs from the bed outwards: the axes before this one carry it.
-            for outer in branch[:branch.index(axis)]:
-                name = f"E{outer}0{outer}"
-                if machine.axes[outer].is_rotary and name not in out:
-                    out.append(name)
-    return out
 
 
 def inseparable_location_errors(ctx: Context, names: list[str],

@@ -18,9 +18,10 @@ import pytest
 from mt_accuracy_ros.core.compensation.error_model import ErrorModel
 from mt_accuracy_ros.core.effects import family_named
 from mt_accuracy_ros.core.effects.base import Context
-from mt_accuracy_ros.core.effects.geometric import outer_zeros, parse_inseparable
+from mt_accuracy_ros.core.effects.geometric import parse_inseparable
 from mt_accuracy_ros.core.effects.variables import Variables
-from mt_accuracy_ros.core.kinematics.machine import machine_from_dict, with_setup_pose
+from mt_accuracy_ros.core.kinematics.machine import (machine_from_dict, outer_zeros,
+                                                     with_setup_pose)
 from mt_accuracy_ros.core.workbench.diagnosis import Observations, diagnose
 from studies import convention_surveys as cs
 
@@ -163,3 +164,28 @@ def test_a_zero_and_the_carried_tilt_are_named_as_the_sums_they_make():
     assert named.parameters["EX0C"] == pytest.approx(OUTER_OFFSET_Z * 48e-6, abs=0.3e-6)
     assert named.parameters["EB0C"] == pytest.approx(-3e-6, abs=1.5e-6)
     assert "EB0C stands for EB0C + 1 rad/rad x EB0B" in named.explanation
+
+
+def test_probing_says_an_outer_zero_folded_into_the_carried_line():
+    """The probing tool on a trunnion [w C A X Y b Z t], A's zero -43.7 urad: the probed
+    centres see C's line turned about A's (EA0C -43.7 urad, EY0C -o_z x it), and the output
+    says EA0A folded into them with those coefficients, not taken out by the set-up."""
+    from mt_accuracy_ros.core.rotary.probing import identify_location_errors
+
+    generator, described = _trunnion("A", (1, -1), {"A": 0.0, "C": 0.0})
+    rows = _rows(generator, "A")
+    value = -43.7e-6
+    errors, _ = cs.located_errors(generator, cs.errs_from_effects([_zero("A", value)]), rows)
+    _, positions = _context(described, rows)
+    noise = np.random.default_rng(5).normal(0.0, 0.3e-6, errors.shape)
+    # Found minus expected centres: minus the TCP error (Khan & Chen eq. 17).
+    result = identify_location_errors(described, positions, -errors + noise,
+                                      sphere_nominal_m=SPHERE)
+    assert result.parameters["EA0C"] == pytest.approx(value, abs=1.5e-6)
+    assert result.parameters["EY0C"] == pytest.approx(-OUTER_OFFSET_Z * value, abs=0.3e-6)
+    assert result.aliases["EA0C"]["EA0A"] == pytest.approx(1.0, abs=1e-6)
+    assert result.aliases["EY0C"]["EA0A"] == pytest.approx(-OUTER_OFFSET_Z, abs=1e-8)
+    text = result.text()
+    assert "EA0C + EA0A" in text and "EY0C + 0.08 m/rad x EA0A" in text
+    assert "EA0A - an outer axis' zero-angle error turns" in text
+    assert "not observable: EA0A" not in text
