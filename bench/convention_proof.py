@@ -25,7 +25,9 @@ Scoring, per trial (every identifiable effect of the truth):
   plane (ISO 230-1), it is right within 30 % or 3 U of eps(q0), with the sign of the
   squareness-as-one-rotation rule below (the same relation read the other way);
 * a zero-angle error the poses can see (an outer axis' zero: a located sphere sees it as
-  the tilt of the axis it carries) is right as that tilt;
+  the tilt of the axis it carries) is right as that tilt, named on that axis'
+  ``rotary_location``; where the output folds it into the carried line ("EB0B=EX0C*-0.118&
+  EB0C*1", ISO 230-7: the line turned about the outer one) it is scored as a fold, below;
 * a squareness is right when a squareness of its plane is named, or one rotation: the
   constant part P0 of the tilt of a carriage that carries exactly one axis of that plane
   (it turns that axis' travel against the other's, which ISO 230-1 books as the plane's
@@ -33,10 +35,11 @@ Scoring, per trial (every identifiable effect of the truth):
 * what the poses cannot part is said, and scored as said: a rotary location error the
   named effect folds into another (``setting.inseparable``, "EB0C=EX0C*-0.417": EX0C
   stands for EX0C - 0.417 m/rad x EB0C) is right when every parameter it folds into
-  carries the truth's sum within 30 % or 3 U; an effect the output states the readings
-  cannot part from a named one (``inseparable``: the other's name and its own fit of the
-  same contribution) is right when that statement would be right as a named effect -
-  the truth among the stated pair, with its value;
+  carries the truth's sum within 30 % or 3 U, and a truth kept as a parameter into
+  which another truth is folded is judged against that sum too; an effect the output
+  states the readings cannot part from a named one (``inseparable``: the other's name
+  and its own fit of the same contribution) is right when that statement would be right
+  as a named effect - the truth among the stated pair, with its value;
 * a table tilt's constant part - its mean over the stroke, which the catalogue's
   zero-mean shapes leave out - turns one body against the other: named as the lines of
   rotary axes tilted about the same direction, it is right when the lines the tilted
@@ -175,17 +178,21 @@ def folds_of(named: dict) -> dict[str, dict[str, float]]:
     return out
 
 
+def folded_share(kept: str, named: dict, truths: dict[str, float]) -> float:
+    """What a named rotary_location parameter stands for beyond its own truth: each
+    error the output folds into it (``setting.inseparable``) times its ratio."""
+    return sum(ratio * truths.get(name, 0.0) for name, onto in folds_of(named).items()
+               for k, ratio in onto.items() if k == kept)
+
+
 def folded_value(effect: dict, named: dict, truths: dict[str, float]) -> str:
     """"value"/"wrong value" for a truth location error the named effect folded, "" if not."""
     into = folds_of(named).get(effect["iso_name"])
     if not into:
         return ""
-    folds = folds_of(named)
     for kept in into:
         # What the kept parameter stands for: its own truth plus each folded one's share.
-        expected = truths.get(kept, 0.0) + sum(ratio * truths.get(name, 0.0)
-                                               for name, onto in folds.items()
-                                               for k, ratio in onto.items() if k == kept)
+        expected = truths.get(kept, 0.0) + folded_share(kept, named, truths)
         value = named["parameters"].get(kept)
         spread = 3.0 * named.get("parameter_uncertainties", {}).get(kept, 0.0)
         if value is None or value * expected <= 0 or \
@@ -334,8 +341,11 @@ def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = No
         carried = carried_rotary(chain, effect["axis"]) if chain else ""
         if not carried or family != "rotary_location" or carried not in variant:
             return ""
-        effect = dict(effect, iso_name=f"E{effect['axis']}0{carried}",
-                      kind="location_tilt")
+        if effect["iso_name"] in folds_of(named):
+            # Said as what it folds into (its tilt and its arm's offset): scored as said.
+            return folded_value(effect, named, truths or {})
+        effect = dict(effect, iso_name=f"E{effect['axis']}0{carried}", axis=carried,
+                      kind="location_tilt", as_carried_tilt=True)
         iso, kind = effect["iso_name"], effect["kind"]
     if kind in ("location_offset", "location_tilt"):
         if family != "rotary_location" or effect["axis"] not in variant:
@@ -344,7 +354,9 @@ def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = No
         if value is None:
             return folded_value(effect, named, truths or {}) if family == "rotary_location" \
                 else ""
-        truth = effect["value_si"]
+        # A parameter the output says stands for a sum is judged against that sum.
+        truth = effect["value_si"] + (0.0 if effect.get("as_carried_tilt") else
+                                      folded_share(iso, named, truths or {}))
         spread = 3.0 * named.get("parameter_uncertainties", {}).get(iso, 0.0)
         if value * truth > 0 and abs(value - truth) <= max(0.3 * abs(truth), spread):
             return "value"
@@ -389,7 +401,7 @@ def score(truth: dict, result: dict | None) -> dict:
     names = [n["name"] for n in named]
     wanted = [e for e in truth["effects"] if e["identifiable"]]
     truths = {e["iso_name"]: e["value_si"] for e in truth["effects"]
-              if e["kind"] in ("location_offset", "location_tilt")}
+              if e["kind"] in ("location_offset", "location_tilt", "zero")}
     used, problems = set(), []
 
     strokes = truth.get("strokes_m", {})

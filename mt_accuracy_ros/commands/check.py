@@ -448,7 +448,9 @@ def setup_note(machine) -> str:
         "no setup_pose given: every rotary axis at 0"
     notes = "".join(f"; {note}" for note in machine.setup_notes)
     return (f"set-up pose {pose} ({given}): the rotary axes turn about their actual lines "
-            f"from there, so their zero-angle errors are taken out by the set-up{notes}")
+            f"from there, so the zero-angle error of each side's last rotary axis is taken "
+            f"out by the set-up; an outer axis' zero turns the lines it carries (ISO 230-7) "
+            f"and is said with them{notes}")
 
 
 def in_package_convention(measured, mask, direction_errors: dict, convention, machine,

@@ -215,8 +215,10 @@ class Context:
             rotary = [a for a in self.machine.axis_order if self.machine.axes[a].is_rotary]
             if error_name[3] not in rotary:
                 rotary.append(error_name[3])
+            # The line's two offsets and two tilts, and its zero (an outer axis' zero turns
+            # the lines it carries, ISO 230-7); an offset along the line moves nothing.
             names = [f"E{c}0{axis}" for axis in rotary for c in "XYZABC"
-                     if c not in ("XYZ"["ABC".index(axis)], axis)]
+                     if c != "XYZ"["ABC".index(axis)]]
             positions = {a: self.variables.positions[a] for a in self.machine.axis_order}
             found = self.kinematics.located_sensitivities(positions, names,
                                                           work_point=self.work_point)

@@ -48,6 +48,7 @@ import hashlib
 
 import numpy as np
 
+from ..kinematics.machine import outer_zeros
 from .base import Context, EffectFamily, along
 from .setup_location import located_design, side_rotations
 from .spectral import (direct_basis, frequency_grid, resolvable, strongest_frequencies,
@@ -1509,10 +1510,11 @@ class RotaryLocation(EffectFamily):
         return self.complexity + (len(variant) > 1)
 
     def _names(self, variant):
-        # ISO 230-7's location errors of the line: two offsets and two tilts. The zero-angle
-        # error (EA0A for A) and an offset along the line move nothing: the body turns about
-        # its actual line from where the work was set up (kinematics.chain), so the set-up
-        # takes them out.
+        # ISO 230-7's location errors of the line: two offsets and two tilts. An offset
+        # along the line moves nothing, nor does the zero-angle error of the last axis of a
+        # side: the located set-up takes them out. An outer axis' zero (EA0A where A carries
+        # C) turns the carried line about its own: said as that line's tilt and offset
+        # (outer_zeros, in the setting), never fitted.
         names = []
         for axis in variant:
             along_axis = "XYZ"["ABC".index(axis)]
@@ -1537,8 +1539,10 @@ class RotaryLocation(EffectFamily):
             ``[{"inseparable": str}]`` (:func:`inseparable_location_errors`) or ``[]``.
         """
         # The location errors these poses cannot part are folded into those they move
-        # the readings as (one setting: which, and by how much).
-        setting = {"inseparable": inseparable_location_errors(ctx, self._names(variant))}
+        # the readings as (one setting: which, and by how much); so is the zero of an
+        # outer axis, which turns the lines it carries (said, never fitted).
+        setting = {"inseparable": inseparable_location_errors(
+            ctx, self._names(variant), said_only=outer_zeros(ctx.machine, variant))}
         # A variant none of whose errors these poses see is no candidate.
         return [setting] if self.parameter_names(variant, setting) else []
 
@@ -1675,7 +1679,8 @@ class RotaryLocation(EffectFamily):
 INSEPARABLE_FRACTION = 1e-4
 
 
-def inseparable_location_errors(ctx: Context, names: list[str]) -> str:
+def inseparable_location_errors(ctx: Context, names: list[str],
+                                said_only: list[str] | tuple[str, ...] = ()) -> str:
     """Which of a rotary axis' location errors ``names`` the readings cannot part, as the
     setting string ``"EB0C=EX0C*-0.093;EX0B="``: EB0C moves them as -0.093 m/rad of EX0C
     (EX0C then stands for EX0C - 0.093 m/rad x EB0C); EX0B moves nothing here.
@@ -1691,6 +1696,10 @@ def inseparable_location_errors(ctx: Context, names: list[str]) -> str:
         The machine and the readings.
     names : list of str
         Location error names, offsets [m] before tilts [rad].
+    said_only : list of str, optional
+        Location errors judged after ``names`` against what was kept and never kept
+        themselves (an outer axis' zero, :func:`outer_zeros`): said when folded or unseen,
+        left out when the readings part them.
 
     Returns
     -------
@@ -1698,7 +1707,7 @@ def inseparable_location_errors(ctx: Context, names: list[str]) -> str:
         The setting string (ratios in the kept error's unit per the folded one's).
     """
     columns = []
-    for name in names:
+    for name in list(names) + list(said_only):
         position, turn = ctx.located(name)
         if ctx.width == 6:      # the direction as the instrument saw it (Context)
             position = np.concatenate([position, ctx._direction_rows(turn[:, :, None])[:, :, 0]],
@@ -1711,9 +1720,11 @@ def inseparable_location_errors(ctx: Context, names: list[str]) -> str:
         flat.append(column.ravel())
     kept: list[int] = []
     parts = []
+    names = list(names) + list(said_only)
     # The axes that turned first: a line error of one that stood still is read as the
     # line of one that turned (a B offset at a fixed B moves the C table's line).
-    for i in sorted(range(len(names)), key=lambda k: not ctx.moves(names[k][3])):
+    order = sorted(range(len(names) - len(said_only)), key=lambda k: not ctx.moves(names[k][3]))
+    for i in order + list(range(len(names) - len(said_only), len(names))):
         column = flat[i]
         norm = float(np.linalg.norm(column))
         if norm == 0.0:
@@ -1728,7 +1739,8 @@ def inseparable_location_errors(ctx: Context, names: list[str]) -> str:
                                  if abs(w) * float(np.linalg.norm(flat[k])) > 1e-6 * norm)
                 parts.append(f"{names[i]}={terms}")
                 continue
-        kept.append(i)
+        if i < len(names) - len(said_only):
+            kept.append(i)
     return ";".join(parts)
 
 
@@ -1780,7 +1792,10 @@ def inseparable_sentence(text: str) -> str:
             stands = "; ".join(f"{kept} stands for {kept} + {ratio:.4g} "
                                f"{_ratio_unit(name, kept)} x {name}"
                                for kept, ratio in into.items())
-            said.append(f"{name} moves these readings as {moves} would, which these poses "
+            # An outer axis' zero turns the lines it carries about its own (ISO 230-7).
+            what = f"{name} (the {name[3]} axis' zero error, turning the lines it carries)" \
+                if name[1] == name[3] else name
+            said.append(f"{what} moves these readings as {moves} would, which these poses "
                         f"cannot part: {stands}")
     if unseen:
         said.append(f"{', '.join(unseen)} move(s) nothing on these poses (not seen)")

@@ -630,8 +630,12 @@ class KinematicModel:
         for name in names:
             axis = name[3]
             side = "tool" if head and axis in self.machine.tool_branch else "workpiece"
-            moved = _unit_motion(frames[name], name)
-            moved_then = _unit_motion(at_setup[name], name)
+            # A zero error (EC0C) turns the body to q + e about its line (ISO 230-7): the
+            # axis' constant angular positioning error, which a turn about the line itself
+            # (L R L^-1, L about the line) cannot make.
+            source = motion_error_name(axis, axis) if name[1] == axis else name
+            moved = _unit_motion(frames[source], source)
+            moved_then = _unit_motion(at_setup[source], source)
             position = moved[0] - np.einsum("nij,nj->ni", turned[side], moved_then[0])
             # The direction's change at the set-up, located with the side: its turn across
             # the tool axis comes off the body's own turn (kept whole: at a set-up where the

@@ -225,6 +225,40 @@ class MachineDescription:
 _CHAIN = re.compile(r"^\[\s*w((?:\s+[XYZABC])*)\s+b((?:\s+[XYZABC])*)\s+t\s*\]$")
 
 
+def outer_zeros(machine: MachineDescription, axes: str) -> list[str]:
+    """The zero-angle errors of the rotary axes that carry one of ``axes`` on its side.
+
+    An outer axis' zero error e turns the body by q + e about its line (ISO 230-7), and
+    with it the lines of the rotary axes it carries: a sphere located at the set-up (by a
+    translation) then reads it exactly as the carried line turned by e about the outer
+    line - a tilt e of that line and an offset e x (its origin's arm from the outer line)
+    (:meth:`~.chain.KinematicModel.located_sensitivities`).
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine.
+    axes : str
+        Rotary axis letters, e.g. ``"C"`` or ``"BC"``.
+
+    Returns
+    -------
+    list of str
+        ISO names, e.g. ``["EB0B"]`` for ``"C"`` on a ``[w C B X Y b Z t]`` trunnion.
+    """
+    out = []
+    for branch in (machine.workpiece_branch, machine.tool_branch):
+        for axis in axes:
+            if axis not in branch:
+                continue
+            # The branch runs from the bed outwards: the axes before this one carry it.
+            for outer in branch[:branch.index(axis)]:
+                name = f"E{outer}0{outer}"
+                if machine.axes[outer].is_rotary and name not in out:
+                    out.append(name)
+    return out
+
+
 def parse_chain(chain: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """Workpiece and tool branches (from the bed outwards) of an ISO 10791-1 chain string.
 

@@ -23,9 +23,11 @@ unknown setup position (3 nuisance parameters), and reports:
 
 Each rotary body turns about its actual axis line from the pose where the
 sphere and the probe were set up (ISO 230-7; the machine's ``setup_pose``), so
-an axis' zero-angle error is taken out by the set-up and is never identifiable;
-nor is its offset along its own line. Both are refused by name when asked for,
-and said otherwise.
+the zero-angle error of each side's last rotary axis is taken out by the set-up and
+is never identifiable, nor is an offset along an axis' own line; an outer axis' zero
+turns the lines it carries, so the sphere sees it as their tilt and offset, folded
+into them. A zero and an offset along the line are refused by name when asked for, and
+said otherwise.
 """
 from __future__ import annotations
 
@@ -36,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import CalibrationError, InputDataError, MachineDescriptionError
 from ..kinematics.chain import ErrorOverrides, KinematicModel
-from ..kinematics.machine import MachineDescription, location_error_name
+from ..kinematics.machine import MachineDescription, location_error_name, outer_zeros
 from ..validation import finite_array
 
 LETTERS = "XYZ"
@@ -233,8 +235,11 @@ class LocationIdentification:
         text = name
         for other, c in self.aliases.get(name, {}).items():
             size = abs(c)
-            text += f" {'+' if c > 0 else '-'} " + (other if abs(size - 1) < 0.02
-                                                     else f"{size:.2g} {other}")
+            # A coefficient between an offset and an angle has a unit: say it.
+            mixed = (name[1] in LETTERS) != (other[1] in LETTERS)
+            unit = (" m/rad x" if name[1] in LETTERS else " rad/m x") if mixed else ""
+            text += f" {'+' if c > 0 else '-'} " + (
+                other if abs(size - 1) < 0.02 and not mixed else f"{size:.2g}{unit} {other}")
         return text
 
     @property
@@ -307,9 +312,14 @@ class LocationIdentification:
                      "nominal place")
         folded = {o for names in self.aliases.values() for o in names}
         absorbed = [n for n in self.not_observable if n not in folded]
-        if folded:
+        turned = sorted(n for n in folded if n[1] == n[3])
+        if folded - set(turned):
             lines.append(f"  folded into the parameters above (one sphere cannot part them): "
-                         f"{', '.join(sorted(folded))}")
+                         f"{', '.join(sorted(folded - set(turned)))}")
+        if turned:
+            lines.append(f"  folded into the parameters above: {', '.join(turned)} - an outer "
+                         "axis' zero-angle error turns the lines it carries about its own "
+                         "(ISO 230-7), which the sphere sees as their tilt and offset")
         for name, ratio in self.probe_length_aliases.items():
             value = self.parameters[name]
             lines.append(f"  {name} moves the centres as a probe {abs(value * ratio) * 1e6:.1f} um "
@@ -452,6 +462,9 @@ def identify_location_errors(machine: MachineDescription, positions: dict[str, A
                     for i in range(p) for j in range(i + 1, p) if abs(correlation[i, j]) > 0.9}
     aliases = _aliases(machine, q, names, not_observable, nominal_point) if not_observable \
         else {}
+    for kept, zeros in _outer_zero_folds(machine, q, names, not_observable,
+                                         nominal_point).items():
+        aliases.setdefault(kept, {}).update(zeros)
     return LocationIdentification(
         dict(zip(names, (float(v) for v in theta[:p]))),
         dict(zip(names, (float(v) for v in std[:p]))), theta[p:].copy(), residuals, deviations,
@@ -516,6 +529,44 @@ def _aliases(machine: MachineDescription, q: dict[str, NDArray], kept: list[str]
     return out
 
 
+def _outer_zero_folds(machine: MachineDescription, q: dict[str, NDArray], kept: list[str],
+                      dropped: list[str], point: NDArray) -> dict[str, dict[str, float]]:
+    """What each dropped outer axis' zero folds into: kept -> {zero: coefficient}.
+
+    An outer axis' zero e turns the lines it carries about its own (ISO 230-7): the sphere,
+    located at the set-up, sees the carried line turned by e - its tilt and its offset
+    (:func:`~..kinematics.machine.outer_zeros`). The chain turns each body about its line
+    from the set-up and so cannot make a zero; its reading as a located sphere's
+    (:meth:`~..kinematics.chain.KinematicModel.located_sensitivities`) is taken on the
+    kept parameters and the sphere's set-up position by least squares. A zero that those
+    leave more than :data:`ZERO_FOLD_REST` of is not folded (nor one that moves nothing).
+    """
+    rotary = "".join(a for a in machine.axis_order if machine.axes[a].is_rotary)
+    zeros = [name for name in dropped if name in outer_zeros(machine, rotary)]
+    if not zeros or not kept:
+        return {}
+    model = KinematicModel(machine)
+    found = model.located_sensitivities(q, kept + zeros, work_point=point)
+    # The sphere's set-up position: a translation of the workpiece frame, turning with it.
+    work = model.branch("workpiece", q, errors=False, check_stroke=False)[:, :3, :3]
+    columns = [found[name][0].ravel() for name in kept]
+    basis = np.column_stack(columns + [work[:, :, i].ravel() for i in range(3)])
+    out: dict[str, dict[str, float]] = {}
+    for zero in zeros:
+        column = found[zero][0].ravel()
+        norm = float(np.linalg.norm(column))
+        coefficients, *_ = np.linalg.lstsq(basis, column, rcond=None)
+        if norm == 0.0 or np.linalg.norm(column - basis @ coefficients) > ZERO_FOLD_REST * norm:
+            continue
+        for name, value, own in zip(kept, coefficients, columns):
+            if abs(value) * float(np.linalg.norm(own)) > 1e-3 * norm:
+                out.setdefault(name, {})[zero] = float(value)
+    return out
+
+
+#: An outer zero whose located reading the kept parameters and the sphere leave more than
+#: this fraction of is not said to fold into them.
+ZERO_FOLD_REST = 1e-4
 RANK_TOLERANCE = 1e-7
 #: A column this small against the largest is round-off: the parameter moves nothing.
 ZERO_COLUMN = 1e-7

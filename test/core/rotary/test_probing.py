@@ -152,7 +152,7 @@ def test_a_trunnion_probed_at_its_set_up_pose_gives_each_line_offset_alone(truth
     virtual machine (its own rigid bodies, turning about the real lines) is probed
     sweeping A, then C. A C-line offset comes back as itself (not as two cancelling
     angles), an A-line offset without a spurious C offset, the sphere's set-up where it
-    is, and a zero-angle error is said to be the set-up's."""
+    is, C's zero-angle error said to be the set-up's and A's folded into C's line."""
     from mt_accuracy_ros.sim.rotary_instruments import ProbingPlan, probe_sphere
 
     machine = load_machine("trunnion_ac")
@@ -169,4 +169,9 @@ def test_a_trunnion_probed_at_its_set_up_pose_gives_each_line_offset_alone(truth
         assert abs(value - truth.get(name, 0.0)) <= 4 * result.uncertainties[name] + 1e-12, \
             (name, value, result.text())
     np.testing.assert_allclose(result.sphere_offset_m, plan.sphere_offset_m, atol=1e-6)
-    assert result.not_observable == ["EA0A", "EC0C"] and not result.aliases
+    assert result.not_observable == ["EA0A", "EC0C"]
+    # A's zero turns C's line about A's (ISO 230-7): folded into C's tilt and, through C's
+    # origin 0.1 m below A's line, its offset in y; C's zero is the set-up's.
+    assert result.aliases == {"EA0C": {"EA0A": pytest.approx(1.0)},
+                              "EY0C": {"EA0A": pytest.approx(0.1)}}
+    assert "not observable: EC0C - a zero-angle error is taken out" in result.text()
