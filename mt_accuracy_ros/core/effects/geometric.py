@@ -1141,8 +1141,9 @@ class Squareness(EffectFamily):
              "EYZ": "Y and Z"}
 
     def variants(self, ctx: Context) -> list[str]:
-        """Location errors EC0Y, EB0Z, EA0Z of pairs whose later axis moved, and the other-reference
-        slopes (EYX ...) of pairs that both moved.
+        """Location errors EC0Y, EB0Z, EA0Z of pairs whose later axis moved, and the slopes
+        (EYX, EXY ...) whose growing axis moved - each while one target was read
+        (:func:`moves_within_a_target`); the other axis of the pair may stand still.
 
         Parameters
         ----------
