@@ -60,6 +60,9 @@ _KIND_COMPONENTS = {"positioning": "self", "straightness": "XYZ", "angular": "AB
 _ORDERS = 6
 #: Legendre orders of a located tilt of a carriage that carries the rotary axes.
 _LOCATED_ORDERS = 2
+#: The largest squareness any machine tool has [rad]: 10 mm per metre of travel, a hundred
+#: times a poorly built machine's (ISO 230-1 squareness errors are tens of urad).
+LARGEST_SQUARENESS_RAD = 1e-2
 _LARGEST_ORDER = 2 + _ORDERS - 1
 
 
@@ -97,6 +100,31 @@ def component_names(ctx: Context, kind: str) -> list[str]:
         else:
             names += [f"E{c}{axis}" for c in "ABC"]
     return names
+
+
+def moves_within_a_target(ctx: Context, axis: str) -> bool:
+    """Whether ``axis`` moved while one target was read: each target (a probed sphere) reads
+    from a zero of its own, which takes in whatever an axis' error is where that target
+    stood, so an error growing with an axis that moved only between targets shows none of
+    its growth.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings (``target_groups``: None for one).
+    axis : str
+        Axis letter.
+
+    Returns
+    -------
+    bool
+        True when its positions span a non-zero range within some target's readings.
+    """
+    groups = ctx.target_groups
+    positions = ctx.variables.positions[axis]
+    if groups is None:
+        return bool(np.ptp(positions) > 0)
+    return any(np.ptp(positions[groups == g]) > 0 for g in np.unique(groups))
 
 
 def carries_rotary(machine, axis: str) -> bool:
@@ -346,6 +374,41 @@ def lever_line_offsets(machine, variant: str, lever: dict[str, float]) -> dict[s
 HEAD = "head"
 
 
+#: The one setting of a still carriage's tilt: its constant turn, located (P0 alone).
+STILL_TURN = {"order": 0, "constant": True, "located": True}
+
+
+def still_turns(ctx: Context) -> list[str]:
+    """The constant turns of work-side carriages that stood still and carry the rotary
+    axes, about the first carried rotary axis' direction (``EAX`` for an X that carries A),
+    where a target was located at the set-up and the work turned.
+
+    Such a carriage's tilt is one constant turn over these readings. It turns the rotary
+    axes, the table and the work about the carriage's origin (ISO 230-1): the carried
+    axis' zero and the offset of its line by the turn's lever (ISO 230-7). A sphere located
+    at the set-up by a translation reads the offset's circle, and an instrument that
+    located the tool's direction with the work reads the turn itself, turning with the
+    work (ISO 10791-6), which no line offset makes.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings.
+
+    Returns
+    -------
+    list of str
+        Angular error names (``EAX`` ...), each offered at :data:`STILL_TURN` only.
+    """
+    machine = ctx.machine
+    if not located_tilt_seen(ctx) or setup_rows(ctx) is None:
+        return []
+    return [f"E{c}{axis}" for axis in machine.workpiece_branch
+            if not machine.axes[axis].is_rotary and not ctx.moves(axis) and
+            carries_rotary(machine, axis) for c in "ABC"
+            if turns_about_carried_rotary(machine, f"E{c}{axis}")]
+
+
 def carries_head(machine, axis: str) -> bool:
     """Whether ``axis`` is a tool-side carriage that carries rotary axes of the head.
 
@@ -546,9 +609,13 @@ class ComponentError(EffectFamily):
         Returns
         -------
         list of str
-            ISO 230-1 names (``EXX``, ``EYX`` ...).
+            ISO 230-1 names (``EXX``, ``EYX`` ...); for the smooth angular kind also the
+            turns of still carriages (:func:`still_turns`).
         """
-        return component_names(ctx, self.kind)
+        names = component_names(ctx, self.kind)
+        if self.kind == "angular" and not self.periodic:
+            names += still_turns(ctx)
+        return names
 
     def settings(self, ctx: Context, variant: str) -> list[dict]:
         """Periods searched (periodic) or Legendre orders (smooth).
@@ -571,6 +638,10 @@ class ComponentError(EffectFamily):
             carries the head's rotary axes ``{"order": k, "located": "head"}`` alike
             (:func:`head_located_settings`).
         """
+        if self.kind == "angular" and not self.periodic and not ctx.moves(variant[2]) and \
+                variant in still_turns(ctx):
+            # A carriage that stood still: its tilt is one constant turn (still_turns).
+            return [dict(STILL_TURN)]
         if self.periodic:
             low, high = ctx.machine.axes[variant[2]].stroke
             # Frequencies a quarter cycle apart over the stroke: no peak falls between;
@@ -682,9 +753,11 @@ class ComponentError(EffectFamily):
             basis[:, 3] = 2.0 * basis[:, 0] * basis[:, 1]
             return basis
         first = 2 if self.kind == "straightness" else 1
-        columns = _legendre_columns(u, first, setting["order"])
+        # Order 0 (a still carriage's turn) holds the constant part alone.
+        columns = _legendre_columns(u, first, setting["order"]) if setting["order"] >= first \
+            else np.zeros((np.asarray(u).size, 0))
         if setting.get("constant"):
-            columns = np.column_stack([columns, np.ones_like(columns[:, 0])])
+            columns = np.column_stack([columns, np.ones(columns.shape[0])])
         return columns
 
     def design(self, ctx: Context, variant: str, setting: dict):
@@ -1004,6 +1077,17 @@ class ComponentError(EffectFamily):
             return (f"{variant} repeats every {setting['period_m'] * 1e3:.2f} mm of {axis} "
                     "travel - typical of a ball-screw pitch error, a rack or a wavy guideway "
                     "(ISO 230-1 periodic error)")
+        if setting == STILL_TURN:
+            # ISO 230-1: the tilt of a carriage that stood still is one constant turn of
+            # all it carries; ISO 230-7: about the carried axis' direction that is the
+            # axis' zero and its line's offset by the turn's lever.
+            return (f"the {axis} axis stood still over these readings: its angular error "
+                    f"{variant} is one constant turn P0 of the carriage and all it carries "
+                    "about the carriage's origin - the zero of the rotary axis it carries "
+                    "and its line's offset by the turn's lever, which these readings cannot "
+                    "part - read as the sphere, and the tool's direction, located at the "
+                    "set-up read it, turning with the work (ISO 230-1, ISO 230-7, ISO "
+                    "10791-6)")
         kind = {"positioning": "positioning", "straightness": "straightness",
                 "angular": "angular"}[self.kind]
         reach = " reaching the TCP through its Abbe arms" if self.kind == "angular" else ""
@@ -1086,8 +1170,9 @@ class Squareness(EffectFamily):
              "EYZ": "Y and Z"}
 
     def variants(self, ctx: Context) -> list[str]:
-        """Location errors EC0Y, EB0Z, EA0Z of pairs whose later axis moved, and the other-reference
-        slopes (EYX ...) of pairs that both moved.
+        """Location errors EC0Y, EB0Z, EA0Z of pairs whose later axis moved, and the slopes
+        (EYX, EXY ...) whose growing axis moved - each while one target was read
+        (:func:`moves_within_a_target`); the other axis of the pair may stand still.
 
         Parameters
         ----------
@@ -1099,14 +1184,15 @@ class Squareness(EffectFamily):
         list of str
             Variant names.
         """
-        moving = ctx.linear_axes(moving=True)
+        moving = [axis for axis in ctx.linear_axes(moving=True) if moves_within_a_target(ctx, axis)]
         axes = ctx.linear_axes()
-        # The error grows with the last letter's axis: it must have moved.
+        # The error grows with the last letter's axis: it must have moved while one target
+        # was read (each target reads from its own zero, which takes a move between them).
         first = [name for name in ("EC0Y", "EB0Z", "EA0Z") if name[-1] in moving and
                  {"C": "X", "B": "X", "A": "Y"}[name[1]] in axes]
         # The other reference: the slope along the earlier axis; both must have moved.
         return first + [name for name, base in self.OTHER_REFERENCE.items()
-                        if name[2] in moving and name[1] in moving and base[-1] in axes]
+                        if name[2] in moving and base[-1] in axes]
 
     def parameter_names(self, variant, setting):
         """One angle.
@@ -1149,9 +1235,27 @@ class Squareness(EffectFamily):
             design = (ctx.jacobian(variant) * position[:, None])[:, :, None]
         else:
             design = ctx.jacobian(variant)[:, :, None]
+        if self._head_located(ctx, variant):
+            # The tool, located at the head's set-up, took the squareness' move there in,
+            # and that belief turns with the head (ISO 10791-6), as a tilt's does.
+            return located_head_tilt(ctx, design)
         if self._located(ctx, variant):
             design = located_tilt(ctx, design)
         return design
+
+    @staticmethod
+    def _slide(variant: str) -> str:
+        """The axis whose travel the squareness tilts: K of E R 0 K, or of E C K."""
+        return variant[3] if len(variant) == 4 else variant[2]
+
+    @classmethod
+    def _head_located(cls, ctx: Context, variant: str) -> bool:
+        """Whether the tilted slide carries a head that turned and stood at its set-up pose
+        among the readings: the tool was located there (:func:`located_head_tilt`)."""
+        machine = ctx.machine
+        return carries_head(machine, cls._slide(variant)) and \
+            any(machine.axes[a].is_rotary and ctx.moves(a) for a in machine.tool_branch) and \
+            head_setup_row(ctx) is not None
 
     @staticmethod
     def _located(ctx: Context, variant: str) -> bool:
@@ -1186,7 +1290,42 @@ class Squareness(EffectFamily):
         # reference is a straightness slope, a translation.
         if variant in self.OTHER_REFERENCE:
             return None
-        return ctx.orientation_jacobian(variant)[:, :, None]
+        turn = ctx.orientation_jacobian(variant)[:, :, None]
+        # The tool's direction located at the head's set-up too (two spheres, ISO 10791-6).
+        return located_head_turn(ctx, turn) if self._head_located(ctx, variant) else turn
+
+    def fit_problems(self, ctx: Context, variant: str, setting: dict, coefficients
+                     ) -> list[str]:
+        """A squareness no machine has, said in words without its number: the poses barely
+        see this form (a work-side slide's location error turns the table with its travel
+        about a point where the tool stands, which moves nothing there), so its fit
+        follows the readings' noise.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+        coefficients : sequence of float, length 1
+            The fitted angle [rad].
+
+        Returns
+        -------
+        list of str
+            One sentence when the angle is beyond :data:`LARGEST_SQUARENESS_RAD` or not
+            finite, else none.
+        """
+        angle = float(np.asarray(coefficients, dtype=np.float64)[0])
+        if np.isfinite(angle) and abs(angle) <= LARGEST_SQUARENESS_RAD:
+            return []
+        reach = float(np.max(np.abs(self.design(ctx, variant, setting)), initial=0.0))
+        return [f"{variant} would put {self.PAIRS[variant]} out of square by more than "
+                f"{LARGEST_SQUARENESS_RAD * 1e3:g} mrad, which no machine tool is: these "
+                f"poses barely see it (it moves the readings by at most {reach * 1e-6:.2g} m "
+                "per urad), so its fit follows the noise and is not reported"]
 
     def location_error(self, machine, variant: str, setting: dict,
                        coefficients) -> dict[str, float]:

@@ -376,8 +376,11 @@ class Candidate:
         return {"effect": self.effect, "variant": self.variant, "name": self.name,
                 "group": self.group, "setting": self.setting,
                 "setting_display": display_setting(self.setting),
-                "display": display_parameters(self.effect, self.variant, self.parameters,
-                                              self.parameter_uncertainties),
+                # A fit physics refuses is said in words (``refusal``), not read as values.
+                "display": {name: "not reported: physics refuses the fit"
+                            for name in self.parameters} if self.refusal else
+                display_parameters(self.effect, self.variant, self.parameters,
+                                   self.parameter_uncertainties),
                 "cv_rmse_after": self.cv_rmse_after, "error_reduction": self.error_reduction,
                 "significant": self.significant, "confidence": self.confidence,
                 "share_of_excess": self.share_of_excess, "explanation": self.explanation,

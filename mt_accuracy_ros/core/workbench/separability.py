@@ -163,8 +163,83 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
             found += _lever_statement(selector, term, setting, coefficients[k])
         found += head_constant(selector, base, block, contribution, (term, setting), terms,
                                limit)
+        found += plane_squareness(selector, base, block, contribution, (term, setting), terms,
+                                  limit)
         out.append(found)
     return out
+
+
+def plane_squareness(selector: Selector, base: NDArray[np.float64], block: NDArray[np.float64],
+                     contribution: NDArray[np.float64], named: tuple[Term, dict],
+                     terms: list[Term], limit: float) -> list[dict]:
+    """The squarenesses of a named tilt's plane that the readings cannot part from its
+    constant part.
+
+    A constant turn P0 of a carriage turns its travel's frame and all it carries about its
+    pivot; a squareness tilts one axis' travel in the same plane (ISO 230-1). Where the
+    target sits where the tool is (a laser tracker on the tool tip, a table brought under
+    the tool), the turn moves it by P0 e_k x (tip - pivot), and the pivot moves with the
+    carriage: the move grows with the carriage's own travel as a squareness slope does,
+    and the two are one rotation on these poses. Judged as :func:`head_constant` judges the
+    head's lines: the tilt refitted with the squareness' column in place of its P0, within
+    the same bound.
+
+    Parameters
+    ----------
+    selector : Selector
+        The selection (its rows and noise).
+    base : ndarray, shape (R, q)
+        The offsets and the other named effects' columns at the rows [m per unit].
+    block : ndarray, shape (R, p)
+        The named tilt's columns [m per unit].
+    contribution : ndarray, shape (R,)
+        The named tilt's fitted contribution [m].
+    named : tuple of (Term, dict)
+        The named effect and its setting.
+    terms : list of Term
+        The candidates the selection considered (the squareness family's among them).
+    limit : float
+        The bound on the fits' sums of squares [m^2].
+
+    Returns
+    -------
+    list of dict
+        ``{"name", "parameters" ({"angle_rad": value}, SI), "reason"}`` per squareness
+        that stands for P0, or empty.
+    """
+    term, setting = named
+    if term.family.name != "angular" or not setting.get("constant") or \
+            setting.get("located") == HEAD:
+        return []
+    names = term.family.parameter_names(term.variant, setting)
+    if "P0" not in names or len(names) != block.shape[1]:
+        return []
+    plane = _plane(term.variant)
+    kept = np.column_stack([base, np.delete(block, names.index("P0"), axis=1)])
+    found = []
+    for other in terms:
+        if other.family.name != "squareness" or _plane(other.variant) != plane:
+            continue
+        columns = selector.design_rows(other, other.settings[0])
+        if not np.any(columns):
+            continue
+        solution, misfit = _refit(np.column_stack([kept, columns]), contribution)
+        if misfit <= limit:
+            found.append({"name": other.name, "parameters": {"angle_rad": float(solution[-1])},
+                          "reason": "the tilt's constant part P0 and this squareness of its "
+                                    "plane are one rotation on these poses: the carriage's "
+                                    "turn about its pivot, which moves with its travel, "
+                                    "grows with that travel as the squareness does (ISO "
+                                    "230-1); the tilt's other numbers are its own"})
+    return found
+
+
+def _plane(variant: str) -> frozenset[str]:
+    """The two linear axes a squareness or a tilt lies in: ``EB0Z`` and ``EXZ`` (X, Z), an
+    angular error ``EBX`` (X, Z: turned about y)."""
+    if len(variant) == 4 or variant[1] in "ABC":
+        return frozenset("XYZ") - {"XYZ"["ABC".index(variant[1])]}
+    return frozenset(variant[1:3])
 
 
 def head_constant(selector: Selector, base: NDArray[np.float64], block: NDArray[np.float64],

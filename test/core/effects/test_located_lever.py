@@ -158,7 +158,14 @@ def test_a_roll_of_the_carriage_that_carries_a_and_c_about_a_pivot_is_named_as_t
     slope = named["squareness:EZY"].parameters["angle_rad"]
     assert abs(slope) == pytest.approx(abs(c1 * PIVOT[0]), rel=0.1)
     # Said: the lever is the offsets of the lines Y carries, and the located set-up error.
-    (said,) = roll.inseparable          # the lever's numbers only: no whole alternative
+    # The lever's numbers only (no whole alternative), and P0 as the squareness of the
+    # roll's plane, which it is on these poses (one rotation, ISO 230-1).
+    said, *plane = roll.inseparable
+    assert plane and {p["name"] for p in plane} <= {"squareness:EB0Z", "squareness:EXZ",
+                                                    "squareness:EZX"}, plane
+    for form in plane:
+        assert abs(form["parameters"]["angle_rad"]) == pytest.approx(
+            abs(roll.parameters["P0"]), rel=0.1)
     assert said["name"] == "rotary_location:AC"
     assert said["parameters"] == pytest.approx(
         {"EZ0A": roll.parameters["lever_z"], "EX0C": roll.parameters["lever_x"]}, abs=1e-15)
