@@ -133,3 +133,34 @@ def test_the_tilts_of_one_stack_are_judged_with_one_tool():
     differ = one_tool_for_the_stack([("EAX", 0.101, 0.002), ("EBY", -0.396, 0.003)])
     assert len(differ) == 1 and differ[0].startswith("warning: the tilts of one stack")
     assert one_tool_for_the_stack([("EAX", 0.1, 0.002)]) == []
+
+
+def test_a_machine_files_impossible_set_up_the_map_replaces_is_said_not_refused(tmp_path):
+    """The machine file says A was set up at 90 deg, outside A's stroke; the survey's map
+    says where its sphere was located (A = C = 0). The check reads the survey at the map's
+    set-up and says why the file's is not used, instead of refusing the survey."""
+    from studies.convention_surveys import generate
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        generate(str(tmp_path / "panel"), 1, 50, topology="trunnion_AC", instrument="r_test")
+    folder = tmp_path / "panel" / json.loads(
+        (tmp_path / "panel" / "index.json").read_text())["trials"][0]["folder"]
+    described = yaml.safe_load((folder / "machine.yaml").read_text())
+    low, high = described["axes"]["A"]["stroke"]["value"] if isinstance(
+        described["axes"]["A"]["stroke"], dict) else [v * 57.29577951308232 for v in
+                                                       described["axes"]["A"]["stroke"]]
+    outside = high + 60.0
+    described["setup_pose"] = {"A": {"value": outside, "unit": "deg"},
+                               "C": {"value": 0.0, "unit": "deg"}}
+    (folder / "machine.yaml").write_text(yaml.safe_dump(described))
+    column_map = yaml.safe_load((folder / "map.yaml").read_text())
+    assert "setup_pose" in column_map and "A" in column_map["setup_pose"]
+    code, result, printed = _check(folder / "survey.csv", folder / "map.yaml")
+    assert code == 0, printed
+    assert f"{outside:g} deg is outside the stroke" in result["machine_note"]
+    assert "not used - the column map's setup_pose gives A's set-up" in result["machine_note"]
+    # Without the map's set-up the file's impossible one is refused, in one line.
+    del column_map["setup_pose"]
+    (folder / "bare.yaml").write_text(yaml.safe_dump(column_map))
+    code, _, printed = _check(folder / "survey.csv", folder / "bare.yaml")
+    assert code == 2 and "outside the stroke" in printed

@@ -366,8 +366,10 @@ def check_bag(bag: Path, model_text: str, add: list[str], auto: int, namespace: 
 
 
 def survey_model(survey, model_text: str | None, machine: str | None,
-                 tool_offset_m: float | None = None, work_axes: tuple[str, ...] = ()):
-    """The model a survey is checked against, and a note on the machine it assumes.
+                 tool_offset_m: float | None = None, work_axes: tuple[str, ...] = (),
+                 setup_axes: tuple[str, ...] = ()):
+    """The model a survey is checked against, and a note on the machine it assumes
+    (``setup_axes``: the rotary axes whose set-up the column map gives).
 
     ``model_text`` (a model names its machine), else ``machine`` (a bundled name or a
     machine YAML) with no effects, else a generic Cartesian machine whose strokes are
@@ -380,8 +382,11 @@ def survey_model(survey, model_text: str | None, machine: str | None,
     if model_text is not None and machine is not None:
         raise InputDataError("give --model or --machine, not both: a model names its machine")
     if model_text is not None or machine is not None:
+        # The map's set-up replaces the machine file's: an impossible one there is said,
+        # not refused (the survey's own is what the readings were located at).
         model = resolve_model(model_text) if model_text is not None else \
-            ErrorModel(load_machine(machine), {})
+            ErrorModel(load_machine(machine, {a: "the column map's setup_pose"
+                                              for a in setup_axes}), {})
         refuse_contradicting_work_axes(model.machine, work_axes)
         return model, ""
     travel = {axis: (float(np.min(q)), float(np.max(q))) for axis, q in survey.positions.items()
@@ -691,7 +696,7 @@ def check_mapped_csv(path: Path, column_map, model_text: str | None, add: list[s
     sensor_notes = judge_survey_sensors(survey)
     machine = survey_machine(machine, column_map.machine, model_text)
     model, machine_note = survey_model(survey, model_text, machine, column_map.tool_offset_m,
-                                       column_map.work_axes)
+                                       column_map.work_axes, tuple(column_map.setup_pose))
     refuse_rotary_without_machine(survey.positions, model.machine)
     model = model.with_machine(with_setup_pose(model.machine, column_map.setup_pose,
                                                "the column map's setup_pose"))

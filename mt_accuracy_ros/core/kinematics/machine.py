@@ -14,6 +14,7 @@ and its location errors (EX0Y ... EC0Y; e.g. the squareness EC0Y).
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -308,7 +309,8 @@ def _vector(spec, where: str) -> np.ndarray:
 
 
 @reraise_as(MachineDescriptionError, "machine description")
-def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
+def machine_from_dict(data: dict, source: str = "<dict>",
+                      replaced_setup: Mapping[str, str] | None = None) -> MachineDescription:
     """Build and validate a description from its parsed YAML mapping.
 
     Parameters
@@ -318,6 +320,8 @@ def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
         lengths in [m], angles in [rad] unless written ``{value: .., unit: ..}``.
     source : str, optional
         Where ``data`` came from, quoted in error messages.
+    replaced_setup : mapping of str to str, optional
+        Rotary axis -> who gives its set-up instead (:func:`read_setup_pose`).
 
     Returns
     -------
@@ -394,7 +398,7 @@ def machine_from_dict(data: dict, source: str = "<dict>") -> MachineDescription:
                                              f"{source}: structure_length_m"),
         cnc=_cnc_section(data.get("cnc"), f"{source}: cnc"),
         setup_pose=read_setup_pose(data.get("setup_pose"), axes, f"{source}: setup_pose",
-                                   setup_notes),
+                                   setup_notes, replaced_setup),
         setup_notes=tuple(setup_notes))
 
 
@@ -477,7 +481,8 @@ def angle_with_unit(value, where: str, error: type[Exception],
 
 
 def read_setup_pose(spec, axes: dict[str, "Axis"], where: str,
-                    notes: list[str] | None = None) -> dict[str, float]:
+                    notes: list[str] | None = None, replaced: Mapping[str, str] | None = None
+                    ) -> dict[str, float]:
     """Rotary axis -> set-up command [rad] from ``{A: {value: -90, unit: deg}, ...}``.
 
     Every angle carries its unit; an axis the machine lacks, a linear axis, or a bare
@@ -494,6 +499,9 @@ def read_setup_pose(spec, axes: dict[str, "Axis"], where: str,
         Where the pose sits, quoted in messages.
     notes : list of str, optional
         Appended with one sentence per assumption made.
+    replaced : mapping of str to str, optional
+        Rotary axis -> who gives its set-up instead (a survey's column map): an angle of
+        such an axis outside its stroke is not used and said in ``notes``, not refused.
 
     Returns
     -------
@@ -520,7 +528,14 @@ def read_setup_pose(spec, axes: dict[str, "Axis"], where: str,
                 f"{where}.{axis}: not a rotary axis of this machine (rotary: "
                 f"{', '.join(rotary) or 'none'})")
         angle = angle_with_unit(value, f"{where}.{axis}", MachineDescriptionError)
-        pose[axis] = setup_angle_in_stroke(axes[axis], angle, f"{where}.{axis}", notes)
+        try:
+            pose[axis] = setup_angle_in_stroke(axes[axis], angle, f"{where}.{axis}", notes)
+        except MachineDescriptionError as exc:
+            if not replaced or axis not in replaced or not np.isfinite(angle):
+                raise
+            # Another set-up replaces it: the file's impossible one is said, not used.
+            if notes is not None:
+                notes.append(f"{exc}: not used - {replaced[axis]} gives {axis}'s set-up")
     return pose
 
 
@@ -822,7 +837,8 @@ def bundled_machine_path(name: str) -> Path:
 
 
 @reraise_as(MachineDescriptionError, "machine description")
-def load_machine(path_or_name: str | Path) -> MachineDescription:
+def load_machine(path_or_name: str | Path,
+                 replaced_setup: Mapping[str, str] | None = None) -> MachineDescription:
     """Load a description from a YAML file, or a bundled one by name
     (``kidani_hmc``, ``khan_chen_rpppr``): a name has no suffix.
 
@@ -833,6 +849,9 @@ def load_machine(path_or_name: str | Path) -> MachineDescription:
     ----------
     path_or_name : str or pathlib.Path
         Path to a machine YAML, or a bundled machine's name.
+    replaced_setup : mapping of str to str, optional
+        Rotary axis -> who gives its set-up instead (a survey's column map): the file's
+        angle for it is then not refused when outside the stroke, only said.
 
     Returns
     -------
@@ -848,4 +867,5 @@ def load_machine(path_or_name: str | Path) -> MachineDescription:
     if not path.suffix:
         path = bundled_machine_path(str(path_or_name))
     text = read_description(path, "machine description", MachineDescriptionError)
-    return machine_from_dict(load_yaml(text, str(path), MachineDescriptionError), str(path))
+    return machine_from_dict(load_yaml(text, str(path), MachineDescriptionError), str(path),
+                             replaced_setup)

@@ -41,3 +41,22 @@ def test_an_axis_short_of_a_full_turn_refuses_what_lies_outside_its_stroke():
         machine_from_dict({**BASE, "setup_pose": {"A": {"value": 250, "unit": "deg"}}})
     with pytest.raises(MachineDescriptionError, match="outside the stroke"):
         with_setup_pose(machine_from_dict(BASE), {"A": np.radians(-120.0)})
+
+
+def test_a_set_up_another_source_replaces_is_said_not_refused_when_out_of_stroke():
+    """A machine file written with A set up at 90 deg, outside A's [-110, 30] deg: refused
+    as the machine's own set-up, but where a survey's map gives A's set-up the file's is
+    not used - said with the stroke, the rest of the file read as it is."""
+    spec = {**BASE, "setup_pose": {"A": {"value": 90, "unit": "deg"},
+                                   "C": {"value": 45, "unit": "deg"}}}
+    with pytest.raises(MachineDescriptionError, match="outside the stroke"):
+        machine_from_dict(spec)
+    machine = machine_from_dict(spec, replaced_setup={"A": "the column map's setup_pose"})
+    assert "A" not in machine.setup_pose
+    assert machine.setup_angle("C") == pytest.approx(np.radians(45.0), abs=1e-12)
+    (note,) = machine.setup_notes
+    assert "90 deg is outside the stroke [-110, 30] deg" in note
+    assert "not used - the column map's setup_pose gives A's set-up" in note
+    # A set-up with no unit is still refused: replaced or not, the file must be readable.
+    with pytest.raises(MachineDescriptionError, match="unit"):
+        machine_from_dict({**BASE, "setup_pose": {"A": 90}}, replaced_setup={"A": "the map"})
