@@ -32,8 +32,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..effects import family_named
-from ..effects.geometric import (HEAD, carries_head, head_setup_row, lever_line_offsets,
-                                 turns_about_carried_rotary)
+from ..effects.geometric import (HEAD, STILL_TURN, carries_head, head_setup_row,
+                                 lever_line_offsets, turns_about_carried_rotary)
 from .distributions import chi2_sf
 from .selection import Selector, Term
 
@@ -63,6 +63,10 @@ _WHY = {
         "on these poses the tool stays where the tables bring the target, so the tilt's "
         "arm is the axis' own travel and the tilt moves the target as a straightness of "
         "that axis does",
+    frozenset({"rotary_location", "angular"}):
+        "a carriage that stood still under the rotary axes turns them once: the carried "
+        "axis' zero and its line's offset by the turn's lever (ISO 230-7), which move the "
+        "target as these lines do",
     frozenset({"squareness"}):
         "the same pair out of square with the other axis as the reference (ISO 230-1), "
         "the rest of the difference a turn the other named effects hold",
@@ -107,10 +111,23 @@ def _comparable(named: Term, other: Term) -> bool:
     linear axis (the axis is the variant's last letter: EXY, ECY)."""
     if other.name == named.name:
         return False
+    if _still_turn_pair(named, other):
+        return True
     if named.family.name in FAMILIES and other.family.name in FAMILIES:
         return not _same_lines(named, other)
     return {named.family.name, other.family.name} == set(AXIS_FAMILIES) and \
         named.variant[-1:] == other.variant[-1:]
+
+
+def _still_turn_pair(named: Term, other: Term) -> bool:
+    """A rotary axis' lines and the one constant turn of a carriage that stood still under
+    them (:data:`STILL_TURN`, offered only there): the turn is the carried axis' zero and
+    its line's offset by the turn's lever (ISO 230-7), so on readings whose tool direction
+    the set-up did not locate the two move the target alike."""
+    pair = {named.family.name: named, other.family.name: other}
+    turn = pair.get("angular")
+    return set(pair) == {"rotary_location", "angular"} and turn is not None and \
+        any(setting == STILL_TURN for setting in turn.settings)
 
 
 def _same_lines(named: Term, other: Term) -> bool:

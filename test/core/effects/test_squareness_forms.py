@@ -251,3 +251,27 @@ def test_an_axis_that_moved_only_between_probed_spheres_shows_no_squareness():
     assert Squareness().variants(ctx) == []
     ctx = context(sweep_of_c + [{"C": 0.0, "B": math.radians(b)} for b in (-30, 30, 60)])
     assert "EXZ" in Squareness().variants(ctx)
+
+
+def test_a_still_carriages_turn_and_the_carried_lines_are_said_one_another():
+    """The roll of a still X that carries A, read by a sphere located at the set-up, is
+    exactly a line offset of A (the turn about X's origin moves A's line by its lever, ISO
+    230-7): A's line errors fit it to 1e-10 m. So where the workbench names
+    rotary_location:A it says the still turn beside it, with the turn's value."""
+    from mt_accuracy_ros.core.effects.geometric import RotaryLocation
+    from mt_accuracy_ros.core.workbench.separability import _still_turn_pair
+    from mt_accuracy_ros.core.workbench.selection import Term
+
+    generator, described, poses = _trunnion_ac_sweep_of_a()
+    ctx, errors = _followed(generator, described, poses, [_roll_of_x(ROLL)])
+    lines = RotaryLocation()
+    setting = {"inseparable": ""}
+    design = ctx.measured_design(lines, "A", setting)
+    _, rms = _fit(design, errors)
+    assert np.abs(errors).max() > 1e-6 and rms < 1e-10
+    family = ComponentError("angular", False)
+    still = Term(family, "EAX", [STILL_TURN])
+    named = Term(lines, "A", [setting])
+    assert _still_turn_pair(named, still) and _still_turn_pair(still, named)
+    moving = Term(family, "EAX", [{"order": 1}])
+    assert not _still_turn_pair(named, moving)
