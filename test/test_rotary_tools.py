@@ -139,13 +139,22 @@ def test_export_carries_a_fitted_rotary_line_and_says_what_no_file_holds(tmp_pat
                                                "EB0C": 0.0}},
         "rotary_error:EZA": {"family": "rotary_error", "variant": "EZA",
                              "setting": {"harmonics": 1},
-                             "coefficients": {"cos1": 5e-6, "sin1": -3e-6}}}}))
+                             "coefficients": {"cos1": 5e-6, "sin1": -3e-6}},
+        # A's tilt EB0A folded into its offset EZ0A (poses that could not part them), and
+        # the survey's own set-up: both said, neither judged as a machine error left out.
+        "rotary_location:A": {"family": "rotary_location", "variant": "A",
+                              "setting": {"inseparable": "EB0A=EZ0A*-0.1"},
+                              "coefficients": {"EY0A": 0.0, "EZ0A": 5e-6, "EC0A": 0.0}},
+        "setup_location:work": {"family": "setup_location", "variant": "work", "setting": {},
+                                "coefficients": {"v_x": 1e-6, "v_y": 0.0, "v_z": 0.0}}}}))
     out = tmp_path / "tables"
     assert main(["export", str(model), "--spacing-mm", "10", "--out", str(out), "--json",
                  str(tmp_path / "e.json")]) == 0
     said = capsys.readouterr().out
     assert "does not hold rotary_error:EZA" in said and "in real time" in said
     assert "rotary_location:C" not in said
+    assert "rotary_location:A: " in said and "EZ0A stands for" in said
+    assert "setup_location:work is where the survey's work or tool was located" in said
     lines = (out / "volumetric_isg.csv").read_text().splitlines()
     block = lines.index("// location errors (constant)")
     assert dict(zip(lines[block + 1].split(), map(float, lines[block + 2].split())))[

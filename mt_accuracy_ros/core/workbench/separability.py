@@ -228,11 +228,10 @@ def plane_squareness(selector: Selector, base: NDArray[np.float64], block: NDArr
     if term.family.name != "angular" or not setting.get("constant") or \
             setting.get("located") == HEAD:
         return []
-    names = term.family.parameter_names(term.variant, setting)
-    if "P0" not in names or len(names) != block.shape[1]:
+    kept = _without_constant(term, setting, base, block)
+    if kept is None:
         return []
     plane = _plane(term.variant)
-    kept = np.column_stack([base, np.delete(block, names.index("P0"), axis=1)])
     found = []
     for other in terms:
         if other.family.name != "squareness" or _plane(other.variant) != plane:
@@ -249,6 +248,17 @@ def plane_squareness(selector: Selector, base: NDArray[np.float64], block: NDArr
                                     "grows with that travel as the squareness does (ISO "
                                     "230-1); the tilt's other numbers are its own"})
     return found
+
+
+def _without_constant(term: Term, setting: dict, base: NDArray[np.float64],
+                      block: NDArray[np.float64]) -> NDArray[np.float64] | None:
+    """``base`` beside the named tilt's columns but its constant part P0 (R, q + p - 1)
+    [m per unit]: what a refit that puts another effect in P0's place keeps; None when the
+    tilt has no P0."""
+    names = term.family.parameter_names(term.variant, setting)
+    if "P0" not in names or len(names) != block.shape[1]:
+        return None
+    return np.column_stack([base, np.delete(block, names.index("P0"), axis=1)])
 
 
 def _plane(variant: str) -> frozenset[str]:
@@ -298,12 +308,11 @@ def head_constant(selector: Selector, base: NDArray[np.float64], block: NDArray[
     term, setting = named
     if setting.get("located") != HEAD or not setting.get("constant"):
         return []
-    names = term.family.parameter_names(term.variant, setting)
-    if "P0" not in names or len(names) != block.shape[1]:
+    kept = _without_constant(term, setting, base, block)
+    if kept is None:
         return []
     machine = selector.ctx.machine
     head = {a for a in machine.tool_branch if machine.axes[a].is_rotary}
-    kept = np.column_stack([base, np.delete(block, names.index("P0"), axis=1)])
     for other in terms:
         if other.family.name != "rotary_location" or not set(other.variant) <= head:
             continue
