@@ -768,6 +768,11 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
     dropped = [{"name": gone.term.name, "by": by.term.name,
                 "sentence": f"dropped {gone.term.name}: {by.term.name} explains it"}
                for gone, by in selector.dropped]
+    dropped += [{"name": gone.term.name, "by": "+".join(kept),
+                 "sentence": f"dropped {gone.term.name}: {', '.join(kept)} together leave it "
+                             "nothing to carry (every number of it within its uncertainty "
+                             "in their joint fit, U, k = 2)"}
+                for gone, kept in selector.dropped_jointly]
     return Diagnosis(in_sample, first.base_cv_rmse if first else in_sample,
                      float(np.max(np.abs(position_residual[position_mask]), initial=0.0)),
                      float(np.mean(np.abs(position_residual[position_mask]) > obs.uncertainty_m))

@@ -67,6 +67,11 @@ _WHY = {
         "a carriage that stood still under the rotary axes turns them once: the carried "
         "axis' zero and its line's offset by the turn's lever (ISO 230-7), which move the "
         "target as these lines do",
+    frozenset({"squareness", "angular"}):
+        "a carriage's constant turn about the plane's normal turns the work once, which "
+        "ISO 230-1 books as the plane's squareness; over the travel made here the tilt "
+        "changes too little to be told from that turn (the tilt's numbers its own fit of "
+        "the readings)",
     frozenset({"squareness"}):
         "the same pair out of square with the other axis as the reference (ISO 230-1), "
         "the rest of the difference a turn the other named effects hold",
@@ -182,8 +187,65 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
                                limit)
         found += plane_squareness(selector, base, block, contribution, (term, setting), terms,
                                   limit)
+        found += plane_tilts(selector, base, block, term, terms, limit)
         out.append(found)
     return out
+
+
+def plane_tilts(selector: Selector, base: NDArray[np.float64], block: NDArray[np.float64],
+                term: Term, terms: list[Term], limit: float) -> list[dict]:
+    """The tilts with a constant part that fit the readings as well as a named squareness:
+    :func:`plane_squareness` read the other way.
+
+    A table's constant turn about the normal of a plane is that plane's squareness (ISO
+    230-1) wherever its tilt changes too little over the travel the survey made to be seen:
+    a carriage moved a few millimetres of its stroke turns the work once. The selection then
+    names the squareness (it assumes less); the output says which tilt would fit the
+    readings as well, with that tilt's numbers, so a user knows the squareness may be a
+    carriage's pitch or yaw. The turn also moves the tool along its arm, which a squareness
+    slope does not: a tilt can fit the readings better than the squareness without
+    reproducing its contribution, so the two are judged on the readings - the tilt's first
+    setting with a constant part that, in the squareness' place beside ``base``, leaves a
+    sum of squares at most ``limit`` above the squareness'.
+
+    Parameters
+    ----------
+    selector : Selector
+        The selection (its rows, residual ``y`` [m] and noise).
+    base : ndarray, shape (R, q)
+        The offsets and the other named effects' columns at the rows [m per unit].
+    block : ndarray, shape (R, p)
+        The named squareness' columns [m per rad].
+    term : Term
+        The named effect (a squareness; any other gives nothing).
+    terms : list of Term
+        The candidates the selection considered (the angular family's among them).
+    limit : float
+        The bound on the fits' sums of squares [m^2].
+
+    Returns
+    -------
+    list of dict
+        ``{"name", "parameters" (SI, the tilt's fit of the readings), "reason"}`` per
+        tilt of the squareness' plane that fits them as well, or empty.
+    """
+    if term.family.name != "squareness":
+        return []
+    plane = _plane(term.variant)
+    _, named_misfit = _refit(np.column_stack([base, block]), selector.y)
+    found = []
+    for other in terms:
+        if other.family.name != "angular" or _plane(other.variant) != plane:
+            continue
+        for setting in (s for s in other.settings if s.get("constant")):
+            columns = selector.design_rows(other, setting)
+            if not np.any(columns):
+                continue
+            solution, misfit = _refit(np.column_stack([base, columns]), selector.y)
+            if misfit <= named_misfit + limit:
+                found.append(_statement(term, other, setting, solution[base.shape[1]:]))
+                break
+    return found
 
 
 def plane_squareness(selector: Selector, base: NDArray[np.float64], block: NDArray[np.float64],

@@ -59,6 +59,11 @@ from .significance import (Evidence, PassRule, block_gains, coefficient_p_value,
                            gain_p_value, max_t_adjusted)
 
 
+#: The coverage factor of an expanded uncertainty (GUM, ISO 14253-1: k = 2), by which a
+#: coefficient is told from zero when the selection is pruned.
+COVERAGE = 2.0
+
+
 @dataclass
 class Scored:
     """A candidate's cross-validated score at one selection step."""
@@ -214,6 +219,9 @@ class Selector(ReadingDesigns):
         self.selected: list[tuple[Term, dict]] = []
         #: Terms taken out again because a later one explains them: (dropped, by).
         self.dropped: list[tuple[Scored, Scored]] = []
+        #: Terms taken out because the others together leave them nothing to carry:
+        #: (dropped, the names of the terms kept) (:meth:`carrying_nothing`).
+        self.dropped_jointly: list[tuple[Scored, list[str]]] = []
 
     def physics_refusal(self, term: Term, setting: dict, coefficients: NDArray[np.float64],
                         own_square_sum: float | None = None) -> str:
@@ -1135,7 +1143,52 @@ class Selector(ReadingDesigns):
             remaining = [t for t in remaining if t.name != step.added.term.name]
             if len(self.selected) > 1:
                 self.no_longer_needed(steps, step.added)
+        self.carrying_nothing(steps)
         return steps
+
+    def carrying_nothing(self, steps: list[Step]) -> list[Scored]:
+        """The named terms the others together leave carrying nothing, taken out.
+
+        :meth:`no_longer_needed` drops only what one later term explains alone. Several
+        later terms together can leave an earlier one with nothing to carry: a tilt's
+        arm and its pivot's slope, named after a first guess of another axis' tilt,
+        leave that guess's numbers at zero. A term goes when, in the joint fit of every
+        named term, each of its coefficients lies within its expanded uncertainty
+        (|c| <= 2 s, k = 2) - no number of it is told from zero - and the model without it
+        predicts the held-out readings as well (:meth:`_may_drop`). Of several such terms
+        the one whose absence costs the held-out error least goes first, then the rest
+        are judged again.
+
+        Parameters
+        ----------
+        steps : list of Step
+            The selection's steps (a dropped term's step is left with ``added`` None).
+
+        Returns
+        -------
+        list of Scored
+            The terms taken out (also recorded in :attr:`dropped_jointly`).
+        """
+        gone = []
+        while len(self.selected) > 1:
+            coefficients, standard, _ = self.fit_full(self.selected)
+            idle = [k for k, (c, s) in enumerate(zip(coefficients, standard))
+                    if c.size and np.all(np.abs(c) <= COVERAGE * s)]
+            options = []
+            for k in idle:
+                without = self.selected[:k] + self.selected[k + 1:]
+                if self._may_drop(self.selected, without):
+                    options.append((self._out_of_fold_mse(without), k, without))
+            if not options:
+                break
+            _, k, without = min(options, key=lambda option: option[:2])
+            name = self.selected[k][0].name
+            step = next(s for s in steps if s.added is not None and s.added.term.name == name)
+            self.dropped_jointly.append((step.added, [t.name for t, _ in without]))
+            gone.append(step.added)
+            step.added = None
+            self.selected = without
+        return gone
 
     def _simpler_start(self, terms: list[Term], max_terms: int, beam: int,
                        steps: list[Step]) -> list[Step]:
@@ -1160,7 +1213,7 @@ class Selector(ReadingDesigns):
             coefficients, _, _ = self.fit_full(self.selected)
             return len(self.selected), sum(c.size for c in coefficients)
 
-        best = (steps, list(self.selected), list(self.dropped),
+        best = (steps, list(self.selected), (list(self.dropped), list(self.dropped_jointly)),
                 self._out_of_fold_mse(self.selected), size())
         mse0, size0 = best[3], best[4]
         def assumes(s: Scored) -> int:
@@ -1170,7 +1223,7 @@ class Selector(ReadingDesigns):
         # rotary axis' harmonics against its line's offsets and tilts) is no simpler start.
         for alternative in [s for s in first.ranking[1:beam] if not s.refusal and
                             assumes(s) < assumes(first.added)]:
-            self.selected, self.dropped = [], []
+            self.selected, self.dropped, self.dropped_jointly = [], [], []
             stats = self._baseline()[0]
             start = replace(alternative)
             # On the block test alone: its full-data coefficients were not ranked first.
@@ -1184,7 +1237,8 @@ class Selector(ReadingDesigns):
             # No more effects and fewer numbers: one effect is never traded for two.
             if mse <= best[3] * (1.0 + self.tie) and count <= best[4][0] and \
                     parameters < best[4][1]:
-                best = (path, list(self.selected), list(self.dropped), mse,
+                best = (path, list(self.selected),
+                        (list(self.dropped), list(self.dropped_jointly)), mse,
                         (count, parameters))
                 # The term begun from (a later one may have explained it and taken its
                 # place: its step then holds no addition).
@@ -1193,7 +1247,7 @@ class Selector(ReadingDesigns):
             self.simpler_start = SimplerStart(started_from,
                                               first.added.term.name, best[4][1], size0[1],
                                               float(np.sqrt(best[3])), float(np.sqrt(mse0)))
-        steps, self.selected, self.dropped = best[0], best[1], best[2]
+        steps, self.selected, (self.dropped, self.dropped_jointly) = best[0], best[1], best[2]
         return steps
 
     def _refit_jointly(self, steps: list[Step]) -> None:
