@@ -34,7 +34,8 @@ catalogue's candidate terms, each step
 3. if it passes, adds it (setting chosen on all readings), refits every
    selected term jointly, re-tests every earlier term against the ones before it
    and the newest (one the newest explains is dropped: :meth:`Selector.no_longer_needed`),
-   and looks again; otherwise stops.
+   and looks again; otherwise stops, and takes out a term the others together leave
+   with every number inside its expanded uncertainty (:meth:`Selector.carrying_nothing`).
 
 The false-alarm rate of this rule on data with nothing missing is measured
 in ``bench/workbench_catalogue.py`` (docs/results.md).
@@ -1090,7 +1091,9 @@ class Selector(ReadingDesigns):
         A first step where no single term passes tries pairs (:meth:`pair_lookahead`);
         one where a simpler candidate passes too may begin from it instead
         (:meth:`_simpler_start`). After each addition every earlier term must still earn
-        its place (:meth:`no_longer_needed`); one that does not is dropped (:attr:`dropped`).
+        its place (:meth:`no_longer_needed`); one that does not is dropped (:attr:`dropped`),
+        and at the end one the others together leave carrying nothing
+        (:meth:`carrying_nothing`).
         Every added term is refit jointly at the end; one physics then refuses is taken
         out again, with the reason.
 
