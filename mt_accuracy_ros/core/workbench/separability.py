@@ -168,7 +168,9 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
     -------
     list of list of dict
         Per selected term, a list of ``{"name", "parameters" (SI, the alternative's fit of
-        the named contribution), "reason"}``; empty for terms outside :data:`FAMILIES`.
+        the named contribution), "reason"}`` (and ``"with"``, the other squareness form's
+        share, where the alternative holds only together with it: :func:`with_other_form`);
+        empty for terms outside :data:`FAMILIES`.
     """
     blocks = [selector.design_rows(t, s) for t, s in selected]
     out: list[list[dict]] = []
