@@ -21,6 +21,11 @@ reproduce is judged (what is left of it beyond that bound). The alternative's ow
 coefficients are given (its least-squares fit of that contribution), so a reader - or a
 proof - can read the other explanation's values.
 
+A named squareness is also judged against a candidate together with the same plane's
+squareness in another form (:func:`with_other_form`): the two forms differ by a turn of
+the plane's travels against the work, which a rotary line tilted about the plane's normal
+makes too, so one named form can stand for a squareness and that line's tilt at once.
+
 A named rotary line or set-up location is also judged parameter by parameter against the
 constant turns of the tool-side carriages that carry the head (:func:`head_turns`): where
 the carriages stand still while the head turns, such a turn moves the located tool along
@@ -163,7 +168,9 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
     -------
     list of list of dict
         Per selected term, a list of ``{"name", "parameters" (SI, the alternative's fit of
-        the named contribution), "reason"}``; empty for terms outside :data:`FAMILIES`.
+        the named contribution), "reason"}`` (and ``"with"``, the other squareness form's
+        share, where the alternative holds only together with it: :func:`with_other_form`);
+        empty for terms outside :data:`FAMILIES`.
     """
     blocks = [selector.design_rows(t, s) for t, s in selected]
     out: list[list[dict]] = []
@@ -179,6 +186,7 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
             for other in terms:
                 if _comparable(term, other):
                     found += _reproduces(selector, base, contribution, term, other, limit)
+            found += with_other_form(selector, base, contribution, term, terms, limit, found)
             found += head_turns(selector, base, block, contribution, (term, setting), terms,
                                 limit)
         if setting.get("lever"):
@@ -189,6 +197,88 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
                                   limit)
         found += plane_tilts(selector, base, block, term, terms, limit)
         out.append(found)
+    return out
+
+
+def with_other_form(selector: Selector, base: NDArray[np.float64],
+                    contribution: NDArray[np.float64], term: Term, terms: list[Term],
+                    limit: float, found: list[dict]) -> list[dict]:
+    """The candidates that reproduce a named squareness together with the same plane's
+    squareness in another form: the named effect may stand for the sum of two.
+
+    ISO 230-1 books one squareness per plane, with either axis as the reference (EC0Y and
+    EXY tilt Y's travel, EYX tilts X's); two forms differ by a turn of both travels of the
+    plane against the work. A survey aligned to the machine keeps that turn, and where the
+    work turns on rotary axes a rotary line tilted about the plane's normal (EC0A for an A
+    carried by the plane's carriages, ISO 230-7) turns the work against the travels
+    alike: the named form alone then carries a squareness and the line's tilt together,
+    and no one alternative reproduces it. Judged as :func:`alternatives` judges one: the
+    named contribution fitted by ``base``, the other form's column and the candidate's,
+    within ``limit``; a candidate already said alone, one the other form reproduces
+    alone, and one holding the lines of one said so are left out.
+
+    Parameters
+    ----------
+    selector : Selector
+        The selection (its rows and noise).
+    base : ndarray, shape (R, q)
+        The offsets and the other named effects' columns at the rows [m per unit].
+    contribution : ndarray, shape (R,)
+        The named squareness' fitted contribution [m].
+    term : Term
+        The named effect (a squareness; any other gives nothing).
+    terms : list of Term
+        The candidates the selection considered.
+    limit : float
+        The bound on the fits' sums of squares [m^2].
+    found : list of dict
+        What is already said of the named effect (alternatives alone).
+
+    Returns
+    -------
+    list of dict
+        ``{"name", "parameters" (SI, the candidate's share), "with" ({form: {"angle_rad":
+        value}}, the other form's share, SI), "reason"}`` per candidate, or empty.
+    """
+    if term.family.name != "squareness":
+        return []
+    plane = _plane(term.variant)
+    forms = [t for t in terms if t.family.name == "squareness" and t.name != term.name and
+             _plane(t.variant) == plane]
+    others = sorted((t for t in terms if _comparable(term, t) and len(t.settings) == 1 and
+                     not (t.family.name == "squareness" and _plane(t.variant) == plane)),
+                    key=lambda t: selector.design_rows(t, t.settings[0]).shape[1])
+    said = {entry["name"] for entry in found}
+    stated: list[Term] = []
+    out = []
+    for form in forms:
+        form_columns = selector.design_rows(form, form.settings[0])
+        if not np.any(form_columns) or \
+                _refit(np.column_stack([base, form_columns]), contribution)[1] <= limit:
+            continue
+        for other in others:
+            if other.name in said or any(_same_lines(other, s) for s in stated):
+                continue
+            columns = selector.design_rows(other, other.settings[0])
+            if not np.any(columns):
+                continue
+            solution, misfit = _refit(np.column_stack([base, form_columns, columns]),
+                                      contribution)
+            if misfit > limit:
+                continue
+            share = float(solution[base.shape[1]])
+            entry = _statement(term, other, other.settings[0], solution[base.shape[1] + 1:])
+            entry["with"] = {form.name: {"angle_rad": share}}
+            entry["reason"] = (f"{term.name} is {form.name} ({share * 1e6:.3g} urad, the same "
+                               "plane's squareness with the other axis as reference, ISO "
+                               "230-1) together with this: the two forms differ by a turn "
+                               "of the plane's travels against the work, which on these "
+                               "poses this candidate makes too (a rotary line turned about "
+                               "the plane's normal, ISO 230-7), so the named squareness may "
+                               "stand for the sum of the two")
+            out.append(entry)
+            stated.append(other)
+            said.add(other.name)
     return out
 
 
