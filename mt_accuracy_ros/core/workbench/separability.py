@@ -29,7 +29,10 @@ makes too, so one named form can stand for a squareness and that line's tilt at 
 A named rotary line or set-up location is also judged parameter by parameter against the
 constant turns of the tool-side carriages that carry the head (:func:`head_turns`): where
 the carriages stand still while the head turns, such a turn moves the located tool along
-the circles a line's offset draws, and the output says which parameter it stands for.
+the circles a line's offset draws, and the output says which parameter it stands for. A
+named rotary line's parameter is judged so against the squarenesses too
+(:func:`line_squareness`): a slide that travels only to keep the tool on the target as a
+rotary axis turns moves it, out of square, along the circle a tilt of that line draws.
 """
 from __future__ import annotations
 
@@ -189,6 +192,8 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
             found += with_other_form(selector, base, contribution, term, terms, limit, found)
             found += head_turns(selector, base, block, contribution, (term, setting), terms,
                                 limit)
+            found += line_squareness(selector, base, block, contribution, (term, setting),
+                                     terms, limit, {f["name"] for f in found})
         if setting.get("lever"):
             found += _lever_statement(selector, term, setting, coefficients[k])
         found += head_constant(selector, base, block, contribution, (term, setting), terms,
@@ -531,15 +536,8 @@ def head_turns(selector: Selector, base: NDArray[np.float64], block: NDArray[np.
         return []
     angular = next((t.family for t in terms if t.family.name == "angular"), None) or \
         family_named("angular")
-    names = term.family.parameter_names(term.variant, named_setting)
-    names = names if len(names) == block.shape[1] > 1 else [""] * block.shape[1]
-    # Only a parameter that carries a part the others and the base do not reproduce has
-    # anything for a turn to stand for (a parameter fitted near zero has not).
-    needed = []
-    for j in range(block.shape[1]):
-        x = np.column_stack([base, np.delete(block, j, axis=1)])
-        solution, misfit = _refit(x, contribution)
-        needed.append(misfit > limit)
+    names = _parameter_labels(term, named_setting, block)
+    needed = _parameters_needed(base, block, contribution, limit)
     found = []
     for axis in machine.tool_branch:
         if not carries_head(machine, axis):
@@ -553,18 +551,117 @@ def head_turns(selector: Selector, base: NDArray[np.float64], block: NDArray[np.
             columns = selector.design_rows(turn, setting)
             if not np.any(columns):
                 continue
-            for j, name in enumerate(names):
-                if not needed[j]:
-                    continue
-                x = np.column_stack([base, np.delete(block, j, axis=1), columns])
-                solution, misfit = _refit(x, contribution)
-                if misfit <= limit:
-                    why = ("a constant turn of a carriage that carries the head turns its "
-                           "lines and the tool located at the head's set-up along the same "
-                           "circles")
-                    found.append({"name": turn.name, "parameters": {"P0": float(solution[-1])},
-                                  "reason": why + (f" as {name} does" if name else "")})
-                    break
+            stands = _in_place_of(base, block, contribution, columns, needed, limit)
+            if stands is not None:
+                j, value = stands
+                why = ("a constant turn of a carriage that carries the head turns its "
+                       "lines and the tool located at the head's set-up along the same "
+                       "circles")
+                found.append({"name": turn.name, "parameters": {"P0": value},
+                              "reason": why + (f" as {names[j]} does" if names[j] else "")})
+    return found
+
+
+def _parameter_labels(term: Term, setting: dict, block: NDArray[np.float64]) -> list[str]:
+    """The named effect's parameter names, one per column of ``block``; "" each where it
+    has one parameter (the sentence then names the effect, not a parameter)."""
+    names = term.family.parameter_names(term.variant, setting)
+    return names if len(names) == block.shape[1] > 1 else [""] * block.shape[1]
+
+
+def _parameters_needed(base: NDArray[np.float64], block: NDArray[np.float64],
+                       contribution: NDArray[np.float64], limit: float) -> list[bool]:
+    """Per column of the named effect's ``block``: whether it carries a part of the
+    ``contribution`` that ``base`` and the effect's other columns do not reproduce within
+    ``limit`` [m^2]. Only such a parameter has anything for another effect to stand for
+    (one fitted near zero has not)."""
+    needed = []
+    for j in range(block.shape[1]):
+        _, misfit = _refit(np.column_stack([base, np.delete(block, j, axis=1)]), contribution)
+        needed.append(misfit > limit)
+    return needed
+
+
+def _in_place_of(base: NDArray[np.float64], block: NDArray[np.float64],
+                 contribution: NDArray[np.float64], columns: NDArray[np.float64],
+                 needed: list[bool], limit: float) -> tuple[int, float] | None:
+    """The first needed parameter j of the named effect that the one column ``columns``
+    (R, 1) stands for: the effect refitted with it in j's place, beside ``base``, leaves
+    a sum of squares of at most ``limit`` [m^2]; (j, the column's coefficient), or None."""
+    for j, wanted in enumerate(needed):
+        if not wanted:
+            continue
+        x = np.column_stack([base, np.delete(block, j, axis=1), columns])
+        solution, misfit = _refit(x, contribution)
+        if misfit <= limit:
+            return j, float(solution[-1])
+    return None
+
+
+def line_squareness(selector: Selector, base: NDArray[np.float64], block: NDArray[np.float64],
+                    contribution: NDArray[np.float64], named: tuple[Term, dict],
+                    terms: list[Term], limit: float, said: set[str]) -> list[dict]:
+    """The squarenesses the readings cannot part from one parameter of a named rotary
+    line.
+
+    A slide that moves only to follow the turn of a rotary axis - the Z travel an RTCP
+    makes to keep the tool's tip on one sphere as a head or a table tilts - moves the
+    target, where its travel is out of square (ISO 230-1), by the angle times that
+    travel, which follows the circle a tilt of the line draws (ISO 230-7): a swivel
+    head's B on a Z ram, its tip L under B's line turned by b, keeps the tip on the
+    sphere by Z travel L (1 - cos b), and B's line tilted about x by e moves the tip
+    along y by e L (1 - cos b) - the Y-Z squareness' slope EYZ times that travel. A
+    line often holds another error too (its offset): the whole effect is then
+    reproduced by no squareness, so each parameter is judged on its own as
+    :func:`head_turns` judges it (the others refitted with the squareness in its
+    place), within the same bound.
+
+    Parameters
+    ----------
+    selector : Selector
+        The selection (its rows and noise).
+    base : ndarray, shape (R, q)
+        The offsets and the other named effects' columns at the rows [m per unit].
+    block : ndarray, shape (R, p)
+        The named line's columns [m per m or rad].
+    contribution : ndarray, shape (R,)
+        The named line's fitted contribution [m].
+    named : tuple of (Term, dict)
+        The named effect and its setting (a ``rotary_location``; any other gives nothing).
+    terms : list of Term
+        The candidates the selection considered (the squareness family's among them).
+    limit : float
+        The bound on the fits' sums of squares [m^2].
+    said : set of str
+        The alternatives already said for the whole effect (not said again).
+
+    Returns
+    -------
+    list of dict
+        ``{"name", "parameters" ({"angle_rad": value}, SI), "reason"}`` per squareness
+        that stands for one of the line's parameters (``reason`` names which).
+    """
+    term, setting = named
+    if term.family.name != "rotary_location" or block.shape[1] < 2:
+        return []
+    names = _parameter_labels(term, setting, block)
+    needed = _parameters_needed(base, block, contribution, limit)
+    found = []
+    for other in terms:
+        if other.family.name != "squareness" or other.name in said:
+            continue
+        columns = selector.design_rows(other, other.settings[0])
+        if not np.any(columns):
+            continue
+        stands = _in_place_of(base, block, contribution, columns, needed, limit)
+        if stands is not None:
+            j, value = stands
+            found.append({"name": other.name, "parameters": {"angle_rad": value},
+                          "reason": "on these poses the slide's travel follows the rotary "
+                                    "axes' turns (the tool kept on the target), so its "
+                                    "travel out of square (ISO 230-1) moves the target "
+                                    f"along the circle {names[j]} draws (ISO 230-7); the "
+                                    "line's other numbers are its own"})
     return found
 
 

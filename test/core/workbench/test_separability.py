@@ -160,6 +160,53 @@ def test_a_head_lines_tilt_and_a_squareness_are_said_alike_on_one_sphere():
     assert "move the target along the same circle" in named.explanation
 
 
+def _mixed_table_head():
+    """A C table under a swivel head's B on the Z ram: the tip 0.286 m under B's line."""
+    work = [cs._ax("Y", -1, [0, 0, 0.054]), cs._ax("X", 1, [0, 0, 0.133]),
+            cs._ax("C", -1, [0, 0, 0])]
+    tool = [cs._ax("Z", -1, [0, 0, 0.752]), cs._ax("B", -1, [0, 0, -0.165])]
+    return _machines(work, tool, [0, 0, -0.121], {"C": 0, "B": 0},
+                     {"C": (-360, 360), "B": (-110, 30)})
+
+
+def test_a_head_lines_tilt_beside_its_offset_is_said_as_the_y_z_squareness():
+    """The Y-Z pair out of square (the generator's EA0Z: Z's slide tilted toward Y) beside
+    an offset of the head's B line. Keeping the tip on the sphere, the RTCP moves Z by
+    L (1 - cos b) (L the tip's depth under B), so the squareness a moves the sphere's
+    reading along y by a L (1 - cos b): what B's line tilted about x by -a does (ISO 230-7).
+    One line explains both; with its offset beside the tilt no squareness reproduces the
+    whole line, so its tilt alone is judged, and the output says the squareness it may be,
+    with its own value."""
+    generator, described = _mixed_table_head()
+    poses = [{"C": math.radians(c), "B": math.radians(b)}
+             for b in np.arange(-110, 31, 10) for c in np.arange(0, 360, 30)]
+    square, offset = -40e-6, 9e-6
+    rows = {"q": [cs.solve_linear(generator, p, SPHERE)
+                  for p in [dict(generator["setup"])] + poses],
+            "target": np.tile(SPHERE, (len(poses) + 1, 1)), "group": [0] * (len(poses) + 1),
+            "setup": {0: 0}, "tool_setup": 0}
+    read = {name: cs.located_errors(generator, cs.errs_from_effects([effect]), rows)[0]
+            for name, effect in [("EA0Z", _effect("EA0Z", "Z", square, "squareness")),
+                                 ("EA0B", _effect("EA0B", "B", -square, "location_tilt"))]}
+    z, b = (np.array([q[a] for q in rows["q"]]) for a in "ZB")
+    depth = 0.165 + 0.121
+    assert np.allclose(z - z[0], depth * (1 - np.cos(b)), rtol=0, atol=1e-12)
+    assert np.allclose(read["EA0Z"][:, 1], square * depth * (1 - np.cos(b)), rtol=0, atol=1e-13)
+    assert np.abs(read["EA0Z"] - read["EA0B"]).max() < 2e-9      # second order in the angle
+    obs = _survey(generator, described, poses,
+                  [_effect("EA0Z", "Z", square, "squareness"), _effect("EX0B", "B", offset)])
+    diagnosis = diagnose(ErrorModel(described), obs)
+    names = [c.name for c in diagnosis.selected]
+    assert names == ["rotary_location:B"], diagnosis.text()
+    named = diagnosis.selected[0]
+    assert named.parameters["EX0B"] == pytest.approx(offset, abs=0.3e-6)
+    said = {a["name"]: a for a in named.inseparable}
+    assert "squareness:EYZ" in said, named.inseparable
+    assert said["squareness:EYZ"]["parameters"]["angle_rad"] == pytest.approx(square, rel=0.05)
+    assert "along the circle EA0B draws" in said["squareness:EYZ"]["reason"]
+    assert "cannot part rotary_location:B from" in named.explanation
+
+
 def test_several_spheres_located_one_by_one_each_keep_their_own_zero():
     """Three spheres probed on a trunnion, each found at the set-up on its own: where each
     sphere really sits is known only to that finding (here 20 um apart from the nominal),
