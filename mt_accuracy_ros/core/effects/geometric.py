@@ -308,6 +308,51 @@ def lever_names(variant: str) -> list[str]:
     return [f"lever_{c}" for c in lever_components(variant)]
 
 
+def machine_reach(ctx: Context) -> float:
+    """[m] the farthest a lever of the machine's own can reach: its linear strokes end to
+    end, the tool's length and half a metre of structure. A fitted arm or pivot beyond it
+    is no machine's: a vanishing tilt divided into another error's share."""
+    return sum(high - low for low, high in (ctx.machine.axes[a].stroke
+                                            for a in ctx.linear_axes())) + \
+        float(np.linalg.norm(ctx.machine.tool)) + 0.5
+
+
+def lever_slope_names(variant: str) -> list[str]:
+    """Parameter names of a located tilt's lever slope, e.g. ``["lever_slope_x",
+    "lever_slope_z"]`` [m]: the pivot's move P1 (e_k x p) at the stroke's end."""
+    return [f"lever_slope_{c}" for c in lever_components(variant)]
+
+
+def located_lever_slope(ctx: Context, variant: str, slope: np.ndarray) -> np.ndarray:
+    """(N, 3, 2) the reading's change per metre of a located tilt's lever slope: about a
+    pivot p the tilt's slope P1 L1(u) moves what the carriage carries by
+    -P1 L1(u) (e_k x p), growing along the carriage's travel; the target located at the
+    set-up took in that move there, turning with the work since (ISO 10791-6):
+    -(L1(u) I - R_S(q) R_S(q_s)^T L1(u_s)) along the two directions across e_k; on a batch
+    with no reading at the set-up (a CNC's commands), -L1(u) I.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings (:func:`setup_rows` not None).
+    variant : str
+        An angular error of a work-side carriage that carries the rotary axes.
+    slope : ndarray, shape (N,)
+        L1(u) at the readings, the carriage's command normalised over its stroke.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 2)
+        [m per m of the lever slope], bed frame.
+    """
+    across = ["xyz".index(c) for c in lever_components(variant)]
+    moved = np.zeros((ctx.n, 3, 2))
+    moved[:, across, [0, 1]] = slope[:, None]
+    # A CNC's own commands locate nothing: the move as the machine makes it, from the
+    # stroke's middle (where L1 is zero).
+    return -moved if setup_rows(ctx) is None else -located_tilt(ctx, moved)
+
+
 def located_lever(ctx: Context, variant: str) -> np.ndarray:
     """(N, 3, 2) the reading's change per metre of a located tilt's lever: a tilt eps(q)
     about a pivot p off the carriage's origin turns what it carries about p, which moves it
@@ -667,13 +712,17 @@ class ComponentError(EffectFamily):
             # axis' zero and line offset (rotary_location), not offered as the tilt's.
             located = [{"order": k, "located": True} for k in range(1, _LOCATED_ORDERS + 1)]
             if turns_about_carried_rotary(ctx.machine, variant):
-                return orders + located
+                # Its slope still moves the carried lines about a pivot off the origin.
+                return orders + located + \
+                    [{"order": 1, "located": True, "lever_slope": True}]
             # Its pivot, off the carriage's origin, moves what the carriage carries by the
             # constant part's lever (located_lever): offered with the constant part, at
             # order 1 only (at order 2 it led the first step where a squareness and a line
             # offset were the truth).
             return orders + located + \
-                [{"order": 1, "constant": True, "located": True, "lever": True}] + \
+                [{"order": 1, "constant": True, "located": True, "lever": True},
+                 {"order": 1, "constant": True, "located": True, "lever": True,
+                  "lever_slope": True}] + \
                 [{"order": k, "constant": True, "located": True}
                  for k in range(1, _LOCATED_ORDERS + 1)]
         # A table's tilt with a constant part turns the table, and the work on it, about
@@ -685,6 +734,42 @@ class ComponentError(EffectFamily):
         # about the same direction by the pivot alone, which this family does not fit, so
         # it could stand in for it: there the squareness family holds a constant turn.
         return orders + [{"order": k, "constant": True} for k in range(first, first + _ORDERS)]
+
+    def fit_problems(self, ctx: Context, variant: str, setting: dict, coefficients
+                     ) -> list[str]:
+        """A pivot beyond the machine's reach is no tilt's: the slope of a located tilt's
+        lever is -P1 (e_k x p), so the pivot lies |lever slope| / |P1| across the axis; a
+        fit that puts it farther than :func:`machine_reach` makes a straightness or a line
+        offset of the tilt's slope, dividing by a slope that is not the carriage's.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The variant (one of :meth:`variants`).
+        setting : dict
+            The setting (one of :meth:`settings`).
+        coefficients : sequence of float, length P
+            The fitted coefficients, SI (P1 [rad], the lever's slope [m] ...).
+
+        Returns
+        -------
+        list of str
+            One sentence when the pivot lies beyond the machine's reach, else none.
+        """
+        if not setting.get("lever_slope"):
+            return []
+        fitted = dict(zip(self.parameter_names(variant, setting),
+                          np.asarray(coefficients, dtype=np.float64)))
+        slope = float(np.hypot(*(fitted[n] for n in lever_slope_names(variant))))
+        reach = machine_reach(ctx)
+        if slope <= reach * abs(fitted["P1"]):
+            return []
+        pivot = slope / abs(fitted["P1"]) if fitted["P1"] else float("inf")
+        return [f"the pivot its lever's slope puts {pivot:.2f} m from the {variant[2]} "
+                f"carriage's origin is beyond the machine's reach ({reach:.2f} m): not a "
+                "tilt about a pivot, another error's share divided by a vanishing slope"]
 
     def nested_columns(self, variant: str, setting: dict, largest: dict) -> list[int] | None:
         """Columns of the largest setting's design: P1 .. Pk, then P0 for a constant part.
@@ -709,6 +794,8 @@ class ComponentError(EffectFamily):
         first = 2 if self.kind == "straightness" else 1
         if bool(setting.get("located")) != bool(largest.get("located")):
             return None     # a located tilt's columns are not the plain ones'
+        if setting.get("lever_slope") or largest.get("lever_slope"):
+            return None     # a lever's slope columns are made on their own
         if setting.get("lever") and not largest.get("lever"):
             return None     # nor are a lever's
         columns = list(range(setting["order"] - first + 1))
@@ -740,7 +827,8 @@ class ComponentError(EffectFamily):
         first = 2 if self.kind == "straightness" else 1
         return [f"P{k}" for k in range(first, setting["order"] + 1)] + \
             (["P0"] if setting.get("constant") else []) + \
-            (lever_names(variant) if setting.get("lever") else [])
+            (lever_names(variant) if setting.get("lever") else []) + \
+            (lever_slope_names(variant) if setting.get("lever_slope") else [])
 
     def _basis(self, q, u, setting):
         if self.periodic:
@@ -790,6 +878,9 @@ class ComponentError(EffectFamily):
             tilt = plain if setup_rows(ctx) is None else located_tilt(ctx, plain)
             if setting.get("lever"):
                 tilt = np.concatenate([tilt, located_lever(ctx, variant)], axis=2)
+            if setting.get("lever_slope"):
+                slope = _legendre_columns(ctx.normalised_position(variant[2]), 1, 1)[:, 0]
+                tilt = np.concatenate([tilt, located_lever_slope(ctx, variant, slope)], axis=2)
             return tilt
         return along(*self._plain_separable(ctx, variant, setting))
 
@@ -901,10 +992,11 @@ class ComponentError(EffectFamily):
         # The two spheres located at the set-up with the work: the direction's change there
         # turns with the work (ISO 10791-6).
         turn = located_turn(ctx, turn) if self._turn_located(ctx, variant) else turn
-        if not setting.get("lever"):
+        width = 2 * bool(setting.get("lever")) + 2 * bool(setting.get("lever_slope"))
+        if not width:
             return turn
-        # The lever (a translation) turns nothing.
-        return np.concatenate([turn, np.zeros((ctx.n, 3, 2))], axis=2)
+        # The lever and its slope (translations) turn nothing.
+        return np.concatenate([turn, np.zeros((ctx.n, 3, width))], axis=2)
 
     def motion_error(self, machine, variant: str, setting: dict, coefficients, q):
         """The error motion itself, E(q) [m or rad] at axis positions q: what a CNC's
@@ -1116,6 +1208,10 @@ class ComponentError(EffectFamily):
             reach += (f"; about a pivot p off the carriage's origin, whose lever "
                       f"-P0 (e_k x p) ({', '.join(lever_names(variant))}) moves all it "
                       "carries, located alike")
+        if setting.get("lever_slope"):
+            reach += (f"; the pivot's move growing with the tilt's slope, -P1 L1(u) (e_k x p) "
+                      f"({', '.join(lever_slope_names(variant))}), offsets the lines it "
+                      "carries along its travel, located alike")
         return (f"the {kind} error {variant} of the {axis} axis, smooth along its travel "
                 f"(Legendre order {setting.get('order')}){reach} (ISO 230-1, Kidani eq. 2.6)")
 
@@ -2284,9 +2380,7 @@ class AngularWithArm(EffectFamily):
         """
         # An arm beyond the machine's reach is no tilt: the "arm" part is then a
         # straightness or squareness of the axis that a vanishing tilt divides.
-        reach = sum(high - low for low, high in (ctx.machine.axes[a].stroke
-                                                 for a in ctx.linear_axes())) + \
-            float(np.linalg.norm(ctx.machine.tool)) + 0.5
+        reach = machine_reach(ctx)
         arm = self.arm_m(coefficients)
         if not abs(arm) <= reach:
             return [f"the fitted arm along the tool ({arm:+.2f} m) is beyond the machine's "

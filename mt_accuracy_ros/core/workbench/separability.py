@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 
 from ..effects import family_named
 from ..effects.geometric import (HEAD, STILL_TURN, carries_head, head_setup_row,
-                                 lever_line_offsets, turns_about_carried_rotary)
+                                 lever_line_offsets, lever_names, turns_about_carried_rotary)
 from .distributions import chi2_sf
 from .selection import Selector, Term
 
@@ -681,7 +681,9 @@ def _lever_statement(selector: Selector, term: Term, setting: dict,
         raise ValueError(f"{term.name}: a lever, but its carriage carries no rotary line")
     carried = "".join(sorted({name[3] for name in offsets},
                              key=machine.axis_order.index))
-    lever = {name: value for name, value in fitted.items() if name.startswith("lever_")}
+    # The constant lever only: its slope offsets the lines by an amount that changes
+    # along the carriage's travel, which no line's offset holds.
+    lever = {name: fitted[name] for name in lever_names(term.variant)}
     located = ", ".join(f"v_{name[-1]} {-value * 1e6:.3g} µm" for name, value in lever.items())
     return [{"name": f"rotary_location:{carried}", "parameters": offsets,
              "reason": f"the tilt's lever ({', '.join(lever)}; -P0 (e_k x p), a translation "

@@ -34,6 +34,8 @@ from test_located_tilt import (SPHERES, _fit, _grid, _located_readings, _observa
 PIVOT = (-0.142, 0.423, -0.023)
 #: The lever setting: the located tilt's P1, P0 and the lever across its axis.
 LEVER = {"order": 1, "constant": True, "located": True, "lever": True}
+#: The lever with its slope (the pivot's move growing with the tilt's slope).
+SLOPED = dict(LEVER, lever_slope=True)
 
 
 def _roll(value_si, pivot=PIVOT, name="EBY"):
@@ -107,8 +109,9 @@ def test_the_largest_setting_holds_every_smaller_ones_columns_and_not_the_levers
     settings = family.settings(ctx, "EBY")
     largest = settings[-1]
     assert largest == {"order": 2, "constant": True, "located": True}
-    assert [s for s in settings if s.get("lever")] == [LEVER]
+    assert [s for s in settings if s.get("lever")] == [LEVER, SLOPED]
     assert family.nested_columns("EBY", LEVER, largest) is None
+    assert family.nested_columns("EBY", SLOPED, largest) is None
     full = ctx.measured_design(family, "EBY", largest)
     for setting in settings:
         if not setting.get("located") or setting.get("lever"):
@@ -134,10 +137,10 @@ def test_the_constant_roll_about_the_origin_is_the_located_xz_squareness_on_thes
 
 def test_a_roll_of_the_carriage_that_carries_a_and_c_about_a_pivot_is_named_as_the_roll():
     """An R-test on a trunnion A/C, the Y carriage (which carries X, A and C) rolled by
-    eps(y) = -49 urad - 200 urad/m y about a pivot p off its origin: named as the roll with
-    its constant part and lever, the closed form's, and the pivot's slope along Y (the
-    roll's slope times p's lever, c1 y e_y x p: z moves by -c1 p_x y, ISO 230-1) as Y's
-    travel tilted in z (before the lever: A's and C's lines, eight numbers)."""
+    eps(y) = -49 urad - 200 urad/m y about a pivot p off its origin: named as the roll alone,
+    with its constant part, its lever and the lever's slope, the closed forms' (the pivot's
+    move -eps(y) e_y x p grows along Y, ISO 230-1; before the slope, Y's travel tilted in z
+    named beside the roll; before the lever, A's and C's lines, eight numbers)."""
     generator, described = _trunnion_ac({"A": 0, "C": 0})
     poses = [{"A": math.radians(a), "C": math.radians(c)}
              for a in np.arange(-30, 111, 10) for c in np.arange(0, 360, 15)]
@@ -146,20 +149,24 @@ def test_a_roll_of_the_carriage_that_carries_a_and_c_about_a_pivot_is_named_as_t
                                                       SPHERES[:1], [_roll([c0, c1, 0.0])])
     diagnosis = diagnose(ErrorModel(described), _observations(positions, errors, targets))
     named = {s.name: s for s in diagnosis.selected}
-    assert sorted(named) == ["angular:EBY", "squareness:EZY"], diagnosis.text()
+    assert sorted(named) == ["angular:EBY"], diagnosis.text()
     roll = named["angular:EBY"]
-    assert roll.setting == LEVER
+    assert roll.setting == SLOPED
     # Y's stroke -0.6 .. 0.9 m: P0 = c0 + 0.15 c1 = -79 urad, P1 = 0.75 c1 = -150 urad.
-    assert roll.parameters["P0"] == pytest.approx(c0 + 0.15 * c1, abs=6e-6)
-    assert roll.parameters["P1"] == pytest.approx(0.75 * c1, abs=15e-6)
-    # The lever -c0 e_y x p = c0 (-p_z, 0, p_x): -1.13 um in x, 6.96 um in z.
-    assert roll.parameters["lever_x"] == pytest.approx(-c0 * PIVOT[2], abs=0.2e-6)
-    assert roll.parameters["lever_z"] == pytest.approx(c0 * PIVOT[0], abs=0.2e-6)
-    slope = named["squareness:EZY"].parameters["angle_rad"]
-    assert abs(slope) == pytest.approx(abs(c1 * PIVOT[0]), rel=0.1)
+    p0, p1 = c0 + 0.15 * c1, 0.75 * c1
+    # The survey moved Y by +-72 mm of its 1.5 m stroke, so P1 (per half stroke) is read
+    # from a tenth of its reach.
+    assert roll.parameters["P0"] == pytest.approx(p0, abs=6e-6)
+    assert roll.parameters["P1"] == pytest.approx(p1, rel=0.15)
+    # The lever -P0 e_y x p = P0 (-p_z, 0, p_x) and its slope -P1 e_y x p along z, where
+    # the pivot's long arm p_x = -0.142 m acts (along x, p_z = -0.023 m moves a few um,
+    # which these poses share with the tilt's own numbers).
+    assert roll.parameters["lever_z"] == pytest.approx(p0 * PIVOT[0], abs=0.6e-6)
+    assert roll.parameters["lever_slope_z"] == pytest.approx(p1 * PIVOT[0], rel=0.1)
+    assert not diagnosis.residual_above_noise, diagnosis.text()
     # Said: the lever is the offsets of the lines Y carries, and the located set-up error.
-    # The lever's numbers only (no whole alternative), and P0 as the squareness of the
-    # roll's plane, which it is on these poses (one rotation, ISO 230-1).
+    # The lever's numbers only (no whole alternative, not its slope), and P0 as the
+    # squareness of the roll's plane, which it is on these poses (one rotation, ISO 230-1).
     said, *plane = roll.inseparable
     assert plane and {p["name"] for p in plane} <= {"squareness:EB0Z", "squareness:EXZ",
                                                     "squareness:EZX"}, plane
@@ -170,6 +177,7 @@ def test_a_roll_of_the_carriage_that_carries_a_and_c_about_a_pivot_is_named_as_t
     assert said["parameters"] == pytest.approx(
         {"EZ0A": roll.parameters["lever_z"], "EX0C": roll.parameters["lever_x"]}, abs=1e-15)
     assert f"v_x {-roll.parameters['lever_x'] * 1e6:.3g} µm" in said["reason"]
+    assert "lever_slope" not in said["reason"]
     assert "lever (lever_x, lever_z" in roll.explanation
 
 
