@@ -664,9 +664,15 @@ class ComponentError(EffectFamily):
             # Smooth and of low order only: a located tilt of higher order, on a sweep where
             # the carriage follows one rotary axis, would stand in for that axis' own errors.
             # A constant turn about the direction of the first rotary axis carried is that
-            # axis' zero and line offset (rotary_location), not offered as the tilt's.
+            # axis' zero and line offset (rotary_location), not offered as the tilt's - unless
+            # the tool's direction was located with the work: the zero turns the work at the
+            # set-up too, so the located direction reads that turn carried with the work,
+            # R_W(q) R_W(q_s)^T (eps x u), where the carried line's tilt (into which the
+            # line family folds the zero, ISO 230-7) reads (R_W(q) R_W(q_s)^T eps) x u: the
+            # direction parts the carriage's turn from the line's (located_turn).
             located = [{"order": k, "located": True} for k in range(1, _LOCATED_ORDERS + 1)]
-            if turns_about_carried_rotary(ctx.machine, variant):
+            if turns_about_carried_rotary(ctx.machine, variant) and \
+                    not self._turn_located(ctx, variant):
                 return orders + located
             # Its pivot, off the carriage's origin, moves what the carriage carries by the
             # constant part's lever (located_lever): offered with the constant part, at
