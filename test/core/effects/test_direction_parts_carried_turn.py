@@ -177,3 +177,29 @@ def test_a_roll_of_the_carriage_seen_with_the_tool_direction_is_named_as_the_rol
     named = diagnosis.selected[0]
     assert named.parameters["P0"] == pytest.approx(LEGENDRE["P0"], abs=5e-6)
     assert named.parameters["P1"] == pytest.approx(LEGENDRE["P1"], abs=5e-6)
+
+
+def test_an_outer_zero_seen_with_the_tool_direction_is_said_as_a_carriages_turn_and_the_zero():
+    """A's zero of -40 urad, read with the tool's direction: C's line (into which the line
+    family folds it) cannot make the direction, a carriage's constant turn about x can - the
+    check names that turn and says it is A's zero, with P0's value (before: C's line at
+    0.5 urad, X's roll at order 2 and A's line offsets)."""
+    generator, described = _trunnion()
+    zero = -40e-6
+    ctx, errors, changes = _readings(generator, described, [
+        {"iso_name": "EA0A", "kind": "zero", "axis": "A", "value_si": zero}])
+    rng = np.random.default_rng(11)
+    n = ctx.n
+    obs = Observations(ctx.variables.positions, errors + rng.normal(0.0, 0.3e-6, (n, 3)),
+                       np.ones((n, 3), bool), np.arange(n, dtype=float), {}, {}, 0.6e-6,
+                       measured_orientation_rad=np.cross(
+                           ctx.tool_axis(), changes + rng.normal(0.0, 3e-6, (n, 3))),
+                       orientation_measured=np.ones(n, dtype=bool),
+                       orientation_uncertainty_rad=6e-6, work_point=SPHERE)
+    diagnosis = diagnose(ErrorModel(described), obs)
+    (named,) = diagnosis.selected
+    assert named.name in ("angular:EAX", "angular:EAY"), diagnosis.text()
+    assert named.parameters["P0"] == pytest.approx(zero, abs=3e-6)
+    said = {alt["name"]: alt for alt in named.inseparable}
+    assert said["rotary_location:A"]["parameters"]["EA0A"] == pytest.approx(zero, abs=3e-6)
+    assert "A's zero-angle error" in named.explanation
