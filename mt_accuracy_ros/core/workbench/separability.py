@@ -449,13 +449,14 @@ def _carried_zero(machine, term: Term, setting: dict, coefficients: NDArray[np.f
     """A located tilt's constant part about the direction of the first rotary axis its
     carriage carries, said as that axis' zero.
 
-    Offered only where the tool's direction was located with the work (a sphere alone reads
-    the turn as the carried line's tilt, which the line family holds): the carriage's
-    constant turn P0 turns that axis' body by P0 about a line parallel to its own, which is
-    its zero-angle error, and moves the lines it carries by the turn's lever (ISO 230-7) -
-    the same rigid motion on any poses, position and direction. The line family never
-    fits an outer axis' zero (it folds it into the carried line, which the direction
-    parts from it), so the output says it here, with P0's value.
+    The carriage's constant turn P0 turns that axis' body by P0 about a line parallel to
+    its own, which is its zero-angle error, and moves the lines it carries by the turn's
+    lever (ISO 230-7): the same rigid motion on any poses, position and direction, where
+    every linear axis between the carriage and that rotary axis travels along the turn's
+    direction (the turn leaves their travel as it is; else it also turns their travel, a
+    squareness, and nothing is said here). The line family never fits an outer axis' zero
+    (it folds it into the carried line's tilt, which a sphere alone reads alike and a
+    located tool direction does not), so the output says it here, with P0's value.
 
     Parameters
     ----------
@@ -479,8 +480,11 @@ def _carried_zero(machine, term: Term, setting: dict, coefficients: NDArray[np.f
         return []
     branch = next(b for b in (machine.workpiece_branch, machine.tool_branch)
                   if term.variant[2] in b)
-    axis = next(a for a in branch[branch.index(term.variant[2]) + 1:]
-                if machine.axes[a].is_rotary)
+    carried = branch[branch.index(term.variant[2]) + 1:]
+    axis = next(a for a in carried if machine.axes[a].is_rotary)
+    turn = "ABC".index(term.variant[1])
+    if any(machine.axes[a].direction != turn for a in carried[:carried.index(axis)]):
+        return []       # the turn tilts a carried travel too: not the zero alone
     names = term.family.parameter_names(term.variant, setting)
     zero = float(dict(zip(names, map(float, coefficients)))["P0"])
     return [{"name": f"rotary_location:{axis}", "parameters": {f"E{axis}0{axis}": zero},

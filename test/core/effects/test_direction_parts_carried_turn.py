@@ -125,15 +125,20 @@ def test_the_carriages_constant_turn_reads_in_the_direction_as_the_closed_form()
     assert np.abs(line - closed).max() > 40e-6
 
 
-def test_the_constant_part_is_offered_only_where_the_direction_was_located():
+def test_the_constant_part_is_offered_in_full_where_the_direction_was_located():
+    """With the direction located, the roll is offered as any located tilt (its constant
+    part with the lever, at orders 1 and 2); on the sphere alone its constant part only at
+    order 1, without the lever (the lines' offsets are the line family's)."""
     generator, described = _trunnion()
     with_direction, _, _ = _readings(generator, described, [])
     family = ComponentError("angular", False)
-    assert SETTING in family.settings(with_direction, "EAY")
+    full = [s for s in family.settings(with_direction, "EAY") if s.get("constant")]
+    assert SETTING in full and any(s.get("lever") for s in full)
+    assert {"order": 2, "constant": True, "located": True} in full
     positions = with_direction.variables.positions
     without = Context(described, Variables(positions), work_point=SPHERE,
                       located_readings=True)
-    assert not any(s.get("constant") for s in family.settings(without, "EAY"))
+    assert [s for s in family.settings(without, "EAY") if s.get("constant")] == [SETTING]
 
 
 def test_the_located_roll_with_its_constant_part_is_the_generators_readings():
@@ -203,3 +208,20 @@ def test_an_outer_zero_seen_with_the_tool_direction_is_said_as_a_carriages_turn_
     said = {alt["name"]: alt for alt in named.inseparable}
     assert said["rotary_location:A"]["parameters"]["EA0A"] == pytest.approx(zero, abs=3e-6)
     assert "A's zero-angle error" in named.explanation
+
+
+def test_the_zero_is_said_only_where_the_turn_leaves_the_carried_travels_as_they_are():
+    """Y's roll about x on [w C A X Y b Z t] turns A's body and leaves X's travel (along x)
+    as it is: P0 is A's zero with the lines moved. Y's pitch about y on [w C B X Y b Z t]
+    also turns X's travel toward z (a squareness): not the zero alone, nothing said."""
+    from mt_accuracy_ros.core.workbench.selection import Term
+    from mt_accuracy_ros.core.workbench.separability import _carried_zero
+
+    family = ComponentError("angular", False)
+    coefficients = np.array([10e-6, -30e-6])
+    _, roll = _trunnion()
+    (said,) = _carried_zero(roll, Term(family, "EAY", [SETTING]), SETTING, coefficients)
+    assert said["name"] == "rotary_location:A"
+    assert said["parameters"] == {"EA0A": pytest.approx(-30e-6)}
+    _, pitch = geometry._trunnion_bc({"B": 0, "C": 0})
+    assert _carried_zero(pitch, Term(family, "EBY", [SETTING]), SETTING, coefficients) == []
