@@ -151,7 +151,8 @@ def carries_rotary(machine, axis: str) -> bool:
 def turns_about_carried_rotary(machine, variant: str) -> bool:
     """Whether the angular error ``variant`` of a carriage turns about the direction of the
     first rotary axis the carriage carries: a constant turn of it is that axis' zero and
-    line offset (ISO 230-7 location errors), not a tilt of its own.
+    line offset (ISO 230-7 location errors), offered with the tilt at order 1 only unless
+    the tool's direction was located with the work (:meth:`ComponentError.settings`).
 
     Parameters
     ----------
@@ -708,13 +709,22 @@ class ComponentError(EffectFamily):
             # the located instrument reads it (its value at the set-up tied to its shape).
             # Smooth and of low order only: a located tilt of higher order, on a sweep where
             # the carriage follows one rotary axis, would stand in for that axis' own errors.
-            # A constant turn about the direction of the first rotary axis carried is that
-            # axis' zero and line offset (rotary_location), not offered as the tilt's.
             located = [{"order": k, "located": True} for k in range(1, _LOCATED_ORDERS + 1)]
-            if turns_about_carried_rotary(ctx.machine, variant):
+            if turns_about_carried_rotary(ctx.machine, variant) and \
+                    not self._turn_located(ctx, variant):
+                # A constant turn about the direction of the first rotary axis carried is that
+                # axis' zero and line offset (rotary_location, ISO 230-7): no lever and no
+                # higher order with it. But the tilt's mean over the stroke is no part of its
+                # Legendre slope, and a tilt that grows from its command's zero rather than
+                # from the stroke's middle needs it: order 1 only (separability._carried_zero).
                 # Its slope still moves the carried lines about a pivot off the origin.
-                return orders + located + \
-                    [{"order": 1, "located": True, "lever_slope": True}]
+                return orders + located + [{"order": 1, "constant": True, "located": True},
+                                           {"order": 1, "located": True, "lever_slope": True}]
+            # Where the tool's direction was located with the work, it parts the carriage's
+            # turn from the carried line's tilt (into which the line family folds that zero):
+            # the zero turns the work at the set-up too, so the located direction reads
+            # -[eps x u - R_W(q) R_W(q_s)^T (eps x u)], the line's tilt -(eps - R_W(q)
+            # R_W(q_s)^T eps) x u (located_turn): the tilt is offered as any other there.
             # Its pivot, off the carriage's origin, moves what the carriage carries by the
             # constant part's lever (located_lever): offered with the constant part, at
             # order 1 only (at order 2 it led the first step where a squareness and a line
@@ -798,6 +808,9 @@ class ComponentError(EffectFamily):
             return None     # a lever's slope columns are made on their own
         if setting.get("lever") and not largest.get("lever"):
             return None     # nor are a lever's
+        if setting["order"] > largest["order"] or \
+                (setting.get("constant") and not largest.get("constant")):
+            return None     # the largest holds no such column
         columns = list(range(setting["order"] - first + 1))
         if setting.get("constant"):
             columns.append(largest["order"] - first + 1)

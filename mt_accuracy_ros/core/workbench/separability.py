@@ -196,6 +196,7 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
                                      terms, limit, {f["name"] for f in found})
         if setting.get("lever"):
             found += _lever_statement(selector, term, setting, coefficients[k])
+        found += _carried_zero(selector.ctx.machine, term, setting, coefficients[k])
         found += head_constant(selector, base, block, contribution, (term, setting), terms,
                                limit)
         found += plane_squareness(selector, base, block, contribution, (term, setting), terms,
@@ -692,6 +693,56 @@ def _lever_statement(selector: Selector, term: Term, setting: dict,
                        f"work's located set-up error ({located}; ISO 10791-6): the three "
                        "move the readings alike on any poses; the tilt's other numbers "
                        "are its own"}]
+
+
+def _carried_zero(machine, term: Term, setting: dict, coefficients: NDArray[np.float64]
+                  ) -> list[dict]:
+    """A located tilt's constant part about the direction of the first rotary axis its
+    carriage carries, said as that axis' zero.
+
+    The carriage's constant turn P0 turns that axis' body by P0 about a line parallel to
+    its own, which is its zero-angle error, and moves the lines it carries by the turn's
+    lever (ISO 230-7): the same rigid motion on any poses, position and direction, where
+    every linear axis between the carriage and that rotary axis travels along the turn's
+    direction (the turn leaves their travel as it is; else it also turns their travel, a
+    squareness, and nothing is said here). The line family never fits an outer axis' zero
+    (it folds it into the carried line's tilt, which a sphere alone reads alike and a
+    located tool direction does not), so the output says it here, with P0's value.
+
+    Parameters
+    ----------
+    machine : MachineDescription
+        The machine (branches from the bed outwards).
+    term : Term
+        The named effect.
+    setting : dict
+        Its setting.
+    coefficients : ndarray, shape (p,)
+        Its fitted coefficients, SI, in :meth:`parameter_names` order.
+
+    Returns
+    -------
+    list of dict
+        ``[{"name": "rotary_location:A", "parameters": {"EA0A": P0}, "reason"}]``, or empty.
+    """
+    if term.family.name != "angular" or setting.get("located") is not True or \
+            not setting.get("constant") or setting == STILL_TURN or \
+            not turns_about_carried_rotary(machine, term.variant):
+        return []
+    branch = next(b for b in (machine.workpiece_branch, machine.tool_branch)
+                  if term.variant[2] in b)
+    carried = branch[branch.index(term.variant[2]) + 1:]
+    axis = next(a for a in carried if machine.axes[a].is_rotary)
+    turn = "ABC".index(term.variant[1])
+    if any(machine.axes[a].direction != turn for a in carried[:carried.index(axis)]):
+        return []       # the turn tilts a carried travel too: not the zero alone
+    names = term.family.parameter_names(term.variant, setting)
+    zero = float(dict(zip(names, map(float, coefficients)))["P0"])
+    return [{"name": f"rotary_location:{axis}", "parameters": {f"E{axis}0{axis}": zero},
+             "reason": f"the tilt's constant part P0 turns the {axis} axis and all it carries "
+                       f"about {axis}'s direction: {axis}'s zero-angle error (E{axis}0{axis} "
+                       f"{zero * 1e6:.3g} µrad) with its carried lines moved by the turn's "
+                       "lever (ISO 230-7), the same rigid motion on any poses"}]
 
 
 def _reproduces(selector: Selector, base: NDArray[np.float64], contribution: NDArray[np.float64],

@@ -82,8 +82,8 @@ def test_without_the_slope_the_sloped_roll_about_a_pivot_leaves_a_micrometre():
 @pytest.mark.parametrize("setup_deg", [{"A": 0, "C": 0}, {"A": 60, "C": 45}])
 def test_a_roll_about_the_carried_a_axis_direction_is_offered_with_its_slope_alone(setup_deg):
     """The X carriage's roll EAX turns about the direction of A, the first rotary axis it
-    carries: its constant part is A's zero and line offset (not offered as the tilt's), but
-    its slope about a pivot still offsets the carried lines along X's travel. A linear roll
+    carries: its constant part is A's zero and line offset (no lever is offered with it),
+    but its slope about a pivot still offsets the carried lines along X's travel. A linear roll
     about p, zero at X's mid-stroke, is the located tilt with the slope alone, -P1 (e_x x p)
     in y and z."""
     # Zero at the stroke's middle: a constant part would be A's zero and line offset.
@@ -92,8 +92,7 @@ def test_a_roll_about_the_carried_a_axis_direction_is_offered_with_its_slope_alo
     ctx, errors, groups = _ctx([_tilt("EAX", [-c1 * 0.5 * (low + high), c1, 0.0])], setup_deg)
     family = ComponentError("angular", False)
     settings = family.settings(ctx, "EAX")
-    assert SLOPE_ONLY in settings and not any(s.get("constant") for s in settings
-                                              if s.get("located"))
+    assert SLOPE_ONLY in settings and not any(s.get("lever") for s in settings)
     coefficients, rms = _fit(ctx.measured_design(family, "EAX", SLOPE_ONLY), errors, groups)
     assert np.abs(errors).max() > 5e-6
     assert rms < 1e-8

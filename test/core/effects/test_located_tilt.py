@@ -169,9 +169,10 @@ def test_a_pivot_off_the_carriage_origin_adds_columns_of_the_tilts_own_shape():
     assert with_pivot < 1e-8
 
 
-def test_the_constant_turn_about_the_first_carried_rotary_axis_is_its_location_error():
+def test_the_constant_turn_about_the_first_carried_rotary_axis_is_offered_at_order_one():
     """On a trunnion B/C, X carries B (about y): a constant pitch EBX of X is B's zero and
-    line offset, so the located tilt has no constant part there; a yaw ECY of Y has."""
+    line offset, so the located tilt takes its constant part at order 1 only, without a
+    lever (the lines' offsets are the line family's); a yaw ECY of Y has them all."""
     generator, described = geometry._trunnion_bc({"B": 0, "C": 0})
     assert turns_about_carried_rotary(described, "EBX")
     assert turns_about_carried_rotary(described, "EBY")
@@ -182,8 +183,38 @@ def test_the_constant_turn_about_the_first_carried_rotary_axis_is_its_location_e
     ctx = Context(described, Variables(positions), work_point=targets[0],
                   located_readings=True)
     family = ComponentError("angular", False)
-    assert not any(s.get("constant") for s in family.settings(ctx, "EBX"))
-    assert any(s.get("constant") and s.get("located") for s in family.settings(ctx, "ECY"))
+    constant = [s for s in family.settings(ctx, "EBX") if s.get("constant")]
+    assert constant == [{"order": 1, "constant": True, "located": True}]
+    assert any(s.get("constant") and s.get("lever") for s in family.settings(ctx, "ECY"))
+
+
+def test_a_slope_of_a_tilt_about_the_carried_axis_keeps_its_mean_over_the_stroke():
+    """Trunnion B/C probed at three spheres, B swept alone: Y pitched about B's direction
+    by eps(y) = 85 urad/m y about its origin. Over the stroke -0.6 .. 0.9 m the tilt's mean
+    P0 = 0.15 c1 is no part of the Legendre slope: the slope alone leaves it (B's line
+    offset by its lever), the order-1 setting with the constant part fits the generator's
+    readings to second order at P1 = 0.75 c1, P0 = 0.15 c1. Without it a yaw of the same
+    carriage with its constant part fitted these readings better than the pitch did."""
+    generator, described = geometry._trunnion_bc({"B": 0, "C": 0})
+    poses = [{"B": math.radians(b), "C": 0.0} for b in np.arange(-110, 31, 10)] * 4
+    slope = 85e-6
+    tilt = {"iso_name": "EBY", "kind": "table_tilt", "axis": "Y",
+            "value_si": [0.0, slope, 0.0], "pivot_m": [0.0, 0.0, 0.0]}
+    positions, errors, targets, groups = _located_readings(generator, described, poses,
+                                                           SPHERES, [tilt])
+    ctx = Context(described, Variables(positions), work_point=targets,
+                  located_readings=True)
+    family = ComponentError("angular", False)
+    setting = {"order": 1, "constant": True, "located": True}
+    assert setting in family.settings(ctx, "EBY")
+    coefficients, rms = _fit(ctx.measured_design(family, "EBY", setting), errors, groups)
+    assert np.abs(errors).max() > 0.3e-6 and rms < 1e-10
+    fitted = dict(zip(family.parameter_names("EBY", setting), coefficients))
+    assert fitted["P1"] == pytest.approx(0.75 * slope, abs=0.05e-6)
+    assert fitted["P0"] == pytest.approx(0.15 * slope, abs=0.05e-6)
+    _, alone = _fit(ctx.measured_design(family, "EBY", {"order": 1, "located": True}),
+                    errors, groups)
+    assert alone > 20 * rms and alone > 0.05e-6
 
 
 def test_no_reading_at_the_set_up_pose_offers_no_located_tilt():
