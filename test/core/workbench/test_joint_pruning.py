@@ -18,34 +18,16 @@ as in a whole proof's set:
 """
 from __future__ import annotations
 
-import json
-
-import numpy as np
-
-from bench.convention_proof import linear_strokes, run_check, score
-from studies import convention_surveys as cs
 
 
-def _trial(folder, seed: int, index: int) -> dict:
-    """Write trial ``index`` of ``seed``'s draw into ``folder``; its truth with the strokes."""
-    stream = np.random.SeedSequence(seed).spawn(index + 1)[index]
-    rng = np.random.default_rng(stream)
-    cs.write_trial(cs.draw_trial(rng, f"trial_{index:03d}"), folder, rng)
-    truth = json.loads((folder / "truth.json").read_text())
-    truth["strokes_m"] = linear_strokes(folder / "machine.yaml")
-    return truth
-
-
-def _checked(folder) -> dict:
-    result, printed, _ = run_check(folder)
-    assert result is not None, printed
-    return result
+from bench.convention_proof import score
+from convention_trials import checked, write_trial
 
 
 def test_a_first_guess_the_later_tilts_leave_at_zero_is_dropped_and_said(tmp_path):
-    truth = _trial(tmp_path, 37, 9)
+    truth = write_trial(tmp_path, 37, 9)
     assert sorted(e["iso_name"] for e in truth["effects"]) == ["EAX", "ECX"]
-    result = _checked(tmp_path)
+    result = checked(tmp_path)
     names = [n["name"] for n in result["named"]]
     assert sorted(names) == ["angular:EAX", "angular:ECX"], names
     said = [d for d in result["dropped"] if d["name"] == "straightness:EYX"]
@@ -56,10 +38,10 @@ def test_a_first_guess_the_later_tilts_leave_at_zero_is_dropped_and_said(tmp_pat
 
 
 def test_a_roll_left_inside_its_uncertainty_by_the_yaw_and_its_pivot_is_dropped(tmp_path):
-    truth = _trial(tmp_path, 41, 1)
+    truth = write_trial(tmp_path, 41, 1)
     (yaw,) = truth["effects"]
     assert yaw["iso_name"] == "ECX"
-    result = _checked(tmp_path)
+    result = checked(tmp_path)
     names = [n["name"] for n in result["named"]]
     assert "angular:EAX" not in names and "angular:ECX" in names, names
     # Taken first and dropped, or never taken (the yaw with its pivot's slope leads).
@@ -71,10 +53,10 @@ def test_a_roll_left_inside_its_uncertainty_by_the_yaw_and_its_pivot_is_dropped(
 
 
 def test_a_squareness_says_the_pitch_of_a_carriage_that_barely_moved(tmp_path):
-    truth = _trial(tmp_path, 41, 13)
+    truth = write_trial(tmp_path, 41, 13)
     (pitch,) = truth["effects"]
     assert pitch["iso_name"] == "EBZ" and pitch["value_si"][0] == 0.0
-    result = _checked(tmp_path)
+    result = checked(tmp_path)
     (named,) = result["named"]
     assert named["name"] == "squareness:EB0Z", named["name"]
     tilt = [a for a in named["inseparable"] if a["name"] == "angular:EBZ"]
@@ -94,9 +76,9 @@ def test_a_squareness_the_poses_part_from_every_tilt_says_none(tmp_path):
     """The statement is judged, not granted: on an HMC surveyed over its travel (seed 43's
     trial 11: the squarenesses EC0Y and EB0Z) each named squareness says no tilt of its
     plane, since a carriage's tilt would move the tool along its arms as no slope does."""
-    truth = _trial(tmp_path, 43, 11)
+    truth = write_trial(tmp_path, 43, 11)
     assert sorted(e["iso_name"] for e in truth["effects"]) == ["EB0Z", "EC0Y"]
-    result = _checked(tmp_path)
+    result = checked(tmp_path)
     squares = [n for n in result["named"] if n["name"].startswith("squareness:")]
     assert len(squares) == 2, [n["name"] for n in result["named"]]
     for square in squares:

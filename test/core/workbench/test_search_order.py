@@ -11,33 +11,21 @@ move there turning with the head, ISO 10791-6), the squareness leads by itself.
 """
 from __future__ import annotations
 
-import json
 from types import SimpleNamespace
 
 import numpy as np
 
-from bench.convention_proof import linear_strokes, run_check, score
+from bench.convention_proof import run_check, score
 from mt_accuracy_ros.core.workbench.selection import Selector
 from mt_accuracy_ros.core.workbench.selection.selector import Scored
-from studies import convention_surveys as cs
-
-
-def _trial(folder, seed: int, index: int) -> dict:
-    """Write trial ``index`` of ``seed``'s draw (the same as in a whole proof's set: one
-    independent stream per trial) into ``folder``; its truth, with the strokes."""
-    stream = np.random.SeedSequence(seed).spawn(index + 1)[index]
-    rng = np.random.default_rng(stream)
-    cs.write_trial(cs.draw_trial(rng, f"trial_{index:03d}"), folder, rng)
-    truth = json.loads((folder / "truth.json").read_text())
-    truth["strokes_m"] = linear_strokes(folder / "machine.yaml")
-    return truth
+from convention_trials import write_trial
 
 
 def test_a_squareness_under_a_head_is_named_not_the_b_axis_harmonics(tmp_path):
     """Begun from the squareness (simpler than the harmonics, and passing on its own), the
     search names it with its value, and predicts the held-out readings as well with fewer
     parameters: that selection is kept."""
-    truth = _trial(tmp_path, 2026, 52)
+    truth = write_trial(tmp_path, 2026, 52)
     assert [e["iso_name"] for e in truth["effects"] if e["identifiable"]] == ["EB0Z"]
     result, printed, _ = run_check(tmp_path)
     assert result is not None, printed

@@ -16,35 +16,17 @@ as in a whole proof's set:
 """
 from __future__ import annotations
 
-import json
-
-import numpy as np
-
-from bench.convention_proof import linear_strokes, run_check, score
-from studies import convention_surveys as cs
 
 
-def _trial(folder, seed: int, index: int) -> dict:
-    """Write trial ``index`` of ``seed``'s draw into ``folder``; its truth with the strokes."""
-    stream = np.random.SeedSequence(seed).spawn(index + 1)[index]
-    rng = np.random.default_rng(stream)
-    cs.write_trial(cs.draw_trial(rng, f"trial_{index:03d}"), folder, rng)
-    truth = json.loads((folder / "truth.json").read_text())
-    truth["strokes_m"] = linear_strokes(folder / "machine.yaml")
-    return truth
-
-
-def _checked(folder) -> dict:
-    result, printed, _ = run_check(folder)
-    assert result is not None, printed
-    return result
+from bench.convention_proof import score
+from convention_trials import checked, write_trial
 
 
 def test_a_squareness_says_the_line_tilt_it_carries_with_the_other_form(tmp_path):
-    truth = _trial(tmp_path, 41, 15)
+    truth = write_trial(tmp_path, 41, 15)
     values = {e["iso_name"]: e["value_si"] for e in truth["effects"]}
     assert sorted(values) == ["EC0A", "EC0Y"]
-    result = _checked(tmp_path)
+    result = checked(tmp_path)
     (named,) = result["named"]
     assert named["name"] == "squareness:EYX", named["name"]
     angle = named["parameters"]["angle_rad"]
@@ -63,9 +45,9 @@ def test_a_squareness_says_the_line_tilt_it_carries_with_the_other_form(tmp_path
 
 
 def test_a_squareness_without_rotary_axes_says_no_line_with_another_form(tmp_path):
-    truth = _trial(tmp_path, 43, 11)
+    truth = write_trial(tmp_path, 43, 11)
     assert sorted(e["iso_name"] for e in truth["effects"]) == ["EB0Z", "EC0Y"]
-    result = _checked(tmp_path)
+    result = checked(tmp_path)
     squares = [n for n in result["named"] if n["name"].startswith("squareness:")]
     assert squares, [n["name"] for n in result["named"]]
     for square in squares:
