@@ -892,7 +892,8 @@ class ComponentError(EffectFamily):
             if setting.get("lever"):
                 tilt = np.concatenate([tilt, located_lever(ctx, variant)], axis=2)
             if setting.get("lever_slope"):
-                slope = _legendre_columns(ctx.normalised_position(variant[2]), 1, 1)[:, 0]
+                # L1(u) = u: the command normalised over the stroke.
+                slope = ctx.normalised_position(variant[2])
                 tilt = np.concatenate([tilt, located_lever_slope(ctx, variant, slope)], axis=2)
             return tilt
         return along(*self._plain_separable(ctx, variant, setting))

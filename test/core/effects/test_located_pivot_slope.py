@@ -117,3 +117,17 @@ def test_the_slope_on_a_cnc_batch_is_the_move_as_the_machine_makes_it():
     np.testing.assert_allclose(columns[:, 0, 0], -slope, atol=0)
     np.testing.assert_allclose(columns[:, 2, 1], -slope, atol=0)
     assert not np.any(columns[:, 1, :])
+
+
+def test_a_pivot_beyond_the_machines_reach_is_refused_in_words():
+    """The pivot a fit implies, |lever slope| / |P1|, beyond the machine's strokes, tool and
+    half a metre is refused with its distance (a yaw's 40 um lever slope over a 5.5 urad
+    slope: a pivot 7.3 m away); the same slope at a pivot of 0.2 m stands."""
+    ctx, _, _ = _ctx([], {"A": 0, "C": 0})
+    family = ComponentError("angular", False)
+    names = family.parameter_names("EBY", SLOPED)
+    far = dict(zip(names, [5.5e-6, 50e-6, 0.0, 0.0, 0.0, 40e-6]))
+    near = dict(far, lever_slope_z=0.2 * 5.5e-6)
+    (problem,) = family.fit_problems(ctx, "EBY", SLOPED, [far[n] for n in names])
+    assert "7.27 m" in problem and "beyond the machine's reach" in problem
+    assert family.fit_problems(ctx, "EBY", SLOPED, [near[n] for n in names]) == []
