@@ -127,6 +127,34 @@ def moves_within_a_target(ctx: Context, axis: str) -> bool:
     return any(np.ptp(positions[groups == g]) > 0 for g in np.unique(groups))
 
 
+def seen_through_located_turn(ctx: Context, axis: str) -> bool:
+    """Whether an error of ``axis`` shows where the axis stood still while each target was
+    read: each target was located at the set-up and the work turned while it was read, so
+    the error's move where a target stood, constant over its readings, turns away from the
+    located value with the work, (I - R_W(q) R_W(q_s)^T) e (ISO 10791-6); it is told from a
+    line offset of the turning axis (the same circle for one constant e) only when the axis
+    stood elsewhere for another target.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings (``target_groups``: None for one).
+    axis : str
+        A linear axis' letter.
+
+    Returns
+    -------
+    bool
+        True when the readings are located, a work-side rotary axis turned within some
+        target's readings and ``axis`` stood at more than one position over the readings.
+    """
+    machine = ctx.machine
+    if setup_rows(ctx) is None or not np.ptp(ctx.variables.positions[axis]) > 0:
+        return False
+    return any(machine.axes[a].is_rotary and moves_within_a_target(ctx, a)
+               for a in machine.workpiece_branch)
+
+
 def carries_rotary(machine, axis: str) -> bool:
     """Whether ``axis`` carries a rotary axis on its branch of the chain.
 
@@ -1294,10 +1322,14 @@ class Squareness(EffectFamily):
         list of str
             Variant names.
         """
-        moving = [axis for axis in ctx.linear_axes(moving=True) if moves_within_a_target(ctx, axis)]
         axes = ctx.linear_axes()
+        moving = [axis for axis in ctx.linear_axes(moving=True)
+                  if moves_within_a_target(ctx, axis) or
+                  (self._seen_located(ctx, axis) and seen_through_located_turn(ctx, axis))]
         # The error grows with the last letter's axis: it must have moved while one target
-        # was read (each target reads from its own zero, which takes a move between them).
+        # was read (each target reads from its own zero, which takes a move between them),
+        # or the work turned under a located target while the axis stood still (its move
+        # there then turns away from the located value).
         first = [name for name in ("EC0Y", "EB0Z", "EA0Z") if name[-1] in moving and
                  {"C": "X", "B": "X", "A": "Y"}[name[1]] in axes]
         # The other reference: the slope along the earlier axis; both must have moved.
@@ -1368,16 +1400,20 @@ class Squareness(EffectFamily):
             head_setup_row(ctx) is not None
 
     @staticmethod
+    def _seen_located(ctx: Context, slide: str) -> bool:
+        """Whether a squareness of ``slide`` reads as a located target reads it
+        (:meth:`_located`): not where the slide carries a head that turns."""
+        head = any(ctx.machine.axes[a].is_rotary for a in ctx.machine.tool_branch)
+        return not (head and slide in ctx.machine.tool_branch)
+
+    @staticmethod
     def _located(ctx: Context, variant: str) -> bool:
         """Whether a target located at the set-up took in this squareness' move there, turning
         with the work-side rotary axes: not where the tilted slide is on a head that turns
         (there the tool was located in its own frame first, and its part turns with the head)."""
         if not located_tilt_seen(ctx) or setup_rows(ctx) is None:
             return False
-        machine = ctx.machine
-        slide = variant[3] if len(variant) == 4 else variant[2]
-        head = any(machine.axes[a].is_rotary for a in machine.tool_branch)
-        return not (head and slide in machine.tool_branch)
+        return Squareness._seen_located(ctx, Squareness._slide(variant))
 
     def orientation_design(self, ctx, variant, setting):
         """The turn of the later axis' frame; None for the other-reference (translational) form.

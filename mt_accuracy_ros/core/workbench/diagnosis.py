@@ -773,6 +773,11 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
                              "nothing to carry (every number of it within its uncertainty "
                              "in their joint fit, U, k = 2)"}
                 for gone, kept in selector.dropped_jointly]
+    dropped += [{"name": gone.term.name, "by": refused,
+                 "sentence": f"dropped {gone.term.name}: it was named beside {refused}, which "
+                             "physics refuses in their joint fit, and does not pass the "
+                             "acceptance rule without it"}
+                for gone, refused in selector.dropped_with_refused]
     return Diagnosis(in_sample, first.base_cv_rmse if first else in_sample,
                      float(np.max(np.abs(position_residual[position_mask]), initial=0.0)),
                      float(np.mean(np.abs(position_residual[position_mask]) > obs.uncertainty_m))

@@ -60,6 +60,9 @@ from .significance import (Evidence, PassRule, block_gains, coefficient_p_value,
                            gain_p_value, max_t_adjusted)
 
 
+#: How often the search goes on after physics refused a named term in the joint fit.
+_RESUMED_SEARCHES = 2
+
 #: The coverage factor of an expanded uncertainty (GUM, ISO 14253-1: k = 2), by which a
 #: coefficient is told from zero when the selection is pruned.
 COVERAGE = 2.0
@@ -90,6 +93,9 @@ class Scored:
     #: Its full-data coefficients' p-value, adjusted for every candidate setting tried
     #: (set for the step's first candidate only; 1 otherwise).
     coefficient_p: float = 1.0
+    #: The second term of the pair it was named in (:meth:`Selector.pair_lookahead`): it
+    #: passed only beside that one ("" when it passed on its own).
+    paired_with: str = ""
 
     def evidence(self, on_coefficients: bool = False) -> Evidence:
         """What :class:`.significance.PassRule` reads of this candidate.
@@ -223,6 +229,9 @@ class Selector(ReadingDesigns):
         #: Terms taken out because the others together leave them nothing to carry:
         #: (dropped, the names of the terms kept) (:meth:`carrying_nothing`).
         self.dropped_jointly: list[tuple[Scored, list[str]]] = []
+        #: Terms named beside one physics refused in the joint fit, taken out when they do
+        #: not pass without it: (dropped, the refused term's name) (:meth:`_without_refused`).
+        self.dropped_with_refused: list[tuple[Scored, str]] = []
 
     def physics_refusal(self, term: Term, setting: dict, coefficients: NDArray[np.float64],
                         own_square_sum: float | None = None) -> str:
@@ -1011,6 +1020,7 @@ class Selector(ReadingDesigns):
                 first.parameter_names = first.term.family.parameter_names(first.term.variant,
                                                                           setting)
                 first.significant = True
+                first.paired_with = second.term.name
                 options.append((mse, first, second))
         if not options:
             return None
@@ -1115,7 +1125,15 @@ class Selector(ReadingDesigns):
         self.simpler_start = None
         steps = self._simpler_start(terms, max_terms, beam,
                                     self._forward(terms, max_terms, beam, []))
-        self._refit_jointly(steps)
+        refused = self._refit_jointly(steps)
+        for _ in range(_RESUMED_SEARCHES):
+            if not refused or len(self.selected) >= max_terms:
+                break
+            # What physics refused in the joint fit left the readings it stood for
+            # unexplained: the search goes on from what remains, without it.
+            unrefused = [t for t in terms if t.name not in refused]
+            steps = self._forward(unrefused, max_terms, beam, steps)
+            refused |= self._refit_jointly(steps)
         return steps
 
     def _forward(self, terms: list[Term], max_terms: int, beam: int, steps: list[Step]
@@ -1253,9 +1271,10 @@ class Selector(ReadingDesigns):
         steps, self.selected, (self.dropped, self.dropped_jointly) = best[0], best[1], best[2]
         return steps
 
-    def _refit_jointly(self, steps: list[Step]) -> None:
+    def _refit_jointly(self, steps: list[Step]) -> set[str]:
         """Every added term refit jointly; one physics then refuses is taken out again,
-        with the reason (:meth:`run`)."""
+        with the reason (:meth:`run`); the names of those taken out."""
+        refused_names: set[str] = set()
         while True:
             added = [s.added for s in steps if s.added is not None]
             if not added:
@@ -1273,9 +1292,32 @@ class Selector(ReadingDesigns):
                 scored.term, scored.setting, scored.coefficients)
             scored.significant = False
             self.selected = [(t, st) for t, st in self.selected if t.name != scored.term.name]
-            for step in steps:
-                if step.added is scored:
-                    step.added = None
+            at = next(k for k, step in enumerate(steps) if step.added is scored)
+            steps[at].added = None
+            refused_names.add(scored.term.name)
+            self._without_refused(steps, at, scored.term.name)
+        return refused_names
+
+    def _without_refused(self, steps: list[Step], at: int, refused: str) -> None:
+        """The terms named beside a term physics refused in the joint fit, taken out when
+        they do not pass the acceptance rule against the terms that remain: each named
+        after it (it was in the model they were judged against) and a pair's first term
+        named only with it (:meth:`pair_lookahead`)."""
+        for k, step in enumerate(steps):
+            first = step.added
+            if first is None or (k < at and first.paired_with != refused):
+                continue
+            others = [s for s in self.selected if s[0].name != first.term.name]
+            kept = self.selected
+            self.selected = others
+            try:
+                retest = self.step([first.term])
+            finally:
+                self.selected = kept
+            if retest.added is None:
+                self.selected = others
+                step.added = None
+                self.dropped_with_refused.append((first, refused))
 
     def remaining_residual(self) -> NDArray[np.float64]:
         """(N, K) residual after the offsets and the selected terms (in-sample)."""
