@@ -46,6 +46,12 @@ Scoring, per trial (every identifiable effect of the truth):
   carriage carries together carry it, within 30 % or 3 U, and the other body's lines stay
   at zero; where the carriage carries no rotary axis, when the other body's lines
   together carry it with the sign turned;
+* a carriage's constant turn about a direction turns the rotary lines it carries about
+  it too (ISO 230-7), and no pose parts it from their own tilts: a line's tilt truth is
+  judged against its sum with the mean turns of the carriages that carry it, unless a
+  named tilt of that carriage holds its constant part (P0); a named tilt's P0 that holds
+  that sum accounts for the line's tilt (the output says P0 is the outer axis' zero, which
+  turns the lines it carries);
 * a ``setup_location`` (the machine's error where the work or tool was located, turning
   with it) is right beside a truth that has such an error there: a linear-axis error
   (tilt, squareness) on that side - on the tool side only when the head carries rotary
@@ -219,6 +225,63 @@ def mean_tilt(effect: dict, strokes: dict) -> float:
     a, b = strokes[effect["axis"]]
     c0, c1, c2 = effect["value_si"]
     return c0 + c1 * (a + b) / 2.0 + c2 * (a * a + a * b + b * b) / 3.0
+
+
+def carriage_turns(truth: dict, named: list[dict], strokes: dict) -> dict[str, float]:
+    """What each truth line tilt E{d}0{R} stands for beside the tilts of the carriages that
+    carry R: a carriage's constant turn about d turns R's line about d with it (ISO 230-7),
+    which no pose parts from the line's own tilt - the line then carries the sum, unless a
+    named tilt of that carriage carries its constant part (P0). {line tilt: the carriages'
+    mean turns to add} [rad]."""
+    chain = truth.get("chain", "")
+    if not chain or not strokes:
+        return {}
+    letters = chain.strip("[]").split()
+    bed = letters.index("b")
+    sides = (letters[1:bed][::-1], letters[bed + 1:-1])
+    claimed = {n["variant"] for n in named if n["effect"].startswith("angular") and
+               "P0" in n.get("parameters", {})}
+    out: dict[str, float] = {}
+    for line in truth["effects"]:
+        if line["kind"] != "location_tilt":
+            continue
+        for tilt in truth["effects"]:
+            if tilt["kind"] != "table_tilt" or tilt["iso_name"][1] != line["iso_name"][1] or \
+                    tilt["iso_name"] in claimed:
+                continue
+            side = next((s for s in sides if tilt["axis"] in s and line["axis"] in s), None)
+            if side and side.index(line["axis"]) > side.index(tilt["axis"]):
+                out[line["iso_name"]] = out.get(line["iso_name"], 0.0) + \
+                    mean_tilt(tilt, strokes)
+    return out
+
+
+def line_in_carriage_turn(effect: dict, named: dict, truth: dict, strokes: dict) -> str:
+    """A truth line tilt E{d}0{R} held by the constant part P0 of a named tilt about d of a
+    carriage that carries R: the carriage's turn turns R's line with it, so P0 is the sum of
+    the line's tilt and the carriage's own mean turn (the output says P0 is the outer
+    axis' zero, which turns the lines it carries). Right within 30 % or 3 U of that sum;
+    "" when it is not."""
+    chain = truth.get("chain", "")
+    if effect["kind"] != "location_tilt" or not named["effect"].startswith("angular") or \
+            "P0" not in named.get("parameters", {}) or not chain or not strokes:
+        return ""
+    variant = named["variant"]
+    if variant[1] != effect["iso_name"][1]:
+        return ""
+    letters = chain.strip("[]").split()
+    bed = letters.index("b")
+    side = next((s for s in (letters[1:bed][::-1], letters[bed + 1:-1])
+                 if variant[2] in s and effect["axis"] in s), None)
+    if side is None or side.index(effect["axis"]) < side.index(variant[2]):
+        return ""
+    turn = sum(mean_tilt(t, strokes) for t in truth["effects"]
+               if t["kind"] == "table_tilt" and t["iso_name"] == variant)
+    expected = effect["value_si"] + turn
+    value = named["parameters"]["P0"]
+    spread = 3.0 * named.get("parameter_uncertainties", {}).get("P0", 0.0)
+    right = value * expected > 0 and abs(value - expected) <= max(0.3 * abs(expected), spread)
+    return "line tilt in its carriage's constant turn" if right else ""
 
 
 def turned_line(effect: dict, named: dict, chain: str, strokes: dict) -> str:
@@ -405,11 +468,17 @@ def score(truth: dict, result: dict | None) -> dict:
     used, problems = set(), []
 
     strokes = truth.get("strokes_m", {})
+    # A line tilt carries its carriage's constant turn about the same direction too.
+    turns = carriage_turns(truth, named, strokes)
+    truths.update({iso: truths[iso] + extra for iso, extra in turns.items()})
+    wanted = [dict(e, value_si=truths[e["iso_name"]]) if e["iso_name"] in turns else e
+              for e in wanted]
     still = {"at": truth.get("still_m", {}),
              "signs": truth.get("conventions", {}).get("signs", {})}
 
     def accounts(effect, entry):
-        why = matches(effect, entry, truth.get("chain", ""), truths, strokes, still)
+        why = matches(effect, entry, truth.get("chain", ""), truths, strokes, still) or \
+            line_in_carriage_turn(effect, entry, truth, strokes)
         if why and why != "wrong value":
             return why
         # What the output says the readings cannot part from it, scored as if named.

@@ -165,3 +165,54 @@ def test_a_tilts_constant_part_is_on_the_lines_its_carriage_carries_once():
     assert not right(-22e-6, 22e-6)         # split
     assert not right(-44e-6, 44e-6)         # twice
     assert not right(-10e-6, 0.0)           # too small
+
+
+def _trunnion(*effects):
+    """A trunnion B/C ([w C B X Y b Z t]: X carries B, which carries C)."""
+    return {"chain": "[w C B X Y b Z t]", "conventions": {"tool_located": False},
+            "effects": list(effects), "strokes_m": {"X": (-0.2, 0.2), "Y": (-0.2, 0.2),
+                                                    "Z": (0.2, 0.5)}}
+
+
+def _pitch(constant):
+    # The X table's pitch about y: c0 + 2.2e-4 rad/m x X over [-0.2, 0.2] m (mean c0).
+    return {"iso_name": "EBX", "kind": "table_tilt", "axis": "X", "side": "work",
+            "value_si": [constant, -2.2e-4, 0.0], "constant_part_si": constant,
+            "pivot_m": [0.29, 0.12, 0.39], "identifiable": True}
+
+
+def _c_tilt(value):
+    return {"iso_name": "EB0C", "kind": "location_tilt", "axis": "C", "side": "work",
+            "value_si": value, "identifiable": True}
+
+
+def test_a_carried_lines_tilt_holds_its_carriages_constant_turn_unless_a_tilt_holds_it():
+    # X's constant turn about y (26 urad) turns C's line about y with it: with the pitch
+    # named without a constant part, C's line carries 39 + 26 urad, not 39 alone.
+    truth = _trunnion(_pitch(26e-6), _c_tilt(39e-6))
+    pitch = _named("angular:EBX", {"P1": -44e-6})
+    for value, right in ((65e-6, True), (39e-6, False), (-65e-6, False)):
+        line = _named("rotary_location:C", {"EX0C": 0.0, "EY0C": 0.0, "EA0C": 0.0,
+                                            "EB0C": value})
+        assert score(truth, {"named": [line, pitch]})["right"] is right, value
+    # Where the named pitch holds its constant part, the line holds its own tilt alone.
+    held = _named("angular:EBX", {"P1": -44e-6, "P0": 26e-6})
+    line = _named("rotary_location:C", {"EX0C": 0.0, "EY0C": 0.0, "EA0C": 0.0,
+                                        "EB0C": 39e-6})
+    assert score(truth, {"named": [line, held]})["right"]
+
+
+def test_a_carried_lines_tilt_is_right_in_its_carriages_constant_turn_with_the_sum():
+    # The C line tilted -32 urad about y, X turned 56 urad about y: one named pitch whose
+    # P0 holds both (24 urad) accounts for the line's tilt; another P0 does not.
+    truth = _trunnion(_pitch(56e-6), _c_tilt(-32e-6))
+    for value, right in ((24e-6, True), (56e-6, False), (-24e-6, False)):
+        pitch = _named("angular:EBX", {"P1": -44e-6, "P0": value})
+        assert score(truth, {"named": [pitch]})["right"] is right, value
+    # A tilt of the carriage about another direction holds none of it.
+    roll = {"iso_name": "EAX", "kind": "table_tilt", "axis": "X", "side": "work",
+            "value_si": [24e-6, 0.0, 0.0], "constant_part_si": 24e-6, "pivot_m": None,
+            "identifiable": True}
+    verdict = score(_trunnion(roll, _c_tilt(-32e-6)),
+                    {"named": [_named("angular:EAX", {"P0": 24e-6})]})
+    assert not verdict["right"] and "EB0C not named" in verdict["why"]
