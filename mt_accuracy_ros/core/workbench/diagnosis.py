@@ -778,6 +778,11 @@ def diagnose(model: ErrorModel, obs: Observations, *, min_reduction: float = 0.0
                              "physics refuses in their joint fit, and does not pass the "
                              "acceptance rule without it"}
                 for gone, refused in selector.dropped_with_refused]
+    dropped += [{"name": gone.term.name, "by": earlier,
+                 "sentence": f"dropped {gone.term.name}: named after {earlier}, it made "
+                             f"physics refuse their joint fit ({earlier}: {reason}); "
+                             f"{earlier} without it is accepted"}
+                for gone, earlier, reason in selector.dropped_for_refusal]
     return Diagnosis(in_sample, first.base_cv_rmse if first else in_sample,
                      float(np.max(np.abs(position_residual[position_mask]), initial=0.0)),
                      float(np.mean(np.abs(position_residual[position_mask]) > obs.uncertainty_m))

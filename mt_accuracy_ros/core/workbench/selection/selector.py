@@ -232,6 +232,10 @@ class Selector(ReadingDesigns):
         #: Terms named beside one physics refused in the joint fit, taken out when they do
         #: not pass without it: (dropped, the refused term's name) (:meth:`_without_refused`).
         self.dropped_with_refused: list[tuple[Scored, str]] = []
+        #: Terms named after one they made physics refuse in the joint fit, taken out so
+        #: that it stands: (dropped, the earlier term's name, why physics refused it) -
+        #: (:meth:`_later_break`).
+        self.dropped_for_refusal: list[tuple[Scored, str, str]] = []
 
     def physics_refusal(self, term: Term, setting: dict, coefficients: NDArray[np.float64],
                         own_square_sum: float | None = None) -> str:
@@ -1288,15 +1292,40 @@ class Selector(ReadingDesigns):
             if refused is None:
                 break
             scored = added[refused]
-            scored.refusal = "in the joint fit: " + self.physics_refusal(
-                scored.term, scored.setting, scored.coefficients)
+            reason = self.physics_refusal(scored.term, scored.setting, scored.coefficients)
+            at = next(k for k, step in enumerate(steps) if step.added is scored)
+            if self._later_break(steps, at, reason):
+                refused_names.update(gone.term.name for gone, _, _ in self.dropped_for_refusal)
+                continue
+            scored.refusal = "in the joint fit: " + reason
             scored.significant = False
             self.selected = [(t, st) for t, st in self.selected if t.name != scored.term.name]
-            at = next(k for k, step in enumerate(steps) if step.added is scored)
             steps[at].added = None
             refused_names.add(scored.term.name)
             self._without_refused(steps, at, scored.term.name)
         return refused_names
+
+    def _later_break(self, steps: list[Step], at: int, reason: str) -> bool:
+        """The terms named after the one at ``steps[at]`` taken out, when it was accepted
+        at its own step and physics accepts it again without them: they broke its fit
+        (a straightness of the same period cancelling part of a tilt's arm, say), and the
+        earlier, stronger term keeps its place. False (nothing taken out) when none came
+        after it or it is refused without them too."""
+        later = [step for step in steps[at + 1:] if step.added is not None]
+        if not later:
+            return False
+        names = {step.added.term.name for step in later}
+        kept = [s for s in self.selected if s[0].name not in names]
+        coefficients, _, _ = self.fit_full(kept)
+        term = steps[at].added
+        position = [t.name for t, _ in kept].index(term.term.name)
+        if self.physics_refusal(term.term, term.setting, coefficients[position]):
+            return False
+        for step in later:
+            self.dropped_for_refusal.append((step.added, term.term.name, reason))
+            step.added = None
+        self.selected = kept
+        return True
 
     def _without_refused(self, steps: list[Step], at: int, refused: str) -> None:
         """The terms named beside a term physics refused in the joint fit, taken out when
