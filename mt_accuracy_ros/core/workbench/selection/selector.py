@@ -35,7 +35,11 @@ catalogue's candidate terms, each step
    selected term jointly, re-tests every earlier term against the ones before it
    and the newest (one the newest explains is dropped: :meth:`Selector.no_longer_needed`),
    and looks again; otherwise stops, and takes out a term the others together leave
-   with every number inside its expanded uncertainty (:meth:`Selector.carrying_nothing`).
+   with every number inside its expanded uncertainty (:meth:`Selector.carrying_nothing`);
+4. refits every named term jointly: one physics refuses there goes - unless the terms
+   named after it broke its fit (it was accepted at its step, and is again without them),
+   which then go instead; a term that passed only beside a refused one goes with it; and
+   the search goes on from what remains, without what went.
 
 The false-alarm rate of this rule on data with nothing missing is measured
 in ``bench/workbench_catalogue.py`` (docs/results.md).
