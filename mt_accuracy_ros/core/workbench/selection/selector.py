@@ -36,10 +36,11 @@ catalogue's candidate terms, each step
    and the newest (one the newest explains is dropped: :meth:`Selector.no_longer_needed`),
    and looks again; otherwise stops, and takes out a term the others together leave
    with every number inside its expanded uncertainty (:meth:`Selector.carrying_nothing`);
-4. refits every named term jointly: one physics refuses there goes - unless the terms
-   named after it broke its fit (it was accepted at its step, and is again without them),
-   which then go instead; a term that passed only beside a refused one goes with it; and
-   the search goes on from what remains, without what went.
+4. refits every named term jointly: one physics refuses there goes - unless a term named
+   after it broke its fit (without that one physics accepts the model, which predicts the
+   held-out readings better than without the refused term), which then goes instead; a
+   term that passed only beside a refused one goes with it; and the search goes on from
+   what remains, without what went.
 
 The false-alarm rate of this rule on data with nothing missing is measured
 in ``bench/workbench_catalogue.py`` (docs/results.md).
@@ -1299,7 +1300,7 @@ class Selector(ReadingDesigns):
             reason = self.physics_refusal(scored.term, scored.setting, scored.coefficients)
             at = next(k for k, step in enumerate(steps) if step.added is scored)
             if self._later_break(steps, at, reason):
-                refused_names.update(gone.term.name for gone, _, _ in self.dropped_for_refusal)
+                refused_names.add(self.dropped_for_refusal[-1][0].term.name)
                 continue
             scored.refusal = "in the joint fit: " + reason
             scored.significant = False
@@ -1310,24 +1311,30 @@ class Selector(ReadingDesigns):
         return refused_names
 
     def _later_break(self, steps: list[Step], at: int, reason: str) -> bool:
-        """The terms named after the one at ``steps[at]`` taken out, when it was accepted
-        at its own step and physics accepts it again without them: they broke its fit
-        (a straightness of the same period cancelling part of a tilt's arm, say), and the
-        earlier, stronger term keeps its place. False (nothing taken out) when none came
-        after it or it is refused without them too."""
-        later = [step for step in steps[at + 1:] if step.added is not None]
-        if not later:
+        """One term named after the one at ``steps[at]`` taken out instead of it, when that
+        leaves a model physics accepts whole and predicts the held-out readings better than
+        the model without the refused term: the later term broke its fit (a straightness of
+        the same period cancelling part of a tilt's arm, say). Of several, the one whose
+        absence costs least. False (nothing taken out) when no later term does so.
+        """
+        without_refused = [s for s in self.selected if s[0].name != steps[at].added.term.name]
+        best_mse, best = self._out_of_fold_mse(without_refused), None
+        for step in steps[at + 1:]:
+            if step.added is None:
+                continue
+            kept = [s for s in self.selected if s[0].name != step.added.term.name]
+            coefficients, _, _ = self.fit_full(kept)
+            if any(self.physics_refusal(term, setting, c)
+                   for (term, setting), c in zip(kept, coefficients)):
+                continue
+            mse = self._out_of_fold_mse(kept)
+            if mse < best_mse:
+                best_mse, best = mse, (step, kept)
+        if best is None:
             return False
-        names = {step.added.term.name for step in later}
-        kept = [s for s in self.selected if s[0].name not in names]
-        coefficients, _, _ = self.fit_full(kept)
-        term = steps[at].added
-        position = [t.name for t, _ in kept].index(term.term.name)
-        if self.physics_refusal(term.term, term.setting, coefficients[position]):
-            return False
-        for step in later:
-            self.dropped_for_refusal.append((step.added, term.term.name, reason))
-            step.added = None
+        step, kept = best
+        self.dropped_for_refusal.append((step.added, steps[at].added.term.name, reason))
+        step.added = None
         self.selected = kept
         return True
 
