@@ -374,12 +374,35 @@ def located_lever_slope(ctx: Context, variant: str, slope: np.ndarray) -> np.nda
     ndarray, shape (N, 3, 2)
         [m per m of the lever slope], bed frame.
     """
-    across = ["xyz".index(c) for c in lever_components(variant)]
-    moved = np.zeros((ctx.n, 3, 2))
-    moved[:, across, [0, 1]] = slope[:, None]
+    moved = lever_slope_move(ctx, variant, slope)
     # A CNC's own commands locate nothing: the move as the machine makes it, from the
     # stroke's middle (where L1 is zero).
-    return -moved if setup_rows(ctx) is None else -located_tilt(ctx, moved)
+    return moved if setup_rows(ctx) is None else located_tilt(ctx, moved)
+
+
+def lever_slope_move(ctx: Context, variant: str, slope: np.ndarray) -> np.ndarray:
+    """(N, 3, 2) the move -P1 L1(u) (e_k x p) per metre of a tilt's lever slope, as the
+    machine makes it: about a pivot p off the carriage's origin, the tilt's slope turns the
+    carriage, and all it carries, about p rather than about the origin (ISO 230-1).
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings.
+    variant : str
+        An angular error of a work-side carriage.
+    slope : ndarray, shape (N,)
+        L1(u) at the readings, the carriage's command normalised over its stroke.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 2)
+        [m per m of the lever slope], bed frame, along the two directions across e_k.
+    """
+    across = ["xyz".index(c) for c in lever_components(variant)]
+    moved = np.zeros((ctx.n, 3, 2))
+    moved[:, across, [0, 1]] = -slope[:, None]     # -L1(u) (e_k x p), component-wise
+    return moved
 
 
 def located_lever(ctx: Context, variant: str) -> np.ndarray:
@@ -705,7 +728,9 @@ class ComponentError(EffectFamily):
         -------
         list of dict
             ``{"period_m": lambda}`` [m] on a resolvable frequency grid, or ``{"order": k}``;
-            a table's tilt also ``{"order": k, "constant": True}`` (P1 .. Pk and P0); the
+            a table's tilt also ``{"order": k, "constant": True}`` (P1 .. Pk and P0) and
+            ``{"order": 1, "constant": True, "lever_slope": True}`` (about a pivot off its
+            origin, :func:`lever_slope_move`); the
             tilt of a work-side carriage that carries rotary axes, under a target located
             at the set-up, also ``{"order": k, "located": True}`` with or without the
             constant (:func:`located_tilt`), k = 1, 2; the tilt of a tool-side carriage that
@@ -771,7 +796,12 @@ class ComponentError(EffectFamily):
         # the tool side a constant turn of a carriage differs from the table's own tilt
         # about the same direction by the pivot alone, which this family does not fit, so
         # it could stand in for it: there the squareness family holds a constant turn.
-        return orders + [{"order": k, "constant": True} for k in range(first, first + _ORDERS)]
+        # About a pivot off the table's origin the tilt's slope also moves the table by
+        # -P1 L1(u) (e_k x p): a positioning and a straightness slope of its own axis,
+        # which a survey made about another pivot reads with the tilt. Order 1 only, with
+        # the constant part: the pivot is the one thing it adds.
+        return orders + [{"order": k, "constant": True} for k in range(first, first + _ORDERS)] \
+            + [{"order": 1, "constant": True, "lever_slope": True}]
 
     def fit_problems(self, ctx: Context, variant: str, setting: dict, coefficients
                      ) -> list[str]:
@@ -924,7 +954,12 @@ class ComponentError(EffectFamily):
                 slope = ctx.normalised_position(variant[2])
                 tilt = np.concatenate([tilt, located_lever_slope(ctx, variant, slope)], axis=2)
             return tilt
-        return along(*self._plain_separable(ctx, variant, setting))
+        plain = along(*self._plain_separable(ctx, variant, setting))
+        if setting.get("lever_slope"):
+            # A table's tilt about a pivot off its origin (no rotary axis carried).
+            slope = lever_slope_move(ctx, variant, ctx.normalised_position(variant[2]))
+            return np.concatenate([plain, slope], axis=2)
+        return plain
 
     def _head_located_design(self, ctx: Context, variant: str, setting: dict):
         """(N, 3, P) the tilt of a carriage carrying the head, the tool located at the head's
@@ -952,6 +987,8 @@ class ComponentError(EffectFamily):
         """
         if setting.get("located") or self._turn_located(ctx, variant):
             return None     # the located set-up error is no product of one sensitivity
+        if setting.get("lever_slope"):
+            return None     # nor is a pivot's move, along two directions of its own
         return self._plain_separable(ctx, variant, setting)
 
     def _turn_located(self, ctx: Context, variant: str) -> bool:
@@ -1250,10 +1287,18 @@ class ComponentError(EffectFamily):
             reach += (f"; about a pivot p off the carriage's origin, whose lever "
                       f"-P0 (e_k x p) ({', '.join(lever_names(variant))}) moves all it "
                       "carries, located alike")
-        if setting.get("lever_slope"):
+        if setting.get("lever_slope") and setting.get("located"):
             reach += (f"; the pivot's move growing with the tilt's slope, -P1 L1(u) (e_k x p) "
                       f"({', '.join(lever_slope_names(variant))}), offsets the lines it "
                       "carries along its travel, located alike")
+        elif setting.get("lever_slope"):
+            # ISO 230-1 books a turn about the origin: the pivot's move is, there, a slope of
+            # the axis' own positioning and straightness - its squareness.
+            reach += (f"; about a pivot p off the carriage's origin, the pivot's move growing "
+                      f"with the tilt's slope, -P1 L1(u) (e_k x p) "
+                      f"({', '.join(lever_slope_names(variant))}), shifts the table along its "
+                      "travel, which ISO 230-1 books at the origin as the carriage's "
+                      "squareness and positioning slope")
         return (f"the {kind} error {variant} of the {axis} axis, smooth along its travel "
                 f"(Legendre order {setting.get('order')}){reach} (ISO 230-1, Kidani eq. 2.6)")
 
@@ -1279,7 +1324,8 @@ class ComponentError(EffectFamily):
             located = ", the tool located at the head's set-up"
             constant = ", with a constant part (the head's lines tilted alike)" if \
                 setting.get("constant") else ""
-        lever = ", about a pivot off its origin" if setting.get("lever") else ""
+        lever = ", about a pivot off its origin" if setting.get("lever") or \
+            setting.get("lever_slope") else ""
         return f"order {setting['order']}{constant}{located}{lever}"
 
 

@@ -41,7 +41,8 @@ from numpy.typing import NDArray
 
 from ..effects import family_named
 from ..effects.geometric import (HEAD, STILL_TURN, carries_head, head_setup_row,
-                                 lever_line_offsets, lever_names, turns_about_carried_rotary)
+                                 lever_components, lever_line_offsets, lever_names,
+                                 lever_slope_names, turns_about_carried_rotary)
 from .distributions import chi2_sf
 from .selection import Selector, Term
 
@@ -176,6 +177,7 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
         empty for terms outside :data:`FAMILIES`.
     """
     blocks = [selector.design_rows(t, s) for t, s in selected]
+    slopes = shared_pivot_slopes(selected, coefficients)
     out: list[list[dict]] = []
     for k, ((term, setting), block) in enumerate(zip(selected, blocks)):
         found: list[dict] = []
@@ -196,6 +198,9 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
                                      terms, limit, {f["name"] for f in found})
         if setting.get("lever"):
             found += _lever_statement(selector, term, setting, coefficients[k])
+        elif setting.get("lever_slope") and not setting.get("located"):
+            found += pivot_slope_statement(selector, (term, setting), block, slopes[k],
+                                           terms, limit)
         found += _carried_zero(selector.ctx.machine, term, setting, coefficients[k])
         found += head_constant(selector, base, block, contribution, (term, setting), terms,
                                limit)
@@ -333,7 +338,10 @@ def plane_tilts(selector: Selector, base: NDArray[np.float64], block: NDArray[np
     for other in terms:
         if other.family.name != "angular" or _plane(other.variant) != plane:
             continue
-        for setting in (s for s in other.settings if s.get("constant")):
+        # A tilt about a pivot off the table's origin holds the squareness' slope among
+        # its own columns: it fits as well by construction, and says nothing.
+        for setting in (s for s in other.settings if s.get("constant") and
+                        not (s.get("lever_slope") and not s.get("located"))):
             columns = selector.design_rows(other, setting)
             if not np.any(columns):
                 continue
@@ -693,6 +701,117 @@ def _lever_statement(selector: Selector, term: Term, setting: dict,
                        f"work's located set-up error ({located}; ISO 10791-6): the three "
                        "move the readings alike on any poses; the tilt's other numbers "
                        "are its own"}]
+
+
+def shared_pivot_slopes(selected: list[tuple[Term, dict]],
+                        coefficients: list[NDArray[np.float64]]) -> list[dict[str, float]]:
+    """Per named effect, the slopes of its pivot's move it is to say, by direction.
+
+    Two tilts of one table about pivots off its origin (its pitch and its yaw) both move
+    it along its own travel's direction: -P1 L1(u) (e_k x p) has a component along the
+    axis for each. The readings hold their sum alone, so the first named tilt says the sum
+    and the later ones say nothing of that direction.
+
+    Parameters
+    ----------
+    selected : list of tuple of (Term, dict)
+        (term, setting) of each named effect, in order.
+    coefficients : list of ndarray, shape (p_k,)
+        Their joint-fit coefficients, SI, in :meth:`parameter_names` order.
+
+    Returns
+    -------
+    list of dict of str to float
+        Per named effect ``{"x": slope [m], ...}``: the directions across its tilt's axis
+        it says, with the slope summed over the named tilts of its carriage; empty for an
+        effect without a plain pivot slope.
+    """
+    out: list[dict[str, float]] = []
+    said: dict[tuple[str, str], int] = {}
+    for k, (term, setting) in enumerate(selected):
+        out.append({})
+        if not setting.get("lever_slope") or setting.get("located"):
+            continue
+        fitted = dict(zip(term.family.parameter_names(term.variant, setting),
+                          map(float, coefficients[k])))
+        for component, name in zip(lever_components(term.variant),
+                                   lever_slope_names(term.variant)):
+            first = said.setdefault((term.variant[2], component), k)
+            out[first][component] = out[first].get(component, 0.0) + fitted[name]
+    return out
+
+
+def pivot_slope_statement(selector: Selector, named: tuple[Term, dict],
+                          block: NDArray[np.float64], slopes: dict[str, float],
+                          terms: list[Term], limit: float) -> list[dict]:
+    """A table's tilt about a pivot off its origin: each direction of the pivot's move
+    said as the squareness or positioning slope that ISO 230-1 books it as.
+
+    About a pivot p the tilt's slope moves the table by -P1 L1(u) (e_k x p) (:func:`
+    lever_slope_move`): along the table's own travel a positioning slope, across it a
+    straightness slope - its plane's squareness, referred to the origin. Each direction
+    whose share exceeds ``limit`` is said as the one candidate whose column alone, beside
+    the offsets, reproduces it within ``limit``, with that candidate's value.
+
+    Parameters
+    ----------
+    selector : Selector
+        The selection (its rows, offsets and noise).
+    named : tuple of (Term, dict)
+        The named tilt and its setting (a plain ``lever_slope`` one).
+    block : ndarray, shape (R, p)
+        The named tilt's columns at the rows [m per unit].
+    slopes : dict of str to float
+        The pivot's slopes to say, by direction [m] (:func:`shared_pivot_slopes`).
+    terms : list of Term
+        The candidates the selection considered.
+    limit : float
+        The bound on the fits' sums of squares [m^2].
+
+    Returns
+    -------
+    list of dict
+        ``{"name", "parameters" (SI), "reason"}`` per direction said.
+    """
+    term, setting = named
+    names = term.family.parameter_names(term.variant, setting)
+    axis = term.variant[2]
+    found = []
+    for component, value in slopes.items():
+        column = block[:, names.index(f"lever_slope_{component}")]
+        share = column * value
+        if float(share @ share) <= limit:
+            continue
+        for other, other_setting in _slope_candidates(terms, axis, component):
+            columns = selector.design_rows(other, other_setting)
+            if not np.any(columns):
+                continue
+            solution, misfit = _refit(np.column_stack([selector.offsets, columns]), share)
+            if misfit <= limit:
+                own = other.family.parameter_names(other.variant, other_setting)
+                found.append({
+                    "name": other.name,
+                    "parameters": dict(zip(own, map(float, solution[-columns.shape[1]:]))),
+                    "reason": f"the tilt's pivot slope lever_slope_{component} "
+                              f"{value * 1e6:.3g} µm (-P1 L1(u) (e_k x p): its pivot off "
+                              f"the {axis} table's origin) moves the table along "
+                              f"{component} as this does; ISO 230-1 books it so at the "
+                              "origin"})
+                break
+    return found
+
+
+def _slope_candidates(terms: list[Term], axis: str, component: str):
+    """(term, setting) that move a table linearly along ``component`` with its own travel:
+    its positioning slope (order 1) along its own direction, else the squarenesses of the
+    plane it spans with ``component``."""
+    for other in terms:
+        if component == axis.lower() and other.family.name == "positioning" and \
+                other.variant == f"E{axis}{axis}":
+            yield other, {"order": 1}
+        elif component != axis.lower() and other.family.name == "squareness" and \
+                _plane(other.variant) == frozenset({axis, component.upper()}):
+            yield other, other.settings[0]
 
 
 def _carried_zero(machine, term: Term, setting: dict, coefficients: NDArray[np.float64]
