@@ -16,6 +16,25 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
 
+def _blas_kernel() -> str | None:
+    """The OpenBLAS kernel the seeded figures and the CLI's goldens were computed with:
+    OpenBLAS picks its kernels by the CPU (an Intel with AVX-512 takes SkylakeX's, an AMD
+    EPYC Zen's), and their sums round differently in the last bit, which a selection's
+    near-tie or a printed digit can turn into another answer. Haswell's (AVX2 and FMA) run
+    on every x86-64 CPU that has those; None elsewhere (another architecture, an older
+    CPU), where the CPU's own are used and the report header says so."""
+    try:
+        flags = next((line for line in Path("/proc/cpuinfo").read_text().splitlines()
+                      if line.startswith("flags")), "").split()
+    except OSError:
+        return None
+    return "Haswell" if {"avx2", "fma"} <= set(flags) else None
+
+
+if _blas_kernel() is not None:
+    os.environ.setdefault("OPENBLAS_CORETYPE", _blas_kernel())
+
+
 
 def _domain_of_this_run() -> int:
     """A ROS domain of this test process's own: parallel workers of one run (pytest-xdist
@@ -92,4 +111,6 @@ def pytest_report_header(config):
     """Say the test processes' BLAS threads, and whether numpy loaded before they were
     set (then the setting came too late for this process)."""
     late = " (numpy was loaded before: not applied here)" if BLAS_IMPORTED_BEFORE else ""
-    return f"BLAS threads per test process: {os.environ['OPENBLAS_NUM_THREADS']}{late}"
+    kernel = os.environ.get("OPENBLAS_CORETYPE", "the CPU's own (seeded figures may differ)")
+    return (f"BLAS threads per test process: {os.environ['OPENBLAS_NUM_THREADS']}; "
+            f"OpenBLAS kernel: {kernel}{late}")

@@ -7,6 +7,12 @@ rendered three ways, command modules that raise - and their outputs are in
 ``test/golden/cli/``. Printed text must be the same byte for byte; a JSON summary must
 hold the same keys with the same values, plus its ``schema_version`` (and any key added
 since, as the schema allows).
+
+The goldens were computed with OpenBLAS' Haswell kernels, which ``conftest.py`` pins on
+every x86-64 CPU with AVX2 and FMA: kernels chosen by the CPU round their sums apart in
+the last bit, and the simulated bag's check turns that into another answer (with
+SkylakeX's, ``positioning:EYY`` enters as the second term, final RMSE 2.583 um; with
+Haswell's or Zen's it does not, 2.997 um) - a near-tie of that survey, not the CLI's.
 """
 from __future__ import annotations
 
