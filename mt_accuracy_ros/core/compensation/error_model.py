@@ -738,9 +738,16 @@ class ErrorModel:
                 continue
             setting = entry.get("setting") or {}
             names = family.parameter_names(variant, setting)
-            values = family.motion_error(self.machine, variant, setting,
-                                         [entry["coefficients"][n] for n in names], grid)
+            coefficients = [entry["coefficients"][n] for n in names]
+            values = family.motion_error(self.machine, variant, setting, coefficients, grid)
             out[variant] = out.get(variant, 0.0) + values
+            if hasattr(family, "pivot_motion_errors"):
+                # A table's tilt about a pivot: its pivot's move is the axis' own
+                # positioning and straightness.
+                for name, moved in family.pivot_motion_errors(self._kinematics, variant,
+                                                              setting, coefficients,
+                                                              grid).items():
+                    out[name] = out.get(name, 0.0) + moved
         if include_user:
             # Fitted user effects of this axis' position alone, as its error motions
             # (user_tables); ``strict`` refuses one of its position that no table can hold.

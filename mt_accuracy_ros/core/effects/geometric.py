@@ -506,6 +506,13 @@ def still_turns(ctx: Context) -> list[str]:
             if turns_about_carried_rotary(machine, f"E{c}{axis}")]
 
 
+def under_rotary(machine, axis: str) -> bool:
+    """Whether a rotary axis lies between the bed and ``axis`` on its branch: then the
+    carriage's frame turns with it, and a move fixed in the carriage is none in the bed's."""
+    branch = next(b for b in (machine.workpiece_branch, machine.tool_branch) if axis in b)
+    return any(machine.axes[a].is_rotary for a in branch[:branch.index(axis)])
+
+
 def carries_head(machine, axis: str) -> bool:
     """Whether ``axis`` is a tool-side carriage that carries rotary axes of the head.
 
@@ -796,12 +803,15 @@ class ComponentError(EffectFamily):
         # the tool side a constant turn of a carriage differs from the table's own tilt
         # about the same direction by the pivot alone, which this family does not fit, so
         # it could stand in for it: there the squareness family holds a constant turn.
+        constant = [{"order": k, "constant": True} for k in range(first, first + _ORDERS)]
+        if under_rotary(ctx.machine, variant[2]):
+            return orders + constant
         # About a pivot off the table's origin the tilt's slope also moves the table by
         # -P1 L1(u) (e_k x p): a positioning and a straightness slope of its own axis,
         # which a survey made about another pivot reads with the tilt. Order 1 only, with
-        # the constant part: the pivot is the one thing it adds.
-        return orders + [{"order": k, "constant": True} for k in range(first, first + _ORDERS)] \
-            + [{"order": 1, "constant": True, "lever_slope": True}]
+        # the constant part: the pivot is the one thing it adds. In the bed's frame only
+        # where no rotary axis below turns the table's.
+        return orders + constant + [{"order": 1, "constant": True, "lever_slope": True}]
 
     def fit_problems(self, ctx: Context, variant: str, setting: dict, coefficients
                      ) -> list[str]:
@@ -1104,6 +1114,63 @@ class ComponentError(EffectFamily):
         basis = self._basis(q, (2.0 * q - (low + high)) / (high - low), setting)
         # The located set-up error (last, with ``located``) is no motion of the axis.
         return basis @ np.asarray(coefficients, dtype=np.float64)[:basis.shape[1]]
+
+    def pivot_motion_errors(self, kinematics, variant: str, setting: dict, coefficients,
+                            q) -> dict[str, np.ndarray]:
+        """What a CNC's per-axis tables hold of a table's tilt about a pivot off its origin
+        (``lever_slope`` without ``located``): the pivot's move -P1 L1(u) (e_k x p) as the
+        positioning and straightness error motions of the tilted axis that make it at the
+        TCP (each translation's sensitivity is sign R e_C, :meth:`KinematicModel.
+        error_frames`, constant on a table no rotary axis turns); nothing for another.
+
+        Parameters
+        ----------
+        kinematics : KinematicModel
+            The machine's chain (the translations' frames).
+        variant : str
+            ISO name, e.g. ``EBX``.
+        setting : dict
+            The fitted setting.
+        coefficients : sequence of float, length P
+            Fitted coefficients, in :meth:`parameter_names` order [rad] and [m].
+        q : array_like, shape (K,)
+            Positions of the variant's axis [m].
+
+        Returns
+        -------
+        dict of str to ndarray, shape (K,)
+            ISO motion error name (``EXX``, ``EZX`` ...) -> values [m].
+
+        Raises
+        ------
+        ValueError
+            A direction of the pivot's move that no translation of the axis makes alone
+            (the axis' frame not along the bed's).
+        """
+        if not setting.get("lever_slope") or setting.get("located"):
+            return {}
+        machine = kinematics.machine
+        axis = variant[2]
+        low, high = machine.axes[axis].stroke
+        q = np.asarray(q, dtype=np.float64)
+        slope = (2.0 * q - (low + high)) / (high - low)     # L1(u)
+        fitted = dict(zip(self.parameter_names(variant, setting),
+                          np.asarray(coefficients, dtype=np.float64)))
+        middle = {a: np.full(1, 0.5 * sum(machine.axes[a].stroke)) for a in machine.axis_order}
+        frames = kinematics.error_frames(middle)
+        out: dict[str, np.ndarray] = {}
+        for component, name in zip(lever_components(variant), lever_slope_names(variant)):
+            row = "xyz".index(component)
+            for motion in "XYZ":
+                sign, rotation, _ = frames[f"E{motion}{axis}"]
+                along = float(sign * rotation[0, row, "XYZ".index(motion)])
+                if abs(along) > 1.0 - 1e-9:
+                    out[f"E{motion}{axis}"] = -slope * fitted[name] / along
+                    break
+            else:
+                raise ValueError(f"{variant}: no translation of the {axis} axis moves the TCP "
+                                 f"along {component} alone; its pivot's slope has no table")
+        return out
 
     def location_error(self, machine, variant: str, setting: dict,
                        coefficients) -> dict[str, float]:
