@@ -815,10 +815,11 @@ class ComponentError(EffectFamily):
 
     def fit_problems(self, ctx: Context, variant: str, setting: dict, coefficients
                      ) -> list[str]:
-        """A pivot beyond the machine's reach is no tilt's: the slope of a located tilt's
-        lever is -P1 (e_k x p), so the pivot lies |lever slope| / |P1| across the axis; a
-        fit that puts it farther than :func:`machine_reach` makes a straightness or a line
-        offset of the tilt's slope, dividing by a slope that is not the carriage's.
+        """A pivot beyond the machine's reach is no tilt's: about a pivot p the lever is
+        -P0 (e_k x p) and its slope -P1 (e_k x p), so the pivot lies |lever| / |P0| (or
+        |lever slope| / |P1|) across the axis; a fit that puts it farther than
+        :func:`machine_reach` makes a line offset or a straightness of the tilt's lever,
+        dividing by a turn that is not the carriage's.
 
         Parameters
         ----------
@@ -829,25 +830,34 @@ class ComponentError(EffectFamily):
         setting : dict
             The setting (one of :meth:`settings`).
         coefficients : sequence of float, length P
-            The fitted coefficients, SI (P1 [rad], the lever's slope [m] ...).
+            The fitted coefficients, SI (P0, P1 [rad], the lever and its slope [m] ...).
 
         Returns
         -------
         list of str
-            One sentence when the pivot lies beyond the machine's reach, else none.
+            One sentence per part (the lever, its slope) whose pivot lies beyond the
+            machine's reach, else none.
         """
-        if not setting.get("lever_slope"):
+        parts = [(part, names, turn) for key, part, names, turn in (
+            ("lever", "lever", lever_names, "P0"),
+            ("lever_slope", "lever's slope", lever_slope_names, "P1")) if setting.get(key)]
+        if not parts:
             return []
         fitted = dict(zip(self.parameter_names(variant, setting),
                           np.asarray(coefficients, dtype=np.float64)))
-        slope = float(np.hypot(*(fitted[n] for n in lever_slope_names(variant))))
         reach = machine_reach(ctx)
-        if slope <= reach * abs(fitted["P1"]):
-            return []
-        pivot = slope / abs(fitted["P1"]) if fitted["P1"] else float("inf")
-        return [f"the pivot its lever's slope puts {pivot:.2f} m from the {variant[2]} "
-                f"carriage's origin is beyond the machine's reach ({reach:.2f} m): not a "
-                "tilt about a pivot, another error's share divided by a vanishing slope"]
+        out = []
+        for part, names_of, turn in parts:
+            names = names_of(variant)
+            moved = float(np.hypot(*(fitted[n] for n in names)))
+            if moved <= reach * abs(fitted[turn]):
+                continue
+            pivot = moved / abs(fitted[turn]) if fitted[turn] else float("inf")
+            out.append(f"the pivot its {part} puts {pivot:.3g} m from the {variant[2]} "
+                       f"carriage's origin is beyond the machine's reach ({reach:.2f} m): "
+                       "not a tilt about a pivot, another error's share divided by a "
+                       "vanishing turn")
+        return out
 
     def nested_columns(self, variant: str, setting: dict, largest: dict) -> list[int] | None:
         """Columns of the largest setting's design: P1 .. Pk, then P0 for a constant part.

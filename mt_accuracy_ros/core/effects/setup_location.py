@@ -153,6 +153,39 @@ class SetupLocation(EffectFamily):
         return ["v_x", "v_y", "v_z"] + (["w_x", "w_y", "w_z"] if setting.get("direction")
                                         else [])
 
+    def parameter_limits(self, ctx: Context, variant: str, setting: dict
+                         ) -> dict[str, tuple[float, str]]:
+        """The machine's own error where it was set up is no larger than the largest
+        squareness any machine has over its reach: v within LARGEST_SQUARENESS_RAD times
+        :func:`~.geometric.machine_reach` [m], w within LARGEST_SQUARENESS_RAD. A fit
+        beyond is a direction the poses barely see (the located error along the rotary
+        axes' own lines), its number the noise divided by a vanishing column.
+
+        Parameters
+        ----------
+        ctx : Context
+            The machine and the variables at the N readings.
+        variant : str
+            The side, ``work`` or ``tool``.
+        setting : dict
+            The setting (one of :meth:`settings`).
+
+        Returns
+        -------
+        dict of str to tuple of (float, str)
+            Name -> (bound [m] or [rad], reason).
+        """
+        from .geometric import LARGEST_SQUARENESS_RAD, machine_reach  # (imports this module)
+
+        reach = machine_reach(ctx)
+        moved = (LARGEST_SQUARENESS_RAD * reach,
+                 f"the machine's error at the set-up, at most {LARGEST_SQUARENESS_RAD * 1e3:g} "
+                 f"mm per metre of its {reach:.2f} m reach")
+        turned = (LARGEST_SQUARENESS_RAD, "the tool's direction at the set-up, turned by at "
+                                          "most the largest squareness of any machine")
+        return {name: turned if name.startswith("w_") else moved
+                for name in self.parameter_names(variant, setting)}
+
     def design(self, ctx: Context, variant: str, setting: dict) -> NDArray[np.float64]:
         """(I - R_S R_S(q_s)^T) on v; w moves no TCP position.
 

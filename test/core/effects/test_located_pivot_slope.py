@@ -131,3 +131,18 @@ def test_a_pivot_beyond_the_machines_reach_is_refused_in_words():
     (problem,) = family.fit_problems(ctx, "EBY", SLOPED, [far[n] for n in names])
     assert "7.27 m" in problem and "beyond the machine's reach" in problem
     assert family.fit_problems(ctx, "EBY", SLOPED, [near[n] for n in names]) == []
+
+
+def test_a_constant_lever_beyond_the_machines_reach_is_refused_in_words():
+    """The same rule for the lever of the constant part, |lever| / |P0|: a fit that divides
+    a line offset of a million metres by an 11 urad turn (a direction the poses barely
+    see) is refused; a pivot of 0.9 m at the same turn stands."""
+    ctx, _, _ = _ctx([], {"A": 0, "C": 0})
+    family = ComponentError("angular", False)
+    names = family.parameter_names("EBY", SLOPED)
+    far = dict(zip(names, [50e-6, 11e-6, -1e6, 0.06e-6, 0.0, 0.0]))
+    near = dict(far, lever_x=0.9 * 11e-6)
+    (problem,) = family.fit_problems(ctx, "EBY", SLOPED, [far[n] for n in names])
+    assert "the pivot its lever puts 9.09e+10 m" in problem, problem
+    assert "beyond the machine's reach" in problem
+    assert family.fit_problems(ctx, "EBY", SLOPED, [near[n] for n in names]) == []

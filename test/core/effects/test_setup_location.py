@@ -78,3 +78,27 @@ def test_a_two_sphere_instrument_locates_the_tool_direction_too():
     # It moves no tip.
     position = family.design(ctx, "work", setting) @ np.concatenate([np.zeros(3), w])
     np.testing.assert_allclose(position, 0.0, atol=0)
+
+
+def test_a_set_up_error_beyond_any_machines_is_refused_by_its_limits():
+    """The machine's error at the set-up is bounded by the largest squareness over the
+    machine's reach (10 mm per metre): a fit of 2e5 m along a direction the poses barely see
+    (seed 59's trial 28 of the independent generator, before the bound) is beyond it, the
+    micrometres of a real set-up far within."""
+    from mt_accuracy_ros.core.effects.geometric import LARGEST_SQUARENESS_RAD, machine_reach
+    from mt_accuracy_ros.core.effects.physics import limit_problems
+
+    machine = load_machine("trunnion_ac")
+    ctx = Context(machine, Variables(_readings(machine)), KinematicModel(machine),
+                  work_point=SPHERE)
+    family = family_named("setup_location")
+    setting = {"direction": True}
+    limits = family.parameter_limits(ctx, "work", setting)
+    names = family.parameter_names("work", setting)
+    assert set(limits) == set(names)
+    bound = LARGEST_SQUARENESS_RAD * machine_reach(ctx)
+    assert limits["v_x"][0] == bound and limits["w_x"][0] == LARGEST_SQUARENESS_RAD
+    absurd = [208932.4, -3e-9, -7e-8, -5.2e-5, -5.7e-7, -6.9e-7]
+    (problem,) = limit_problems(names, absurd, limits)
+    assert problem.startswith("v_x = 2.09e+05 exceeds") and "reach" in problem
+    assert limit_problems(names, [6e-7, 0.0, 7e-7, 1e-5, 0.0, 0.0], limits) == []
