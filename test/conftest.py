@@ -31,8 +31,9 @@ def _blas_kernel() -> str | None:
     return "Haswell" if {"avx2", "fma"} <= set(flags) else None
 
 
-if _blas_kernel() is not None:
-    os.environ.setdefault("OPENBLAS_CORETYPE", _blas_kernel())
+_KERNEL = _blas_kernel()
+if _KERNEL is not None:
+    os.environ.setdefault("OPENBLAS_CORETYPE", _KERNEL)
 
 
 

@@ -51,6 +51,13 @@ SHARED_COLUMNS_KEPT = 48
 _SCALE_SENSOR = re.compile(r"^[xyzabc][12]_s\d+$", re.IGNORECASE)
 
 
+
+def normalised_stroke(machine, axis: str, q) -> NDArray[np.float64]:
+    """Positions ``q`` [m] of ``axis`` mapped to [-1, 1] over its stroke (Legendre's domain):
+    u = (2 q - (low + high)) / (high - low), dimensionless, shape of ``q``."""
+    low, high = machine.axes[axis].stroke
+    return (2.0 * np.asarray(q, dtype=np.float64) - (low + high)) / (high - low)
+
 class Context:
     """Machine + variables at N readings; caches kinematic sensitivities.
 
@@ -399,8 +406,7 @@ class Context:
         ndarray, shape (N,)
             Dimensionless u = (2 q - (low + high)) / (high - low).
         """
-        low, high = self.machine.axes[axis].stroke
-        return (2.0 * self.variables.positions[axis] - (low + high)) / (high - low)
+        return normalised_stroke(self.machine, axis, self.variables.positions[axis])
 
     def moves(self, axis: str) -> bool:
         """Did ``axis`` move over these readings? (an axis that stood still cannot show an

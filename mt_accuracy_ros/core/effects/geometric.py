@@ -49,7 +49,7 @@ import hashlib
 import numpy as np
 
 from ..kinematics.machine import outer_zeros
-from .base import Context, EffectFamily, along
+from .base import Context, EffectFamily, along, normalised_stroke
 from .setup_location import located_design, side_rotations
 from .spectral import (direct_basis, frequency_grid, resolvable, strongest_frequencies,
                        weight_sums)
@@ -1119,9 +1119,8 @@ class ComponentError(EffectFamily):
         ndarray, shape (K,)
             E(q) [m] or [rad].
         """
-        low, high = machine.axes[variant[2]].stroke
         q = np.asarray(q, dtype=np.float64)
-        basis = self._basis(q, (2.0 * q - (low + high)) / (high - low), setting)
+        basis = self._basis(q, normalised_stroke(machine, variant[2], q), setting)
         # The located set-up error (last, with ``located``) is no motion of the axis.
         return basis @ np.asarray(coefficients, dtype=np.float64)[:basis.shape[1]]
 
@@ -1161,9 +1160,7 @@ class ComponentError(EffectFamily):
             return {}
         machine = kinematics.machine
         axis = variant[2]
-        low, high = machine.axes[axis].stroke
-        q = np.asarray(q, dtype=np.float64)
-        slope = (2.0 * q - (low + high)) / (high - low)     # L1(u)
+        slope = normalised_stroke(machine, axis, q)     # L1(u)
         fitted = dict(zip(self.parameter_names(variant, setting),
                           np.asarray(coefficients, dtype=np.float64)))
         middle = {a: np.full(1, 0.5 * sum(machine.axes[a].stroke)) for a in machine.axis_order}
