@@ -582,7 +582,8 @@ class ErrorModel:
                   accelerations: dict[str, ArrayLike] | None = None,
                   spindle_speed_rad_s: ArrayLike | None = None, fresh: bool = False,
                   referred: bool = True, work_point: ArrayLike | None = None,
-                  run_starts: ArrayLike | None = None, located_readings: bool = False
+                  run_starts: ArrayLike | None = None, located_readings: bool = False,
+                  direction_measured: bool = False
                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position error (N, 3) [m], orientation error (N, 3) [rad]) at command positions.
 
@@ -636,6 +637,10 @@ class ErrorModel:
             set-up among them (a survey's): a located tilt is then read as that instrument
             reads it. False (default) for a CNC's own commands: every error as the machine
             makes it, the same whatever poses the batch holds.
+        direction_measured : bool, optional
+            With ``located_readings``: the instrument also measured the tool's direction,
+            located with the work at the set-up (two spheres, ISO 10791-6): a work-side
+            tilt's turn is then read as that instrument reads it, as its fit's design did.
 
         Returns
         -------
@@ -693,7 +698,8 @@ class ErrorModel:
                                   lag_states=None if run_starts is not None
                                   else self._lag_states, run_starts=run_starts)
             context = Context(self.machine, variables, self._kinematics, orientation,
-                              work_point=work_point, located_readings=located_readings)
+                              work_point=work_point, located_readings=located_readings,
+                              direction_measured=direction_measured)
             turned = np.zeros_like(orientation)
             for name, entry in catalogue.items():
                 position = position + catalogue_error(name, entry, context)

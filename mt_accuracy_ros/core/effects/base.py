@@ -79,6 +79,10 @@ class Context:
     orientation_lever_m : float, optional
         Set when the readings measured the tool's direction: the instrument's
         position noise over its direction noise [m per rad].
+    direction_measured : bool, optional
+        The readings measured the tool's direction (by default: ``orientation_lever_m``
+        is set); a model predicting them (:meth:`ErrorModel.tcp_error`) says so without
+        a lever, so that a tilt's turn is read as the instrument read it.
     work_point : ndarray, shape (3,) or (N, 3), optional
         Fixed target [m], workpiece frame.
     zero_rows : ndarray of int, shape (N,), optional
@@ -96,7 +100,8 @@ class Context:
                  orientation_lever_m: float | None = None,
                  work_point: NDArray[np.float64] | None = None,
                  zero_rows: NDArray[np.intp] | None = None,
-                 located_readings: bool = False) -> None:
+                 located_readings: bool = False,
+                 direction_measured: bool | None = None) -> None:
         self.machine = machine
         #: True for an instrument's readings, whose target (and tool) was located at the
         #: set-up: the located families then read the set-up among them. False for a CNC's
@@ -110,6 +115,11 @@ class Context:
         #: Set when the readings measured the tool's direction: [m per rad] that makes a
         #: direction row's noise the position rows' (see the module docstring).
         self.orientation_lever_m = orientation_lever_m
+        #: The instrument measured the tool's direction: a located instrument then read a
+        #: tilt's turn located with the work (the fit's design and the model's prediction
+        #: alike).
+        self.direction_measured = orientation_lever_m is not None \
+            if direction_measured is None else bool(direction_measured)
         self.variables = variables
         self.kinematics = kinematics or KinematicModel(machine)
         self.orientation = orientation

@@ -1014,7 +1014,7 @@ class ComponentError(EffectFamily):
     def _turn_located(self, ctx: Context, variant: str) -> bool:
         """Whether the instrument measured the tool's direction and located it with the work
         at the set-up: a work-side tilt's turn is then read as located (:func:`located_turn`)."""
-        return self.kind == "angular" and ctx.orientation_lever_m is not None and \
+        return self.kind == "angular" and ctx.direction_measured and \
             variant[2] in ctx.machine.workpiece_branch and setup_rows(ctx) is not None
 
     def _plain_separable(self, ctx: Context, variant: str, setting: dict):

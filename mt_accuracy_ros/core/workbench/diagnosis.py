@@ -297,7 +297,8 @@ class Observations:
                   "directions": self.directions or None, "time_s": self.time_s,
                   "accelerations": self.accelerations or None,
                   "spindle_speed_rad_s": self.spindle_speed_rad_s,
-                  "located_readings": True}      # an instrument's, located at the set-up
+                  "located_readings": True,      # an instrument's, located at the set-up
+                  "direction_measured": self.measures_direction}
         if self.work_point is not None:
             inputs["work_point"] = self.work_point
         if self.run_starts is not None:
