@@ -2082,13 +2082,18 @@ class RotaryLocation(EffectFamily):
 #: columns kept before it (and the offsets) are taken out is not parted from them: its
 #: parameter would be known this many times worse than if it were.
 INSEPARABLE_FRACTION = 1e-4
+#: [m per m or m per rad] RMS: a location error that moves the readings less than this
+#: per unit moves nothing (a tilt of a line that never turned, to rounding: its fit would
+#: be 1e10 rad).
+NULL_SENSITIVITY = 1e-9
 
 
 def inseparable_location_errors(ctx: Context, names: list[str],
                                 said_only: list[str] | tuple[str, ...] = ()) -> str:
     """Which of a rotary axis' location errors ``names`` the readings cannot part, as the
     setting string ``"EB0C=EX0C*-0.093;EX0B="``: EB0C moves them as -0.093 m/rad of EX0C
-    (EX0C then stands for EX0C - 0.093 m/rad x EB0C); EX0B moves nothing here.
+    (EX0C then stands for EX0C - 0.093 m/rad x EB0C); EX0B moves nothing here (less than
+    :data:`NULL_SENSITIVITY` per unit).
 
     The columns are taken in order (the line's offsets before its tilts: the centre a
     calibration measures first), each against the offsets (an instrument's own zero, on
@@ -2132,7 +2137,7 @@ def inseparable_location_errors(ctx: Context, names: list[str],
     for i in order + list(range(len(names) - len(said_only), len(names))):
         column = flat[i]
         norm = float(np.linalg.norm(column))
-        if norm == 0.0:
+        if norm <= NULL_SENSITIVITY * np.sqrt(column.size):
             parts.append(f"{names[i]}=")
             continue
         if kept:
