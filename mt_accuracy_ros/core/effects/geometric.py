@@ -1522,8 +1522,11 @@ class Squareness(EffectFamily):
     @staticmethod
     def _seen_located(ctx: Context, slide: str) -> bool:
         """Whether a squareness of ``slide`` reads as a located target reads it
-        (:meth:`_located`): not where the slide carries a head that turns."""
-        head = any(ctx.machine.axes[a].is_rotary for a in ctx.machine.tool_branch)
+        (:meth:`_located`): not where the slide carries a head that turned among the
+        readings. A head that stood still keeps the tool located in its own frame as one
+        constant, as a head without rotary axes does."""
+        head = any(ctx.machine.axes[a].is_rotary and ctx.moves(a)
+                   for a in ctx.machine.tool_branch)
         return not (head and slide in ctx.machine.tool_branch)
 
     @staticmethod
