@@ -549,7 +549,8 @@ def with_tool_direction(obs, direction_errors: dict, machine) -> str:
     obs.orientation_measured = np.ones(obs.n, dtype=bool)
     return (f"tool direction: {obs.n} readings of the tool axis' change (across the tool "
             f"axis), judged with a k = 2 uncertainty of "
-            f"{obs.orientation_uncertainty_rad * 1e6:.1f} urad")
+            f"{obs.orientation_uncertainty_rad * 1e6:.1f} urad (assumed: the documented "
+            "default; a column map does not state the direction's uncertainty)")
 
 
 def refuse_contradicting_work_axes(machine, work_axes: tuple[str, ...]) -> None:

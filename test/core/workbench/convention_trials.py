@@ -30,8 +30,7 @@ def drawn_trial(seed: int, index: int, only: set[str] | None = None,
                                                 trial["rows"])
         noise = np.random.default_rng([seed, index, 11])
         trial.update(sigma_m=sigma, sigma_dir=sigma / cs.DIR_LEVER,
-                     uncertainty_m=max(2 * sigma, 1e-8), located_m=position,
-                     located_direction=direction,
+                     uncertainty_m=max(2 * sigma, 1e-8), located_direction=direction,
                      errors_m=position + noise.normal(0.0, sigma, position.shape),
                      dir_errors=direction + noise.normal(0.0, sigma / cs.DIR_LEVER,
                                                          direction.shape))
