@@ -148,10 +148,17 @@ def consistency_allowances(residual: NDArray[np.float64], mask: NDArray[np.bool_
 
 
 def spread_problems(spreads: dict[str, float], allowances: dict[str, float],
-                    orientation_lever_m: float | None = None) -> list[str]:
+                    orientation_lever_m: float | None = None,
+                    carried: dict[str, float] | None = None) -> list[str]:
     """Components where an effect's own spread [m] exceeds its allowance
     (:func:`consistency_allowances`); a direction component (a, b, c: scaled by
     ``orientation_lever_m``) is said in urad.
+
+    An effect fitted beside others may move a component more than the residual there
+    shows, by what the others move it the other way: their sum is what the residual
+    saw. So the allowance grows by the others' spread ``carried`` (triangle inequality),
+    by at most the allowance itself: the others are held to it too, and two stand-ins
+    that cancel each other beyond it are still refused.
 
     Parameters
     ----------
@@ -162,6 +169,9 @@ def spread_problems(spreads: dict[str, float], allowances: dict[str, float],
     orientation_lever_m : float, optional
         Lever that scaled a direction component to metres [m]; with it, a, b, c are said
         in urad.
+    carried : dict of str to float, optional
+        Component -> the RMS spread at the readings of what the other effects of the same
+        joint fit move [m]; none when the effect stands alone.
 
     Returns
     -------
@@ -169,19 +179,23 @@ def spread_problems(spreads: dict[str, float], allowances: dict[str, float],
         One sentence per component beyond its allowance.
     """
     out = []
+    carried = carried or {}
     for component, allowed in allowances.items():
         spread = spreads.get(component, 0.0)
         if spread == 0.0:
             continue
+        allowed = allowed + min(carried.get(component, 0.0), allowed)
         if not np.isfinite(spread) or spread > allowed:
             if component in "abc" and orientation_lever_m:
                 what, factor, unit = (f"the tool's direction about {'xyz'['abc'.index(component)]}",
                                       1e6 / orientation_lever_m, "urad")
             else:
                 what, factor, unit = component, 1e6, "um"
+            beside = " beside what the other named effects move there" \
+                if carried.get(component, 0.0) > 0.0 else ""
             out.append(f"it would move {what} by {spread * factor:.3g} {unit} RMS at the "
                        f"readings, more than the {allowed * factor:.3g} {unit} the residual "
-                       "there allows")
+                       f"there allows{beside}")
     return out
 
 

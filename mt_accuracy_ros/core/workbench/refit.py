@@ -691,19 +691,26 @@ def _refitted(model: ErrorModel, selector: Selector, names: list[str], terms: li
     A coefficient taken as zero keeps its stated uncertainty (the bound the readings
     left it within)."""
     candidates, changes, refusals = [], [], []
-    for k, (name, (term, setting), parameters) in enumerate(zip(names, terms,
-                                                                parameter_names)):
+    fitted = []
+    for k, parameters in enumerate(parameter_names):
+        entry = model.effects[names[k]]
+        old = entry.get("coefficients") or {}
+        width = len(parameters)
+        values = np.array([float(old.get(p, 0.0)) for p in parameters]) + \
+            fit.change[start:start + width]
+        errors = np.array(fit.standard[start:start + width], dtype=np.float64)
+        if held is not None:
+            old_u = entry.get("uncertainties") or {}
+            errors = np.where(held[k], [float(old_u.get(p, 0.0)) for p in parameters], errors)
+        start += width
+        fitted.append((values, errors))
+    # Judged as the joint fit they are: each beside what the others move.
+    reasons = selector.joint_refusals(terms, [values for values, _ in fitted])
+    for name, (term, setting), parameters, (values, errors), refusal in zip(
+            names, terms, parameter_names, fitted, reasons):
         entry = model.effects[name]
         old = entry.get("coefficients") or {}
         old_u = entry.get("uncertainties") or {}
-        width = len(parameters)
-        old_values = np.array([float(old.get(p, 0.0)) for p in parameters])
-        values = old_values + fit.change[start:start + width]
-        errors = np.array(fit.standard[start:start + width], dtype=np.float64)
-        if held is not None:
-            errors = np.where(held[k], [float(old_u.get(p, 0.0)) for p in parameters], errors)
-        start += width
-        refusal = selector.physics_refusal(term, setting, values)
         if refusal:
             refusals.append(f"{name}: {refusal}")
         for parameter, value, error in zip(parameters, values, errors):

@@ -6,7 +6,8 @@ import pytest
 
 from mt_accuracy_ros.core.compensation.error_model import ErrorModel
 from mt_accuracy_ros.core.effects import Context
-from mt_accuracy_ros.core.effects.physics import consistency_problems, limit_problems
+from mt_accuracy_ros.core.effects.physics import (consistency_allowances, consistency_problems,
+                                                  limit_problems, spread_problems)
 from mt_accuracy_ros.core.kinematics.machine import load_machine
 from mt_accuracy_ros.core.workbench import selection
 from mt_accuracy_ros.core.workbench.diagnosis import Observations, candidate_terms, residuals
@@ -316,3 +317,53 @@ def test_a_steps_fold_fits_in_batches_are_each_candidates_own(monkeypatch, limit
         assert fits.keys() == alone_fits.keys(), term.name
         for key, coefficients in fits.items():
             np.testing.assert_allclose(coefficients, alone_fits[key], rtol=1e-12, atol=1e-300)
+
+
+def test_terms_fitted_jointly_are_each_judged_beside_what_the_others_move():
+    """:meth:`Selector.joint_refusals` against the plain computation on full (N, 3)
+    contributions: each term's spread per component judged with the allowance grown by
+    the others' spread (at most once more). Coefficients 3x and 30x too large make
+    some refuse."""
+    selector, terms = _selector()
+    chosen = [t for t in terms if t.family.name in ("straightness", "angular")][:3]
+    together = [(t, t.settings[-1]) for t in chosen]
+    coefficients, _, _ = selector.fit_full(together)
+    for scale in (1.0, 3.0, 30.0):
+        scaled = [scale * c for c in coefficients]
+        flats = []
+        for (term, setting), c in zip(together, scaled):
+            flat = np.zeros(selector.mask.size)
+            flat[selector.rows] = selector.design_rows(term, setting) @ c
+            flats.append(flat.reshape(-1, 3))
+        allowances = consistency_allowances(selector.residual, selector.mask,
+                                            selector.noise_sigma)
+        expected = []
+        for k, ((term, setting), c) in enumerate(zip(together, scaled)):
+            others = sum(f for j, f in enumerate(flats) if j != k)
+            own_spread = {a: float(np.std(flats[k][:, i])) for i, a in enumerate("xyz")}
+            other_spread = {a: float(np.std(others[:, i])) for i, a in enumerate("xyz")}
+            problems = limit_problems(term.family.parameter_names(term.variant, setting), c,
+                                      term.family.parameter_limits(selector.ctx, term.variant,
+                                                                   setting))
+            problems += term.family.fit_problems(selector.ctx, term.variant, setting, c)
+            problems += spread_problems(own_spread, allowances, carried=other_spread)
+            expected.append("; ".join(problems))
+        assert selector.joint_refusals(together, scaled) == expected
+        assert selector.joint_refusals(together, scaled, [1]) == [expected[1]]
+    assert any(selector.joint_refusals(together, [30.0 * c for c in coefficients]))
+
+
+def test_a_term_refused_alone_stands_beside_one_that_cancels_it():
+    """A contribution 1.5x its allowance where it is largest: refused alone, it stands
+    beside one that moves 90 % of it the other way, and not beside one that moves 30 %."""
+    selector, terms = _selector()
+    term = next(t for t in terms if t.family.name == "straightness")
+    setting = term.settings[-1]
+    c = selector.fit_full([(term, setting)])[0][0]
+    spreads = selector._spreads(selector.prediction_rows(term, setting, c))
+    c = c * 1.5 / max(spreads[k] / selector.allowances[k] for k in spreads)
+    assert selector.physics_refusal(term, setting, c)
+    pair = [(term, setting), (term, setting)]
+    assert selector.joint_refusals(pair, [c, -0.9 * c], [0]) == [""]
+    assert selector.joint_refusals(pair, [c, -0.3 * c], [0])[0].endswith(
+        "beside what the other named effects move there")

@@ -243,7 +243,8 @@ class Selector(ReadingDesigns):
         self.dropped_for_refusal: list[tuple[Scored, str, str]] = []
 
     def physics_refusal(self, term: Term, setting: dict, coefficients: NDArray[np.float64],
-                        own_square_sum: float | None = None) -> str:
+                        own_square_sum: float | None = None,
+                        others: NDArray[np.float64] | None = None) -> str:
         """Why physics refuses ``term`` fitted with ``coefficients``.
 
         Parameters
@@ -259,6 +260,9 @@ class Selector(ReadingDesigns):
             [m^2] (from the products at hand). Every component's spread is at most
             sqrt(that / its rows); when that bound lies within every allowance, no
             spread can exceed one and the contribution itself is not made.
+        others : ndarray, shape (R,), optional
+            What the other named terms of the same joint fit move on the rows fitted [m]:
+            part of the term's spread may cancel theirs (:func:`.physics.spread_problems`).
 
         Returns
         -------
@@ -273,26 +277,73 @@ class Selector(ReadingDesigns):
         problems += term.family.fit_problems(self.ctx, term.variant, setting, coefficients)
         if own_square_sum is not None and self._spreads_within_allowances(own_square_sum):
             return "; ".join(problems)
+        spreads = self._spreads(self.prediction_rows(term, setting, coefficients))
+        carried = None if others is None else self._spreads(others)
+        problems += spread_problems(spreads, self.allowances, self.ctx.orientation_lever_m,
+                                    carried)
+        return "; ".join(problems)
+
+    def joint_refusals(self, terms: list[tuple[Term, dict]],
+                       coefficients: list[NDArray[np.float64]],
+                       judged: list[int] | None = None) -> list[str]:
+        """:meth:`physics_refusal` of each of ``terms`` fitted jointly with ``coefficients``,
+        beside what the others move.
+
+        Parameters
+        ----------
+        terms : list of (Term, dict)
+            The jointly fitted terms and their settings.
+        coefficients : list of ndarray
+            Each term's coefficients in that fit (SI).
+        judged : list of int, optional
+            The indices of the terms judged (default: all).
+
+        Returns
+        -------
+        list of str
+            Per judged term, why physics refuses it ("" where it may stand).
+        """
+        if not terms:
+            return []
+        predictions = [self.prediction_rows(t, s, c) for (t, s), c in zip(terms, coefficients)]
+        total = np.sum(predictions, axis=0)
+        judged = range(len(terms)) if judged is None else judged
+        return [self.physics_refusal(terms[k][0], terms[k][1], coefficients[k],
+                                     others=total - predictions[k]) for k in judged]
+
+    def prediction_rows(self, term: Term, setting: dict, coefficients: NDArray[np.float64]
+                        ) -> NDArray[np.float64]:
+        """(R,) what ``term`` at ``setting`` with ``coefficients`` moves on the rows fitted [m]."""
+        coefficients = np.asarray(coefficients, float)
         basis = self.basis_rows(term, setting)
-        own = self.design_rows(term, setting) @ coefficients if basis is None else \
+        return self.design_rows(term, setting) @ coefficients if basis is None else \
             self._separable_prediction(term, basis, coefficients)
-        # Each component's spread about its mean, from the rows that measured it.
+
+    def _spreads(self, rows: NDArray[np.float64]) -> dict[str, float]:
+        """Each judged component's spread about its mean of ``rows`` (R,) [m], from the rows
+        that measured it."""
         if self.all_rows:
             # (Column reductions by products: numpy's strided std is several times slower.)
-            per_sample = own.reshape(-1, self.width)
+            per_sample = rows.reshape(-1, self.width)
             centred = per_sample - (self._ones @ per_sample) / per_sample.shape[0]
             spread = np.sqrt(np.einsum("ij,ij->j", centred, centred) / per_sample.shape[0])
         else:
             count = np.bincount(self.component_of_row, minlength=self.width)
-            mean = np.bincount(self.component_of_row, weights=own, minlength=self.width) / \
+            mean = np.bincount(self.component_of_row, weights=rows, minlength=self.width) / \
                 np.maximum(count, 1)
             spread = np.sqrt(np.bincount(self.component_of_row,
-                                         weights=(own - mean[self.component_of_row]) ** 2,
+                                         weights=(rows - mean[self.component_of_row]) ** 2,
                                          minlength=self.width) / np.maximum(count, 1))
-        spreads = {component: float(spread[c]) for c, component in enumerate(self.components)
-                   if component in self.allowances}
-        problems += spread_problems(spreads, self.allowances, self.ctx.orientation_lever_m)
-        return "; ".join(problems)
+        return {component: float(spread[c]) for c, component in enumerate(self.components)
+                if component in self.allowances}
+
+    def _named_prediction(self, base: NDArray[np.float64], coefficients: NDArray[np.float64]
+                          ) -> NDArray[np.float64]:
+        """(R,) what the selected terms among the model's columns ``base`` (R, q) move with
+        their ``coefficients`` (q,) of a joint fit [m] (the offsets left out: they are the
+        datum, no effect)."""
+        start = self.offsets.shape[1]
+        return base[:, start:] @ np.asarray(coefficients, float)[start:]
 
     def _spreads_within_allowances(self, own_square_sum: float) -> bool:
         """Can no component's spread of a contribution whose squares sum to
@@ -820,8 +871,11 @@ class Selector(ReadingDesigns):
         candidate.coefficients, candidate.standard_errors = (a[q:] for a in full_fit)
         candidate.parameter_names = term.family.parameter_names(term.variant, setting)
         own = candidate.coefficients
-        candidate.refusal = self.physics_refusal(
-            term, setting, own, own_square_sum=float(own @ gram[:, q:, q:].sum(axis=0) @ own))
+        own_square_sum = float(own @ gram[:, q:, q:].sum(axis=0) @ own)
+        # What the named terms move beside it, where its spread needs judging at all.
+        others = None if self._spreads_within_allowances(own_square_sum) else \
+            self._named_prediction(stats.base, full_fit[0][:q])
+        candidate.refusal = self.physics_refusal(term, setting, own, own_square_sum, others)
         return candidate, gain
 
     def rank(self, scored: list[Scored]) -> tuple[list[Scored], Scored | None]:
@@ -888,7 +942,8 @@ class Selector(ReadingDesigns):
         best.setting = setting
         best.coefficients, best.standard_errors = coefficients[-1], standard[-1]
         best.parameter_names = best.term.family.parameter_names(best.term.variant, setting)
-        best.refusal = self.physics_refusal(best.term, setting, best.coefficients)
+        best.refusal = self.joint_refusals(self.selected + [(best.term, setting)], coefficients,
+                                           [len(self.selected)])[0]
         # A weak effect spread evenly over the readings moves each block's error
         # too little for the blocks' t-test; the candidate the held-out data rank
         # first may then pass on its full-data coefficients instead, Bonferroni-
@@ -1017,11 +1072,11 @@ class Selector(ReadingDesigns):
                                                  second.per_sample_sq.sum(axis=1)) *
                            beam * max(1, len(remaining)))
             share = (base_mse - mse) / excess if excess > 0 else 1.0
-            coefficients, standard, _ = self.fit_full(self.selected + [(first.term, setting),
-                                                                       (second.term,
-                                                                        second.setting)])
+            together = self.selected + [(first.term, setting), (second.term, second.setting)]
+            coefficients, standard, _ = self.fit_full(together)
             # The first term of a pair passes the one rule, with twice the share.
-            evidence = Evidence(self.physics_refusal(first.term, setting, coefficients[-2]),
+            evidence = Evidence(self.joint_refusals(together, coefficients,
+                                                    [len(together) - 2])[0],
                                 adjusted, 1.0 - np.sqrt(mse / base_mse), share,
                                 coefficients[-2], standard[-2])
             if pair_rule.passes(evidence):
@@ -1101,8 +1156,7 @@ class Selector(ReadingDesigns):
         if not without:
             return True
         coefficients, _, _ = self.fit_full(without)
-        return not any(self.physics_refusal(term, setting, c)
-                       for (term, setting), c in zip(without, coefficients))
+        return not any(self.joint_refusals(without, coefficients))
 
     def run(self, terms: list[Term], max_terms: int = 4, beam: int = 3) -> list[Step]:
         """The forward selection: steps until nothing passes or ``max_terms`` were added.
@@ -1292,12 +1346,11 @@ class Selector(ReadingDesigns):
             for scored, c, s in zip(added, coefficients, standard):
                 scored.coefficients, scored.standard_errors = c, s
             # Jointly refit, a term physics refuses is taken out again (named, refused).
-            refused = next((k for k, scored in enumerate(added) if self.physics_refusal(
-                scored.term, scored.setting, scored.coefficients)), None)
+            reasons = self.joint_refusals(self.selected, coefficients)
+            refused = next((k for k, reason in enumerate(reasons) if reason), None)
             if refused is None:
                 break
-            scored = added[refused]
-            reason = self.physics_refusal(scored.term, scored.setting, scored.coefficients)
+            scored, reason = added[refused], reasons[refused]
             at = next(k for k, step in enumerate(steps) if step.added is scored)
             if self._later_break(steps, at, reason):
                 refused_names.add(self.dropped_for_refusal[-1][0].term.name)
@@ -1324,8 +1377,7 @@ class Selector(ReadingDesigns):
                 continue
             kept = [s for s in self.selected if s[0].name != step.added.term.name]
             coefficients, _, _ = self.fit_full(kept)
-            if any(self.physics_refusal(term, setting, c)
-                   for (term, setting), c in zip(kept, coefficients)):
+            if any(self.joint_refusals(kept, coefficients)):
                 continue
             mse = self._out_of_fold_mse(kept)
             if mse < best_mse:
