@@ -196,6 +196,8 @@ def alternatives(selector: Selector, selected: list[tuple[Term, dict]],
                                 limit)
             found += line_squareness(selector, base, block, contribution, (term, setting),
                                      terms, limit, {f["name"] for f in found})
+            found += still_slide_squareness(selector, base, block, contribution,
+                                            (term, setting), limit, {f["name"] for f in found})
         if setting.get("lever"):
             found += _lever_statement(selector, term, setting, coefficients[k])
         elif setting.get("lever_slope") and not setting.get("located"):
@@ -568,6 +570,80 @@ def head_turns(selector: Selector, base: NDArray[np.float64], block: NDArray[np.
                        "circles")
                 found.append({"name": turn.name, "parameters": {"P0": value},
                               "reason": why + (f" as {names[j]} does" if names[j] else "")})
+    return found
+
+
+def still_slide_squareness(selector: Selector, base: NDArray[np.float64],
+                           block: NDArray[np.float64], contribution: NDArray[np.float64],
+                           named: tuple[Term, dict], limit: float, said: set[str]
+                           ) -> list[dict]:
+    """The squarenesses of a still slide carrying the head that the readings cannot part
+    from a named rotary line's or set-up location's parameter.
+
+    A slide out of square (ISO 230-1) moves what it carries by the angle times its
+    position, across its travel (the slope form EXZ: Z's travel tilted toward X). Where
+    the slide carries the head and stood at one position off its zero over the readings,
+    that move is one constant; the tool, located at the head's set-up, took it in, and
+    that belief turns with the head (ISO 10791-6) along the circles a line's offset
+    draws. Such a squareness is no candidate (a slide that never moved shows no slope),
+    so it is said here, with its value, for the parameter it stands for - judged as
+    :func:`head_turns` judges a carriage's turn.
+
+    Parameters
+    ----------
+    selector : Selector
+        The selection (its rows and noise).
+    base : ndarray, shape (R, q)
+        The offsets and the other named effects' columns at the rows [m per unit].
+    block : ndarray, shape (R, p)
+        The named effect's columns [m per unit].
+    contribution : ndarray, shape (R,)
+        The named effect's fitted contribution [m].
+    named : tuple of (Term, dict)
+        The named effect and its setting (of :data:`HEAD_TURNED`; any other gives nothing).
+    limit : float
+        The bound on the fits' sums of squares [m^2].
+    said : set of str
+        The alternatives already said (not said again).
+
+    Returns
+    -------
+    list of dict
+        ``{"name", "parameters" ({"angle_rad": value}, SI), "reason"}`` per squareness
+        that stands for one of the named parameters.
+    """
+    ctx = selector.ctx
+    machine = ctx.machine
+    term, setting = named
+    if term.family.name not in HEAD_TURNED or head_setup_row(ctx) is None:
+        return []
+    square = family_named("squareness")
+    names = _parameter_labels(term, setting, block)
+    needed = _parameters_needed(base, block, contribution, limit)
+    found = []
+    for slide in machine.tool_branch:
+        if machine.axes[slide].is_rotary or not carries_head(machine, slide):
+            continue
+        stance = ctx.variables.positions[slide]
+        if np.ptp(stance) > 0 or not np.any(stance):
+            continue    # a moving slide's squareness is a candidate; at zero it moves nothing
+        for variant, reference in square.OTHER_REFERENCE.items():
+            if variant[2] != slide or reference[-1] not in machine.axes or \
+                    f"squareness:{variant}" in said:
+                continue
+            other = Term(square, variant, [{}])
+            columns = selector.design_rows(other, {})
+            if not np.any(columns):
+                continue
+            stands = _in_place_of(base, block, contribution, columns, needed, limit)
+            if stands is not None:
+                j, value = stands
+                found.append({"name": other.name, "parameters": {"angle_rad": value},
+                              "reason": f"{slide} stood at one position, where its travel "
+                                        "out of square (ISO 230-1) moves the head once; the "
+                                        "tool located at the head's set-up turns that move "
+                                        "with the head along the same circles"
+                                        + (f" as {names[j]} does" if names[j] else "")})
     return found
 
 

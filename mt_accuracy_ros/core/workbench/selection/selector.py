@@ -68,6 +68,12 @@ from .significance import (Evidence, PassRule, block_gains, coefficient_p_value,
 #: How often the search goes on after physics refused a named term in the joint fit.
 _RESUMED_SEARCHES = 2
 
+#: How far down the first step's ranking a simpler first term is sought
+#: (:meth:`Selector._simpler_start`). Below the leader may rank several flexible terms that
+#: each stand in for two effects: the work's located set-up error beside a tilt's lever
+#: holds an offset of the C line (ISO 230-7) and an offset of the A line that carries it.
+SIMPLER_START_RANKS = 6
+
 #: The coverage factor of an expanded uncertainty (GUM, ISO 14253-1: k = 2), by which a
 #: coefficient is told from zero when the selection is pruned.
 COVERAGE = 2.0
@@ -1282,12 +1288,13 @@ class Selector(ReadingDesigns):
         The first step takes the candidate with the least held-out error; a flexible one
         (a rotary axis' harmonics) may stand in there for two simple effects together (a
         squareness and the tool's located error), after which each of them trims too
-        little to be named. Each plausible candidate among the first step's ``beam`` best
-        that assumes less (:meth:`EffectFamily.variant_complexity`) and passes the
-        acceptance rule on its own is taken first instead, and the search goes on from it;
-        its selection replaces the first when it predicts the held-out readings as well
-        (out-of-fold MSE within the Occam tie) with no more effects and fewer parameters -
-        Occam's razor over whole selections, not only over one step's candidates.
+        little to be named. Each plausible candidate among the first step's
+        :data:`SIMPLER_START_RANKS` best that assumes less
+        (:meth:`EffectFamily.variant_complexity`) and passes the acceptance rule on its own
+        is taken first instead, and the search goes on from it; its selection replaces the
+        first when it predicts the held-out readings as well (out-of-fold MSE within the
+        Occam tie) with no more effects and fewer parameters - Occam's razor over whole
+        selections, not only over one step's candidates.
         """
         first = steps[0] if steps else None
         if first is None or first.added is None or not beam:
@@ -1305,8 +1312,8 @@ class Selector(ReadingDesigns):
 
         # Of fewer assumptions: a family that fits fewer numbers to the same assumptions (a
         # rotary axis' harmonics against its line's offsets and tilts) is no simpler start.
-        for alternative in [s for s in first.ranking[1:beam] if not s.refusal and
-                            assumes(s) < assumes(first.added)]:
+        for alternative in [s for s in first.ranking[1:SIMPLER_START_RANKS]
+                            if not s.refusal and assumes(s) < assumes(first.added)]:
             self.selected, self.dropped, self.dropped_jointly = [], [], []
             stats = self._baseline()[0]
             start = replace(alternative)
