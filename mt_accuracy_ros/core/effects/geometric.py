@@ -513,6 +513,31 @@ def under_rotary(machine, axis: str) -> bool:
     return any(machine.axes[a].is_rotary for a in branch[:branch.index(axis)])
 
 
+def located_turns(ctx: Context) -> bool:
+    """Whether the readings were located at a set-up and a rotary axis turned them from it:
+    the work side's (the target located at its set-up reading) or the head's (the tool
+    located at the head's). Then every effect's move at the set-up went into one located
+    value, their sum, which turns with the rotary axes (ISO 10791-6): the readings show
+    that sum's circle, not each effect's.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings.
+
+    Returns
+    -------
+    bool
+        True when :func:`located_tilt_seen` with :func:`setup_rows`, or the head turned and
+        :func:`head_setup_row` exists.
+    """
+    if located_tilt_seen(ctx) and setup_rows(ctx) is not None:
+        return True
+    machine = ctx.machine
+    return head_setup_row(ctx) is not None and \
+        any(machine.axes[a].is_rotary and ctx.moves(a) for a in machine.tool_branch)
+
+
 def carries_head(machine, axis: str) -> bool:
     """Whether ``axis`` is a tool-side carriage that carries rotary axes of the head.
 

@@ -322,9 +322,10 @@ def test_a_steps_fold_fits_in_batches_are_each_candidates_own(monkeypatch, limit
 def test_terms_fitted_jointly_are_each_judged_beside_what_the_others_move():
     """:meth:`Selector.joint_refusals` against the plain computation on full (N, 3)
     contributions: each term's spread per component judged with the allowance grown by
-    the others' spread (at most once more). Coefficients 3x and 30x too large make
-    some refuse."""
+    the others' spread (at most once more) where the set-up was located as one sum.
+    Coefficients 3x and 30x too large make some refuse."""
     selector, terms = _selector()
+    selector.shared_located = True
     chosen = [t for t in terms if t.family.name in ("straightness", "angular")][:3]
     together = [(t, t.settings[-1]) for t in chosen]
     coefficients, _, _ = selector.fit_full(together)
@@ -355,8 +356,11 @@ def test_terms_fitted_jointly_are_each_judged_beside_what_the_others_move():
 
 def test_a_term_refused_alone_stands_beside_one_that_cancels_it():
     """A contribution 1.5x its allowance where it is largest: refused alone, it stands
-    beside one that moves 90 % of it the other way, and not beside one that moves 30 %."""
+    beside one that moves 90 % of it the other way, and not beside one that moves 30 % -
+    where the set-up was located as one sum. On a survey without located turns (this HMC's)
+    each term is held to the residual alone."""
     selector, terms = _selector()
+    assert not selector.shared_located
     term = next(t for t in terms if t.family.name == "straightness")
     setting = term.settings[-1]
     c = selector.fit_full([(term, setting)])[0][0]
@@ -364,6 +368,9 @@ def test_a_term_refused_alone_stands_beside_one_that_cancels_it():
     c = c * 1.5 / max(spreads[k] / selector.allowances[k] for k in spreads)
     assert selector.physics_refusal(term, setting, c)
     pair = [(term, setting), (term, setting)]
+    assert selector.joint_refusals(pair, [c, -0.9 * c], [0]) == \
+        [selector.physics_refusal(term, setting, c)]
+    selector.shared_located = True
     assert selector.joint_refusals(pair, [c, -0.9 * c], [0]) == [""]
     assert selector.joint_refusals(pair, [c, -0.3 * c], [0])[0].endswith(
         "beside what the other named effects move there")

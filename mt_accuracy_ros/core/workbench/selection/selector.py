@@ -54,6 +54,7 @@ from numpy.typing import NDArray
 
 from ...errors import InsufficientDataError
 from ...effects.base import Context
+from ...effects.geometric import located_turns
 from ...effects.physics import consistency_allowances, limit_problems, spread_problems
 from ..distributions import chi2_sf
 from ..line_search import minimise_bounded
@@ -216,6 +217,10 @@ class Selector(ReadingDesigns):
                            time_blocks(n, folds) if blocks is None else blocks, folds,
                            self.forward)
         self.allowances = consistency_allowances(residual, mask, noise_sigma)
+        #: Whether the effects' moves at the set-up were located as one sum that turns with
+        #: the rotary axes (:func:`.geometric.located_turns`): then what one term moves
+        #: through that sum, the others may cancel (:meth:`physics_refusal`).
+        self.shared_located = located_turns(ctx)
         # Rows judged: all, or (forward) those after the first block.
         first_judged = self.fold_bounds[1][0] if self.forward else 0
         self.judged_row = np.arange(self.rows.size) >= first_judged
@@ -267,8 +272,11 @@ class Selector(ReadingDesigns):
             sqrt(that / its rows); when that bound lies within every allowance, no
             spread can exceed one and the contribution itself is not made.
         others : ndarray, shape (R,), optional
-            What the other named terms of the same joint fit move on the rows fitted [m]:
-            part of the term's spread may cancel theirs (:func:`.physics.spread_problems`).
+            What the other named terms of the same joint fit move on the rows fitted [m].
+            Where the set-up was located as one sum that turns with the rotary axes
+            (:attr:`shared_located`), part of the term's spread may cancel theirs there
+            (:func:`.physics.spread_problems`); elsewhere each term is held to the
+            residual alone (two stand-ins of one period cancelling each other's arm).
 
         Returns
         -------
@@ -284,7 +292,8 @@ class Selector(ReadingDesigns):
         if own_square_sum is not None and self._spreads_within_allowances(own_square_sum):
             return "; ".join(problems)
         spreads = self._spreads(self.prediction_rows(term, setting, coefficients))
-        carried = None if others is None else self._spreads(others)
+        carried = None if others is None or not self.shared_located else \
+            self._spreads(others)
         problems += spread_problems(spreads, self.allowances, self.ctx.orientation_lever_m,
                                     carried)
         return "; ".join(problems)
@@ -309,11 +318,12 @@ class Selector(ReadingDesigns):
         list of str
             Per judged term, why physics refuses it ("" where it may stand).
         """
-        if not terms:
-            return []
+        judged = range(len(terms)) if judged is None else judged
+        if not self.shared_located:
+            return [self.physics_refusal(terms[k][0], terms[k][1], coefficients[k])
+                    for k in judged]
         predictions = [self.prediction_rows(t, s, c) for (t, s), c in zip(terms, coefficients)]
         total = np.sum(predictions, axis=0)
-        judged = range(len(terms)) if judged is None else judged
         return [self.physics_refusal(terms[k][0], terms[k][1], coefficients[k],
                                      others=total - predictions[k]) for k in judged]
 
@@ -879,7 +889,8 @@ class Selector(ReadingDesigns):
         own = candidate.coefficients
         own_square_sum = float(own @ gram[:, q:, q:].sum(axis=0) @ own)
         # What the named terms move beside it, where its spread needs judging at all.
-        others = None if self._spreads_within_allowances(own_square_sum) else \
+        others = None if not self.shared_located or \
+            self._spreads_within_allowances(own_square_sum) else \
             self._named_prediction(stats.base, full_fit[0][:q])
         candidate.refusal = self.physics_refusal(term, setting, own, own_square_sum, others)
         return candidate, gain
