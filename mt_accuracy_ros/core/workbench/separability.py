@@ -50,8 +50,13 @@ from .selection import Selector, Term
 FAMILIES = ("rotary_location", "setup_location", "squareness")
 #: The families of one linear axis' error motions that a survey can leave alike: where the
 #: tool stays at a target the tables bring under it, a tilt's arm is the axis' own travel,
-#: and the tilt moves the target as a straightness of that axis does.
-AXIS_FAMILIES = ("straightness", "angular")
+#: and the tilt moves the target as a straightness of that axis does; where the target
+#: stands at one arm from the carriage across its travel, the tilt moves it along the
+#: travel by the tilt times that arm (the Abbe error, ISO 230-1), as the axis'
+#: positioning error does.
+AXIS_FAMILIES = ("straightness", "angular", "positioning")
+#: The pairs of :data:`AXIS_FAMILIES` judged against each other (of one axis).
+AXIS_PAIRS = (frozenset({"straightness", "angular"}), frozenset({"positioning", "angular"}))
 #: The probability below which a difference of the fits' sums of squares would be
 #: chance: above the bound it is not (chi-square, 95 %).
 LEVEL = 0.95
@@ -72,6 +77,10 @@ _WHY = {
         "on these poses the tool stays where the tables bring the target, so the tilt's "
         "arm is the axis' own travel and the tilt moves the target as a straightness of "
         "that axis does",
+    frozenset({"positioning", "angular"}):
+        "on these poses the target stands at one arm from the carriage across its travel, "
+        "so the tilt moves it along the travel by the tilt times that arm (the Abbe error, "
+        "ISO 230-1), as the axis' positioning error does",
     frozenset({"rotary_location", "angular"}):
         "a carriage that stood still under the rotary axes turns them once: the carried "
         "axis' zero and its line's offset by the turn's lever (ISO 230-7), which move the "
@@ -129,7 +138,7 @@ def _comparable(named: Term, other: Term) -> bool:
         return True
     if named.family.name in FAMILIES and other.family.name in FAMILIES:
         return not _same_lines(named, other)
-    return {named.family.name, other.family.name} == set(AXIS_FAMILIES) and \
+    return frozenset({named.family.name, other.family.name}) in AXIS_PAIRS and \
         named.variant[-1:] == other.variant[-1:]
 
 
