@@ -27,8 +27,9 @@ Scoring, per trial (every identifiable effect of the truth):
 * a zero-angle error the poses can see (an outer axis' zero: a located sphere sees it as
   the tilt of the axis it carries) is right as that tilt, named on that axis'
   ``rotary_location``; the last axis' own zero (seen only through a measured tool
-  direction) is right named as itself, within 30 % or 3 U; where the output folds it into the carried line ("EB0B=EX0C*-0.118&
-  EB0C*1", ISO 230-7: the line turned about the outer one) it is scored as a fold, below;
+  direction) is right named as itself, within 30 % or 3 U; where the output folds it
+  into the carried line ("EB0B=EX0C*-0.118&EB0C*1", ISO 230-7: the line turned about the
+  outer one) it is scored as a fold, below;
 * a squareness is right when a squareness of its plane is named, or one rotation: the
   constant part P0 of the tilt of a carriage that carries exactly one axis of that plane
   (it turns that axis' travel against the other's, which ISO 230-1 books as the plane's
