@@ -1029,16 +1029,12 @@ def _checked_catalogue_entry(name: str, entry: dict, machine: MachineDescription
                              f"{family.name} ({exc})") from exc
     coefficients = entry.get("coefficients")
     if family.name == "rotary_location" and isinstance(coefficients, dict):
-        # A zero the setting does not list (measured directions see the last axis' own).
-        zeros = sorted(k for k in coefficients if len(k) == 4 and k[1] == k[3] and
-                       k[2] == "0" and k not in names)
+        zeros = sorted(k for k in coefficients if len(k) == 4 and k[1] == k[3] and k[2] == "0")
         if zeros:
             raise ParameterError(
                 f"effect {name}: {', '.join(zeros)} is a zero-angle error, which the set-up "
                 "takes out (each rotary body turns about its actual line from the set-up "
-                "pose, ISO 230-7; only the tool's measured direction sees the last axis' "
-                f"zero, said by the setting's zeros): remove it; the coefficients are "
-                f"{', '.join(names)}")
+                f"pose, ISO 230-7): remove it; the coefficients are {', '.join(names)}")
     if not isinstance(coefficients, dict) or set(coefficients) != set(names):
         raise ParameterError(f"effect {name}: 'coefficients' must give {', '.join(names)}")
     return {"family": family.name, "variant": variant, "setting": dict(setting),

@@ -1942,34 +1942,19 @@ class RotaryLocation(EffectFamily):
         """
         return self.complexity + (len(variant) > 1)
 
-    def _names(self, variant, zeros: str = ""):
+    def _names(self, variant):
         # ISO 230-7's location errors of the line: two offsets and two tilts. An offset
-        # along the line moves nothing, nor - on positions alone - does the zero-angle
-        # error of the last axis of a side: the located set-up (a translation) takes it
-        # out. Where the tool's direction was measured, that zero turns the direction
-        # against the work about the axis' line, which the set-up does not take out: then
-        # it is one of the line's errors (``zeros``, from the setting). An outer axis' zero
-        # (EA0A where A carries C) turns the carried line about its own: said as that
-        # line's tilt and offset (outer_zeros, in the setting), never fitted.
+        # along the line moves nothing, nor does the zero-angle error of the last axis of a
+        # side: the located set-up takes them out. An outer axis' zero (EA0A where A carries
+        # C) turns the carried line about its own: said as that line's tilt and offset
+        # (outer_zeros, in the setting), never fitted.
         names = []
         for axis in variant:
             along_axis = "XYZ"["ABC".index(axis)]
             offsets = [f"E{c}0{axis}" for c in "XYZ" if c != along_axis]
             tilts = [f"E{c}0{axis}" for c in "ABC" if c != axis]
-            zero = [f"E{axis}0{axis}"] if f"E{axis}0{axis}" in zeros.split(",") else []
-            names += offsets + tilts + zero
+            names += offsets + tilts
         return names
-
-    @staticmethod
-    def _seen_zeros(ctx, variant) -> str:
-        """The zero-angle errors of the last rotary axis of a side among ``variant`` (the one
-        nearest the work or the tool), where the tool's direction was measured: comma-joined
-        ISO names, "" when it was not."""
-        if not ctx.direction_measured:
-            return ""
-        # The zeros of the axes that carry another rotary axis are the outer ones.
-        outer = set(outer_zeros(ctx.machine, "".join(ctx.rotary_axes())))
-        return ",".join(f"E{a}0{a}" for a in variant if f"E{a}0{a}" not in outer)
 
     def settings(self, ctx, variant):
         """One setting: the line errors these readings cannot part (or none when nothing is seen).
@@ -1989,11 +1974,8 @@ class RotaryLocation(EffectFamily):
         # The location errors these poses cannot part are folded into those they move
         # the readings as (one setting: which, and by how much); so is the zero of an
         # outer axis, which turns the lines it carries (said, never fitted).
-        zeros = self._seen_zeros(ctx, variant)
         setting = {"inseparable": inseparable_location_errors(
-            ctx, self._names(variant, zeros), said_only=outer_zeros(ctx.machine, variant))}
-        if zeros:
-            setting["zeros"] = zeros
+            ctx, self._names(variant), said_only=outer_zeros(ctx.machine, variant))}
         # A variant none of whose errors these poses see is no candidate.
         return [setting] if self.parameter_names(variant, setting) else []
 
@@ -2013,8 +1995,7 @@ class RotaryLocation(EffectFamily):
             ISO names: offsets ``EX0C`` ... [m], tilts ``EA0C`` ... [rad].
         """
         folded = parse_inseparable(setting.get("inseparable", ""))
-        return [name for name in self._names(variant, setting.get("zeros", ""))
-                if name not in folded]
+        return [name for name in self._names(variant) if name not in folded]
 
     def design(self, ctx, variant, setting):
         """(N, 3, P) as an instrument located at the set-up reads them (:meth:`Context.located`).
@@ -2080,12 +2061,6 @@ class RotaryLocation(EffectFamily):
                 f"({', '.join(self.parameter_names(variant, setting))}; ISO 230-7 location "
                 "errors, the body turning about the actual line, the target located at the "
                 "set-up pose; Khan & Chen position-independent errors)")
-        zeros = [z for z in setting.get("zeros", "").split(",")
-                 if z in self.parameter_names(variant, setting)]
-        if zeros:
-            text += (f"; {', '.join(zeros)}: the zero of the last rotary axis turns the work "
-                     "(or the tool) about that axis' line, which the located set-up of a "
-                     "position does not take out and the measured tool direction shows")
         folded = inseparable_sentence(setting.get("inseparable", ""))
         return f"{text}; {folded}" if folded else text
 

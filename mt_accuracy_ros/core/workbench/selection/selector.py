@@ -776,8 +776,7 @@ class Selector(ReadingDesigns):
 
     def step(self, terms: list[Term]) -> Step:
         """One selection step over ``terms``: :meth:`score` each held out, :meth:`rank` them,
-        :meth:`test` the first (and, where that was Occam's simpler choice and failed, the
-        best by held-out error).
+        :meth:`test` the first.
 
         Parameters
         ----------
@@ -793,12 +792,6 @@ class Selector(ReadingDesigns):
         stats, base_sq, count, base_mse, _ = self._baseline()
         ranking, plausible_best = self.rank(self.score(terms, stats, base_sq, count))
         added = self.test(ranking, plausible_best, terms, stats.base)
-        if added is None and plausible_best is not None and ranking[0] is not plausible_best:
-            # Occam's choice among the tied did not pass the rule; the best by held-out
-            # error may (on its full-data coefficients too), and is then named first.
-            ranking.remove(plausible_best)
-            ranking.insert(0, plausible_best)
-            added = self.test(ranking, plausible_best, terms, stats.base)
         # Per-reading errors are kept only where a pair look-ahead may need them (N floats
         # per candidate: GBs over a catalogue at 1e5 readings).
         for s in ranking[self.keep_errors:]:
