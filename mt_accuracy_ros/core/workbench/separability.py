@@ -32,7 +32,12 @@ the carriages stand still while the head turns, such a turn moves the located to
 the circles a line's offset draws, and the output says which parameter it stands for. A
 named rotary line's parameter is judged so against the squarenesses too
 (:func:`line_squareness`): a slide that travels only to keep the tool on the target as a
-rotary axis turns moves it, out of square, along the circle a tilt of that line draws.
+rotary axis turns moves it, out of square, along the circle a tilt of that line draws;
+and against the squareness of a slide that carries the head and stood still
+(:func:`still_slide_squareness`), whose one move the located tool turns with the head.
+A named positioning error is judged against the tilts of its axis as a straightness is
+(:data:`AXIS_PAIRS`): a target at one arm from the carriage reads a tilt's Abbe error as
+positioning.
 """
 from __future__ import annotations
 
