@@ -26,10 +26,8 @@ Scoring, per trial (every identifiable effect of the truth):
   squareness-as-one-rotation rule below (the same relation read the other way);
 * a zero-angle error the poses can see (an outer axis' zero: a located sphere sees it as
   the tilt of the axis it carries) is right as that tilt, named on that axis'
-  ``rotary_location``; the last axis' own zero (seen only through a measured tool
-  direction) is right named as itself, within 30 % or 3 U; where the output folds it
-  into the carried line ("EB0B=EX0C*-0.118&EB0C*1", ISO 230-7: the line turned about the
-  outer one) it is scored as a fold, below;
+  ``rotary_location``; where the output folds it into the carried line ("EB0B=EX0C*-0.118&
+  EB0C*1", ISO 230-7: the line turned about the outer one) it is scored as a fold, below;
 * a squareness is right when a squareness of its plane is named, or one rotation: the
   constant part P0 of the tilt of a carriage that carries exactly one axis of that plane
   (it turns that axis' travel against the other's, which ISO 230-1 books as the plane's
@@ -404,11 +402,6 @@ def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = No
         # A located sphere sees an outer axis' zero error as the tilt of the axis it
         # carries about the same direction (EA0A as EA0C): the same turn of that line.
         carried = carried_rotary(chain, effect["axis"]) if chain else ""
-        if not carried and family == "rotary_location" and effect["axis"] in variant and \
-                iso in named.get("parameters", {}):
-            # The last axis' own zero (the tool's measured direction sees it), named as
-            # itself: judged as that parameter.
-            carried = effect["axis"]
         if not carried or family != "rotary_location" or carried not in variant:
             return ""
         if effect["iso_name"] in folds_of(named):

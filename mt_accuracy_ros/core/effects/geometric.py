@@ -221,6 +221,24 @@ def located_tilt_seen(ctx: Context) -> bool:
     return any(machine.axes[a].is_rotary and ctx.moves(a) for a in machine.workpiece_branch)
 
 
+def head_turned(ctx: Context) -> bool:
+    """Whether the tool side holds a rotary axis that moved over the readings (the head
+    turned): the tool-side counterpart of :func:`located_tilt_seen`.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings.
+
+    Returns
+    -------
+    bool
+        True when a rotary axis of the tool branch moved over the readings.
+    """
+    machine = ctx.machine
+    return any(machine.axes[a].is_rotary and ctx.moves(a) for a in machine.tool_branch)
+
+
 #: How close [rad] a rotary command must be to its set-up angle for a reading to be taken at
 #: the set-up pose (commands written in degrees to a few decimals).
 _AT_SETUP_RAD = 1e-5
@@ -528,14 +546,12 @@ def located_turns(ctx: Context) -> bool:
     Returns
     -------
     bool
-        True when :func:`located_tilt_seen` with :func:`setup_rows`, or the head turned and
-        :func:`head_setup_row` exists.
+        True when :func:`located_tilt_seen` with :func:`setup_rows`, or
+        :func:`head_turned` with :func:`head_setup_row`.
     """
     if located_tilt_seen(ctx) and setup_rows(ctx) is not None:
         return True
-    machine = ctx.machine
-    return head_setup_row(ctx) is not None and \
-        any(machine.axes[a].is_rotary and ctx.moves(a) for a in machine.tool_branch)
+    return head_turned(ctx) and head_setup_row(ctx) is not None
 
 
 def carries_head(machine, axis: str) -> bool:
@@ -599,8 +615,7 @@ def head_located_settings(ctx: Context, variant: str) -> list[dict]:
         The settings (:func:`located_head_tilt` makes their designs).
     """
     machine = ctx.machine
-    turned = any(machine.axes[a].is_rotary and ctx.moves(a) for a in machine.tool_branch)
-    if not turned or head_setup_row(ctx) is None:
+    if not head_turned(ctx) or head_setup_row(ctx) is None:
         return []
     # The carriage turns the head, its rotary lines and the tool about its pivot; the tool
     # located at the head's set-up took the tilt's move there into where the tool is
@@ -1539,9 +1554,7 @@ class Squareness(EffectFamily):
     def _head_located(cls, ctx: Context, variant: str) -> bool:
         """Whether the tilted slide carries a head that turned and stood at its set-up pose
         among the readings: the tool was located there (:func:`located_head_tilt`)."""
-        machine = ctx.machine
-        return carries_head(machine, cls._slide(variant)) and \
-            any(machine.axes[a].is_rotary and ctx.moves(a) for a in machine.tool_branch) and \
+        return carries_head(ctx.machine, cls._slide(variant)) and head_turned(ctx) and \
             head_setup_row(ctx) is not None
 
     @staticmethod
@@ -1550,9 +1563,7 @@ class Squareness(EffectFamily):
         (:meth:`_located`): not where the slide carries a head that turned among the
         readings. A head that stood still keeps the tool located in its own frame as one
         constant, as a head without rotary axes does."""
-        head = any(ctx.machine.axes[a].is_rotary and ctx.moves(a)
-                   for a in ctx.machine.tool_branch)
-        return not (head and slide in ctx.machine.tool_branch)
+        return not (head_turned(ctx) and slide in ctx.machine.tool_branch)
 
     @staticmethod
     def _located(ctx: Context, variant: str) -> bool:
