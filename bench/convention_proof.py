@@ -36,7 +36,8 @@ Scoring, per trial (every identifiable effect of the truth):
   named effect folds into another (``setting.inseparable``, "EB0C=EX0C*-0.417": EX0C
   stands for EX0C - 0.417 m/rad x EB0C) is right when every parameter it folds into
   carries the truth's sum within 30 % or 3 U, and a truth kept as a parameter into
-  which another truth is folded is judged against that sum too; an effect the output
+  which another truth is folded is judged against that sum too (a line error of an
+  outer axis that stood still, folded into the line it carries, alike); an effect the output
   states the readings cannot part from a named one (``inseparable``: the other's name
   and its own fit of the same contribution) is right when that statement would be right
   as a named effect - the truth among the stated pair, with its value;
@@ -411,8 +412,13 @@ def matches(effect: dict, named: dict, chain: str = "", truths: dict | None = No
                       kind="location_tilt", as_carried_tilt=True)
         iso, kind = effect["iso_name"], effect["kind"]
     if kind in ("location_offset", "location_tilt"):
-        if family != "rotary_location" or effect["axis"] not in variant:
+        if family != "rotary_location":
             return ""
+        if effect["axis"] not in variant:
+            # A still outer axis' line error said as what it folds into on a carried
+            # line that turned: scored as said.
+            return folded_value(effect, named, truths or {}) \
+                if iso in folds_of(named) else ""
         value = named["parameters"].get(iso)
         if value is None:
             return folded_value(effect, named, truths or {}) if family == "rotary_location" \

@@ -39,3 +39,19 @@ def test_an_outer_zero_said_folded_is_scored_as_the_sums_it_makes():
     verdict = score(truth, {"named": [alone]})
     assert not verdict["right"] and "EB0B wrong value" in verdict["why"]
     assert "EB0C wrong value" in verdict["why"]
+
+
+def test_a_still_outer_lines_offset_said_folded_is_scored_as_the_sum_it_makes():
+    """A's line offset EY0A 40 um while A stood at -60 deg, beside C's EY0C -37.7 um: the
+    output names C's line alone, EY0C standing for EY0C + (cos 60 deg - 1) EY0A = -57.7 um."""
+    truth = dict(_truth(_location("EY0A", 40e-6, "A"), _location("EY0C", -37.7e-6, "C"),
+                        head=False), chain="[w C A X Y b Z t]")
+    setting = {"inseparable": "EY0A=EY0C*-5.0e-01"}
+    right = _named("rotary_location:C", {"EX0C": 0.0, "EY0C": -57.0e-6}, setting)
+    assert score(truth, {"named": [right]})["right"]
+    # C's own truth alone is not the sum the output says EY0C stands for.
+    alone = _named("rotary_location:C", {"EX0C": 0.0, "EY0C": -37.7e-6}, setting)
+    assert not score(truth, {"named": [alone]})["right"]
+    # Not said folded, A's offset is missed on C's line.
+    unsaid = _named("rotary_location:C", {"EX0C": 0.0, "EY0C": -57.0e-6})
+    assert not score(truth, {"named": [unsaid]})["right"]

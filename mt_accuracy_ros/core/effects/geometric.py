@@ -1985,8 +1985,9 @@ class RotaryLocation(EffectFamily):
         # The location errors these poses cannot part are folded into those they move
         # the readings as (one setting: which, and by how much); so is the zero of an
         # outer axis, which turns the lines it carries (said, never fitted).
+        said_only = outer_zeros(ctx.machine, variant) + still_outer_lines(ctx, variant)
         setting = {"inseparable": inseparable_location_errors(
-            ctx, self._names(variant), said_only=outer_zeros(ctx.machine, variant))}
+            ctx, self._names(variant), said_only=said_only)}
         # A variant none of whose errors these poses see is no candidate.
         return [setting] if self.parameter_names(variant, setting) else []
 
@@ -2191,6 +2192,45 @@ def inseparable_location_errors(ctx: Context, names: list[str],
         if i < len(names) - len(said_only):
             kept.append(i)
     return ";".join(parts)
+
+
+def still_outer_lines(ctx: Context, axes: str) -> list[str]:
+    """The line errors of the rotary axes that carry one of ``axes`` on its side and stood
+    still over these readings.
+
+    A body that never turned moves what it carries by one constant rigid motion: its
+    line's offsets shift the carried lines, its tilts tilt them (ISO 230-7), so on these
+    readings they are the carried lines' own errors. Judged after those (said when they
+    fold into them, never fitted as the carried variant's), they are said beside the line
+    that turned rather than named for it.
+
+    Parameters
+    ----------
+    ctx : Context
+        The machine and the variables at the N readings.
+    axes : str
+        Rotary axis letters of a variant, e.g. ``"C"``.
+
+    Returns
+    -------
+    list of str
+        ISO names, e.g. ``["EY0A", "EZ0A", "EB0A", "EC0A"]`` for ``"C"`` on a
+        ``[w C A X Y b Z t]`` trunnion whose A stood still.
+    """
+    machine = ctx.machine
+    out: list[str] = []
+    for branch in (machine.workpiece_branch, machine.tool_branch):
+        for axis in axes:
+            if axis not in branch:
+                continue
+            for outer in branch[:branch.index(axis)]:
+                if not machine.axes[outer].is_rotary or ctx.moves(outer) or outer in axes:
+                    continue
+                along = "XYZ"["ABC".index(outer)]
+                names = [f"E{c}0{outer}" for c in "XYZ" if c != along] + \
+                    [f"E{c}0{outer}" for c in "ABC" if c != outer]
+                out += [name for name in names if name not in out]
+    return out
 
 
 def parse_inseparable(text: str) -> dict[str, dict[str, float]]:

@@ -49,9 +49,13 @@ def test_a_squareness_under_a_head_is_named_not_the_b_axis_harmonics(tmp_path):
         (leader, [n["explanation"] for n in result["named"]])
 
 
+#: A context whose every axis moved over the readings.
+ALL_MOVE = SimpleNamespace(moves=lambda axis: True)
+
+
 def _candidate(name: str, cv_rmse: float, parameters: int) -> Scored:
     """A plausible candidate of an equally assuming family (complexity 2)."""
-    family = SimpleNamespace(variant_complexity=lambda variant: 2)
+    family = SimpleNamespace(name=name.partition(":")[0], variant_complexity=lambda variant: 2)
     term = SimpleNamespace(name=name, family=family, variant=name.partition(":")[2])
     return Scored(term, cv_rmse, 0.5, 1e-3, 1e-3, 0.9, {}, None,
                   coefficients=np.zeros(parameters))
@@ -64,8 +68,21 @@ def test_of_equally_assuming_candidates_tied_held_out_the_one_fitting_fewer_numb
     beyond the tie the error decides."""
     line = _candidate("rotary_location:B", 0.7420e-6, 4)
     square = _candidate("squareness:EZX", 0.7439e-6, 1)
-    ranking, best = Selector.rank(SimpleNamespace(tie=0.02), [line, square])
+    ranking, best = Selector.rank(SimpleNamespace(tie=0.02, ctx=ALL_MOVE), [line, square])
     assert ranking[0] is square and best is line
     worse = _candidate("squareness:EZX", 0.7600e-6, 1)       # 4.9 % in mean square
-    ranking, _ = Selector.rank(SimpleNamespace(tie=0.02), [line, worse])
+    ranking, _ = Selector.rank(SimpleNamespace(tie=0.02, ctx=ALL_MOVE), [line, worse])
     assert ranking[0] is line
+
+
+def test_of_two_tied_rotary_lines_the_one_that_turned_leads_before_fewer_numbers():
+    """A cradle A that stood still while C turned moves C's line rigidly: its line reads as
+    C's. Tied held out, C's line (4 numbers) is named before A's (2 that these poses see),
+    the still line said folded into it; with both turning, the fewer numbers lead again."""
+    c_line = _candidate("rotary_location:C", 0.7420e-6, 4)
+    a_line = _candidate("rotary_location:A", 0.7430e-6, 2)
+    a_still = SimpleNamespace(moves=lambda axis: axis != "A")
+    ranking, best = Selector.rank(SimpleNamespace(tie=0.02, ctx=a_still), [c_line, a_line])
+    assert ranking[0] is c_line and best is c_line
+    ranking, _ = Selector.rank(SimpleNamespace(tie=0.02, ctx=ALL_MOVE), [c_line, a_line])
+    assert ranking[0] is a_line

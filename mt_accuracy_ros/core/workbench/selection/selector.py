@@ -147,6 +147,28 @@ def simplicity(candidate: Scored) -> tuple[int, int]:
     return candidate.term.family.variant_complexity(candidate.term.variant), parameters
 
 
+def still_rotary_axes(candidate: Scored, ctx) -> int:
+    """How many rotary axes of a candidate's line errors stood still over the readings
+    (zero for any other family): Occam's first tie-break, a turning line before a still
+    one that moves the readings alike.
+
+    Parameters
+    ----------
+    candidate : Scored
+        A scored candidate.
+    ctx : Context
+        The machine and the variables at the N readings.
+
+    Returns
+    -------
+    int
+        The number of its variant's rotary axes whose positions never changed.
+    """
+    if candidate.term.family.name != "rotary_location":
+        return 0
+    return sum(not ctx.moves(axis) for axis in candidate.term.variant)
+
+
 @dataclass
 class Step:
     """One selection step: the ranking and, if one passed, the term added."""
@@ -924,7 +946,10 @@ class Selector(ReadingDesigns):
         # fewest assumptions, then the fewest parameters.
         limit = scored[0].cv_rmse ** 2 * (1.0 + self.tie)
         tied = [s for s in plausible if s.cv_rmse ** 2 <= limit]
-        simplest = min(tied, key=lambda s: (*simplicity(s), s.cv_rmse))
+        # A rotary line of an axis that stood still is read as the line of one it carries
+        # that turned (a still body moves what it carries rigidly): the turning line first.
+        simplest = min(tied, key=lambda s: (still_rotary_axes(s, self.ctx), *simplicity(s),
+                                            s.cv_rmse))
         scored.remove(simplest)
         scored.insert(0, simplest)
         return scored, plausible[0]
