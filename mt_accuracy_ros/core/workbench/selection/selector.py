@@ -611,18 +611,33 @@ class Selector(ReadingDesigns):
         counts = np.array([max(a, 1) if self.forward else self.y.size - (b - a)
                            for a, b in self.fold_bounds], float)
         for index, term, chosen, trained in waiting:
-            best_bic = np.full(self.folds, np.inf)
+            # (refused by physics, BIC): a fold takes a setting whose fit its family's
+            # physics refuses (a pivot beyond the machine's reach) only when all are.
+            best_key = np.full((self.folds, 2), np.inf)
             best = [term.settings[0]] * self.folds
             fits = {}
             for setting, (gram, rhs, yy) in zip(term.settings, trained):
                 coefficients = next(solved)
                 rss = np.maximum(yy - np.einsum("fi,fi->f", coefficients, rhs), 1e-300)
                 bic = counts * np.log(rss / counts) + gram.shape[1] * np.log(counts)
-                for fold in np.flatnonzero(bic < best_bic):
-                    best_bic[fold], best[fold] = bic[fold], setting
+                key = np.column_stack([self._refused_in_folds(term, setting, coefficients),
+                                       bic])
+                for fold in range(self.folds):
+                    if tuple(key[fold]) < tuple(best_key[fold]):
+                        best_key[fold], best[fold] = key[fold], setting
                 if penalty_of(term, setting) <= 0:
                     fits[tuple(sorted(setting.items()))] = coefficients
             out[index] = [c if c is not None else b for c, b in zip(chosen, best)], fits
+
+    def _refused_in_folds(self, term: Term, setting: dict,
+                          coefficients: NDArray[np.float64]) -> NDArray[np.float64]:
+        """(F,) 1 where the family's own physics (:meth:`EffectFamily.fit_problems`) refuses
+        the fold's fit of ``term`` at ``setting``, else 0; ``coefficients`` (F, q + p) are
+        the base's and the term's, the term's last."""
+        own = len(term.family.parameter_names(term.variant, setting))
+        return np.array([1.0 if term.family.fit_problems(self.ctx, term.variant, setting,
+                                                         fold[fold.size - own:]) else 0.0
+                         for fold in coefficients])
 
     def _validation_errors(self, term: Term, stats: _BaseStatistics,
                            pairs: list[tuple[int, int, NDArray[np.float64]]]
@@ -695,14 +710,17 @@ class Selector(ReadingDesigns):
                                             self.mask[:, :3], np.ones(self.n, dtype=bool))
             if setting is None:
                 n = self.y.size
-                best_bic = np.inf
+                best_key = (np.inf, np.inf)
                 for candidate in term.settings:
                     x = np.column_stack([base, self.design_rows(term, candidate)])
                     coefficients, *_ = np.linalg.lstsq(x, self.y, rcond=None)
                     rss = float(np.sum((x @ coefficients - self.y) ** 2))
                     bic = n * np.log(max(rss, 1e-300) / n) + x.shape[1] * np.log(n)
-                    if bic < best_bic:
-                        setting, best_bic = candidate, bic
+                    # The folds' rule: a setting physics refuses only when all are.
+                    key = (float(self._refused_in_folds(term, candidate,
+                                                        coefficients[None, :])[0]), bic)
+                    if key < best_key:
+                        setting, best_key = candidate, key
         return self.refine_setting(term, base, setting)
 
     def refine_setting(self, term: Term, base: NDArray[np.float64], setting: dict) -> dict:
